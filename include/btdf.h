@@ -1,0 +1,262 @@
+/* SPDX-License-Identifier: MIT */
+/* btdf.h: public C API of libbtdf, the rough-interface BTDF of Xu & Sun (2008), Eq. 25. */
+#ifndef BTDF_H
+#define BTDF_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "btdf_config.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/*
+ * Conventions
+ * -----------
+ * Frame: z is the mean surface normal and points into the medium the light comes
+ * from (the "upper" medium). Every direction vector points AWAY from the surface.
+ *
+ * Angles: radians everywhere in this API (the btdftab tool speaks degrees).
+ *   ti  polar angle of the incident direction, [0, pi/2]
+ *   to  polar angle of the transmitted direction, [pi/2, pi]
+ *   phi azimuth of the transmitted direction relative to the incident one,
+ *       any finite value; rho depends on cos(phi) only. phi = pi is the forward
+ *       plane, where the undeviated and the refracted directions lie.
+ *
+ * Index: n = (index of the lower medium) / (index of the upper medium).
+ *   Light entering glass from air: n = 1.5; leaving glass into air: n = 1/1.5.
+ *   n = 1 has no BTDF (the transmission is a delta) and is rejected.
+ *
+ * Value: rho is the BTDF in 1/sr, WITHOUT any cosine factor. Radiance form: a
+ *   renderer multiplies by |cos to| itself. Reciprocity:
+ *   rho(n; ti, to, phi) = n^2 rho(1/n; pi - to, pi - ti, phi).
+ *
+ * Out of domain: directions the model cannot connect (transmitted direction in the
+ *   upper hemisphere, grazing ti = pi/2 or to = pi/2, no facet refracting e_i into e_o)
+ *   give rho = 0. Values below the smallest normal double are returned as 0. No
+ *   function of this library ever returns NaN or inf as a value.
+ *
+ * Errors: every fallible function returns btdf_status; results go through
+ *   out-parameters, which are left untouched on error unless said otherwise.
+ *   Messages (with the offending value) go to a caller buffer `msg` of `msglen`
+ *   bytes, which may be NULL.
+ *
+ * Threads: the model functions are pure and thread-safe. A btdf_table is immutable
+ *   once built, so it may be evaluated from many threads at once; building and
+ *   freeing one are not concurrent with other uses of the same table.
+ *
+ * Ownership: objects returned through `**out` belong to the caller, who frees them
+ *   with the matching *_free function; every *_free(NULL) is a no-op. Views returned
+ *   by btdf_table_slice point into the table and live as long as it does.
+ */
+
+#define BTDF_VERSION_MAJOR 0
+#define BTDF_VERSION_MINOR 3
+#define BTDF_VERSION_PATCH 0
+#define BTDF_VERSION_STRING "0.3.0"
+
+/* The library's own version, which may differ from the header it was built against. */
+BTDF_API const char *btdf_version_string(void);
+
+/* Status codes: append-only, never renumbered. One list, so codes and messages agree. */
+#define BTDF_STATUS_LIST(X)                                                        \
+    X(BTDF_OK, "success")                                                          \
+    X(BTDF_EINVAL, "invalid argument")                                             \
+    X(BTDF_ENOMEM, "out of memory")                                                \
+    X(BTDF_EOVERFLOW, "size overflow")                                             \
+    X(BTDF_EDOMAIN, "value outside its domain")                                    \
+    X(BTDF_EIO, "input/output error")                                              \
+    X(BTDF_EFORMAT, "malformed or foreign file")                                   \
+    X(BTDF_ENOTSUP, "not supported by this build")                                 \
+    X(BTDF_EBUDGET, "budget exhausted before the tolerance was met")
+
+#define BTDF_STATUS_ENUM_(name, text) name,
+typedef enum { BTDF_STATUS_LIST(BTDF_STATUS_ENUM_) BTDF_STATUS_COUNT_ } btdf_status;
+#undef BTDF_STATUS_ENUM_
+
+/* A static message for every status; "unknown status" for anything else. */
+BTDF_API const char *btdf_strerror(btdf_status status);
+
+/* ------------------------------------------------------------------------- */
+/* Model parameters                                                          */
+/* ------------------------------------------------------------------------- */
+
+#define BTDF_MAX_CHANNELS 3
+
+/* Accepted parameter ranges (inclusive). Outside them btdf_params_check fails. */
+#define BTDF_IOR_MIN 1e-3
+#define BTDF_IOR_MAX 1e3
+#define BTDF_IOR_ONE_EPS 1e-9 /* |n - 1| below this is treated as n = 1 */
+#define BTDF_S_MIN 1e-3
+#define BTDF_S_MAX 1e6
+#define BTDF_K0_MAX 100.0
+
+typedef struct btdf_params {
+    int channels;                  /* 1, or 3 for R, G, B */
+    double ior[BTDF_MAX_CHANNELS]; /* n per channel (dispersion); ior[0] when channels = 1 */
+    double smoothness;             /* s = tau / sigma, shared by all channels */
+    double k0;                     /* shadowing constant of Eq. 25, 0.7 in the paper */
+} btdf_params;
+
+/* Defaults: one channel, n = 1.5, s = 3, k0 = 0.7. */
+BTDF_API void btdf_params_default(btdf_params *p);
+
+/* BTDF_OK, or BTDF_EINVAL for NaN/inf, channels not 1 or 3, n <= 0 or outside
+   [BTDF_IOR_MIN, BTDF_IOR_MAX], |n - 1| < BTDF_IOR_ONE_EPS, s outside
+   [BTDF_S_MIN, BTDF_S_MAX], k0 outside [0, BTDF_K0_MAX]. */
+BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t msglen);
+
+/* ------------------------------------------------------------------------- */
+/* The model                                                                 */
+/* ------------------------------------------------------------------------- */
+
+/* Eq. 25 for one channel. No validation: for parameters that fail
+   btdf_params_check, or angles out of range, the result is 0 (never NaN). */
+BTDF_API double btdf_rho(double n, double s, double k0, double ti, double to, double phi);
+
+/* btdf_rho with the three angles in degrees, exact at multiples of 90 degrees
+   (the form the btdftab tool uses). */
+BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti, double to,
+                             double phi);
+
+/* Flat-interface Fresnel transmittance Ft(ti) for index n (0 past the critical angle). */
+BTDF_API double btdf_fresnel_t(double n, double ti);
+
+/* rho for every channel of p into out[p->channels]. BTDF_EDOMAIN for angles outside
+   ti in [0, pi/2], to in [pi/2, pi], finite phi; BTDF_EINVAL for bad parameters. */
+BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double to, double phi,
+                               double *out);
+
+/* The same by direction vectors (unit length within 1e-6, pointing away from the
+   surface). wo in the upper hemisphere gives 0, wi in the lower gives BTDF_EDOMAIN. */
+BTDF_API btdf_status btdf_eval_dir(const btdf_params *p, const double wi[3],
+                                   const double wo[3], double *out);
+
+/* count evaluations; out holds count * channels values, channel fastest. The first
+   bad angle stops the batch with BTDF_EDOMAIN and sets *bad_index (may be NULL). */
+BTDF_API btdf_status btdf_eval_batch(const btdf_params *p, size_t count, const double *ti,
+                                     const double *to, const double *phi, double *out,
+                                     size_t *bad_index);
+
+/* Hemispherical transmittance T(ti) = integral of rho |cos to| over the lower
+   hemisphere, per channel, by quadrature in facet-slope space; absolute error below
+   1e-7 for n > 1 and 1e-6 for n < 1 over the parameter ranges above. */
+BTDF_API btdf_status btdf_transmittance(const btdf_params *p, double ti, double *out);
+
+/* ------------------------------------------------------------------------- */
+/* Tables                                                                    */
+/* ------------------------------------------------------------------------- */
+
+/*
+ * A table is a stack of slices at increasing incident angles ti_k. Each slice is a
+ * rectilinear grid of nodes (rows x cols) holding rho for every channel, and one
+ * interpolation rule turns it into rho~(ti, to, phi) everywhere:
+ *
+ *  BTDF_TABLE_FACET: rows are facet tilts tn, cols facet azimuths psi in [0, pi]
+ *    (psi = 0: the facet leans towards the incident direction). For a query
+ *    (ti, to, phi) the facet normal h that refracts e_i into e_o is computed; each of
+ *    the two slices bracketing ti is interpolated bilinearly at h's (tn, |psi|); the
+ *    two values are blended linearly in ti. The lobe is stationary in facet space,
+ *    so few nodes follow it. Queries outside the nodes' range give 0.
+ *  BTDF_TABLE_GRID: rows are to, cols phi in [0, pi]; bilinear in (to, |phi| folded to
+ *    [0, pi]) inside a slice, linear in ti between slices. What a plain engine does.
+ *
+ * Below the first or above the last slice ti, the table gives 0.
+ */
+typedef enum { BTDF_TABLE_FACET = 0, BTDF_TABLE_GRID = 1 } btdf_table_kind;
+
+typedef struct btdf_table btdf_table;
+
+/* A read-only view of slice k. values[(r * ncols + c) * channels + ch]. */
+typedef struct btdf_slice {
+    double ti;
+    size_t nrows, ncols;
+    const double *rows, *cols;
+    const double *values;
+} btdf_slice;
+
+typedef enum { BTDF_METRIC_L1 = 0, BTDF_METRIC_MAX = 1 } btdf_metric;
+
+/* How to build a table. Fill with btdf_table_opts_default, then change fields. */
+typedef struct btdf_table_opts {
+    btdf_params params;
+    double ti_min, ti_max;  /* incident range, radians, within [0, pi/2] */
+    btdf_table_kind kind;   /* FACET: adaptive; GRID: the counts below */
+    double tolerance;       /* target error for FACET (default 1e-3) */
+    btdf_metric metric;     /* which error must meet the tolerance */
+    size_t grid_ti, grid_to, grid_phi; /* GRID counts (default 90 x 90 x 181) */
+    size_t max_samples;     /* node budget, 0 = default 5e7 */
+    size_t max_bytes;       /* memory cap for the node values, 0 = default 1 GiB */
+    int threads;            /* 0 = all cores */
+} btdf_table_opts;
+
+BTDF_API void btdf_table_opts_default(btdf_table_opts *o);
+
+/* Builds a table. BTDF_OK when the tolerance was met (or for GRID). When the budget
+   stops refinement first, *out still holds the best table reached and the status is
+   BTDF_EBUDGET. Errors: BTDF_EINVAL (options), BTDF_ENOMEM, BTDF_EOVERFLOW. */
+BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out,
+                                      char *msg, size_t msglen);
+
+BTDF_API void btdf_table_free(btdf_table *t);
+
+/* Builds a table from slices (for readers): btdf_table_new, then
+   btdf_table_add_slice in increasing ti. Rows and cols must increase strictly;
+   values are copied. BTDF_EINVAL says which rule was broken. */
+BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
+                                    btdf_table **out, char *msg, size_t msglen);
+BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows,
+                                          const double *rows, size_t ncols,
+                                          const double *cols, const double *values,
+                                          char *msg, size_t msglen);
+
+BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t);
+BTDF_API const btdf_params *btdf_table_get_params(const btdf_table *t);
+BTDF_API size_t btdf_table_slice_count(const btdf_table *t);
+/* Total number of stored nodes (sum of rows * cols over the slices). */
+BTDF_API size_t btdf_table_node_count(const btdf_table *t);
+/* BTDF_EINVAL if k is out of range. */
+BTDF_API btdf_status btdf_table_slice(const btdf_table *t, size_t k, btdf_slice *out);
+
+/* rho~ per channel into out[channels]. Same domain rules as btdf_eval. */
+BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, double phi,
+                                     double *out);
+
+/* ------------------------------------------------------------------------- */
+/* Error of a table against Eq. 25 (MODEL.md section 6)                      */
+/* ------------------------------------------------------------------------- */
+
+typedef struct btdf_ti_error {
+    double ti;                   /* radians */
+    double T, T_table;           /* true and tabulated transmittance (channel 0) */
+    double e_l1, e_t, e_max;     /* worst channel; e_max = 0 where T < 0.01 */
+} btdf_ti_error;
+
+typedef struct btdf_report {
+    size_t slices, samples;      /* table size: slices and stored nodes */
+    size_t test_angles, test_points; /* points used by the estimate, not table nodes */
+    double seconds_build, seconds_estimate;
+    double e_l1_max, e_l1_mean, e_t_max, e_t_mean, e_max_max, e_max_mean;
+    double tolerance;            /* requested (0 for GRID) */
+    btdf_metric metric;
+    int met;                     /* 1 when the chosen metric's max <= tolerance */
+    size_t peak_bytes;           /* memory the build held at its peak */
+    btdf_ti_error *per_ti;       /* test_angles entries, owned by the report */
+} btdf_report;
+
+/* Estimates the errors of t over [ti_min, ti_max] at test_angles stratified incident
+   angles (0 = default 48) with about points_per_angle stratified outgoing points
+   each (0 = default 8192), from the given seed. Frees nothing in *r first: pass a
+   zeroed report and call btdf_report_clear after. */
+BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
+                                         size_t test_angles, size_t points_per_angle,
+                                         uint64_t seed, int threads, btdf_report *r);
+BTDF_API void btdf_report_clear(btdf_report *r);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* BTDF_H */

@@ -1,0 +1,103 @@
+/* SPDX-License-Identifier: MIT */
+/* model_impl.h: the Eq. 25 kernel shared by the evaluator, the tables and the estimates. */
+#ifndef BTDF_MODEL_IMPL_H
+#define BTDF_MODEL_IMPL_H
+
+#include <float.h>
+#include <math.h>
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* exp(-x) is 0 in double for x beyond about 745.1, so cutting there changes no
+   result; it lets the kernel skip dividing by v_z^2, which may be 0 (MODEL.md 3.5). */
+#define BTDF_EXP_CUT 746.0
+
+/* Shadowing V(t) of Eq. 25 from tan t >= 0 and 1/tan^2 t precomputed by the caller.
+   V(0) = 1 (MODEL.md 3.4); V(pi/2) = 0. */
+static inline double shadow_v(double tan_t, double s, double k0)
+{
+    if (!(tan_t > 0.0))
+        return 1.0; /* t = 0: exp(-s^2/(4 tan^2)) -> 0, so V -> exp(0) */
+    if (isinf(tan_t))
+        return 0.0; /* grazing: k0 tan/s -> inf, V -> 0 (and avoids inf * 0) */
+    double e = exp(-s * s / (4.0 * tan_t * tan_t));
+    return exp(-(k0 * tan_t / s) * e);
+}
+
+/* Incoming-side quantities that depend on ti only: hoisted out of the inner loop. */
+typedef struct rho_in {
+    double sin_ti, cos_ti;
+    double pref; /* s^2/(4 pi) * V(ti) / cos ti, 0 when cos ti = 0 */
+} rho_in;
+
+/* Outgoing-side quantities that depend on to only. */
+typedef struct rho_out {
+    double sin_to, cos_to; /* cos_to <= 0 */
+    double pref;           /* V(to) / |cos to|, 0 when cos to = 0 */
+} rho_out;
+
+static inline void rho_in_init(rho_in *a, double sin_ti, double cos_ti, double s, double k0)
+{
+    a->sin_ti = sin_ti;
+    a->cos_ti = cos_ti;
+    /* cos ti = 0 is grazing incidence, where rho -> 0 (MODEL.md 3.5): no 1/0. */
+    a->pref = cos_ti > 0.0 ? s * s / (4.0 * M_PI) * shadow_v(sin_ti / cos_ti, s, k0) / cos_ti
+                           : 0.0;
+}
+
+static inline void rho_out_init(rho_out *b, double sin_to, double cos_to, double s, double k0)
+{
+    b->sin_to = sin_to;
+    b->cos_to = cos_to;
+    double c = -cos_to;
+    /* |cos to| = 0 is a grazing exit, where rho -> 0 (MODEL.md 3.5): no 1/0. */
+    b->pref = c > 0.0 ? shadow_v(sin_to / c, s, k0) / c : 0.0;
+}
+
+/* Eq. 25 (MODEL.md section 2) for one channel, from hoisted incoming and outgoing
+   terms and (cos phi, sin phi). Branch-light so that loops over phi vectorise.
+   With v = e_i + n e_o, the facet normal is h = sg v/|v| with sg = sign(v_z), and
+     cos a = sg (e_i.v)/|v|,  cos b = -sg (e_o.v)/|v|,  cos tn = |v_z|/|v|,
+     (n cos b - cos a)^2 = |v|^2 exactly,  so chi = n^2 cos b / |v|^2,
+     1/cos^2 tn = 1 + tan^2 tn = |v|^2 / v_z^2,
+     Ft = 2 n ca cb (1/(ca + n cb)^2 + 1/(n ca + cb)^2)   (1 - R without cancellation). */
+static inline double rho_kernel(double n, double s, const rho_in *a, const rho_out *b,
+                                double cos_phi, double sin_phi)
+{
+    double vx = a->sin_ti + n * b->sin_to * cos_phi;
+    double vy = n * b->sin_to * sin_phi;
+    double vz = a->cos_ti + n * b->cos_to;
+    double rxy2 = vx * vx + vy * vy;
+    double vz2 = vz * vz;
+    double len2 = rxy2 + vz2;
+    /* The exponent s^2 tan^2 tn / 4 written without dividing by vz2, which may be 0
+       (a facet standing vertical): cut when the exponential underflows. */
+    if (!(0.25 * s * s * rxy2 < BTDF_EXP_CUT * vz2))
+        return 0.0;
+    double sg = vz < 0.0 ? -1.0 : 1.0; /* h = sg v / |v| has h_z > 0 */
+    double ei_v = a->sin_ti * vx + a->cos_ti * vz; /* e_i . v */
+    double eo_v = b->sin_to * (cos_phi * vx + sin_phi * vy) + b->cos_to * vz;
+    double ca_l = sg * ei_v;  /* cos a * |v| */
+    double cb_l = -sg * eo_v; /* cos b * |v| */
+    if (!(ca_l > 0.0 && cb_l > 0.0))
+        return 0.0; /* no facet refracts e_i into e_o (MODEL.md 2, 3.7) */
+    /* len2 >= (1 - n)^2 > 0 for n != 1 (validated), and vz2 > 0 after the cut. */
+    double inv_len = 1.0 / sqrt(len2);
+    double ca = ca_l * inv_len, cb = cb_l * inv_len;
+    double t2 = rxy2 / vz2;        /* tan^2 tn, finite after the cut */
+    double sec2 = len2 / vz2;      /* 1 / cos^2 tn */
+    double d1 = ca + n * cb, d2 = n * ca + cb; /* both > 0 since ca, cb > 0 */
+    double ft = 2.0 * n * ca * cb * (1.0 / (d1 * d1) + 1.0 / (d2 * d2));
+    double chi = n * n * cb / len2;
+    double r = a->pref * b->pref * ca * ft * chi * sec2 * sec2 * exp(-0.25 * s * s * t2);
+    /* Results below the smallest normal double are 0 (MODEL.md 3.6). */
+    return r >= DBL_MIN ? r : 0.0;
+}
+
+/* sin and cos of an angle in degrees, exact at multiples of 90 degrees, for tools
+   and tests that speak degrees: reduces to [-45, 45] before converting. */
+void btdf_sincos_deg(double deg, double *s, double *c);
+
+#endif
