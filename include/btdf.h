@@ -255,6 +255,34 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
                                          uint64_t seed, int threads, btdf_report *r);
 BTDF_API void btdf_report_clear(btdf_report *r);
 
+
+/* ------------------------------------------------------------------------- */
+/* Files                                                                     */
+/* ------------------------------------------------------------------------- */
+
+/* Sides of the interface a renderer format may hold (MODEL.md section 5). */
+typedef enum { BTDF_SIDE_ENTER = 1, BTDF_SIDE_LEAVE = 2, BTDF_SIDE_BOTH = 3 } btdf_side;
+
+typedef struct btdf_write_opts {
+    const btdf_report *report; /* error report stored with the table, may be NULL */
+    const char *provenance;    /* e.g. the command line, may be NULL */
+} btdf_write_opts;
+
+/* Writes t to path in the format its extension names (.csv, .exr). The file is
+   written under a temporary name in the same folder and renamed at the end: on any
+   error no file is left at path. BTDF_ENOTSUP when the format was switched off at
+   build time (the message says which feature), BTDF_EIO when writing fails. */
+BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
+                                      const btdf_write_opts *w, char *msg, size_t msglen);
+
+/* Reads a table written by btdf_table_write (.csv, .exr). BTDF_EFORMAT with the
+   reason for truncated, corrupt or foreign files. */
+BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *msg,
+                                     size_t msglen);
+
+/* 1 if files of this extension (".exr", "exr") can be written by this build. */
+BTDF_API int btdf_format_available(const char *ext);
+
 #ifdef __cplusplus
 }
 #endif
