@@ -1,0 +1,5 @@
+/* SPDX-License-Identifier: MIT */
+/* exr_off.c: the OpenEXR entry of a build without OpenEXR, so errors can name the switch. */
+#include "formats.h"
+
+const btdf_format_ops btdf_format_exr = {"OpenEXR", ".exr", "openexr", 0, NULL, NULL, NULL};
