@@ -21,7 +21,11 @@
  * tables that of channel 0; empty where no facet refracts into the lower hemisphere).
  */
 
-static const char *kind_name(btdf_table_kind k) { return k == BTDF_TABLE_GRID ? "grid" : "facet"; }
+static const char *kind_name(btdf_table_kind k)
+{
+    return k == BTDF_TABLE_GRID ? "grid"
+                                : (k == BTDF_TABLE_FACET_RECIPROCAL ? "facet-reciprocal" : "facet");
+}
 
 static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
 {
@@ -44,6 +48,9 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                   "V(theta_i)/cos(theta_i)"
                 : "bilinear in facet (tilt, azimuth) per slice at the facet refracting e_i into "
                   "e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)");
+    if (t->kind == BTDF_TABLE_FACET_RECIPROCAL)
+        fprintf(f, "# reciprocal: slices hold the table of index 1/n, indexed by ti_rad = pi - "
+                   "theta_o; rho(n; ti, to, phi) = n^2 rho(1/n; pi - to, pi - ti, phi)\n");
     if (c->opts->provenance)
         fprintf(f, "# provenance: %s\n", c->opts->provenance);
     const btdf_report *r = c->opts->report;
@@ -58,25 +65,32 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     for (size_t k = 0; k < t->ns; k++) {
         const tslice *s = &t->s[k];
         double ti = s->ti, sti = sin(ti), cti = cos(ti);
+        int recip = t->kind == BTDF_TABLE_FACET_RECIPROCAL;
+        double n0 = recip ? 1.0 / p->ior[0] : p->ior[0]; /* the slices' own index */
         rho_in a;
         rho_in_init(&a, sti, cti, p->smoothness, p->k0);
         for (size_t i = 0; i < s->nr; i++) {
             for (size_t j = 0; j < s->nc; j++) {
-                char to_s[40] = "", ph_s[40] = "";
+                char ti_s[40], to_s[40] = "", ph_s[40] = "";
+                snprintf(ti_s, sizeof ti_s, "%.10g", ti * 180.0 / M_PI);
                 if (t->kind == BTDF_TABLE_GRID) {
                     snprintf(to_s, sizeof to_s, "%.10g", s->rows[i] * 180.0 / M_PI);
                     snprintf(ph_s, sizeof ph_s, "%.10g", s->cols[j] * 180.0 / M_PI);
                 } else {
                     facet_geo g;
-                    if (facet_eval(p->ior[0], p->smoothness, p->k0, &a, sin(s->rows[i]),
+                    if (facet_eval(n0, p->smoothness, p->k0, &a, sin(s->rows[i]),
                                    cos(s->rows[i]), cos(s->cols[j]), sin(s->cols[j]), &g)) {
-                        snprintf(to_s, sizeof to_s, "%.10g",
-                                 atan2(g.sin_to, g.cos_to) * 180.0 / M_PI);
+                        double to = atan2(g.sin_to, g.cos_to) * 180.0 / M_PI;
+                        if (recip) { /* the node's directions for light leaving: swapped */
+                            snprintf(ti_s, sizeof ti_s, "%.10g", 180.0 - to);
+                            to = 180.0 - ti * 180.0 / M_PI;
+                        }
+                        snprintf(to_s, sizeof to_s, "%.10g", to);
                         snprintf(ph_s, sizeof ph_s, "%.10g",
                                  fabs(atan2(g.sin_phi, g.cos_phi)) * 180.0 / M_PI);
                     }
                 }
-                fprintf(f, "%.10g,%s,%s", ti * 180.0 / M_PI, to_s, ph_s);
+                fprintf(f, "%s,%s,%s", recip && !to_s[0] ? "" : ti_s, to_s, ph_s);
                 for (int ch = 0; ch < nch; ch++)
                     fprintf(f, ",%.17g", s->vals[(i * s->nc + j) * (size_t)nch + (size_t)ch]);
                 fprintf(f, ",%.17g,%.17g,%.17g\n", ti, s->rows[i], s->cols[j]);
@@ -218,8 +232,11 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 have_kind = 1;
                 if (!strcmp(word, "grid"))
                     kind = BTDF_TABLE_GRID;
+                else if (!strcmp(word, "facet-reciprocal"))
+                    kind = BTDF_TABLE_FACET_RECIPROCAL;
                 else if (strcmp(word, "facet"))
-                    st = ferr(msg, msglen, path, ln, "kind must be facet or grid");
+                    st = ferr(msg, msglen, path, ln,
+                              "kind must be facet, facet-reciprocal or grid");
             } else if (sscanf(line, "# channels: %d", &p.channels) == 1) {
                 have_ch = 1;
             } else if (!strncmp(line, "# ior:", 6)) {

@@ -162,10 +162,21 @@ BTDF_API btdf_status btdf_transmittance(const btdf_params *p, double ti, double 
  *    so few nodes follow it. Queries outside the nodes' range give 0.
  *  BTDF_TABLE_GRID: rows are to, cols phi in [0, pi]; bilinear in (to, |phi| folded to
  *    [0, pi]) inside a slice, linear in ti between slices. What a plain engine does.
+ *  BTDF_TABLE_FACET_RECIPROCAL: for light leaving the dense medium (every n < 1). The
+ *    slices are a FACET table of index 1/n, indexed by pi - to, and the rule answers
+ *    rho~(n; ti, to, phi) = n^2 rho~(1/n; pi - to, pi - ti, phi) (MODEL.md section 4).
+ *    Facet space of n < 1 is badly conditioned near the critical angle (its measure
+ *    |cos to|/chi diverges there); facet space of 1/n > 1 is not.
  *
- * Below the first or above the last slice ti, the table gives 0.
+ * The blend in ti divides both slice values by Eq. 25's incident factor V(ti)/cos ti
+ * and multiplies the result by the query's. Outside the slices' ti range the table
+ * gives 0.
  */
-typedef enum { BTDF_TABLE_FACET = 0, BTDF_TABLE_GRID = 1 } btdf_table_kind;
+typedef enum {
+    BTDF_TABLE_FACET = 0,
+    BTDF_TABLE_GRID = 1,
+    BTDF_TABLE_FACET_RECIPROCAL = 2
+} btdf_table_kind;
 
 typedef struct btdf_table btdf_table;
 
@@ -183,7 +194,7 @@ typedef enum { BTDF_METRIC_L1 = 0, BTDF_METRIC_MAX = 1 } btdf_metric;
 typedef struct btdf_table_opts {
     btdf_params params;
     double ti_min, ti_max;  /* incident range, radians, within [0, pi/2] */
-    btdf_table_kind kind;   /* FACET: adaptive; GRID: the counts below */
+    btdf_table_kind kind;   /* FACET: adaptive (RECIPROCAL is chosen for n < 1); GRID */
     double tolerance;       /* target error for FACET (default 1e-3) */
     btdf_metric metric;     /* which error must meet the tolerance */
     size_t grid_ti, grid_to, grid_phi; /* GRID counts (default 90 x 90 x 181) */

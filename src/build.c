@@ -60,7 +60,7 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
         if (o->grid_ti > 1 && !(o->ti_max > o->ti_min))
             return bad(msg, msglen, "theta-i range of width %g: several grid slices need "
                                     "start < end", o->ti_max - o->ti_min);
-    } else if (o->kind == BTDF_TABLE_FACET) {
+    } else if (o->kind == BTDF_TABLE_FACET || o->kind == BTDF_TABLE_FACET_RECIPROCAL) {
         if (!(o->tolerance >= 1e-7 && o->tolerance <= 1.0))
             return bad(msg, msglen, "tolerance %g: must lie in [1e-7, 1]", o->tolerance);
     } else {
@@ -696,6 +696,19 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         *out = t;
         return BTDF_OK;
     }
+    /* Light leaving the dense medium (every n < 1) is tabulated through reciprocity as
+       the table of 1/n over all incident angles, whose facet space is well conditioned
+       (btdf.h, BTDF_TABLE_FACET_RECIPROCAL). Errors are still measured for n. */
+    btdf_table_opts ob = *o;
+    int recip = 1;
+    for (int c = 0; c < o->params.channels; c++)
+        recip = recip && o->params.ior[c] < 1.0;
+    if (recip) {
+        for (int c = 0; c < o->params.channels; c++)
+            ob.params.ior[c] = 1.0 / o->params.ior[c];
+        ob.ti_min = 0.0;
+        ob.ti_max = M_PI / 2;
+    }
     /* Split the tolerance between slice interpolation and incidence blending, check
        the result with an independent estimate, and tighten while it falls short. */
     double fs = 0.8, ft = 0.8;
@@ -703,8 +716,12 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     size_t peak = 0;
     for (int pass = 0; pass < 5; pass++) {
         table_clear(t);
+        t->kind = BTDF_TABLE_FACET;
+        t->p = ob.params;
         budget_hit = 0;
-        st = build_facet_pass(o, fs, ft, t, &budget_hit, &peak);
+        st = build_facet_pass(&ob, fs, ft, t, &budget_hit, &peak);
+        t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : BTDF_TABLE_FACET;
+        t->p = o->params;
         if (st != BTDF_OK)
             break;
         btdf_report r;

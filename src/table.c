@@ -191,8 +191,9 @@ BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
 {
     if (!out)
         return BTDF_EINVAL;
-    if (kind != BTDF_TABLE_FACET && kind != BTDF_TABLE_GRID) {
-        set_msg(msg, msglen, "table kind: must be facet or grid");
+    if (kind != BTDF_TABLE_FACET && kind != BTDF_TABLE_GRID &&
+        kind != BTDF_TABLE_FACET_RECIPROCAL) {
+        set_msg(msg, msglen, "table kind: must be facet, grid or facet-reciprocal");
         return BTDF_EINVAL;
     }
     btdf_status st = btdf_params_check(p, msg, msglen);
@@ -343,8 +344,18 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
                    double *out)
 {
     int nch = t->p.channels;
+    int recip = t->kind == BTDF_TABLE_FACET_RECIPROCAL;
     for (int c = 0; c < nch; c++)
         out[c] = 0.0;
+    if (recip) {
+        /* rho(n; ti, to) = n^2 rho(1/n; pi - to, pi - ti): swap the two directions. */
+        double a = sti, b = cti;
+        sti = sto;
+        cti = -cto;
+        sto = a;
+        cto = -b;
+        ti = M_PI - to;
+    }
     if (t->ns == 0 || !(ti >= t->s[0].ti && ti <= t->s[t->ns - 1].ti))
         return; /* outside the tabulated incidence range */
     size_t k = 0;
@@ -370,9 +381,9 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
         g1 = incident_factor(&t->p, t->s[k + 1].ti);
     }
     for (int c = 0; c < nch; c++) {
-        double x, y;
-        if (t->kind == BTDF_TABLE_FACET) {
-            if (!facet_of(t->p.ior[c], sti, cti, sto, cto, cph, sph, &x, &y))
+        double x, y, n = recip ? 1.0 / t->p.ior[c] : t->p.ior[c];
+        if (t->kind != BTDF_TABLE_GRID) {
+            if (!facet_of(n, sti, cti, sto, cto, cph, sph, &x, &y))
                 continue; /* no facet connects the two directions: exactly 0 */
         } else {
             x = to;
@@ -381,7 +392,8 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
         double v = slice_interp(t, k, x, y, c);
         if (w > 0.0)
             v = blend_ti(v, slice_interp(t, k + 1, x, y, c), w, g, g0, g1);
-        out[c] = v;
+        /* reciprocity factor (1/n')^2 = n^2 with n' = 1/n the table's own index */
+        out[c] = recip ? t->p.ior[c] * t->p.ior[c] * v : v;
     }
 }
 

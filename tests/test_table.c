@@ -37,7 +37,7 @@ static void tolerance_met(void **state)
     (void)state;
     const double cases[][5] = {
         {1.5, 3, 0, 80, 1e-3}, {1.5, 20, 0, 60, 2e-3}, {1.33, 1, 0, 70, 5e-3},
-        {2.4, 6, 10, 50, 1e-2}, {1 / 1.4, 6, 0, 30, 1e-2},
+        {2.4, 6, 10, 50, 1e-2}, {1 / 1.5, 3, 0, 60, 3e-3},
     };
     for (int k = 0; k < 5; k++) {
         btdf_table *t = build(cases[k][0], cases[k][1], cases[k][2], cases[k][3], cases[k][4], 0,
@@ -46,6 +46,8 @@ static void tolerance_met(void **state)
         memset(&r, 0, sizeof r);
         assert_status(BTDF_OK, btdf_table_estimate(t, rad(cases[k][2]), rad(cases[k][3]), 40,
                                                    8192, 424242u + (uint64_t)k, 0, &r));
+        assert_int_equal(btdf_table_get_kind(t), cases[k][0] < 1 ? BTDF_TABLE_FACET_RECIPROCAL
+                                                                 : BTDF_TABLE_FACET);
         print_message("n %g s %g: %zu slices, %zu samples, e_L1 %.3g (tol %g)\n", cases[k][0],
                       cases[k][1], r.slices, r.samples, r.e_l1_max, cases[k][4]);
         assert_true(r.e_l1_max <= cases[k][4]);
@@ -103,14 +105,13 @@ static char *slurp(const char *path, size_t *len)
 }
 
 /* Same bytes from 1 and 2 threads; reading the CSV back gives the same table. */
-static void deterministic_and_round_trip(void **state)
+static void round_trip_case(double n)
 {
-    (void)state;
     char p1[64], p2[64];
     snprintf(p1, sizeof p1, "/tmp/btdf-test-%ld-1.csv", (long)getpid());
     snprintf(p2, sizeof p2, "/tmp/btdf-test-%ld-2.csv", (long)getpid());
-    btdf_table *a = build(1.4, 6, 0, 70, 3e-3, 1, BTDF_OK);
-    btdf_table *b = build(1.4, 6, 0, 70, 3e-3, 2, BTDF_OK);
+    btdf_table *a = build(n, 6, 0, 70, 3e-3, 1, BTDF_OK);
+    btdf_table *b = build(n, 6, 0, 70, 3e-3, 2, BTDF_OK);
     char msg[256];
     assert_status(BTDF_OK, btdf_table_write(a, p1, NULL, msg, sizeof msg));
     assert_status(BTDF_OK, btdf_table_write(b, p2, NULL, msg, sizeof msg));
@@ -134,9 +135,17 @@ static void deterministic_and_round_trip(void **state)
     }
     unlink(p1);
     unlink(p2);
+    assert_int_equal(btdf_table_get_kind(c), btdf_table_get_kind(a));
     btdf_table_free(a);
     btdf_table_free(b);
     btdf_table_free(c);
+}
+
+static void deterministic_and_round_trip(void **state)
+{
+    (void)state;
+    round_trip_case(1.4);
+    round_trip_case(1 / 1.4); /* a reciprocal table */
 }
 
 /* A budget too small for the tolerance: EBUDGET, a table, and a message saying so. */
