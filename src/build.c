@@ -208,11 +208,44 @@ typedef struct slice_out {
     int nomem;
 } slice_out;
 
+/* Eq. 25 written in facet space for the builder, with the Beckmann factor hoisted per
+   row: rho = [s^2/(4 pi) V(ti)/cos ti] e^{-s^2 t^2/4} (1 + t^2)^2 ca Ft chi V(to)/|cos to|,
+   t = tan tn, chi = n^2 cb / (ca - n cb)^2. The error estimate evaluates the same
+   directions through the kernel of model_impl.h, so the two check each other.
+   Returns rho and sets *w to the measure weight |cos to|/chi * sin tn. */
+static double facet_rho(double n, double s, double k0, const rho_in *a, double stn,
+                        double ctn, double cpsi, double spsi, double beck, double *w)
+{
+    *w = 0.0;
+    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
+    if (!(ca > 0.0))
+        return 0.0; /* the facet faces away from e_i */
+    double sb2 = (1.0 - ca * ca) / (n * n);
+    if (!(sb2 < 1.0))
+        return 0.0; /* total internal reflection on this facet */
+    double cb = sqrt(1.0 - sb2);
+    double gg = ca / n - cb;
+    double ox = -a->sin_ti / n + gg * stn * cpsi, oy = gg * stn * spsi;
+    double oz = -a->cos_ti / n + gg * ctn;
+    if (!(oz < 0.0) || !(cb > 0.0))
+        return 0.0; /* refracted into the upper hemisphere, or grazing on the facet */
+    double d = ca - n * cb; /* |v|; nonzero for n != 1 */
+    double d1 = ca + n * cb, d2 = n * ca + cb;
+    double ft = 2.0 * n * ca * cb * (1.0 / (d1 * d1) + 1.0 / (d2 * d2));
+    double chi = n * n * cb / (d * d);
+    double st = sqrt(ox * ox + oy * oy);
+    double vo = shadow_v(st / -oz, s, k0); /* -oz > 0 checked above */
+    *w = -oz / chi * stn;
+    double r = a->pref * beck * ca * ft * chi * vo / -oz;
+    return r >= DBL_MIN ? r : 0.0; /* MODEL.md 3.6 */
+}
+
 /* Evaluates rho (all channels) and the channel-0 measure weight on rows x cols. */
 static int eval_nodes(const btdf_params *p, const rho_in *a, const double *rows, size_t nr,
                       const double *cols, size_t nc, double *vals, double *w)
 {
     size_t nch = (size_t)p->channels;
+    double s = p->smoothness;
     double *cc = malloc(nc * 2 * sizeof(double));
     if (!cc)
         return 0;
@@ -222,38 +255,22 @@ static int eval_nodes(const btdf_params *p, const rho_in *a, const double *rows,
     }
     for (size_t i = 0; i < nr; i++) {
         double stn = sin(rows[i]), ctn = cos(rows[i]);
+        /* rows lie in [0, pi/2): ctn > 0; the exponent is cut where exp underflows */
+        double t2 = stn * stn / (ctn * ctn), x = 0.25 * s * s * t2;
+        double beck = x < BTDF_EXP_CUT ? exp(-x) * (1.0 + t2) * (1.0 + t2) : 0.0;
         for (size_t j = 0; j < nc; j++) {
             for (size_t c = 0; c < nch; c++) {
-                facet_geo g;
-                facet_eval(p->ior[c], p->smoothness, p->k0, a, stn, ctn, cc[2 * j],
-                           cc[2 * j + 1], &g);
-                vals[(i * nc + j) * nch + c] = g.rho;
+                double wt;
+                vals[(i * nc + j) * nch + c] =
+                    beck > 0.0 ? facet_rho(p->ior[c], s, p->k0, a, stn, ctn, cc[2 * j],
+                                           cc[2 * j + 1], beck, &wt)
+                               : (wt = 0.0);
                 if (c == 0 && w)
-                    w[i * nc + j] = g.weight * stn;
+                    w[i * nc + j] = wt;
             }
         }
     }
     free(cc);
-    return 1;
-}
-
-static int insert_mids(double **arr, size_t *m, const unsigned char *mark)
-{
-    size_t add = 0;
-    for (size_t i = 0; i + 1 < *m; i++)
-        add += mark[i] != 0;
-    double *na = malloc((*m + add) * sizeof(double));
-    if (!na)
-        return 0;
-    size_t k = 0;
-    for (size_t i = 0; i < *m; i++) {
-        na[k++] = (*arr)[i];
-        if (i + 1 < *m && mark[i])
-            na[k++] = 0.5 * ((*arr)[i] + (*arr)[i + 1]);
-    }
-    free(*arr);
-    *arr = na;
-    *m = k;
     return 1;
 }
 
@@ -264,6 +281,43 @@ static double trap(const double *a, size_t m, size_t i)
     return 0.5 * (lo + hi);
 }
 
+/* The new node set after bisecting the marked intervals of one axis: for each new
+   index, the old index (kind 0) or the interval whose midpoint it is (kind 1). */
+typedef struct axis_map {
+    size_t *idx;
+    unsigned char *mid;
+    size_t m;
+} axis_map;
+
+static int axis_refine(const double *a, size_t m, const unsigned char *mark, double **out,
+                       axis_map *map)
+{
+    size_t add = 0;
+    for (size_t i = 0; i + 1 < m; i++)
+        add += mark[i] != 0;
+    double *na = malloc((m + add) * sizeof(double));
+    map->idx = malloc((m + add) * sizeof(size_t));
+    map->mid = malloc(m + add);
+    if (!na || !map->idx || !map->mid) {
+        free(na);
+        return 0;
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < m; i++) {
+        map->idx[k] = i;
+        map->mid[k] = 0;
+        na[k++] = a[i];
+        if (i + 1 < m && mark[i]) {
+            map->idx[k] = i;
+            map->mid[k] = 1;
+            na[k++] = 0.5 * (a[i] + a[i + 1]);
+        }
+    }
+    map->m = k;
+    *out = na;
+    return 1;
+}
+
 static void build_slice(const slice_target *tg, slice_out *o)
 {
     const btdf_params *p = tg->p;
@@ -272,67 +326,54 @@ static void build_slice(const slice_target *tg, slice_out *o)
     o->s.ti = tg->ti;
     rho_in a;
     rho_in_init(&a, sin(tg->ti), cos(tg->ti), p->smoothness, p->k0);
+    int is_max = tg->metric == BTDF_METRIC_MAX;
     size_t nr = 17, nc = 13;
     double *rows = malloc(nr * sizeof(double)), *cols = malloc(nc * sizeof(double));
-    double *vals = NULL, *w = NULL;
+    double *vals = malloc(nr * nc * nch * sizeof(double)), *w = malloc(nr * nc * sizeof(double));
+    /* per pass: midpoints of row intervals x columns (vr, wr) and rows x midpoints of
+       column intervals (vc, wc); errors per interval; marks */
+    double *vr = NULL, *wr = NULL, *vc = NULL, *wc = NULL, *rm = NULL, *cm = NULL;
     double *er = NULL, *ec = NULL;
     unsigned char *mr = NULL, *mc = NULL;
-    if (!rows || !cols)
+    if (!rows || !cols || !vals || !w)
         goto nomem;
     for (size_t i = 0; i < nr; i++)
         rows[i] = atan(2.0 * tg->U * (double)i / (double)(nr - 1) / p->smoothness);
     for (size_t j = 0; j < nc; j++)
         cols[j] = M_PI * (double)j / (double)(nc - 1);
+    if (!eval_nodes(p, &a, rows, nr, cols, nc, vals, w))
+        goto nomem;
+    o->evals += nr * nc * nch;
     for (;;) {
-        free(vals);
-        free(w);
-        vals = malloc(nr * nc * nch * sizeof(double));
-        w = malloc(nr * nc * sizeof(double));
-        if (!vals || !w || !eval_nodes(p, &a, rows, nr, cols, nc, vals, w))
-            goto nomem;
-        o->evals += nr * nc * nch;
-        /* Midpoint errors per row interval and per column interval. */
-        free(er);
-        free(ec);
-        free(mr);
-        free(mc);
+        rm = malloc((nr - 1) * sizeof(double));
+        cm = malloc((nc - 1) * sizeof(double));
+        vr = malloc((nr - 1) * nc * nch * sizeof(double));
+        wr = malloc((nr - 1) * nc * sizeof(double));
+        vc = malloc(nr * (nc - 1) * nch * sizeof(double));
+        wc = malloc(nr * (nc - 1) * sizeof(double));
         er = calloc(nr, sizeof(double));
         ec = calloc(nc, sizeof(double));
         mr = calloc(nr, 1);
         mc = calloc(nc, 1);
-        if (!er || !ec || !mr || !mc)
+        if (!rm || !cm || !vr || !wr || !vc || !wc || !er || !ec || !mr || !mc)
             goto nomem;
+        for (size_t i = 0; i + 1 < nr; i++)
+            rm[i] = 0.5 * (rows[i] + rows[i + 1]);
+        for (size_t j = 0; j + 1 < nc; j++)
+            cm[j] = 0.5 * (cols[j] + cols[j + 1]);
+        if (!eval_nodes(p, &a, rm, nr - 1, cols, nc, vr, wr) ||
+            !eval_nodes(p, &a, rows, nr, cm, nc - 1, vc, wc))
+            goto nomem;
+        o->evals += ((nr - 1) * nc + nr * (nc - 1)) * nch;
         double vmax = 0.0;
         for (size_t q = 0; q < nr * nc * nch; q++)
             vmax = fmax(vmax, vals[q]);
-        int is_max = tg->metric == BTDF_METRIC_MAX;
         /* vmax = 0 means the slice is empty (grazing incidence): nothing to refine. */
         double norm = is_max ? (vmax > 0.0 ? 1.0 / vmax : 0.0) : 1.0;
         double total = 0.0, worst = 0.0;
-        /* Rho at the midpoints of all row intervals (x all columns) and of all column
-           intervals (x all rows), two batched evaluations. */
-        double *rm = malloc((nr - 1) * sizeof(double)), *cm = malloc((nc - 1) * sizeof(double));
-        double *vr = malloc((nr - 1) * nc * nch * sizeof(double));
-        double *wr = malloc((nr - 1) * nc * sizeof(double));
-        double *vc = malloc(nr * (nc - 1) * nch * sizeof(double));
-        double *wc = malloc(nr * (nc - 1) * sizeof(double));
-        int ok = rm && cm && vr && wr && vc && wc;
-        if (ok) {
-            for (size_t i = 0; i + 1 < nr; i++)
-                rm[i] = 0.5 * (rows[i] + rows[i + 1]);
-            for (size_t jj = 0; jj + 1 < nc; jj++)
-                cm[jj] = 0.5 * (cols[jj] + cols[jj + 1]);
-            ok = eval_nodes(p, &a, rm, nr - 1, cols, nc, vr, wr) &&
-                 eval_nodes(p, &a, rows, nr, cm, nc - 1, vc, wc);
-        }
-        if (!ok) {
-            free(rm); free(cm); free(vr); free(wr); free(vc); free(wc);
-            goto nomem;
-        }
-        o->evals += ((nr - 1) * nc + nr * (nc - 1)) * nch;
         for (size_t i = 0; i + 1 < nr; i++) {
             double e = 0.0;
-            for (size_t j = 0; j < nc; j++) {
+            for (size_t j = 0; j < nc; j++)
                 for (size_t c = 0; c < nch; c++) {
                     double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
                                         vals[((i + 1) * nc + j) * nch + c]);
@@ -342,14 +383,13 @@ static void build_slice(const slice_target *tg, slice_out *o)
                     else
                         e += d * wr[i * nc + j] * trap(cols, nc, j) * (rows[i + 1] - rows[i]) * 2.0;
                 }
-            }
             er[i] = e;
             total += e;
             worst = fmax(worst, e);
         }
         for (size_t j = 0; j + 1 < nc; j++) {
             double e = 0.0;
-            for (size_t i = 0; i < nr; i++) {
+            for (size_t i = 0; i < nr; i++)
                 for (size_t c = 0; c < nch; c++) {
                     double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
                                         vals[(i * nc + j + 1) * nch + c]);
@@ -359,14 +399,11 @@ static void build_slice(const slice_target *tg, slice_out *o)
                     else
                         e += d * wc[i * (nc - 1) + j] * trap(rows, nr, i) * (cols[j + 1] - cols[j]) * 2.0;
                 }
-            }
             ec[j] = e;
             total += e;
             worst = fmax(worst, e);
         }
-        free(rm); free(cm); free(vr); free(wr); free(vc); free(wc);
-        double measure = is_max ? worst : total;
-        if (measure <= tg->target)
+        if ((is_max ? worst : total) <= tg->target)
             break;
         /* Bisect every interval above its average share (for max: above the target). */
         double thresh = is_max ? tg->target : tg->target / (double)(nr - 1 + nc - 1);
@@ -385,13 +422,55 @@ static void build_slice(const slice_target *tg, slice_out *o)
             o->budget_hit = 1; /* cannot refine further within the budget */
             break;
         }
-        if (!insert_mids(&rows, &nr, mr) || !insert_mids(&cols, &nc, mc))
+        /* The new grid reuses every value already computed: old nodes, and the
+           midpoints just evaluated; only (new row, new column) crossings are new. */
+        axis_map ra = {0}, ca = {0};
+        double *nrows = NULL, *ncols = NULL;
+        int ok = axis_refine(rows, nr, mr, &nrows, &ra) && axis_refine(cols, nc, mc, &ncols, &ca);
+        size_t NR = ra.m, NC = ca.m;
+        double *nv = ok ? malloc(NR * NC * nch * sizeof(double)) : NULL;
+        double *nw = ok ? malloc(NR * NC * sizeof(double)) : NULL;
+        double *cross = ok ? malloc(nch * sizeof(double)) : NULL;
+        if (!nv || !nw || !cross) {
+            free(ra.idx); free(ra.mid); free(ca.idx); free(ca.mid);
+            free(nrows); free(ncols); free(nv); free(nw); free(cross);
             goto nomem;
+        }
+        for (size_t I = 0; I < NR; I++) {
+            size_t i = ra.idx[I];
+            for (size_t J = 0; J < NC; J++) {
+                size_t j = ca.idx[J];
+                const double *src;
+                double sw = 0.0;
+                if (!ra.mid[I] && !ca.mid[J]) {
+                    src = vals + (i * nc + j) * nch;
+                    sw = w[i * nc + j];
+                } else if (ra.mid[I] && !ca.mid[J]) {
+                    src = vr + (i * nc + j) * nch;
+                    sw = wr[i * nc + j];
+                } else if (!ra.mid[I]) {
+                    src = vc + (i * (nc - 1) + j) * nch;
+                    sw = wc[i * (nc - 1) + j];
+                } else {
+                    eval_nodes(p, &a, &nrows[I], 1, &ncols[J], 1, cross, &sw); /* no alloc fail: nc = 1 */
+                    o->evals += nch;
+                    src = cross;
+                }
+                memcpy(nv + (I * NC + J) * nch, src, nch * sizeof(double));
+                nw[I * NC + J] = sw;
+            }
+        }
+        free(ra.idx); free(ra.mid); free(ca.idx); free(ca.mid); free(cross);
+        free(rows); free(cols); free(vals); free(w);
+        rows = nrows; cols = ncols; vals = nv; w = nw;
+        nr = NR; nc = NC;
+        free(rm); free(cm); free(vr); free(wr); free(vc); free(wc);
+        free(er); free(ec); free(mr); free(mc);
+        rm = cm = vr = wr = vc = wc = er = ec = NULL;
+        mr = mc = NULL;
     }
-    free(er);
-    free(ec);
-    free(mr);
-    free(mc);
+    free(rm); free(cm); free(vr); free(wr); free(vc); free(wc);
+    free(er); free(ec); free(mr); free(mc);
     o->s.nr = nr;
     o->s.nc = nc;
     o->s.rows = rows;
@@ -400,14 +479,9 @@ static void build_slice(const slice_target *tg, slice_out *o)
     o->w = w;
     return;
 nomem:
-    free(rows);
-    free(cols);
-    free(vals);
-    free(w);
-    free(er);
-    free(ec);
-    free(mr);
-    free(mc);
+    free(rows); free(cols); free(vals); free(w);
+    free(rm); free(cm); free(vr); free(wr); free(vc); free(wc);
+    free(er); free(ec); free(mr); free(mc);
     memset(o, 0, sizeof *o);
     o->nomem = 1;
 }

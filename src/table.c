@@ -233,6 +233,7 @@ btdf_status table_push_slice(btdf_table *t, tslice *s)
         t->s = ns;
         t->cap = nc;
     }
+    s->g = incident_factor(&t->p, s->ti);
     t->s[t->ns++] = *s;
     return BTDF_OK;
 }
@@ -290,7 +291,7 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
         }
     }
     tslice s = {ti, nrows, ncols, malloc(nrows * sizeof(double)),
-                malloc(ncols * sizeof(double)), malloc(nv * nch * sizeof(double))};
+                malloc(ncols * sizeof(double)), malloc(nv * nch * sizeof(double)), 0.0};
     if (!s.rows || !s.cols || !s.vals) {
         free(s.rows);
         free(s.cols);
@@ -377,8 +378,8 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
     double g = 0.0, g0 = 0.0, g1 = 0.0;
     if (w > 0.0) {
         g = incident_factor(&t->p, ti);
-        g0 = incident_factor(&t->p, t->s[k].ti);
-        g1 = incident_factor(&t->p, t->s[k + 1].ti);
+        g0 = t->s[k].g;
+        g1 = t->s[k + 1].g;
     }
     for (int c = 0; c < nch; c++) {
         double x, y, n = recip ? 1.0 / t->p.ior[c] : t->p.ior[c];

@@ -12,6 +12,7 @@ typedef struct tslice {
     double ti;
     size_t nr, nc;
     double *rows, *cols, *vals; /* vals[(r * nc + c) * channels + ch] */
+    double g;                   /* incident factor V(ti)/cos ti, set when the slice is added */
 } tslice;
 
 struct btdf_table {
