@@ -100,4 +100,7 @@ static inline double rho_kernel(double n, double s, const rho_in *a, const rho_o
    and tests that speak degrees: reduces to [-45, 45] before converting. */
 void btdf_sincos_deg(double deg, double *s, double *c);
 
+/* min over channels of T(ti) from a coarse quadrature (about 1e-4 absolute). */
+double btdf_transmittance_coarse(const btdf_params *p, double ti);
+
 #endif

@@ -1,0 +1,739 @@
+/* SPDX-License-Identifier: MIT */
+/* build.c: tables from Eq. 25, a uniform grid or facet-space nodes refined to a tolerance. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "table_impl.h"
+
+btdf_status table_push_slice(btdf_table *t, tslice *s);
+
+BTDF_API void btdf_table_opts_default(btdf_table_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    btdf_params_default(&o->params);
+    o->ti_min = 0.0;
+    o->ti_max = M_PI / 2;
+    o->kind = BTDF_TABLE_FACET;
+    o->tolerance = 1e-3;
+    o->metric = BTDF_METRIC_L1;
+    o->grid_ti = 90;
+    o->grid_to = 90;
+    o->grid_phi = 181;
+    o->max_samples = 0;
+    o->max_bytes = 0;
+    o->threads = 0;
+}
+
+#define DEFAULT_MAX_SAMPLES ((size_t)8000000)
+#define DEFAULT_MAX_BYTES ((size_t)256 << 20)
+
+static btdf_status bad(char *msg, size_t msglen, const char *fmt, double v)
+{
+    if (msg && msglen)
+        snprintf(msg, msglen, fmt, v);
+    return BTDF_EINVAL;
+}
+
+static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen)
+{
+    btdf_status st = btdf_params_check(&o->params, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    if (!(o->ti_min >= 0.0 && o->ti_min <= M_PI / 2))
+        return bad(msg, msglen, "theta-i start %g deg: must lie in [0, 90]",
+                   o->ti_min * 180 / M_PI);
+    if (!(o->ti_max >= o->ti_min && o->ti_max <= M_PI / 2))
+        return bad(msg, msglen, "theta-i end %g deg: must lie in [start, 90]",
+                   o->ti_max * 180 / M_PI);
+    if (o->kind == BTDF_TABLE_GRID) {
+        if (o->grid_ti < 1 || o->grid_ti > 100000)
+            return bad(msg, msglen, "grid theta-i count %g: must lie in [1, 100000]",
+                       (double)o->grid_ti);
+        if (o->grid_to < 2 || o->grid_to > 100000)
+            return bad(msg, msglen, "grid theta-o count %g: must lie in [2, 100000]",
+                       (double)o->grid_to);
+        if (o->grid_phi < 2 || o->grid_phi > 100000)
+            return bad(msg, msglen, "grid phi count %g: must lie in [2, 100000]",
+                       (double)o->grid_phi);
+        if (o->grid_ti > 1 && !(o->ti_max > o->ti_min))
+            return bad(msg, msglen, "theta-i range of width %g: several grid slices need "
+                                    "start < end", o->ti_max - o->ti_min);
+    } else if (o->kind == BTDF_TABLE_FACET) {
+        if (!(o->tolerance >= 1e-7 && o->tolerance <= 1.0))
+            return bad(msg, msglen, "tolerance %g: must lie in [1e-7, 1]", o->tolerance);
+    } else {
+        return bad(msg, msglen, "table kind %g: must be facet (0) or grid (1)",
+                   (double)o->kind);
+    }
+    if (o->threads < 0 || o->threads > 256)
+        return bad(msg, msglen, "threads %g: must lie in [0, 256]", (double)o->threads);
+    return BTDF_OK;
+}
+
+/* ------------------------------------------------------------------------- */
+/* Uniform grid                                                              */
+/* ------------------------------------------------------------------------- */
+
+typedef struct grid_job {
+    const btdf_table_opts *o;
+    tslice *s;
+} grid_job;
+
+static void grid_slice(void *arg, size_t k)
+{
+    grid_job *g = arg;
+    const btdf_params *p = &g->o->params;
+    tslice *s = &g->s[k];
+    size_t nr = s->nr, nc = s->nc, nch = (size_t)p->channels;
+    double *cph = malloc(nc * sizeof(double)), *sph = malloc(nc * sizeof(double));
+    double *row = malloc(nc * sizeof(double));
+    if (!cph || !sph || !row) {
+        free(cph);
+        free(sph);
+        free(row);
+        s->nr = 0; /* reported as BTDF_ENOMEM by the caller */
+        return;
+    }
+    for (size_t j = 0; j < nc; j++) {
+        cph[j] = cos(s->cols[j]);
+        sph[j] = sin(s->cols[j]);
+    }
+    rho_in a;
+    for (size_t c = 0; c < nch; c++) {
+        double n = p->ior[c];
+        rho_in_init(&a, sin(s->ti), cos(s->ti), p->smoothness, p->k0);
+        for (size_t i = 0; i < nr; i++) {
+            rho_out b;
+            rho_out_init(&b, sin(s->rows[i]), fmin(cos(s->rows[i]), 0.0), p->smoothness, p->k0);
+            /* The inner loop has no per-sample trigonometry and no calls: it vectorises. */
+            for (size_t j = 0; j < nc; j++)
+                row[j] = rho_kernel(n, p->smoothness, &a, &b, cph[j], sph[j]);
+            for (size_t j = 0; j < nc; j++)
+                s->vals[(i * nc + j) * nch + c] = row[j];
+        }
+    }
+    free(cph);
+    free(sph);
+    free(row);
+}
+
+static btdf_status build_grid(const btdf_table_opts *o, btdf_table *t, char *msg,
+                              size_t msglen)
+{
+    size_t nt = o->grid_ti, nr = o->grid_to, nc = o->grid_phi, nch = (size_t)o->params.channels;
+    size_t max_samples = o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES;
+    size_t max_bytes = o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES;
+    /* counts are <= 1e5 each: nt * nr * nc < 1e15 fits size_t; bytes checked below */
+    size_t total = nt * nr * nc;
+    if (total > max_samples || total > max_bytes / (nch * sizeof(double))) {
+        if (msg && msglen)
+            snprintf(msg, msglen,
+                     "grid of %zu x %zu x %zu = %zu samples exceeds the budget of %zu samples "
+                     "or %zu bytes",
+                     nt, nr, nc, total, max_samples, max_bytes);
+        return BTDF_EBUDGET;
+    }
+    tslice *s = calloc(nt, sizeof *s);
+    if (!s)
+        return BTDF_ENOMEM;
+    btdf_status st = BTDF_OK;
+    for (size_t k = 0; k < nt && st == BTDF_OK; k++) {
+        s[k].ti = nt > 1 ? o->ti_min + (o->ti_max - o->ti_min) * (double)k / (double)(nt - 1)
+                         : o->ti_min;
+        s[k].nr = nr;
+        s[k].nc = nc;
+        s[k].rows = malloc(nr * sizeof(double));
+        s[k].cols = malloc(nc * sizeof(double));
+        s[k].vals = malloc(nr * nc * nch * sizeof(double));
+        if (!s[k].rows || !s[k].cols || !s[k].vals) {
+            st = BTDF_ENOMEM;
+            break;
+        }
+        for (size_t i = 0; i < nr; i++)
+            s[k].rows[i] = M_PI / 2 + (M_PI / 2) * (double)i / (double)(nr - 1);
+        for (size_t j = 0; j < nc; j++)
+            s[k].cols[j] = M_PI * (double)j / (double)(nc - 1);
+    }
+    if (st == BTDF_OK) {
+        grid_job g = {o, s};
+        btdf_parallel_for(o->threads, nt, grid_slice, &g);
+        for (size_t k = 0; k < nt; k++)
+            if (s[k].nr == 0)
+                st = BTDF_ENOMEM;
+    }
+    for (size_t k = 0; k < nt; k++) {
+        if (st == BTDF_OK && table_push_slice(t, &s[k]) != BTDF_OK)
+            st = BTDF_ENOMEM;
+        if (st != BTDF_OK) {
+            free(s[k].rows);
+            free(s[k].cols);
+            free(s[k].vals);
+        }
+    }
+    free(s);
+    return st;
+}
+
+/* ------------------------------------------------------------------------- */
+/* Adaptive facet-space table                                                */
+/* ------------------------------------------------------------------------- */
+
+/*
+ * Nodes: a slice at ti holds rho at facet normals h(tn, psi). Rows start uniform in
+ * u = (s/2) tan tn, the facet slope in units where the Beckmann factor is exp(-u^2),
+ * so the same nodes suit every s; columns start uniform in psi. Each pass compares
+ * the linear interpolant with Eq. 25 at the midpoint of every row and column
+ * interval, weighted by the outgoing measure |cos to| d(omega_o) = |cos to|/chi
+ * d(omega_h), and bisects the intervals whose share of the error exceeds the
+ * average allowed share. Incidence nodes are bisected the same way, by comparing
+ * the blend of two neighbouring slices with a slice built at their midpoint.
+ */
+
+typedef struct slice_target {
+    const btdf_params *p;
+    double ti;
+    double target; /* allowed error: absolute L1 (already times max(T, 0.01)) or relative max */
+    btdf_metric metric;
+    double U; /* last row at u = U */
+    size_t max_nodes;
+} slice_target;
+
+typedef struct slice_out {
+    tslice s;
+    double *w; /* measure weight per node (channel 0), for incidence refinement */
+    size_t evals;
+    int budget_hit;
+    int nomem;
+} slice_out;
+
+/* Evaluates rho (all channels) and the channel-0 measure weight on rows x cols. */
+static int eval_nodes(const btdf_params *p, const rho_in *a, const double *rows, size_t nr,
+                      const double *cols, size_t nc, double *vals, double *w)
+{
+    size_t nch = (size_t)p->channels;
+    double *cc = malloc(nc * 2 * sizeof(double));
+    if (!cc)
+        return 0;
+    for (size_t j = 0; j < nc; j++) {
+        cc[2 * j] = cos(cols[j]);
+        cc[2 * j + 1] = sin(cols[j]);
+    }
+    for (size_t i = 0; i < nr; i++) {
+        double stn = sin(rows[i]), ctn = cos(rows[i]);
+        for (size_t j = 0; j < nc; j++) {
+            for (size_t c = 0; c < nch; c++) {
+                facet_geo g;
+                facet_eval(p->ior[c], p->smoothness, p->k0, a, stn, ctn, cc[2 * j],
+                           cc[2 * j + 1], &g);
+                vals[(i * nc + j) * nch + c] = g.rho;
+                if (c == 0 && w)
+                    w[i * nc + j] = g.weight * stn;
+            }
+        }
+    }
+    free(cc);
+    return 1;
+}
+
+static int insert_mids(double **arr, size_t *m, const unsigned char *mark)
+{
+    size_t add = 0;
+    for (size_t i = 0; i + 1 < *m; i++)
+        add += mark[i] != 0;
+    double *na = malloc((*m + add) * sizeof(double));
+    if (!na)
+        return 0;
+    size_t k = 0;
+    for (size_t i = 0; i < *m; i++) {
+        na[k++] = (*arr)[i];
+        if (i + 1 < *m && mark[i])
+            na[k++] = 0.5 * ((*arr)[i] + (*arr)[i + 1]);
+    }
+    free(*arr);
+    *arr = na;
+    *m = k;
+    return 1;
+}
+
+/* Trapezoid weight of node i on a non-uniform axis. */
+static double trap(const double *a, size_t m, size_t i)
+{
+    double lo = i > 0 ? a[i] - a[i - 1] : 0.0, hi = i + 1 < m ? a[i + 1] - a[i] : 0.0;
+    return 0.5 * (lo + hi);
+}
+
+static void build_slice(const slice_target *tg, slice_out *o)
+{
+    const btdf_params *p = tg->p;
+    size_t nch = (size_t)p->channels;
+    memset(o, 0, sizeof *o);
+    o->s.ti = tg->ti;
+    rho_in a;
+    rho_in_init(&a, sin(tg->ti), cos(tg->ti), p->smoothness, p->k0);
+    size_t nr = 17, nc = 13;
+    double *rows = malloc(nr * sizeof(double)), *cols = malloc(nc * sizeof(double));
+    double *vals = NULL, *w = NULL;
+    double *er = NULL, *ec = NULL;
+    unsigned char *mr = NULL, *mc = NULL;
+    if (!rows || !cols)
+        goto nomem;
+    for (size_t i = 0; i < nr; i++)
+        rows[i] = atan(2.0 * tg->U * (double)i / (double)(nr - 1) / p->smoothness);
+    for (size_t j = 0; j < nc; j++)
+        cols[j] = M_PI * (double)j / (double)(nc - 1);
+    for (;;) {
+        free(vals);
+        free(w);
+        vals = malloc(nr * nc * nch * sizeof(double));
+        w = malloc(nr * nc * sizeof(double));
+        if (!vals || !w || !eval_nodes(p, &a, rows, nr, cols, nc, vals, w))
+            goto nomem;
+        o->evals += nr * nc * nch;
+        /* Midpoint errors per row interval and per column interval. */
+        free(er);
+        free(ec);
+        free(mr);
+        free(mc);
+        er = calloc(nr, sizeof(double));
+        ec = calloc(nc, sizeof(double));
+        mr = calloc(nr, 1);
+        mc = calloc(nc, 1);
+        if (!er || !ec || !mr || !mc)
+            goto nomem;
+        double vmax = 0.0;
+        for (size_t q = 0; q < nr * nc * nch; q++)
+            vmax = fmax(vmax, vals[q]);
+        int is_max = tg->metric == BTDF_METRIC_MAX;
+        /* vmax = 0 means the slice is empty (grazing incidence): nothing to refine. */
+        double norm = is_max ? (vmax > 0.0 ? 1.0 / vmax : 0.0) : 1.0;
+        double total = 0.0, worst = 0.0;
+        /* Rho at the midpoints of all row intervals (x all columns) and of all column
+           intervals (x all rows), two batched evaluations. */
+        double *rm = malloc((nr - 1) * sizeof(double)), *cm = malloc((nc - 1) * sizeof(double));
+        double *vr = malloc((nr - 1) * nc * nch * sizeof(double));
+        double *wr = malloc((nr - 1) * nc * sizeof(double));
+        double *vc = malloc(nr * (nc - 1) * nch * sizeof(double));
+        double *wc = malloc(nr * (nc - 1) * sizeof(double));
+        int ok = rm && cm && vr && wr && vc && wc;
+        if (ok) {
+            for (size_t i = 0; i + 1 < nr; i++)
+                rm[i] = 0.5 * (rows[i] + rows[i + 1]);
+            for (size_t jj = 0; jj + 1 < nc; jj++)
+                cm[jj] = 0.5 * (cols[jj] + cols[jj + 1]);
+            ok = eval_nodes(p, &a, rm, nr - 1, cols, nc, vr, wr) &&
+                 eval_nodes(p, &a, rows, nr, cm, nc - 1, vc, wc);
+        }
+        if (!ok) {
+            free(rm); free(cm); free(vr); free(wr); free(vc); free(wc);
+            goto nomem;
+        }
+        o->evals += ((nr - 1) * nc + nr * (nc - 1)) * nch;
+        for (size_t i = 0; i + 1 < nr; i++) {
+            double e = 0.0;
+            for (size_t j = 0; j < nc; j++) {
+                for (size_t c = 0; c < nch; c++) {
+                    double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
+                                        vals[((i + 1) * nc + j) * nch + c]);
+                    double d = fabs(vr[(i * nc + j) * nch + c] - lin);
+                    if (is_max)
+                        e = fmax(e, d * norm);
+                    else
+                        e += d * wr[i * nc + j] * trap(cols, nc, j) * (rows[i + 1] - rows[i]) * 2.0;
+                }
+            }
+            er[i] = e;
+            total += e;
+            worst = fmax(worst, e);
+        }
+        for (size_t j = 0; j + 1 < nc; j++) {
+            double e = 0.0;
+            for (size_t i = 0; i < nr; i++) {
+                for (size_t c = 0; c < nch; c++) {
+                    double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
+                                        vals[(i * nc + j + 1) * nch + c]);
+                    double d = fabs(vc[(i * (nc - 1) + j) * nch + c] - lin);
+                    if (is_max)
+                        e = fmax(e, d * norm);
+                    else
+                        e += d * wc[i * (nc - 1) + j] * trap(rows, nr, i) * (cols[j + 1] - cols[j]) * 2.0;
+                }
+            }
+            ec[j] = e;
+            total += e;
+            worst = fmax(worst, e);
+        }
+        free(rm); free(cm); free(vr); free(wr); free(vc); free(wc);
+        double measure = is_max ? worst : total;
+        if (measure <= tg->target)
+            break;
+        /* Bisect every interval above its average share (for max: above the target). */
+        double thresh = is_max ? tg->target : tg->target / (double)(nr - 1 + nc - 1);
+        size_t add_r = 0, add_c = 0;
+        for (size_t i = 0; i + 1 < nr; i++)
+            if (er[i] > thresh && rows[i + 1] - rows[i] > 1e-12) {
+                mr[i] = 1;
+                add_r++;
+            }
+        for (size_t j = 0; j + 1 < nc; j++)
+            if (ec[j] > thresh && cols[j + 1] - cols[j] > 1e-12) {
+                mc[j] = 1;
+                add_c++;
+            }
+        if (add_r + add_c == 0 || (nr + add_r) * (nc + add_c) > tg->max_nodes) {
+            o->budget_hit = 1; /* cannot refine further within the budget */
+            break;
+        }
+        if (!insert_mids(&rows, &nr, mr) || !insert_mids(&cols, &nc, mc))
+            goto nomem;
+    }
+    free(er);
+    free(ec);
+    free(mr);
+    free(mc);
+    o->s.nr = nr;
+    o->s.nc = nc;
+    o->s.rows = rows;
+    o->s.cols = cols;
+    o->s.vals = vals;
+    o->w = w;
+    return;
+nomem:
+    free(rows);
+    free(cols);
+    free(vals);
+    free(w);
+    free(er);
+    free(ec);
+    free(mr);
+    free(mc);
+    memset(o, 0, sizeof *o);
+    o->nomem = 1;
+}
+
+typedef struct facet_job {
+    const btdf_table_opts *o;
+    double frac_slice;
+    double U;
+    size_t max_nodes;
+    const double *ti;
+    slice_out *out;
+} facet_job;
+
+static double t_floor(const btdf_params *p, double ti)
+{
+    /* MODEL.md section 6: errors are relative to max(T, 0.01) */
+    return fmax(btdf_transmittance_coarse(p, ti), 0.01);
+}
+
+static void facet_slice_job(void *arg, size_t k)
+{
+    facet_job *j = arg;
+    const btdf_table_opts *o = j->o;
+    slice_target tg;
+    tg.p = &o->params;
+    tg.ti = j->ti[k];
+    tg.metric = o->metric;
+    tg.U = j->U;
+    tg.max_nodes = j->max_nodes;
+    tg.target = o->tolerance * j->frac_slice *
+                (o->metric == BTDF_METRIC_MAX ? 1.0 : t_floor(&o->params, tg.ti));
+    build_slice(&tg, &j->out[k]);
+}
+
+/* Error of blending slices a and b half-way, measured on slice m's nodes, relative. */
+static double blend_error(const btdf_table_opts *o, const slice_out *A, const slice_out *B,
+                          const slice_out *M)
+{
+    btdf_table tmp;
+    tslice two[2] = {A->s, B->s};
+    tmp.kind = BTDF_TABLE_FACET;
+    tmp.p = o->params;
+    tmp.ns = 2;
+    tmp.cap = 2;
+    tmp.s = two;
+    const tslice *s = &M->s;
+    size_t nch = (size_t)o->params.channels;
+    double wa = (B->s.ti - M->s.ti) / (B->s.ti - A->s.ti), e = 0.0, vmax = 0.0, dmax = 0.0;
+    double g = incident_factor(&o->params, M->s.ti), ga = incident_factor(&o->params, A->s.ti),
+           gb = incident_factor(&o->params, B->s.ti);
+    for (size_t i = 0; i < s->nr; i++) {
+        double tw = trap(s->rows, s->nr, i);
+        for (size_t j = 0; j < s->nc; j++) {
+            for (size_t c = 0; c < nch; c++) {
+                double bl = blend_ti(slice_interp(&tmp, 0, s->rows[i], s->cols[j], (int)c),
+                                     slice_interp(&tmp, 1, s->rows[i], s->cols[j], (int)c),
+                                     1.0 - wa, g, ga, gb);
+                double tv = s->vals[(i * s->nc + j) * nch + c];
+                double d = fabs(bl - tv);
+                vmax = fmax(vmax, tv);
+                dmax = fmax(dmax, d);
+                e += d * M->w[i * s->nc + j] * tw * trap(s->cols, s->nc, j) * 2.0;
+            }
+        }
+    }
+    if (o->metric == BTDF_METRIC_MAX)
+        return vmax > 0.0 ? dmax / vmax : 0.0; /* empty slices have no max error */
+    return e / t_floor(&o->params, M->s.ti);
+}
+
+static void free_slice_out(slice_out *s)
+{
+    free(s->s.rows);
+    free(s->s.cols);
+    free(s->s.vals);
+    free(s->w);
+    memset(s, 0, sizeof *s);
+}
+
+static int cmp_ti(const void *a, const void *b)
+{
+    double x = ((const slice_out *)a)->s.ti, y = ((const slice_out *)b)->s.ti;
+    return (x > y) - (x < y);
+}
+
+/* One adaptive build with the given shares of the tolerance. */
+static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
+                                    double frac_ti, btdf_table *t, int *budget_hit,
+                                    size_t *peak_bytes)
+{
+    size_t max_samples = o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES;
+    size_t max_bytes = o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES;
+    size_t nch = (size_t)o->params.channels;
+    size_t node_cap = max_bytes / (nch * sizeof(double) + sizeof(double));
+    if (node_cap > max_samples)
+        node_cap = max_samples;
+    /* Tail: facets with u > U carry a fraction exp(-U^2) of the facet distribution; U
+       puts that below a tenth of the tolerance. */
+    double U = sqrt(log(10.0 / o->tolerance)) + 1.0;
+    facet_job j = {o, frac_slice, U, node_cap / 8 > 1000 ? node_cap / 8 : 1000, NULL, NULL};
+    double span = o->ti_max - o->ti_min;
+    size_t n0 = span > 0.0 ? (size_t)ceil(span / (5.0 * M_PI / 180.0)) + 1 : 1;
+    size_t cap = n0, ns = n0;
+    slice_out *sl = calloc(cap, sizeof *sl);
+    double *tis = malloc(cap * sizeof(double));
+    if (!sl || !tis) {
+        free(sl);
+        free(tis);
+        return BTDF_ENOMEM;
+    }
+    for (size_t k = 0; k < n0; k++)
+        tis[k] = n0 > 1 ? o->ti_min + span * (double)k / (double)(n0 - 1) : o->ti_min;
+    j.ti = tis;
+    j.out = sl;
+    btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
+    btdf_status st = BTDF_OK;
+    size_t nodes = 0;
+    for (size_t k = 0; k < ns; k++) {
+        if (sl[k].nomem)
+            st = BTDF_ENOMEM;
+        if (sl[k].budget_hit)
+            *budget_hit = 1;
+        nodes += sl[k].s.nr * sl[k].s.nc;
+    }
+    /* Incidence refinement in rounds: test the midpoint of every open interval. */
+    unsigned char *open = malloc(ns ? ns : 1);
+    if (!open)
+        st = BTDF_ENOMEM;
+    for (size_t k = 0; k + 1 < ns && open; k++)
+        open[k] = 1;
+    double min_gap = 1e-4; /* rad: finer incidence steps buy nothing a renderer can see */
+    while (st == BTDF_OK) {
+        size_t nt = 0;
+        for (size_t k = 0; k + 1 < ns; k++)
+            if (open[k] && sl[k + 1].s.ti - sl[k].s.ti > 2 * min_gap)
+                nt++;
+        if (nt == 0)
+            break;
+        double *mt = malloc(nt * sizeof(double));
+        size_t *at = malloc(nt * sizeof(size_t));
+        slice_out *cand = calloc(nt, sizeof *cand);
+        if (!mt || !at || !cand) {
+            free(mt);
+            free(at);
+            free(cand);
+            st = BTDF_ENOMEM;
+            break;
+        }
+        size_t q = 0;
+        for (size_t k = 0; k + 1 < ns; k++)
+            if (open[k] && sl[k + 1].s.ti - sl[k].s.ti > 2 * min_gap) {
+                mt[q] = 0.5 * (sl[k].s.ti + sl[k + 1].s.ti);
+                at[q++] = k;
+            }
+        j.ti = mt;
+        j.out = cand;
+        btdf_parallel_for(o->threads, nt, facet_slice_job, &j);
+        size_t keep = 0;
+        for (q = 0; q < nt; q++) {
+            if (cand[q].nomem) {
+                st = BTDF_ENOMEM;
+                continue;
+            }
+            size_t k = at[q];
+            double e = blend_error(o, &sl[k], &sl[k + 1], &cand[q]);
+            if (e > o->tolerance * frac_ti)
+                keep++;
+            else {
+                open[k] = 0;
+                free_slice_out(&cand[q]);
+            }
+        }
+        if (st == BTDF_OK && keep) {
+            size_t add_nodes = 0;
+            for (q = 0; q < nt; q++)
+                add_nodes += cand[q].s.nr * cand[q].s.nc;
+            if (nodes + add_nodes > max_samples ||
+                (nodes + add_nodes) * (nch + 1) * sizeof(double) > max_bytes) {
+                *budget_hit = 1;
+                keep = 0;
+            }
+        }
+        if (st == BTDF_OK && keep) {
+            slice_out *ns_sl = realloc(sl, (ns + keep) * sizeof *sl);
+            unsigned char *no = ns_sl ? realloc(open, ns + keep) : NULL;
+            if (ns_sl)
+                sl = ns_sl;
+            if (!ns_sl || !no) {
+                st = BTDF_ENOMEM;
+            } else {
+                open = no;
+                /* Old intervals that were split stay open as their two halves. */
+                for (q = 0; q < nt; q++) {
+                    if (cand[q].s.vals) {
+                        sl[ns] = cand[q];
+                        if (cand[q].budget_hit)
+                            *budget_hit = 1;
+                        nodes += cand[q].s.nr * cand[q].s.nc;
+                        memset(&cand[q], 0, sizeof cand[q]);
+                        ns++;
+                    }
+                }
+                /* Re-sort by ti and mark which intervals remain open: an interval is
+                   open when one of its ends was just added. */
+                double *fresh = malloc(ns * sizeof(double));
+                size_t nf = 0;
+                for (size_t k = ns - keep; k < ns && fresh; k++)
+                    fresh[nf++] = sl[k].s.ti;
+                qsort(sl, ns, sizeof *sl, cmp_ti);
+                for (size_t k = 0; k + 1 < ns; k++) {
+                    open[k] = 0;
+                    for (size_t f = 0; f < nf; f++)
+                        if (sl[k].s.ti == fresh[f] || sl[k + 1].s.ti == fresh[f])
+                            open[k] = 1;
+                }
+                free(fresh);
+                if (!fresh)
+                    st = BTDF_ENOMEM;
+            }
+        } else if (st == BTDF_OK && !keep) {
+            for (q = 0; q < nt; q++)
+                free_slice_out(&cand[q]);
+            if (*budget_hit)
+                for (size_t k = 0; k + 1 < ns; k++)
+                    open[k] = 0;
+        }
+        for (q = 0; q < nt; q++)
+            free_slice_out(&cand[q]);
+        free(cand);
+        free(mt);
+        free(at);
+    }
+    free(open);
+    size_t bytes = 0;
+    for (size_t k = 0; k < ns; k++) {
+        bytes += sl[k].s.nr * sl[k].s.nc * (nch + 1) * sizeof(double);
+        free(sl[k].w);
+        sl[k].w = NULL;
+        if (st == BTDF_OK) {
+            if (table_push_slice(t, &sl[k].s) != BTDF_OK) {
+                st = BTDF_ENOMEM;
+                free_slice_out(&sl[k]);
+            }
+        } else {
+            free_slice_out(&sl[k]);
+        }
+    }
+    if (bytes > *peak_bytes)
+        *peak_bytes = bytes;
+    free(sl);
+    free(tis);
+    return st;
+}
+
+static void table_clear(btdf_table *t)
+{
+    for (size_t k = 0; k < t->ns; k++) {
+        free(t->s[k].rows);
+        free(t->s[k].cols);
+        free(t->s[k].vals);
+    }
+    t->ns = 0;
+}
+
+/* Seed of the estimate the builder checks itself with; reports use another. */
+#define BUILD_CHECK_SEED 0x5eedb0f1u
+
+BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out, char *msg,
+                                      size_t msglen)
+{
+    if (!o || !out)
+        return BTDF_EINVAL;
+    btdf_status st = check_opts(o, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    btdf_table *t;
+    st = btdf_table_new(o->kind, &o->params, &t, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    if (o->kind == BTDF_TABLE_GRID) {
+        st = build_grid(o, t, msg, msglen);
+        if (st != BTDF_OK) {
+            btdf_table_free(t);
+            return st;
+        }
+        *out = t;
+        return BTDF_OK;
+    }
+    /* Split the tolerance between slice interpolation and incidence blending, check
+       the result with an independent estimate, and tighten while it falls short. */
+    double fs = 0.8, ft = 0.8;
+    int budget_hit = 0, met = 0;
+    size_t peak = 0;
+    for (int pass = 0; pass < 5; pass++) {
+        table_clear(t);
+        budget_hit = 0;
+        st = build_facet_pass(o, fs, ft, t, &budget_hit, &peak);
+        if (st != BTDF_OK)
+            break;
+        btdf_report r;
+        memset(&r, 0, sizeof r);
+        st = btdf_table_estimate(t, o->ti_min, o->ti_max, 24, 4096, BUILD_CHECK_SEED,
+                                 o->threads, &r);
+        double e = o->metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max;
+        btdf_report_clear(&r);
+        if (st != BTDF_OK)
+            break;
+        met = e <= o->tolerance;
+        if (e <= 0.8 * o->tolerance || budget_hit)
+            break;
+        double f = fmax(0.2, fmin(0.7, 0.7 * o->tolerance / e));
+        fs *= f;
+        ft *= f;
+    }
+    if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        btdf_table_free(t);
+        return st;
+    }
+    *out = t;
+    if (budget_hit && !met) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "the sample budget (%zu samples, %zu bytes) stopped "
+                                  "refinement before the tolerance %g was met",
+                     o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES,
+                     o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES, o->tolerance);
+        return BTDF_EBUDGET;
+    }
+    return BTDF_OK;
+}

@@ -1,0 +1,400 @@
+/* SPDX-License-Identifier: MIT */
+/* table.c: the table object, its interpolation rule, threads and the facet geometry. */
+#include <math.h>
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "table_impl.h"
+
+double btdf_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int btdf_thread_count(int requested)
+{
+    if (requested > 0)
+        return requested > 256 ? 256 : requested;
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1 : (n > 256 ? 256 : (int)n);
+}
+
+typedef struct pool {
+    pthread_mutex_t lock;
+    size_t next, count;
+    void (*fn)(void *, size_t);
+    void *arg;
+} pool;
+
+static void *pool_worker(void *v)
+{
+    pool *p = v;
+    for (;;) {
+        pthread_mutex_lock(&p->lock);
+        size_t i = p->next++;
+        pthread_mutex_unlock(&p->lock);
+        if (i >= p->count)
+            return NULL;
+        p->fn(p->arg, i);
+    }
+}
+
+void btdf_parallel_for(int threads, size_t count, void (*fn)(void *arg, size_t i), void *arg)
+{
+    int nt = btdf_thread_count(threads);
+    if ((size_t)nt > count)
+        nt = (int)count;
+    if (nt <= 1) {
+        for (size_t i = 0; i < count; i++)
+            fn(arg, i);
+        return;
+    }
+    pool p;
+    pthread_mutex_init(&p.lock, NULL);
+    p.next = 0;
+    p.count = count;
+    p.fn = fn;
+    p.arg = arg;
+    pthread_t tid[256];
+    int started = 0;
+    for (int k = 1; k < nt; k++)
+        if (pthread_create(&tid[started], NULL, pool_worker, &p) == 0)
+            started++;
+    pool_worker(&p); /* the calling thread works too; fewer threads only slow it down */
+    for (int k = 0; k < started; k++)
+        pthread_join(tid[k], NULL);
+    pthread_mutex_destroy(&p.lock);
+}
+
+/* ------------------------------------------------------------------------- */
+/* Facet geometry                                                            */
+/* ------------------------------------------------------------------------- */
+
+int facet_eval(double n, double s, double k0, const rho_in *a, double stn, double ctn,
+               double cpsi, double spsi, facet_geo *g)
+{
+    g->rho = 0.0;
+    g->weight = 0.0;
+    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
+    if (!(ca > 0.0))
+        return 0; /* the facet faces away from e_i */
+    double sb2 = (1.0 - ca * ca) / (n * n);
+    if (!(sb2 < 1.0))
+        return 0; /* total internal reflection on this facet */
+    double cb = sqrt(1.0 - sb2);
+    double gg = ca / n - cb;
+    double ox = -a->sin_ti / n + gg * stn * cpsi;
+    double oy = gg * stn * spsi;
+    double oz = -a->cos_ti / n + gg * ctn;
+    if (!(oz < 0.0) || !(cb > 0.0))
+        return 0; /* refracted into the upper hemisphere, or grazing on the facet */
+    double st = sqrt(ox * ox + oy * oy);
+    g->sin_to = st;
+    g->cos_to = oz;
+    /* e_o on the axis: phi is undefined and does not matter, take phi = 0. */
+    g->cos_phi = st > 0.0 ? ox / st : 1.0;
+    g->sin_phi = st > 0.0 ? oy / st : 0.0;
+    rho_out b;
+    rho_out_init(&b, st, oz, s, k0);
+    g->rho = rho_kernel(n, s, a, &b, g->cos_phi, g->sin_phi);
+    double d = ca - n * cb; /* |v| with v = e_i + n e_o = (ca - n cb) h; != 0 for n != 1 */
+    g->weight = -oz * d * d / (n * n * cb);
+    return 1;
+}
+
+int facet_of(double n, double sti, double cti, double sto, double cto, double cph,
+             double sph, double *tn, double *psi)
+{
+    double vx = sti + n * sto * cph, vy = n * sto * sph, vz = cti + n * cto;
+    double sg = vz < 0.0 ? -1.0 : 1.0; /* h = sg v / |v| has h_z >= 0 */
+    double ca = sg * (sti * vx + cti * vz);
+    double cb = -sg * (sto * (cph * vx + sph * vy) + cto * vz);
+    if (!(ca > 0.0 && cb > 0.0) || vz == 0.0)
+        return 0; /* no facet refracts e_i into e_o */
+    double hx = sg * vx, hy = fabs(vy), hz = sg * vz;
+    *tn = atan2(sqrt(hx * hx + hy * hy), hz);
+    *psi = atan2(hy, hx);
+    return 1;
+}
+
+/* Index i with a[i] <= x <= a[i + 1], for a strictly increasing array of m >= 2. */
+static size_t bracket(const double *a, size_t m, double x)
+{
+    size_t lo = 0, hi = m - 1;
+    while (hi - lo > 1) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (a[mid] <= x)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch)
+{
+    const tslice *s = &t->s[k];
+    int nch = t->p.channels;
+    if (!(x >= s->rows[0] && x <= s->rows[s->nr - 1] && y >= s->cols[0] &&
+          y <= s->cols[s->nc - 1]))
+        return 0.0; /* outside the tabulated range: the table says 0 */
+    size_t i = 0, j = 0;
+    double u = 0.0, v = 0.0;
+    if (s->nr > 1) {
+        i = bracket(s->rows, s->nr, x);
+        u = (x - s->rows[i]) / (s->rows[i + 1] - s->rows[i]); /* rows strictly increase */
+    }
+    if (s->nc > 1) {
+        j = bracket(s->cols, s->nc, y);
+        v = (y - s->cols[j]) / (s->cols[j + 1] - s->cols[j]);
+    }
+    size_t i1 = s->nr > 1 ? i + 1 : i, j1 = s->nc > 1 ? j + 1 : j;
+    const double *V = s->vals;
+    double f00 = V[(i * s->nc + j) * nch + ch], f01 = V[(i * s->nc + j1) * nch + ch];
+    double f10 = V[(i1 * s->nc + j) * nch + ch], f11 = V[(i1 * s->nc + j1) * nch + ch];
+    return (1.0 - u) * ((1.0 - v) * f00 + v * f01) + u * ((1.0 - v) * f10 + v * f11);
+}
+
+double incident_factor(const btdf_params *p, double ti)
+{
+    double c = cos(ti);
+    /* grazing incidence: V -> 0 faster than cos ti, and rho is 0 there */
+    return c > 0.0 ? shadow_v(sin(ti) / c, p->smoothness, p->k0) / c : 0.0;
+}
+
+double blend_ti(double v0, double v1, double w, double g, double g0, double g1)
+{
+    /* A slice whose incident factor is 0 (ti = 90 deg) holds only zeros: its reduced
+       value is 0, which the factor g of the query multiplies anyway. */
+    double r0 = g0 > 0.0 ? v0 / g0 : 0.0, r1 = g1 > 0.0 ? v1 / g1 : 0.0;
+    return g * ((1.0 - w) * r0 + w * r1);
+}
+
+/* ------------------------------------------------------------------------- */
+/* The object                                                                */
+/* ------------------------------------------------------------------------- */
+
+static void set_msg(char *msg, size_t msglen, const char *text)
+{
+    if (msg && msglen)
+        snprintf(msg, msglen, "%s", text);
+}
+
+BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
+                                    btdf_table **out, char *msg, size_t msglen)
+{
+    if (!out)
+        return BTDF_EINVAL;
+    if (kind != BTDF_TABLE_FACET && kind != BTDF_TABLE_GRID) {
+        set_msg(msg, msglen, "table kind: must be facet or grid");
+        return BTDF_EINVAL;
+    }
+    btdf_status st = btdf_params_check(p, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    btdf_table *t = calloc(1, sizeof *t);
+    if (!t)
+        return BTDF_ENOMEM;
+    t->kind = kind;
+    t->p = *p;
+    *out = t;
+    return BTDF_OK;
+}
+
+BTDF_API void btdf_table_free(btdf_table *t)
+{
+    if (!t)
+        return;
+    for (size_t k = 0; k < t->ns; k++) {
+        free(t->s[k].rows);
+        free(t->s[k].cols);
+        free(t->s[k].vals);
+    }
+    free(t->s);
+    free(t);
+}
+
+/* Takes ownership of the three arrays of s on success. */
+btdf_status table_push_slice(btdf_table *t, tslice *s);
+btdf_status table_push_slice(btdf_table *t, tslice *s)
+{
+    if (t->ns == t->cap) {
+        size_t nc = t->cap ? 2 * t->cap : 16;
+        tslice *ns = realloc(t->s, nc * sizeof *ns);
+        if (!ns)
+            return BTDF_ENOMEM;
+        t->s = ns;
+        t->cap = nc;
+    }
+    t->s[t->ns++] = *s;
+    return BTDF_OK;
+}
+
+static int strictly_increasing(const double *a, size_t m)
+{
+    for (size_t i = 0; i < m; i++) {
+        if (!isfinite(a[i]))
+            return 0;
+        if (i > 0 && !(a[i] > a[i - 1]))
+            return 0;
+    }
+    return 1;
+}
+
+BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows,
+                                          const double *rows, size_t ncols,
+                                          const double *cols, const double *values,
+                                          char *msg, size_t msglen)
+{
+    char buf[160];
+    if (!t || !rows || !cols || !values)
+        return BTDF_EINVAL;
+    if (!(ti >= 0.0 && ti <= M_PI / 2)) {
+        snprintf(buf, sizeof buf, "slice ti %g rad: must lie in [0, pi/2]", ti);
+        set_msg(msg, msglen, buf);
+        return BTDF_EINVAL;
+    }
+    if (t->ns > 0 && !(ti > t->s[t->ns - 1].ti)) {
+        snprintf(buf, sizeof buf, "slice ti %.17g: must exceed the previous slice's %.17g",
+                 ti, t->s[t->ns - 1].ti);
+        set_msg(msg, msglen, buf);
+        return BTDF_EINVAL;
+    }
+    if (nrows < 1 || ncols < 1 || nrows > 1u << 24 || ncols > 1u << 24) {
+        snprintf(buf, sizeof buf, "slice size %zu x %zu: each must lie in [1, 2^24]", nrows,
+                 ncols);
+        set_msg(msg, msglen, buf);
+        return BTDF_EINVAL;
+    }
+    if (!strictly_increasing(rows, nrows) || !strictly_increasing(cols, ncols)) {
+        set_msg(msg, msglen, "slice coordinates: must be finite and strictly increasing");
+        return BTDF_EINVAL;
+    }
+    size_t nch = (size_t)t->p.channels;
+    size_t nv = nrows * ncols; /* < 2^48: no overflow */
+    if (nv > SIZE_MAX / (nch * sizeof(double)))
+        return BTDF_EOVERFLOW;
+    for (size_t i = 0; i < nv * nch; i++) {
+        if (!isfinite(values[i]) || values[i] < 0.0) {
+            snprintf(buf, sizeof buf, "slice value %g at index %zu: must be finite and >= 0",
+                     values[i], i);
+            set_msg(msg, msglen, buf);
+            return BTDF_EINVAL;
+        }
+    }
+    tslice s = {ti, nrows, ncols, malloc(nrows * sizeof(double)),
+                malloc(ncols * sizeof(double)), malloc(nv * nch * sizeof(double))};
+    if (!s.rows || !s.cols || !s.vals) {
+        free(s.rows);
+        free(s.cols);
+        free(s.vals);
+        return BTDF_ENOMEM;
+    }
+    memcpy(s.rows, rows, nrows * sizeof(double));
+    memcpy(s.cols, cols, ncols * sizeof(double));
+    memcpy(s.vals, values, nv * nch * sizeof(double));
+    btdf_status st = table_push_slice(t, &s);
+    if (st != BTDF_OK) {
+        free(s.rows);
+        free(s.cols);
+        free(s.vals);
+    }
+    return st;
+}
+
+BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t) { return t->kind; }
+BTDF_API const btdf_params *btdf_table_get_params(const btdf_table *t) { return &t->p; }
+BTDF_API size_t btdf_table_slice_count(const btdf_table *t) { return t ? t->ns : 0; }
+
+BTDF_API size_t btdf_table_node_count(const btdf_table *t)
+{
+    size_t n = 0;
+    for (size_t k = 0; t && k < t->ns; k++)
+        n += t->s[k].nr * t->s[k].nc;
+    return n;
+}
+
+BTDF_API btdf_status btdf_table_slice(const btdf_table *t, size_t k, btdf_slice *out)
+{
+    if (!t || !out || k >= t->ns)
+        return BTDF_EINVAL;
+    const tslice *s = &t->s[k];
+    out->ti = s->ti;
+    out->nrows = s->nr;
+    out->ncols = s->nc;
+    out->rows = s->rows;
+    out->cols = s->cols;
+    out->values = s->vals;
+    return BTDF_OK;
+}
+
+/* The rule of btdf.h for one query given its sines and cosines. */
+void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, double sto,
+                   double cto, double cph, double sph, double phi_fold, double to,
+                   double *out);
+void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, double sto,
+                   double cto, double cph, double sph, double phi_fold, double to,
+                   double *out)
+{
+    int nch = t->p.channels;
+    for (int c = 0; c < nch; c++)
+        out[c] = 0.0;
+    if (t->ns == 0 || !(ti >= t->s[0].ti && ti <= t->s[t->ns - 1].ti))
+        return; /* outside the tabulated incidence range */
+    size_t k = 0;
+    double w = 0.0;
+    if (t->ns > 1) {
+        size_t lo = 0, hi = t->ns - 1;
+        while (hi - lo > 1) {
+            size_t mid = lo + (hi - lo) / 2;
+            if (t->s[mid].ti <= ti)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        k = lo;
+        w = (ti - t->s[k].ti) / (t->s[k + 1].ti - t->s[k].ti); /* slices strictly increase */
+    }
+    /* Slices are blended after dividing by Eq. 25's incident factor g = V(ti)/cos ti,
+       which the rule multiplies back: it is what changes fastest near grazing. */
+    double g = 0.0, g0 = 0.0, g1 = 0.0;
+    if (w > 0.0) {
+        g = incident_factor(&t->p, ti);
+        g0 = incident_factor(&t->p, t->s[k].ti);
+        g1 = incident_factor(&t->p, t->s[k + 1].ti);
+    }
+    for (int c = 0; c < nch; c++) {
+        double x, y;
+        if (t->kind == BTDF_TABLE_FACET) {
+            if (!facet_of(t->p.ior[c], sti, cti, sto, cto, cph, sph, &x, &y))
+                continue; /* no facet connects the two directions: exactly 0 */
+        } else {
+            x = to;
+            y = phi_fold;
+        }
+        double v = slice_interp(t, k, x, y, c);
+        if (w > 0.0)
+            v = blend_ti(v, slice_interp(t, k + 1, x, y, c), w, g, g0, g1);
+        out[c] = v;
+    }
+}
+
+BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, double phi,
+                                     double *out)
+{
+    if (!t || !out)
+        return BTDF_EINVAL;
+    if (!(ti >= 0.0 && ti <= M_PI / 2 && to >= M_PI / 2 && to <= M_PI && isfinite(phi)))
+        return BTDF_EDOMAIN;
+    double f = fmod(fabs(phi), 2.0 * M_PI);
+    if (f > M_PI)
+        f = 2.0 * M_PI - f; /* rho depends on cos phi only */
+    table_eval_sc(t, ti, sin(ti), cos(ti), sin(to), cos(to), cos(phi), sin(phi), f, to, out);
+    return BTDF_OK;
+}

@@ -1,0 +1,61 @@
+/* SPDX-License-Identifier: MIT */
+/* table_impl.h: the table object and the facet-space geometry shared by build and estimate. */
+#ifndef BTDF_TABLE_IMPL_H
+#define BTDF_TABLE_IMPL_H
+
+#include <stddef.h>
+
+#include "btdf.h"
+#include "model_impl.h"
+
+typedef struct tslice {
+    double ti;
+    size_t nr, nc;
+    double *rows, *cols, *vals; /* vals[(r * nc + c) * channels + ch] */
+} tslice;
+
+struct btdf_table {
+    btdf_table_kind kind;
+    btdf_params p;
+    size_t ns, cap;
+    tslice *s;
+};
+
+/* Refraction of e_i(ti) through the facet of tilt tn and azimuth psi (psi = 0 leans
+   towards e_i). On success (1) fills the outgoing geometry and rho; 0 where the
+   facet cannot refract e_i into the lower hemisphere, and rho = 0 there. */
+typedef struct facet_geo {
+    double sin_to, cos_to, cos_phi, sin_phi; /* e_o in MODEL.md's angles */
+    double rho;                              /* Eq. 25 at (ti, e_o) */
+    double weight;                           /* |cos to| / chi: d(omega_o) = weight d(omega_h) */
+} facet_geo;
+
+int facet_eval(double n, double s, double k0, const rho_in *a, double tn_sin, double tn_cos,
+               double cpsi, double spsi, facet_geo *g);
+
+/* The facet (tn, psi) that refracts e_i into e_o for index n; 0 if none. */
+int facet_of(double n, double sti, double cti, double sto, double cto, double cph,
+             double sph, double *tn, double *psi);
+
+/* Interpolates slice k of t at facet or grid coordinates (x = row coordinate,
+   y = col coordinate) for channel ch. 0 outside the node range. */
+double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch);
+
+/* Eq. 25's incident factor V(ti)/cos ti (0 at grazing incidence). */
+double incident_factor(const btdf_params *p, double ti);
+
+/* The rule's blend of two slice values at weight w in ti, with the incident factors
+   g (query), g0, g1 (the two slices): g ((1 - w) v0/g0 + w v1/g1). */
+double blend_ti(double v0, double v1, double w, double g, double g0, double g1);
+
+/* Monotonic wall clock in seconds. */
+double btdf_now(void);
+
+/* Number of worker threads for a request (0 = all cores), at least 1. */
+int btdf_thread_count(int requested);
+
+/* Runs fn(arg, i) for i in [0, count) on up to `threads` threads. Which thread runs
+   which i does not change any result: each i writes only its own output. */
+void btdf_parallel_for(int threads, size_t count, void (*fn)(void *arg, size_t i), void *arg);
+
+#endif
