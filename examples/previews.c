@@ -57,30 +57,36 @@ int main(int argc, char **argv)
     snprintf(path, sizeof path, "%s/polar-ti.png", dir);
     bad |= check(btdf_preview_write(&o, path, msg, sizeof msg), path, msg);
 
-    /* A table leaving glass (n = 1/1.5, s = 6), 0 to 60 degrees. */
-    btdf_table_opts to;
-    btdf_table_opts_default(&to);
-    to.params.ior[0] = 1.0 / 1.5;
-    to.params.smoothness = 6.0;
-    to.ti_min = 0.0;
-    to.ti_max = 60.0 * PI / 180.0;
-    to.kind = BTDF_TABLE_GRID;
-    to.grid_ti = 7;
-    to.grid_to = 46;
-    to.grid_phi = 37;
-    btdf_table *t = NULL;
-    btdf_status st = btdf_table_build(&to, &t, msg, sizeof msg);
-    if (st != BTDF_OK && st != BTDF_EBUDGET)
-        return check(st, "table", msg);
-    btdf_preview_opts_default(&o);
-    o.kind = BTDF_PREVIEW_MONTAGE;
-    o.table = t;
-    snprintf(path, sizeof path, "%s/montage.png", dir);
-    bad |= check(btdf_preview_write(&o, path, msg, sizeof msg), path, msg);
-    o.kind = BTDF_PREVIEW_RENDER;
-    o.analytic = 1;
-    snprintf(path, sizeof path, "%s/render.png", dir);
-    bad |= check(btdf_preview_write(&o, path, msg, sizeof msg), path, msg);
-    btdf_table_free(t);
+    /* Tables leaving glass (n = 1/1.5, s = 6), 0 to 60 degrees: the adaptive facet
+       table at its default tolerance, and a coarse uniform grid for comparison. */
+    for (int k = 0; k < 2; k++) {
+        btdf_table_opts to;
+        btdf_table_opts_default(&to);
+        to.params.ior[0] = 1.0 / 1.5;
+        to.params.smoothness = 6.0;
+        to.ti_min = 0.0;
+        to.ti_max = 60.0 * PI / 180.0;
+        if (k == 1) {
+            to.kind = BTDF_TABLE_GRID;
+            to.grid_ti = 7;
+            to.grid_to = 46;
+            to.grid_phi = 37;
+        }
+        btdf_table *t = NULL;
+        btdf_status st = btdf_table_build(&to, &t, msg, sizeof msg);
+        if (st != BTDF_OK && st != BTDF_EBUDGET)
+            return check(st, "table", msg);
+        const char *name = k ? "grid" : "facet";
+        btdf_preview_opts_default(&o);
+        o.kind = BTDF_PREVIEW_MONTAGE;
+        o.table = t;
+        snprintf(path, sizeof path, "%s/montage-%s.png", dir, name);
+        bad |= check(btdf_preview_write(&o, path, msg, sizeof msg), path, msg);
+        o.kind = BTDF_PREVIEW_RENDER;
+        o.analytic = 1;
+        snprintf(path, sizeof path, "%s/render-%s.png", dir, name);
+        bad |= check(btdf_preview_write(&o, path, msg, sizeof msg), path, msg);
+        btdf_table_free(t);
+    }
     return bad;
 }
