@@ -657,5 +657,5 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
 }
 
 const btdf_format_ops btdf_format_exr = {
-    "exr", ".exr", "openexr", 1, NULL, exr_write, exr_read,
+    "OpenEXR", ".exr", "openexr", 1, NULL, exr_write, exr_read,
 };
