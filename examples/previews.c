@@ -1,11 +1,13 @@
 /* SPDX-License-Identifier: MIT */
 /* previews.c: writes the sample pictures of docs/formats.md (polar, montage, render). */
+/* Usage: previews [picture folder [table folder]]; both default to the current one. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "btdf.h"
 #include "btdf_preview.h"
+#include "formats.h"
 
 #define PI 3.14159265358979323846
 
@@ -77,6 +79,13 @@ int main(int argc, char **argv)
         if (st != BTDF_OK && st != BTDF_EBUDGET)
             return check(st, "table", msg);
         const char *name = k ? "grid" : "facet";
+#if BTDF_HAVE_OPENEXR
+        /* The table file the pictures are made from (the writer btdf_table_write uses). */
+        btdf_write_opts w = {NULL, "examples/previews"};
+        btdf_output_ctx oc = {t, &w};
+        snprintf(path, sizeof path, "%s/table-%s.exr", argc > 2 ? argv[2] : dir, name);
+        bad |= check(btdf_format_exr.write_path(&oc, path, msg, sizeof msg), path, msg);
+#endif
         btdf_preview_opts_default(&o);
         o.kind = BTDF_PREVIEW_MONTAGE;
         o.table = t;

@@ -279,7 +279,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
     if (nslices > INT32_MAX)
         return say(BTDF_EOVERFLOW, msg, msglen, "%zu slices exceed OpenEXR's part count",
                    nslices);
-    size_t maxpix = 0;
+    size_t maxpix = 0, maxrows = 0, maxcols = 0;
     for (size_t k = 0; k < nslices; k++) {
         btdf_slice sl;
         btdf_table_slice(t, k, &sl);
@@ -291,7 +291,17 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
             return say(BTDF_EOVERFLOW, msg, msglen, "slice %zu is too large", k);
         size_t npix = sl.nrows * sl.ncols;
         maxpix = npix > maxpix ? npix : maxpix;
+        maxrows = sl.nrows > maxrows ? sl.nrows : maxrows;
+        maxcols = sl.ncols > maxcols ? sl.ncols : maxcols;
     }
+    /* displayWindow is shared by all parts of a multi-part file (the C++ library refuses
+       files where it differs): the largest slice's; each dataWindow is its slice. */
+    exr_attr_box2i_t disp;
+    disp.min.x = disp.min.y = 0;
+    disp.max.x = (int32_t)maxcols - 1;
+    disp.max.y = (int32_t)maxrows - 1;
+    exr_attr_v2f_t centre;
+    centre.x = centre.y = 0.0f;
     if (maxpix > SIZE_MAX / sizeof(float) / (size_t)channels)
         return say(BTDF_EOVERFLOW, msg, msglen, "a slice is too large to convert");
     float *planes = malloc(maxpix * (size_t)channels * sizeof(float));
@@ -318,9 +328,12 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
                  sl.ti * (180.0 / 3.14159265358979323846));
         int part = -1;
         rc = exr_add_part(ctx, pname, EXR_STORAGE_SCANLINE, &part);
+        exr_attr_box2i_t data = disp;
+        data.max.x = (int32_t)sl.ncols - 1;
+        data.max.y = (int32_t)sl.nrows - 1;
         if (rc == EXR_ERR_SUCCESS)
-            rc = exr_initialize_required_attr_simple(ctx, part, (int32_t)sl.ncols,
-                                                     (int32_t)sl.nrows, EXR_COMPRESSION_ZIP);
+            rc = exr_initialize_required_attr(ctx, part, &disp, &data, 1.0f, &centre, 1.0f,
+                                              EXR_LINEORDER_INCREASING_Y, EXR_COMPRESSION_ZIP);
         for (int ch = 0; ch < channels && rc == EXR_ERR_SUCCESS; ch++)
             rc = exr_add_channel(ctx, part, names[ch], EXR_PIXEL_FLOAT,
                                  EXR_PERCEPTUALLY_LINEAR, 1, 1);

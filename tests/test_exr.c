@@ -195,6 +195,17 @@ static void test_attributes(void **state)
     assert_int_equal(exr_attr_get_string(ctx, 0, "btdf.report.perTi", &len, &s),
                      EXR_ERR_SUCCESS);
     assert_true(len > 40);
+    /* Multi-part files share displayWindow (the C++ library refuses them otherwise);
+       the slices differ in size, so their dataWindows differ. */
+    exr_attr_box2i_t d0, dk, w0, wk;
+    assert_int_equal(exr_get_display_window(ctx, 0, &d0), EXR_ERR_SUCCESS);
+    assert_int_equal(exr_get_data_window(ctx, 0, &w0), EXR_ERR_SUCCESS);
+    for (int k = 1; k < count; k++) {
+        assert_int_equal(exr_get_display_window(ctx, k, &dk), EXR_ERR_SUCCESS);
+        assert_memory_equal(&dk, &d0, sizeof d0);
+        assert_int_equal(exr_get_data_window(ctx, k, &wk), EXR_ERR_SUCCESS);
+        assert_true(wk.max.x != w0.max.x);
+    }
     exr_compression_t comp;
     assert_int_equal(exr_get_compression(ctx, 2, &comp), EXR_ERR_SUCCESS);
     assert_int_equal(comp, EXR_COMPRESSION_ZIP);
