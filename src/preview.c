@@ -190,11 +190,11 @@ static btdf_status draw_polar(const btdf_preview_opts *o, plot_canvas *cv_out, c
         double ex = cx - L * sin(cu->ti), ey = cy - L * cos(cu->ti);
         plot_line(c, ex, ey, cx, cy, 2.0, col);
         /* Arrow head pointing at the surface: light travels towards it. */
-        double ux = (cx - ex) / L, uy = (cy - ey) / L;
+        double ux = (cx - ex) / L, uy = (cy - ey) / L; /* L = 0.4 R >= 16 pixels */
         double hx = cx - 14 * ux, hy = cy - 14 * uy;
         plot_line(c, cx, cy, hx - 6 * uy, hy + 6 * ux, 2.0, col);
         plot_line(c, cx, cy, hx + 6 * uy, hy - 6 * ux, 2.0, col);
-        double sn = sin(cu->ti) / cu->p->ior[0];
+        double sn = sin(cu->ti) / cu->p->ior[0]; /* n > 0: btdf_params_check passed */
         if (sn <= 1.0) { /* Snell direction of the mean surface; none past the critical angle */
             double tt = asin(sn);
             plot_dashed(c, cx, cy, cx + R * sin(tt), cy + R * cos(tt), 1.5, 6.0, palette[i]);
@@ -442,7 +442,7 @@ static void face_radiance(const btdf_table *t, int analytic, double x, double y,
     double rl = sqrt(x * x + y * y + depth * depth); /* > 0: depth > 0 */
     double re = sqrt(x * x + y * y + EYE_HEIGHT * EYE_HEIGHT);
     /* e_i (model) = (L - P)/rl with z flipped = (-x, -y, depth)/rl; e_o = (-x, -y, -h)/re. */
-    double cti = depth / rl, cto = -EYE_HEIGHT / re;
+    double cti = depth / rl, cto = -EYE_HEIGHT / re; /* re >= EYE_HEIGHT > 0 */
     double ti = acos(fmin(1.0, cti)), to = acos(fmax(-1.0, cto));
     /* Both directions lean the same way, towards the axis, so phi = 0 (backward side);
        on the axis itself ti = 0 and phi does not matter. */
