@@ -1,1 +1,653 @@
-int main(void){return 0;}
+/* SPDX-License-Identifier: MIT */
+/* btdftab.c: the command-line tool; parses arguments and calls libbtdf. */
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "btdf.h"
+#include "formats.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* Exit statuses (README "Exit status"). */
+enum { EXIT_USAGE = 2, EXIT_BUDGET = 3 };
+
+static const char *prog = "btdftab";
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Peak resident memory of this process so far, in bytes (Linux reports KiB). */
+static size_t peak_rss(void)
+{
+    struct rusage ru;
+    return getrusage(RUSAGE_SELF, &ru) == 0 ? (size_t)ru.ru_maxrss * 1024u : 0;
+}
+
+static int fail(int code, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "%s: ", prog);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return code;
+}
+
+static void usage(FILE *f, int verbose)
+{
+    fprintf(f,
+            "usage: btdftab eval [options] [TI TO PHI]     rho at angles (degrees), or rows on stdin\n"
+            "       btdftab tabulate [options] -o FILE      write a table (.csv%s)\n"
+            "       btdftab albedo [options] [TI ...]       T(ti) and the flat Ft(ti)\n"
+            "       btdftab --help | --version\n",
+            btdf_format_available("exr") ? ", .exr" : "");
+    if (!verbose) {
+        fprintf(f, "Try 'btdftab --help' for more.\n");
+        return;
+    }
+    fprintf(f,
+            "\nModel: Xu & Sun (2008), Eq. 25, the single-scattering BTDF of a Gaussian rough\n"
+            "interface; rho in 1/sr without a cosine factor. Angles in degrees: theta_i in\n"
+            "[0, 90], theta_o in [90, 180] (transmitted side), phi = 180 the forward plane.\n"
+            "\nMaterial options (all commands):\n"
+            "  --ior N | R,G,B      relative index n = n_lower / n_upper (default 1.5); n != 1\n"
+            "  -s, --smoothness S   s = correlation length / RMS height (default 3)\n"
+            "  --k0 K               shadowing constant (default 0.7)\n"
+            "\neval:\n"
+            "  --table FILE         evaluate a written table (.csv%s) instead of Eq. 25\n"
+            "\ntabulate:\n"
+            "  -o, --output FILE    output file; '-' writes CSV to standard output\n"
+            "  --tolerance E        target error of the adaptive table (default 1e-3)\n"
+            "  --metric l1|max      which error must meet E (default l1)\n"
+            "  --grid NI,NO,NPHI    a plain regular grid in (theta_i, theta_o, phi) instead\n"
+            "  --theta-i A:B        incidence range in degrees (default 0:90)\n"
+            "  --max-samples N      node budget (default 8000000)\n"
+            "  --max-memory MIB     memory cap for the nodes (default 256)\n"
+            "  --threads N          worker threads, 0 = all cores (default 0)\n"
+            "  --report FILE.json   write the error report as JSON\n"
+            "  --best-effort        write the table even if the budget stopped refinement\n"
+            "  -q, --quiet          no report line on standard error\n"
+            "\nExit status: 0 success, 1 failed run, 2 usage error, 3 tolerance not met.\n",
+            btdf_format_available("exr") ? ", .exr" : "");
+}
+
+/* ------------------------------------------------------------------------- */
+/* Argument helpers                                                          */
+/* ------------------------------------------------------------------------- */
+
+static int parse_double(const char *flag, const char *s, double *out)
+{
+    char *e;
+    errno = 0;
+    double v = strtod(s, &e);
+    if (e == s || *e || errno == ERANGE) {
+        fail(EXIT_USAGE, "%s: '%s' is not a number", flag, s);
+        return 0;
+    }
+    if (!isfinite(v)) {
+        fail(EXIT_USAGE, "%s: '%s': must be a finite number", flag, s);
+        return 0;
+    }
+    *out = v;
+    return 1;
+}
+
+static int parse_size(const char *flag, const char *s, size_t lo, size_t hi, size_t *out)
+{
+    char *e;
+    errno = 0;
+    unsigned long long v = strtoull(s, &e, 10);
+    if (e == s || *e || errno == ERANGE || s[0] == '-' || v < lo || v > hi) {
+        fail(EXIT_USAGE, "%s: '%s': must be an integer in [%zu, %zu]", flag, s, lo, hi);
+        return 0;
+    }
+    *out = (size_t)v;
+    return 1;
+}
+
+typedef struct common {
+    btdf_params p;
+    int threads;
+    int quiet;
+} common;
+
+/* Consumes a material or common option at argv[*i]; 1 if taken, 0 if not ours, -1 on error. */
+static int common_opt(common *c, int argc, char **argv, int *i)
+{
+    const char *a = argv[*i];
+    const char *val = NULL;
+#define NEED_VAL()                                                                         \
+    do {                                                                                   \
+        if (*i + 1 >= argc) {                                                              \
+            fail(EXIT_USAGE, "%s: missing value", a);                                      \
+            return -1;                                                                     \
+        }                                                                                  \
+        val = argv[++*i];                                                                  \
+    } while (0)
+    if (!strcmp(a, "--ior") || !strcmp(a, "-n")) {
+        NEED_VAL();
+        char buf[256];
+        snprintf(buf, sizeof buf, "%s", val);
+        int k = 0;
+        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+            if (k == 3) {
+                fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
+                return -1;
+            }
+            if (!parse_double("--ior", tok, &c->p.ior[k++]))
+                return -1;
+        }
+        if (k != 1 && k != 3) {
+            fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
+            return -1;
+        }
+        c->p.channels = k;
+        return 1;
+    }
+    if (!strcmp(a, "--smoothness") || !strcmp(a, "-s")) {
+        NEED_VAL();
+        return parse_double("--smoothness", val, &c->p.smoothness) ? 1 : -1;
+    }
+    if (!strcmp(a, "--k0")) {
+        NEED_VAL();
+        return parse_double("--k0", val, &c->p.k0) ? 1 : -1;
+    }
+    if (!strcmp(a, "--threads")) {
+        NEED_VAL();
+        size_t v;
+        if (!parse_size("--threads", val, 0, 256, &v))
+            return -1;
+        c->threads = (int)v;
+        return 1;
+    }
+    if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
+        c->quiet = 1;
+        return 1;
+    }
+    return 0;
+#undef NEED_VAL
+}
+
+static int check_params(const btdf_params *p)
+{
+    char msg[256];
+    if (btdf_params_check(p, msg, sizeof msg) != BTDF_OK) {
+        fail(EXIT_USAGE, "%s", msg);
+        return 0;
+    }
+    return 1;
+}
+
+static int check_angles(double ti, double to, double phi, long line)
+{
+    char where[48] = "";
+    if (line > 0)
+        snprintf(where, sizeof where, "line %ld: ", line);
+    if (!(ti >= 0.0 && ti <= 90.0)) {
+        fail(EXIT_USAGE, "%stheta-i %g: must lie in [0, 90] degrees", where, ti);
+        return 0;
+    }
+    if (!(to >= 90.0 && to <= 180.0)) {
+        fail(EXIT_USAGE,
+             "%stheta-o %g: must lie in [90, 180] degrees (the transmitted hemisphere)", where,
+             to);
+        return 0;
+    }
+    if (!isfinite(phi)) {
+        fail(EXIT_USAGE, "%sphi %g: must be finite", where, phi);
+        return 0;
+    }
+    return 1;
+}
+
+/* Reads up to `want` numbers separated by blanks or commas; returns how many, -1 on junk. */
+static int read_row(const char *line, double *v, int want)
+{
+    int n = 0;
+    const char *s = line;
+    for (;;) {
+        while (*s == ' ' || *s == '\t' || *s == ',' || *s == '\r' || *s == '\n')
+            s++;
+        if (!*s || *s == '#')
+            return n;
+        if (n == want)
+            return -1;
+        char *e;
+        double x = strtod(s, &e);
+        if (e == s || !isfinite(x))
+            return -1;
+        v[n++] = x;
+        s = e;
+    }
+}
+
+/* ------------------------------------------------------------------------- */
+/* eval                                                                      */
+/* ------------------------------------------------------------------------- */
+
+static void print_values(const double *v, int n)
+{
+    for (int c = 0; c < n; c++)
+        printf(c ? " %.17g" : "%.17g", v[c]);
+    putchar('\n');
+}
+
+static int cmd_eval(int argc, char **argv)
+{
+    common c = {0};
+    btdf_params_default(&c.p);
+    const char *table_path = NULL;
+    double pos[3];
+    int npos = 0;
+    for (int i = 1; i < argc; i++) {
+        int r = common_opt(&c, argc, argv, &i);
+        if (r < 0)
+            return EXIT_USAGE;
+        if (r)
+            continue;
+        if (!strcmp(argv[i], "--table")) {
+            if (i + 1 >= argc)
+                return fail(EXIT_USAGE, "--table: missing value");
+            table_path = argv[++i];
+        } else if (argv[i][0] == '-' && argv[i][1] && !(argv[i][1] >= '0' && argv[i][1] <= '9') &&
+                   argv[i][1] != '.') {
+            fail(EXIT_USAGE, "eval: unknown option '%s'", argv[i]);
+            usage(stderr, 0);
+            return EXIT_USAGE;
+        } else {
+            if (npos == 3)
+                return fail(EXIT_USAGE, "eval: give exactly three angles TI TO PHI");
+            if (!parse_double("angle", argv[i], &pos[npos++]))
+                return EXIT_USAGE;
+        }
+    }
+    if (npos != 0 && npos != 3)
+        return fail(EXIT_USAGE, "eval: give exactly three angles TI TO PHI, or none to read rows");
+    btdf_table *t = NULL;
+    if (table_path) {
+        char msg[512];
+        btdf_status st = btdf_table_read(table_path, &t, msg, sizeof msg);
+        if (st != BTDF_OK)
+            return fail(1, "%s: %s", table_path, msg);
+        c.p = *btdf_table_get_params(t);
+    } else if (!check_params(&c.p)) {
+        return EXIT_USAGE;
+    }
+    int code = 0;
+    double out[BTDF_MAX_CHANNELS];
+    char line[1024];
+    long ln = 0;
+    for (;;) {
+        double v[3];
+        if (npos == 3) {
+            if (ln++ > 0)
+                break;
+            memcpy(v, pos, sizeof v);
+        } else {
+            if (!fgets(line, sizeof line, stdin))
+                break;
+            ln++;
+            int k = read_row(line, v, 3);
+            if (k == 0)
+                continue; /* blank or comment line */
+            if (k != 3) {
+                code = fail(EXIT_USAGE, "line %ld: expected three angles 'TI TO PHI'", ln);
+                break;
+            }
+        }
+        if (!check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
+            code = EXIT_USAGE;
+            break;
+        }
+        if (t) {
+            btdf_table_eval(t, v[0] * M_PI / 180.0, v[1] * M_PI / 180.0, v[2] * M_PI / 180.0, out);
+        } else {
+            for (int ch = 0; ch < c.p.channels; ch++)
+                out[ch] = btdf_rho_deg(c.p.ior[ch], c.p.smoothness, c.p.k0, v[0], v[1], v[2]);
+        }
+        print_values(out, c.p.channels);
+    }
+    btdf_table_free(t);
+    if (fflush(stdout) != 0 && code == 0)
+        code = fail(1, "standard output: %s", strerror(errno));
+    return code;
+}
+
+/* ------------------------------------------------------------------------- */
+/* albedo                                                                    */
+/* ------------------------------------------------------------------------- */
+
+static int cmd_albedo(int argc, char **argv)
+{
+    common c = {0};
+    btdf_params_default(&c.p);
+    double angles[256];
+    int na = 0;
+    for (int i = 1; i < argc; i++) {
+        int r = common_opt(&c, argc, argv, &i);
+        if (r < 0)
+            return EXIT_USAGE;
+        if (r)
+            continue;
+        if (argv[i][0] == '-' && argv[i][1] && !(argv[i][1] >= '0' && argv[i][1] <= '9')) {
+            fail(EXIT_USAGE, "albedo: unknown option '%s'", argv[i]);
+            usage(stderr, 0);
+            return EXIT_USAGE;
+        }
+        if (na == 256)
+            return fail(EXIT_USAGE, "albedo: at most 256 angles");
+        if (!parse_double("theta-i", argv[i], &angles[na]))
+            return EXIT_USAGE;
+        na++;
+    }
+    if (!check_params(&c.p))
+        return EXIT_USAGE;
+    if (na == 0)
+        for (int k = 0; k <= 8; k++)
+            angles[na++] = 10.0 * k;
+    printf("theta_i_deg");
+    for (int ch = 0; ch < c.p.channels; ch++)
+        printf(c.p.channels == 1 ? ",T,Ft" : ",T_%c,Ft_%c", "rgb"[ch], "rgb"[ch]);
+    printf("\n");
+    for (int k = 0; k < na; k++) {
+        if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
+            return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
+        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS];
+        btdf_transmittance(&c.p, ti, T);
+        printf("%.10g", angles[k]);
+        for (int ch = 0; ch < c.p.channels; ch++)
+            printf(",%.9f,%.9f", T[ch], btdf_fresnel_t(c.p.ior[ch], ti));
+        printf("\n");
+    }
+    return 0;
+}
+
+/* ------------------------------------------------------------------------- */
+/* tabulate                                                                  */
+/* ------------------------------------------------------------------------- */
+
+static void json_report(FILE *f, const btdf_table_opts *o, const btdf_report *r,
+                        const char *provenance)
+{
+    fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n", BTDF_VERSION_STRING);
+    fprintf(f, "  \"command\": \"");
+    for (const char *s = provenance; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            fputc('\\', f);
+        if ((unsigned char)*s >= 0x20)
+            fputc(*s, f);
+    }
+    fprintf(f, "\",\n  \"kind\": \"%s\",\n", o->kind == BTDF_TABLE_GRID ? "grid" : "facet");
+    fprintf(f, "  \"ior\": [");
+    for (int c = 0; c < o->params.channels; c++)
+        fprintf(f, "%s%.17g", c ? ", " : "", o->params.ior[c]);
+    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", o->params.smoothness,
+            o->params.k0);
+    fprintf(f, "  \"theta_i_deg\": [%.17g, %.17g],\n", o->ti_min * 180 / M_PI,
+            o->ti_max * 180 / M_PI);
+    fprintf(f, "  \"tolerance\": %.17g,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
+            r->tolerance, r->metric == BTDF_METRIC_MAX ? "max" : "l1",
+            r->met ? "true" : "false");
+    fprintf(f, "  \"slices\": %zu,\n  \"samples\": %zu,\n", r->slices, r->samples);
+    fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"seconds_estimate\": %.6f,\n",
+            r->seconds_build, r->seconds_estimate);
+    fprintf(f, "  \"test_angles\": %zu,\n  \"test_points\": %zu,\n", r->test_angles,
+            r->test_points);
+    fprintf(f, "  \"peak_bytes\": %zu,\n", r->peak_bytes);
+    fprintf(f, "  \"e_l1\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_l1_max, r->e_l1_mean);
+    fprintf(f, "  \"e_max\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_max_max, r->e_max_mean);
+    fprintf(f, "  \"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_t_max, r->e_t_mean);
+    fprintf(f, "  \"per_theta_i\": [\n");
+    for (size_t k = 0; k < r->test_angles; k++) {
+        const btdf_ti_error *e = &r->per_ti[k];
+        fprintf(f,
+                "    {\"theta_i_deg\": %.6f, \"T\": %.9f, \"T_table\": %.9f, \"e_l1\": %.6g, "
+                "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
+                e->ti * 180 / M_PI, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
+                k + 1 < r->test_angles ? "," : "");
+    }
+    fprintf(f, "  ]\n}\n");
+}
+
+/* Seed of the reported estimate; the builder checks itself with a different one. */
+#define REPORT_SEED 20081231u
+
+static int parse_range(const char *s, double *a, double *b)
+{
+    const char *colon = strchr(s, ':');
+    if (!colon) {
+        fail(EXIT_USAGE, "--theta-i: '%s': expected A:B in degrees, e.g. 0:60", s);
+        return 0;
+    }
+    char buf[128];
+    snprintf(buf, sizeof buf, "%.*s", (int)(colon - s), s);
+    if (!parse_double("--theta-i", buf, a) || !parse_double("--theta-i", colon + 1, b))
+        return 0;
+    if (!(*a >= 0.0 && *b <= 90.0 && *a <= *b)) {
+        fail(EXIT_USAGE, "--theta-i: '%s': need 0 <= A <= B <= 90 degrees", s);
+        return 0;
+    }
+    return 1;
+}
+
+static int write_text_atomic(const char *path, const btdf_table_opts *o, const btdf_report *r,
+                             const char *prov)
+{
+    char tmp[4200];
+    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    FILE *f = fopen(tmp, "w");
+    if (!f)
+        return fail(1, "%s: cannot create: %s", path, strerror(errno));
+    json_report(f, o, r, prov);
+    int bad = ferror(f);
+    if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
+        unlink(tmp);
+        return fail(1, "%s: writing failed: %s", path, strerror(errno));
+    }
+    return 0;
+}
+
+static int cmd_tabulate(int argc, char **argv, const char *prov)
+{
+    common c = {0};
+    btdf_params_default(&c.p);
+    btdf_table_opts o;
+    btdf_table_opts_default(&o);
+    const char *out = NULL, *report = NULL;
+    int best_effort = 0;
+    double ti0 = 0.0, ti1 = 90.0;
+    size_t mib = 256;
+    for (int i = 1; i < argc; i++) {
+        int r = common_opt(&c, argc, argv, &i);
+        if (r < 0)
+            return EXIT_USAGE;
+        if (r)
+            continue;
+        const char *a = argv[i];
+        int has = i + 1 < argc;
+        if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            out = argv[++i];
+        } else if (!strcmp(a, "--tolerance")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            if (!parse_double(a, argv[++i], &o.tolerance))
+                return EXIT_USAGE;
+        } else if (!strcmp(a, "--metric")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            const char *m = argv[++i];
+            if (!strcmp(m, "l1"))
+                o.metric = BTDF_METRIC_L1;
+            else if (!strcmp(m, "max"))
+                o.metric = BTDF_METRIC_MAX;
+            else
+                return fail(EXIT_USAGE, "--metric: '%s': must be l1 or max", m);
+        } else if (!strcmp(a, "--grid")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            const char *g = argv[++i];
+            unsigned long x, y, z;
+            char tail;
+            if (sscanf(g, "%lu,%lu,%lu%c", &x, &y, &z, &tail) != 3 || strchr(g, '-'))
+                return fail(EXIT_USAGE, "--grid: '%s': expected three counts NI,NO,NPHI", g);
+            o.kind = BTDF_TABLE_GRID;
+            o.grid_ti = x;
+            o.grid_to = y;
+            o.grid_phi = z;
+        } else if (!strcmp(a, "--theta-i")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            if (!parse_range(argv[++i], &ti0, &ti1))
+                return EXIT_USAGE;
+        } else if (!strcmp(a, "--max-samples")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            if (!parse_size(a, argv[++i], 1000, (size_t)1 << 40, &o.max_samples))
+                return EXIT_USAGE;
+        } else if (!strcmp(a, "--max-memory")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            if (!parse_size(a, argv[++i], 1, 1u << 20, &mib))
+                return EXIT_USAGE;
+        } else if (!strcmp(a, "--report")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            report = argv[++i];
+        } else if (!strcmp(a, "--best-effort")) {
+            best_effort = 1;
+        } else {
+            fail(EXIT_USAGE, "tabulate: unknown option '%s'", a);
+            usage(stderr, 0);
+            return EXIT_USAGE;
+        }
+    }
+    if (!out)
+        return fail(EXIT_USAGE, "tabulate: no output: give -o FILE (or -o - for CSV on stdout)");
+    if (!check_params(&c.p))
+        return EXIT_USAGE;
+    const btdf_format_ops *fmt = strcmp(out, "-") ? btdf_format_for_path(out) : &btdf_format_csv;
+    if (!fmt)
+        return fail(EXIT_USAGE, "%s: unknown output format: use .csv or .exr", out);
+    if (!fmt->available)
+        return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
+                    fmt->name, fmt->feature);
+    o.params = c.p;
+    o.threads = c.threads;
+    o.ti_min = ti0 * M_PI / 180.0;
+    o.ti_max = ti1 * M_PI / 180.0;
+    o.max_bytes = mib << 20;
+    char msg[512] = "";
+    btdf_table *t = NULL;
+    double t0 = now_seconds();
+    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
+    double t1 = now_seconds();
+    if (st != BTDF_OK && st != BTDF_EBUDGET)
+        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s", msg[0] ? msg : btdf_strerror(st));
+    if (!t)
+        return fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
+    btdf_report r;
+    memset(&r, 0, sizeof r);
+    btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);
+    if (es != BTDF_OK) {
+        btdf_table_free(t);
+        return fail(1, "error estimate: %s", btdf_strerror(es));
+    }
+    r.seconds_build = t1 - t0;
+    r.peak_bytes = peak_rss();
+    r.tolerance = o.kind == BTDF_TABLE_GRID ? 0.0 : o.tolerance;
+    r.metric = o.metric;
+    double e = o.metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max;
+    r.met = o.kind == BTDF_TABLE_GRID ? 1 : e <= o.tolerance;
+    if (!c.quiet)
+        fprintf(stderr,
+                "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
+                "(%zu angles, %zu points); e_L1 max %.3g mean %.3g; e_max max %.3g mean %.3g; "
+                "e_T max %.3g mean %.3g; peak memory %.1f MiB%s\n",
+                prog, r.slices, r.samples, r.seconds_build, r.seconds_estimate, r.test_angles,
+                r.test_points, r.e_l1_max, r.e_l1_mean, r.e_max_max, r.e_max_mean, r.e_t_max,
+                r.e_t_mean, (double)r.peak_bytes / 1048576.0,
+                o.kind == BTDF_TABLE_GRID ? "" : (r.met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+    int code = 0;
+    if (o.kind != BTDF_TABLE_GRID && !r.met) {
+        fprintf(stderr, "%s: %s: the table reached %s error %.3g, above the tolerance %g%s%s\n",
+                prog, out, o.metric == BTDF_METRIC_MAX ? "max" : "L1", e, o.tolerance,
+                st == BTDF_EBUDGET ? ": " : "", st == BTDF_EBUDGET ? msg : "");
+        if (!best_effort) {
+            fprintf(stderr, "%s: nothing written; raise --max-samples/--max-memory, loosen "
+                            "--tolerance, or pass --best-effort\n", prog);
+            code = EXIT_BUDGET;
+        }
+    }
+    if (code == 0) {
+        btdf_write_opts w = {&r, prov};
+        btdf_output_ctx ctx = {t, &w};
+        if (!strcmp(out, "-")) {
+            st = btdf_format_csv.write_stream(&ctx, stdout, msg, sizeof msg);
+            if (st == BTDF_OK && fflush(stdout) != 0)
+                st = BTDF_EIO;
+        } else {
+            st = btdf_write_atomic(fmt, &ctx, out, msg, sizeof msg);
+        }
+        if (st != BTDF_OK)
+            code = fail(1, "%s: %s", out, msg[0] ? msg : btdf_strerror(st));
+    }
+    if (code == 0 && report)
+        code = write_text_atomic(report, &o, &r, prov);
+    btdf_report_clear(&r);
+    btdf_table_free(t);
+    return code;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        usage(stderr, 0);
+        return EXIT_USAGE;
+    }
+    const char *cmd = argv[1];
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h")) {
+        usage(stdout, 1);
+        return 0;
+    }
+    if (!strcmp(cmd, "--version")) {
+        printf("btdftab %s\n", btdf_version_string());
+        return 0;
+    }
+    /* The command line, recorded in outputs as their provenance. */
+    char prov[2048] = "btdftab";
+    for (int i = 1; i < argc; i++) {
+        size_t l = strlen(prov);
+        snprintf(prov + l, sizeof prov - l, " %s", argv[i]);
+    }
+    for (int i = 2; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            usage(stdout, 1);
+            return 0;
+        }
+    }
+    if (!strcmp(cmd, "eval"))
+        return cmd_eval(argc - 1, argv + 1);
+    if (!strcmp(cmd, "tabulate"))
+        return cmd_tabulate(argc - 1, argv + 1, prov);
+    if (!strcmp(cmd, "albedo"))
+        return cmd_albedo(argc - 1, argv + 1);
+    fail(EXIT_USAGE, "unknown command '%s'", cmd);
+    usage(stderr, 0);
+    return EXIT_USAGE;
+}

@@ -1,0 +1,301 @@
+/* SPDX-License-Identifier: MIT */
+/* csv.c: tables as CSV, one row per node, with everything needed to rebuild them exactly. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "formats.h"
+#include "table_impl.h"
+
+/*
+ * Layout (docs/formats.md): comment lines starting with '#' carry the version, the
+ * kind, the parameters and the error report; then a header row; then one row per
+ * node, slice by slice, row by row, column by column:
+ *   theta_i_deg, theta_o_deg, phi_deg, rho (or rho_r, rho_g, rho_b), ti_rad, row_rad, col_rad
+ * The three *_rad columns are the node coordinates the rule uses (for facet tables
+ * row = facet tilt tn and col = facet azimuth psi; for grid tables row = to, col = phi),
+ * printed with 17 significant digits so that they and rho read back bit for bit.
+ * theta_o_deg and phi_deg give the node's outgoing direction for people (for facet
+ * tables that of channel 0; empty where no facet refracts into the lower hemisphere).
+ */
+
+static const char *kind_name(btdf_table_kind k) { return k == BTDF_TABLE_GRID ? "grid" : "facet"; }
+
+static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
+{
+    (void)msg;
+    (void)msglen;
+    const btdf_table *t = c->table;
+    const btdf_params *p = &t->p;
+    int nch = p->channels;
+    fprintf(f, "# btdftab %s table\n", BTDF_VERSION_STRING);
+    fprintf(f, "# kind: %s\n", kind_name(t->kind));
+    fprintf(f, "# channels: %d\n", nch);
+    fprintf(f, "# ior:");
+    for (int ch = 0; ch < nch; ch++)
+        fprintf(f, " %.17g", p->ior[ch]);
+    fprintf(f, "\n# smoothness: %.17g\n# k0: %.17g\n", p->smoothness, p->k0);
+    fprintf(f, "# units: rho in 1/sr, no cosine factor; angles in degrees and radians\n");
+    fprintf(f, "# rule: %s\n",
+            t->kind == BTDF_TABLE_GRID
+                ? "bilinear in (theta_o, phi) per slice, linear in theta_i after dividing by "
+                  "V(theta_i)/cos(theta_i)"
+                : "bilinear in facet (tilt, azimuth) per slice at the facet refracting e_i into "
+                  "e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)");
+    if (c->opts->provenance)
+        fprintf(f, "# provenance: %s\n", c->opts->provenance);
+    const btdf_report *r = c->opts->report;
+    if (r)
+        fprintf(f,
+                "# error: e_L1 max %.4g mean %.4g; e_max max %.4g mean %.4g; e_T max %.4g mean "
+                "%.4g; %zu test angles, %zu test points\n",
+                r->e_l1_max, r->e_l1_mean, r->e_max_max, r->e_max_mean, r->e_t_max,
+                r->e_t_mean, r->test_angles, r->test_points);
+    fprintf(f, "theta_i_deg,theta_o_deg,phi_deg,%s,ti_rad,row_rad,col_rad\n",
+            nch == 1 ? "rho" : "rho_r,rho_g,rho_b");
+    for (size_t k = 0; k < t->ns; k++) {
+        const tslice *s = &t->s[k];
+        double ti = s->ti, sti = sin(ti), cti = cos(ti);
+        rho_in a;
+        rho_in_init(&a, sti, cti, p->smoothness, p->k0);
+        for (size_t i = 0; i < s->nr; i++) {
+            for (size_t j = 0; j < s->nc; j++) {
+                char to_s[40] = "", ph_s[40] = "";
+                if (t->kind == BTDF_TABLE_GRID) {
+                    snprintf(to_s, sizeof to_s, "%.10g", s->rows[i] * 180.0 / M_PI);
+                    snprintf(ph_s, sizeof ph_s, "%.10g", s->cols[j] * 180.0 / M_PI);
+                } else {
+                    facet_geo g;
+                    if (facet_eval(p->ior[0], p->smoothness, p->k0, &a, sin(s->rows[i]),
+                                   cos(s->rows[i]), cos(s->cols[j]), sin(s->cols[j]), &g)) {
+                        snprintf(to_s, sizeof to_s, "%.10g",
+                                 atan2(g.sin_to, g.cos_to) * 180.0 / M_PI);
+                        snprintf(ph_s, sizeof ph_s, "%.10g",
+                                 fabs(atan2(g.sin_phi, g.cos_phi)) * 180.0 / M_PI);
+                    }
+                }
+                fprintf(f, "%.10g,%s,%s", ti * 180.0 / M_PI, to_s, ph_s);
+                for (int ch = 0; ch < nch; ch++)
+                    fprintf(f, ",%.17g", s->vals[(i * s->nc + j) * (size_t)nch + (size_t)ch]);
+                fprintf(f, ",%.17g,%.17g,%.17g\n", ti, s->rows[i], s->cols[j]);
+            }
+        }
+    }
+    return BTDF_OK;
+}
+
+/* ------------------------------------------------------------------------- */
+/* Reader                                                                    */
+/* ------------------------------------------------------------------------- */
+
+typedef struct dvec {
+    double *v;
+    size_t n, cap;
+} dvec;
+
+static int push(dvec *d, double x)
+{
+    if (d->n == d->cap) {
+        size_t nc = d->cap ? 2 * d->cap : 256;
+        double *nv = realloc(d->v, nc * sizeof *nv);
+        if (!nv)
+            return 0;
+        d->v = nv;
+        d->cap = nc;
+    }
+    d->v[d->n++] = x;
+    return 1;
+}
+
+static btdf_status ferr(char *msg, size_t msglen, const char *path, long line, const char *why)
+{
+    if (msg && msglen)
+        snprintf(msg, msglen, "%s:%ld: %s", path, line, why);
+    return BTDF_EFORMAT;
+}
+
+/* Parses n comma-separated fields; empty fields allowed where allow_empty[i]. */
+static int split(char *s, char **fld, int maxf)
+{
+    int n = 0;
+    fld[n++] = s;
+    for (char *q = s; *q; q++) {
+        if (*q == ',') {
+            *q = 0;
+            if (n == maxf)
+                return -1;
+            fld[n++] = q + 1;
+        } else if (*q == '\n' || *q == '\r') {
+            *q = 0;
+            break;
+        }
+    }
+    return n;
+}
+
+static int num(const char *s, double *out)
+{
+    char *e;
+    errno = 0;
+    double v = strtod(s, &e);
+    if (e == s || *e || errno == ERANGE || !isfinite(v))
+        return 0;
+    *out = v;
+    return 1;
+}
+
+/* Flushes the rows of one slice into the table: they must form a full tensor grid. */
+static btdf_status flush_slice(btdf_table *t, double ti, dvec *rr, dvec *cc, dvec *vv,
+                               const char *path, long line, char *msg, size_t msglen)
+{
+    if (rr->n == 0)
+        return BTDF_OK;
+    size_t nch = (size_t)t->p.channels, npts = rr->n;
+    size_t nc = 1;
+    while (nc < npts && rr->v[nc] == rr->v[0])
+        nc++;
+    if (npts % nc != 0)
+        return ferr(msg, msglen, path, line, "slice rows are not a full grid");
+    size_t nr = npts / nc;
+    double *rows = malloc(nr * sizeof(double)), *cols = malloc(nc * sizeof(double));
+    if (!rows || !cols) {
+        free(rows);
+        free(cols);
+        return BTDF_ENOMEM;
+    }
+    for (size_t i = 0; i < nr; i++)
+        rows[i] = rr->v[i * nc];
+    for (size_t j = 0; j < nc; j++)
+        cols[j] = cc->v[j];
+    for (size_t q = 0; q < npts; q++) {
+        if (rr->v[q] != rows[q / nc] || cc->v[q] != cols[q % nc]) {
+            free(rows);
+            free(cols);
+            return ferr(msg, msglen, path, line,
+                        "slice nodes are not a full grid in row-major order");
+        }
+    }
+    char why[200];
+    btdf_status st = btdf_table_add_slice(t, ti, nr, rows, nc, cols, vv->v, why, sizeof why);
+    free(rows);
+    free(cols);
+    (void)nch;
+    if (st == BTDF_EINVAL)
+        return ferr(msg, msglen, path, line, why);
+    rr->n = cc->n = vv->n = 0;
+    return st;
+}
+
+static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_t msglen)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "cannot open %s: %s", path, strerror(errno));
+        return BTDF_EIO;
+    }
+    btdf_params p;
+    btdf_params_default(&p);
+    int have_kind = 0, have_ch = 0, have_ior = 0, have_s = 0, have_k0 = 0, header = 0;
+    btdf_table_kind kind = BTDF_TABLE_FACET;
+    btdf_table *t = NULL;
+    dvec rr = {0}, cc = {0}, vv = {0};
+    double cur_ti = -1.0;
+    char line[4096];
+    long ln = 0;
+    btdf_status st = BTDF_OK;
+    while (st == BTDF_OK && fgets(line, sizeof line, f)) {
+        ln++;
+        if (!strchr(line, '\n') && !feof(f)) {
+            st = ferr(msg, msglen, path, ln, "line longer than 4095 bytes");
+            break;
+        }
+        if (line[0] == '#') {
+            char word[64];
+            if (sscanf(line, "# kind: %63s", word) == 1) {
+                have_kind = 1;
+                if (!strcmp(word, "grid"))
+                    kind = BTDF_TABLE_GRID;
+                else if (strcmp(word, "facet"))
+                    st = ferr(msg, msglen, path, ln, "kind must be facet or grid");
+            } else if (sscanf(line, "# channels: %d", &p.channels) == 1) {
+                have_ch = 1;
+            } else if (!strncmp(line, "# ior:", 6)) {
+                have_ior = sscanf(line + 6, "%lf %lf %lf", &p.ior[0], &p.ior[1], &p.ior[2]);
+            } else if (sscanf(line, "# smoothness: %lf", &p.smoothness) == 1) {
+                have_s = 1;
+            } else if (sscanf(line, "# k0: %lf", &p.k0) == 1) {
+                have_k0 = 1;
+            }
+            continue;
+        }
+        if (!header) {
+            if (strncmp(line, "theta_i_deg,", 12) != 0) {
+                st = ferr(msg, msglen, path, ln,
+                          "not a btdftab table CSV (expected the header row theta_i_deg,...)");
+                break;
+            }
+            if (!have_kind || !have_ch || !have_s || !have_k0 || have_ior != p.channels) {
+                st = ferr(msg, msglen, path, ln,
+                          "missing '# kind', '# channels', '# ior', '# smoothness' or '# k0' "
+                          "comment before the header row");
+                break;
+            }
+            char why[200];
+            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK) {
+                st = ferr(msg, msglen, path, ln, why);
+                break;
+            }
+            header = 1;
+            continue;
+        }
+        char *fld[16];
+        int nf = split(line, fld, 16);
+        int want = 3 + p.channels + 3;
+        if (nf != want) {
+            char why[80];
+            snprintf(why, sizeof why, "expected %d fields, found %d", want, nf);
+            st = ferr(msg, msglen, path, ln, why);
+            break;
+        }
+        double ti, row, col, v[BTDF_MAX_CHANNELS];
+        int ok = num(fld[nf - 3], &ti) && num(fld[nf - 2], &row) && num(fld[nf - 1], &col);
+        for (int ch = 0; ch < p.channels && ok; ch++)
+            ok = num(fld[3 + ch], &v[ch]);
+        if (!ok) {
+            st = ferr(msg, msglen, path, ln, "a number is malformed or not finite");
+            break;
+        }
+        if (ti != cur_ti) {
+            st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
+            cur_ti = ti;
+        }
+        if (st == BTDF_OK && !(push(&rr, row) && push(&cc, col)))
+            st = BTDF_ENOMEM;
+        for (int ch = 0; ch < p.channels && st == BTDF_OK; ch++)
+            if (!push(&vv, v[ch]))
+                st = BTDF_ENOMEM;
+    }
+    if (st == BTDF_OK && ferror(f))
+        st = ferr(msg, msglen, path, ln, "read error");
+    if (st == BTDF_OK && !header)
+        st = ferr(msg, msglen, path, ln, "no header row: empty or foreign file");
+    if (st == BTDF_OK)
+        st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
+    if (st == BTDF_OK && t->ns == 0)
+        st = ferr(msg, msglen, path, ln, "no table rows");
+    fclose(f);
+    free(rr.v);
+    free(cc.v);
+    free(vv.v);
+    if (st != BTDF_OK) {
+        btdf_table_free(t);
+        return st;
+    }
+    *out = t;
+    return BTDF_OK;
+}
+
+const btdf_format_ops btdf_format_csv = {"CSV", ".csv", NULL, 1, csv_write, NULL, csv_read};

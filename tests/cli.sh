@@ -1,0 +1,74 @@
+#!/bin/sh
+# SPDX-License-Identifier: MIT
+# cli.sh: runs the built btdftab: good runs give the right output, bad runs fail cleanly
+# with the documented status, name the bad value, and leave no file behind.
+set -u
+B="$1"
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+pass=0
+failn=0
+ok() { pass=$((pass + 1)); echo "ok $pass - $1"; }
+no() { failn=$((failn + 1)); echo "not ok - $1"; }
+
+# expect STATUS PATTERN DESCRIPTION -- command...: status and stderr pattern, no output file
+expect() {
+    st=$1; pat=$2; what=$3; shift 4
+    "$@" >"$W/out" 2>"$W/err"
+    rc=$?
+    if [ "$rc" -ne "$st" ]; then no "$what: status $rc, expected $st"; cat "$W/err"; return; fi
+    if ! grep -q -- "$pat" "$W/err"; then no "$what: stderr lacks '$pat'"; cat "$W/err"; return; fi
+    if ls "$W"/t.* "$W"/.t.* >/dev/null 2>&1; then no "$what: left a file"; ls -a "$W"; return; fi
+    ok "$what"
+}
+
+# good runs
+v=$("$B" eval --ior 1.4 --smoothness 3 30 150 180)
+case "$v" in 9.547564898258*) ok "eval by arguments" ;; *) no "eval by arguments: $v" ;; esac
+n=$(printf '30 150 180\n# comment\n\n0 170 90\n45,140,170\n' | "$B" eval | wc -l)
+[ "$n" -eq 3 ] && ok "eval from stdin: one row per input row" || no "eval rows: $n"
+n=$(printf '30 150 180\n' | "$B" eval --ior 1.51,1.52,1.53 | awk '{print NF}')
+[ "$n" -eq 3 ] && ok "eval three channels" || no "eval channels: $n"
+"$B" --version | grep -q '^btdftab [0-9]' && ok "--version" || no "--version"
+"$B" --help | grep -q 'tabulate' && ok "--help" || no "--help"
+"$B" albedo --ior 1.5 -s 100 0 30 | grep -q '^30,0.958' && ok "albedo" || no "albedo"
+"$B" tabulate -q --grid 4,10,7 --theta-i 0:60 -o "$W/g.csv" && \
+    [ "$(grep -vc '^#' "$W/g.csv")" -eq $((1 + 4 * 10 * 7)) ] && ok "tabulate grid CSV rows" || no "grid rows"
+"$B" tabulate -q --grid 2,5,3 -o - | grep -q '^theta_i_deg,theta_o_deg,phi_deg,rho' && ok "-o - writes stdout" || no "-o -"
+"$B" tabulate -q --theta-i 0:40 --tolerance 5e-3 -o "$W/a.csv" --report "$W/a.json" && \
+    grep -q '"met": true' "$W/a.json" && ok "adaptive table and JSON report" || no "adaptive"
+grep -q '^# provenance: btdftab tabulate' "$W/a.csv" && grep -q '^# btdftab ' "$W/a.csv" && \
+    ok "CSV carries version and provenance" || no "CSV provenance"
+# eval --table reproduces the table's own rule (the C tests compare bit for bit)
+x=$(echo "20 150 175" | "$B" eval --table "$W/a.csv")
+y=$(echo "20 150 175" | "$B" eval)
+awk -v x="$x" -v y="$y" 'BEGIN { d = x - y; if (d < 0) d = -d; exit !(d < 0.05 * y) }' && \
+    ok "eval --table close to Eq. 25 ($x vs $y)" || no "eval --table: $x vs $y"
+rm -f "$W"/a.* "$W"/g.*
+
+# bad runs: status 2 for usage, 1 for failures, 3 for a missed tolerance; nothing written
+expect 2 "unknown option" "unknown flag" -- "$B" tabulate --frobnicate -o "$W/t.csv"
+expect 2 "n = 1 has no BTDF" "n = 1" -- "$B" tabulate --ior 1 -o "$W/t.csv"
+expect 2 "not a number" "n = NaN text" -- "$B" tabulate --ior abc -o "$W/t.csv"
+expect 2 "finite" "n = nan" -- "$B" tabulate --ior nan -o "$W/t.csv"
+expect 2 "finite" "n = inf" -- "$B" tabulate --ior inf -o "$W/t.csv"
+expect 2 "must be > 0" "n <= 0" -- "$B" tabulate --ior -1.5 -o "$W/t.csv"
+expect 2 "smoothness 0" "s = 0" -- "$B" tabulate -s 0 -o "$W/t.csv"
+expect 2 "smoothness -3" "s < 0" -- "$B" tabulate -s -3 -o "$W/t.csv"
+expect 2 "theta-o 45" "theta-o out of range" -- "$B" eval 30 45 180
+expect 2 "theta-i 95" "theta-i out of range" -- "$B" eval 95 150 180
+expect 2 "line 2" "bad stdin row" -- sh -c "printf '30 150 180\n30 x 180\n' | '$B' eval"
+expect 2 "theta-i" "bad --theta-i" -- "$B" tabulate --theta-i 50:10 -o "$W/t.csv"
+expect 2 "tolerance" "bad tolerance" -- "$B" tabulate --tolerance 0 -o "$W/t.csv"
+expect 2 "grid" "bad grid" -- "$B" tabulate --grid 3,x,4 -o "$W/t.csv"
+expect 2 "unknown output format" "unknown extension" -- "$B" tabulate -o "$W/t.xyz"
+expect 1 "No such file" "unwritable output" -- "$B" tabulate -q --grid 2,3,3 -o "$W/none/t.csv"
+expect 3 "TOLERANCE NOT MET" "budget exhausted" -- "$B" tabulate --tolerance 1e-5 --max-samples 20000 -o "$W/t.csv"
+"$B" tabulate -q --tolerance 1e-5 --max-samples 20000 --best-effort -o "$W/t.csv" && [ -s "$W/t.csv" ] && \
+    ok "--best-effort writes the best table" || no "--best-effort"
+rm -f "$W/t.csv"
+expect 1 "not a btdftab table" "foreign table" -- sh -c "echo 'a,b' > '$W/f.csv'; echo '30 150 180' | '$B' eval --table '$W/f.csv'"
+expect 2 "unknown command" "unknown command" -- "$B" frob
+
+echo "$pass passed, $failn failed"
+[ "$failn" -eq 0 ]
