@@ -317,7 +317,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
     exr_result_t rc = exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init);
     if (rc != EXR_ERR_SUCCESS) {
         free(planes);
-        return say(BTDF_EIO, msg, msglen, "%s: %s", path, exr_text(&err, rc));
+        return say(BTDF_EIO, msg, msglen, "%s", exr_text(&err, rc));
     }
     const char *const *names = chan_names(channels);
     for (size_t k = 0; k < nslices && rc == EXR_ERR_SUCCESS; k++) {
@@ -346,7 +346,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
         rc = exr_write_header(ctx);
     if (rc != EXR_ERR_SUCCESS)
         st = say(rc == EXR_ERR_OUT_OF_MEMORY ? BTDF_ENOMEM : BTDF_EIO, msg, msglen,
-                 "%s: OpenEXR header: %s", path, exr_text(&err, rc));
+                 "OpenEXR header: %s", exr_text(&err, rc));
     for (size_t k = 0; k < nslices && st == BTDF_OK; k++) {
         btdf_slice sl;
         btdf_table_slice(t, k, &sl);
@@ -357,7 +357,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
     free(planes);
     rc = exr_finish(&ctx);
     if (st == BTDF_OK && rc != EXR_ERR_SUCCESS)
-        st = say(BTDF_EIO, msg, msglen, "%s: OpenEXR: %s", path, exr_text(&err, rc));
+        st = say(BTDF_EIO, msg, msglen, "OpenEXR: %s", exr_text(&err, rc));
     return st;
 }
 
@@ -381,8 +381,7 @@ static char *get_string(reader *r, int part, const char *name, btdf_status *st)
     exr_result_t rc = exr_attr_get_string(r->ctx, part, name, &len, &s);
     if (rc != EXR_ERR_SUCCESS || len < 0 || (len > 0 && s == NULL)) {
         *st = say(BTDF_EFORMAT, r->msg, r->msglen,
-                  "%s: not a btdftab table: part %d has no string attribute %s", r->path,
-                  part, name);
+                  "not a btdftab table: part %d has no string attribute %s", part, name);
         return NULL;
     }
     char *out = malloc((size_t)len + 1);
@@ -401,11 +400,9 @@ static btdf_status get_double(reader *r, int part, const char *name, double *out
     exr_result_t rc = exr_attr_get_double(r->ctx, part, name, out);
     if (rc != EXR_ERR_SUCCESS)
         return say(BTDF_EFORMAT, r->msg, r->msglen,
-                   "%s: not a btdftab table: part %d has no double attribute %s", r->path,
-                   part, name);
+                   "not a btdftab table: part %d has no double attribute %s", part, name);
     if (!isfinite(*out))
-        return say(BTDF_EFORMAT, r->msg, r->msglen, "%s: attribute %s is not finite",
-                   r->path, name);
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "attribute %s is not finite", name);
     return BTDF_OK;
 }
 
@@ -428,7 +425,7 @@ static btdf_status parse_list(reader *r, int part, const char *name, size_t n, d
         double v = strtod(p, &end);
         if (end == p || !isfinite(v) || i >= n) {
             st = say(BTDF_EFORMAT, r->msg, r->msglen,
-                     "%s: part %d: %s is not a list of %zu numbers", r->path, part, name, n);
+                     "part %d: %s is not a list of %zu numbers", part, name, n);
             break;
         }
         out[i++] = v;
@@ -436,7 +433,7 @@ static btdf_status parse_list(reader *r, int part, const char *name, size_t n, d
     }
     if (st == BTDF_OK && i != n)
         st = say(BTDF_EFORMAT, r->msg, r->msglen,
-                 "%s: part %d: %s holds %zu numbers, the image %zu", r->path, part, name, i, n);
+                 "part %d: %s holds %zu numbers, the image %zu", part, name, i, n);
     free(s);
     return st;
 }
@@ -452,7 +449,7 @@ static btdf_status read_params(reader *r, btdf_table_kind *kind, btdf_params *p)
     else if (strcmp(k, "grid") == 0)
         *kind = BTDF_TABLE_GRID;
     else
-        st = say(BTDF_EFORMAT, r->msg, r->msglen, "%s: unknown table kind \"%s\"", r->path, k);
+        st = say(BTDF_EFORMAT, r->msg, r->msglen, "unknown table kind \"%s\"", k);
     free(k);
     if (st != BTDF_OK)
         return st;
@@ -460,7 +457,7 @@ static btdf_status read_params(reader *r, btdf_table_kind *kind, btdf_params *p)
     if (exr_attr_get_int(r->ctx, 0, ATTR_PREFIX "channels", &channels) != EXR_ERR_SUCCESS ||
         (channels != 1 && channels != 3))
         return say(BTDF_EFORMAT, r->msg, r->msglen,
-                   "%s: attribute " ATTR_PREFIX "channels missing or not 1 or 3", r->path);
+                   "attribute " ATTR_PREFIX "channels missing or not 1 or 3");
     btdf_params_default(p);
     p->channels = channels;
     const char *const *names = chan_names(channels);
@@ -481,13 +478,13 @@ static btdf_status check_part(reader *r, int part, int channels, exr_attr_box2i_
 {
     exr_storage_t stor;
     if (exr_get_storage(r->ctx, part, &stor) != EXR_ERR_SUCCESS || stor != EXR_STORAGE_SCANLINE)
-        return say(BTDF_EFORMAT, r->msg, r->msglen, "%s: part %d is not a scanline image",
-                   r->path, part);
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d is not a scanline image",
+                   part);
     const exr_attr_chlist_t *cl = NULL;
     if (exr_get_channels(r->ctx, part, &cl) != EXR_ERR_SUCCESS || !cl ||
         cl->num_channels != channels)
-        return say(BTDF_EFORMAT, r->msg, r->msglen, "%s: part %d does not have %d channel%s",
-                   r->path, part, channels, channels == 1 ? "" : "s");
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d does not have %d channel%s",
+                   part, channels, channels == 1 ? "" : "s");
     const char *const *names = chan_names(channels);
     for (int ch = 0; ch < channels; ch++) {
         int found = 0;
@@ -499,13 +496,13 @@ static btdf_status check_part(reader *r, int part, int channels, exr_attr_box2i_
         }
         if (!found)
             return say(BTDF_EFORMAT, r->msg, r->msglen,
-                       "%s: part %d lacks the 32-bit float channel %s", r->path, part,
+                       "part %d lacks the 32-bit float channel %s", part,
                        names[ch]);
     }
     if (exr_get_data_window(r->ctx, part, dw) != EXR_ERR_SUCCESS ||
         dw->max.x < dw->min.x || dw->max.y < dw->min.y)
-        return say(BTDF_EFORMAT, r->msg, r->msglen, "%s: part %d has no data window",
-                   r->path, part);
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d has no data window",
+                   part);
     return BTDF_OK;
 }
 
@@ -519,7 +516,7 @@ static btdf_status read_part_pixels(reader *r, int part, const exr_attr_box2i_t 
     int32_t lpc = 1;
     exr_result_t rc = exr_get_scanlines_per_chunk(r->ctx, part, &lpc);
     if (rc != EXR_ERR_SUCCESS || lpc < 1)
-        return say(BTDF_EFORMAT, r->msg, r->msglen, "%s: part %d: %s", r->path, part,
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d: %s", part,
                    exr_text(&r->err, rc));
     exr_decode_pipeline_t dec = EXR_DECODE_PIPELINE_INITIALIZER;
     int started = 0;
@@ -561,8 +558,8 @@ static btdf_status read_part_pixels(reader *r, int part, const exr_attr_box2i_t 
     if (started)
         exr_decoding_destroy(r->ctx, &dec);
     if (rc != EXR_ERR_SUCCESS)
-        return say(BTDF_EFORMAT, r->msg, r->msglen, "%s: part %d pixels unreadable (%s): %s",
-                   r->path, part, exr_get_error_code_as_string(rc), exr_text(&r->err, rc));
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d pixels unreadable (%s): %s",
+                   part, exr_get_error_code_as_string(rc), exr_text(&r->err, rc));
     return BTDF_OK;
 }
 
@@ -575,8 +572,7 @@ static btdf_status read_slice(reader *r, btdf_table *t, int part, int channels)
     size_t width = (size_t)((int64_t)dw.max.x - dw.min.x + 1);
     size_t height = (size_t)((int64_t)dw.max.y - dw.min.y + 1);
     if (width > SIZE_MAX / height || width * height > SIZE_MAX / sizeof(double) / 3)
-        return say(BTDF_EOVERFLOW, r->msg, r->msglen, "%s: part %d is too large", r->path,
-                   part);
+        return say(BTDF_EOVERFLOW, r->msg, r->msglen, "part %d is too large", part);
     size_t npix = width * height;
     double ti = 0.0;
     st = get_double(r, part, ATTR_PREFIX "ti", &ti);
@@ -599,8 +595,8 @@ static btdf_status read_slice(reader *r, btdf_table *t, int part, int channels)
             float v = planes[(size_t)ch * npix + i];
             if (!(v >= 0.0f && v <= FLT_MAX)) { /* rejects NaN, inf and negatives */
                 st = say(BTDF_EFORMAT, r->msg, r->msglen,
-                         "%s: part %d pixel %zu channel %s is %g, not a BTDF value", r->path,
-                         part, i, chan_names(channels)[ch], (double)v);
+                         "part %d pixel %zu channel %s is %g, not a BTDF value", part, i,
+                         chan_names(channels)[ch], (double)v);
                 break;
             }
             vals[i * (size_t)channels + (size_t)ch] = (double)v;
@@ -610,9 +606,9 @@ static btdf_status read_slice(reader *r, btdf_table *t, int part, int channels)
         char why[200] = "";
         st = btdf_table_add_slice(t, ti, height, rows, width, cols, vals, why, sizeof why);
         if (st == BTDF_EINVAL)
-            st = say(BTDF_EFORMAT, r->msg, r->msglen, "%s: part %d: %s", r->path, part, why);
+            st = say(BTDF_EFORMAT, r->msg, r->msglen, "part %d: %s", part, why);
         else if (st != BTDF_OK)
-            say(st, r->msg, r->msglen, "%s: part %d: %s", r->path, part, why);
+            say(st, r->msg, r->msglen, "part %d: %s", part, why);
     }
     free(rows);
     free(cols);
@@ -632,7 +628,8 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
     exr_result_t rc = exr_start_read(&r.ctx, path, &init);
     if (rc != EXR_ERR_SUCCESS) {
         btdf_status st = rc == EXR_ERR_FILE_ACCESS ? BTDF_EIO : BTDF_EFORMAT;
-        say(st, msg, msglen, "%s: %s", path, exr_text(&r.err, rc));
+        say(st, msg, msglen, st == BTDF_EIO ? "%s" : "not a readable OpenEXR file: %s",
+            exr_text(&r.err, rc));
         exr_finish(&r.ctx);
         return st;
     }
@@ -642,21 +639,21 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
     int nparts = 0;
     btdf_status st = BTDF_OK;
     if (exr_get_count(r.ctx, &nparts) != EXR_ERR_SUCCESS || nparts < 1)
-        st = say(BTDF_EFORMAT, msg, msglen, "%s: no image parts", path);
+        st = say(BTDF_EFORMAT, msg, msglen, "no image parts");
     if (st == BTDF_OK)
         st = read_params(&r, &kind, &p);
     int32_t nslices = 0;
     if (st == BTDF_OK &&
         (exr_attr_get_int(r.ctx, 0, ATTR_PREFIX "slices", &nslices) != EXR_ERR_SUCCESS ||
          nslices != nparts))
-        st = say(BTDF_EFORMAT, msg, msglen, "%s: " ATTR_PREFIX "slices does not match the %d parts",
-                 path, nparts);
+        st = say(BTDF_EFORMAT, msg, msglen, ATTR_PREFIX "slices does not match the %d parts",
+                 nparts);
     if (st == BTDF_OK) {
         char why[200] = "";
         st = btdf_table_new(kind, &p, &t, why, sizeof why);
         if (st != BTDF_OK)
             st = say(st == BTDF_EINVAL ? BTDF_EFORMAT : st, msg, msglen,
-                     "%s: bad parameters in the file: %s", path, why);
+                     "bad parameters in the file: %s", why);
     }
     for (int k = 0; k < nparts && st == BTDF_OK; k++)
         st = read_slice(&r, t, k, p.channels);

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* png.c: 8-bit RGB pictures to PNG through libpng; its setjmp error handling stays here. */
+#include <errno.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -81,7 +82,7 @@ btdf_status btdf_png_write_rgb(const char *path, const unsigned char *rgb, int w
     FILE *f = fopen(path, "wb");
     if (!f) {
         if (msg && msglen)
-            snprintf(msg, msglen, "%s: cannot create the file", path);
+            snprintf(msg, msglen, "cannot create the file: %s", strerror(errno));
         return BTDF_EIO;
     }
     png_err err;
@@ -93,7 +94,7 @@ btdf_status btdf_png_write_rgb(const char *path, const unsigned char *rgb, int w
     }
     if (bad) {
         if (msg && msglen)
-            snprintf(msg, msglen, "%s: PNG: %s", path, err.text);
+            snprintf(msg, msglen, "PNG: %s", err.text);
         return BTDF_EIO;
     }
     return BTDF_OK;

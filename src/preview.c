@@ -655,8 +655,7 @@ BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *
     st = btdf_png_write_rgb(tmp, rgb, w, h, what[o->kind], msg, msglen);
     btdf_preview_free(rgb);
     if (st == BTDF_OK && rename(tmp, path) != 0)
-        st = say(BTDF_EIO, msg, msglen, "%s: cannot rename the finished file into place",
-                 path);
+        st = say(BTDF_EIO, msg, msglen, "cannot rename the finished file into place");
     if (st != BTDF_OK)
         remove(tmp);
     free(tmp);
