@@ -8,12 +8,14 @@
 #include "btdf.h"
 #include "formats.h"
 
+#if BTDF_HAVE_OPENEXR
 static double now(void)
 {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
+#endif
 
 int main(int argc, char **argv)
 {
