@@ -1,0 +1,80 @@
+/* SPDX-License-Identifier: MIT */
+/* btdf_preview.h: PNG pictures of the model and of tables (polar lobes, slice montages, renders). */
+#ifndef BTDF_PREVIEW_H
+#define BTDF_PREVIEW_H
+
+#include "btdf.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/*
+ * Three kinds of picture, drawn by the library itself (no plotting dependency);
+ * libpng only encodes them, so btdf_preview_render works in every build and
+ * btdf_preview_write returns BTDF_ENOTSUP when PNG support was switched off.
+ *
+ *  BTDF_PREVIEW_POLAR: rho |cos to| (1/sr) in the plane of incidence as a polar plot,
+ *    like Figs. 5 and 6 of Xu & Sun (2008): the surface horizontal, the incident
+ *    direction drawn in the upper half, the lobe below it, one curve for every
+ *    (material, ti) pair, at most BTDF_PREVIEW_MAX_CURVES, with a legend. Channel 0
+ *    of each material is drawn.
+ *  BTDF_PREVIEW_MONTAGE: every slice of a table in false colour on a log scale
+ *    (six decades below the table's maximum), one tile per slice labelled with its
+ *    ti, plus a colour bar. Channel 0. At most BTDF_PREVIEW_MAX_TILES tiles: larger
+ *    tables show evenly spaced slices and say so.
+ *  BTDF_PREVIEW_RENDER: like Figs. 10 and 11: the flat rough face of a semi-infinite
+ *    block, one face width wide, seen from 0.8 face widths away on its axis, lit by a
+ *    point light on the axis inside the block (the medium the table's light comes
+ *    from), far (100 widths) and near (0.8 widths), rendered from the table.
+ *    Radiance per pixel: rho~ cos ti I / r^2. Scaled linearly so that the brightest
+ *    component of each row is 255, as the paper does. With `analytic`, the same
+ *    pictures from Eq. 25 and the relative difference |table - Eq. 25| / max Eq. 25
+ *    beside them.
+ */
+typedef enum {
+    BTDF_PREVIEW_POLAR = 0,
+    BTDF_PREVIEW_MONTAGE = 1,
+    BTDF_PREVIEW_RENDER = 2
+} btdf_preview_kind;
+
+#define BTDF_PREVIEW_MAX_CURVES 8
+#define BTDF_PREVIEW_MAX_TILES 48
+#define BTDF_PREVIEW_MAX_SIDE 8192 /* largest width or height accepted, pixels */
+
+typedef struct btdf_preview_opts {
+    btdf_preview_kind kind;
+    int width, height;             /* pixels; 0 = the kind's default (see below) */
+    /* POLAR: materials x incident angles, one curve per pair. */
+    const btdf_params *materials;  /* nmaterials entries */
+    size_t nmaterials;
+    const double *ti_deg;          /* incident angles in DEGREES, [0, 90) */
+    size_t nti;
+    /* MONTAGE and RENDER. */
+    const btdf_table *table;
+    int analytic;                  /* RENDER: add the Eq. 25 and difference panels */
+    const char *title;             /* extra line written on the picture, may be NULL */
+} btdf_preview_opts;
+
+/* Zeroes o and sets kind = POLAR. Defaults when width/height are 0: POLAR 960 x 720;
+   MONTAGE 1000 wide, height to fit; RENDER 300-pixel panels, size to fit. */
+BTDF_API void btdf_preview_opts_default(btdf_preview_opts *o);
+
+/* Draws the picture into a new buffer of *width x *height RGB pixels, 8 bits per
+   component, rows from the top. The caller frees *rgb with btdf_preview_free.
+   BTDF_EINVAL (with the reason) for missing or bad inputs, BTDF_ENOMEM. */
+BTDF_API btdf_status btdf_preview_render(const btdf_preview_opts *o, unsigned char **rgb,
+                                         int *width, int *height, char *msg, size_t msglen);
+BTDF_API void btdf_preview_free(unsigned char *rgb);
+
+/* btdf_preview_render, then a PNG file at path, written under a temporary name in
+   the same folder and renamed: on error no file is left at path. BTDF_ENOTSUP when
+   PNG support was switched off at build time, BTDF_EIO when writing fails. */
+BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *path,
+                                        char *msg, size_t msglen);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* BTDF_PREVIEW_H */
