@@ -21,12 +21,6 @@
  * tables that of channel 0; empty where no facet refracts into the lower hemisphere).
  */
 
-static const char *kind_name(btdf_table_kind k)
-{
-    return k == BTDF_TABLE_GRID ? "grid"
-                                : (k == BTDF_TABLE_FACET_RECIPROCAL ? "facet-reciprocal" : "facet");
-}
-
 static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
 {
     (void)msg;
@@ -35,7 +29,7 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     const btdf_params *p = &t->p;
     int nch = p->channels;
     fprintf(f, "# btdftab %s table\n", BTDF_VERSION_STRING);
-    fprintf(f, "# kind: %s\n", kind_name(t->kind));
+    fprintf(f, "# kind: %s\n", table_kind_name(t->kind));
     fprintf(f, "# channels: %d\n", nch);
     fprintf(f, "# ior:");
     for (int ch = 0; ch < nch; ch++)
@@ -230,11 +224,7 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
             char word[64];
             if (sscanf(line, "# kind: %63s", word) == 1) {
                 have_kind = 1;
-                if (!strcmp(word, "grid"))
-                    kind = BTDF_TABLE_GRID;
-                else if (!strcmp(word, "facet-reciprocal"))
-                    kind = BTDF_TABLE_FACET_RECIPROCAL;
-                else if (strcmp(word, "facet"))
+                if (!table_kind_parse(word, &kind))
                     st = ferr(msg, msglen, path, ln,
                               "kind must be facet, facet-reciprocal or grid");
             } else if (sscanf(line, "# channels: %d", &p.channels) == 1) {

@@ -12,6 +12,7 @@
 #include <openexr.h>
 
 #include "formats.h"
+#include "table_impl.h"
 
 /* Layout (docs/formats.md is the reference):
  *   part k = slice k, scanline storage, ZIP, FLOAT channels "Y" or "B","G","R";
@@ -144,8 +145,8 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
 {
     const btdf_params *p = btdf_table_get_params(t);
     const char *const *names = chan_names(p->channels);
-    exr_result_t rc = exr_attr_set_string(
-        ctx, 0, ATTR_PREFIX "kind", btdf_table_get_kind(t) == BTDF_TABLE_FACET ? "facet" : "grid");
+    exr_result_t rc =
+        exr_attr_set_string(ctx, 0, ATTR_PREFIX "kind", table_kind_name(btdf_table_get_kind(t)));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_int(ctx, 0, ATTR_PREFIX "channels", p->channels);
     if (rc == EXR_ERR_SUCCESS)
@@ -187,10 +188,10 @@ static exr_result_t set_slice_attrs(exr_context_t ctx, int part, btdf_table_kind
         rc = exr_attr_set_string(ctx, part, ATTR_PREFIX "cols", cols);
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, part, ATTR_PREFIX "rowAxis",
-                                 kind == BTDF_TABLE_FACET ? "tn" : "to");
+                                 kind == BTDF_TABLE_GRID ? "to" : "tn");
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, part, ATTR_PREFIX "colAxis",
-                                 kind == BTDF_TABLE_FACET ? "psi" : "phi");
+                                 kind == BTDF_TABLE_GRID ? "phi" : "psi");
     free(rows);
     free(cols);
     return rc;
@@ -444,11 +445,7 @@ static btdf_status read_params(reader *r, btdf_table_kind *kind, btdf_params *p)
     char *k = get_string(r, 0, ATTR_PREFIX "kind", &st);
     if (!k)
         return st;
-    if (strcmp(k, "facet") == 0)
-        *kind = BTDF_TABLE_FACET;
-    else if (strcmp(k, "grid") == 0)
-        *kind = BTDF_TABLE_GRID;
-    else
+    if (!table_kind_parse(k, kind))
         st = say(BTDF_EFORMAT, r->msg, r->msglen, "unknown table kind \"%s\"", k);
     free(k);
     if (st != BTDF_OK)

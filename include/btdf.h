@@ -298,4 +298,6 @@ BTDF_API int btdf_format_available(const char *ext);
 }
 #endif
 
+#include "btdf_preview.h"
+
 #endif /* BTDF_H */

@@ -31,9 +31,39 @@ typedef struct est_job {
     size_t *points;
 } est_job;
 
-/* Facet slopes are drawn stratified in w = 1 - exp(-u^2) up to u = U_EST, which
-   follows the Beckmann mass; the neglected tail holds exp(-49) of it. */
-#define U_EST 7.0
+/*
+ * Two sample sets per incident angle, combined by the balance heuristic (multiple
+ * importance sampling) on the measure |cos to| d(omega_o):
+ *  A: facet slopes stratified in w = 1 - exp(-u^2) and psi, which follows the lobe
+ *     however narrow it is; a sample stands for V_A = |cos to|/chi d(omega_h) of it;
+ *  B: outgoing directions stratified in (cos to, phi), V_B = |cos to| d(cos to) d(phi).
+ * Each sample counts with V_A V_B / (V_A + V_B) (V_A = infinity where A cannot reach).
+ * A alone has unbounded weights for n < 1, where chi -> 0 at the critical angle;
+ * B alone misses narrow lobes; together they are bounded and follow the lobe.
+ */
+#define U_EST 7.0 /* A's neglected tail holds exp(-49) of the facet distribution */
+
+typedef struct est_acc {
+    double l1, sgn, dmax, vmax;
+} est_acc;
+
+static void est_add(est_acc *e, double tab, double rho, double weight)
+{
+    double d = tab - rho;
+    e->l1 += fabs(d) * weight;
+    e->sgn += d * weight;
+    e->dmax = fmax(e->dmax, fabs(d));
+    e->vmax = fmax(e->vmax, rho);
+}
+
+/* Measure one A sample of slope u (tan tn = 2u/s) stands for, per unit outgoing
+   weight |cos to|/chi: d(omega_h)/(dw dpsi) (2/s^2) e^{u^2} / q^{3/2}, q = 1 + tan^2 tn,
+   times the stratum size, doubled for psi < 0. */
+static double a_measure(double u, double s, double dw, double dpsi)
+{
+    double rr = 2.0 * u / s, q = 1.0 + rr * rr;
+    return (2.0 / (s * s)) * exp(u * u) / (q * sqrt(q)) * dw * dpsi * 2.0;
+}
 
 static void est_angle(void *arg, size_t k)
 {
@@ -53,64 +83,63 @@ static void est_angle(void *arg, size_t k)
     double Tall[BTDF_MAX_CHANNELS];
     btdf_transmittance(p, ti, Tall);
     double wmax = -expm1(-U_EST * U_EST);
+    double dw = wmax / (double)j->nu, dpsi = M_PI / (double)j->npsi;
+    double dmu = 1.0 / (double)j->nmu, dphi = M_PI / (double)j->nphi;
     size_t pts = 0;
     double tab[BTDF_MAX_CHANNELS];
     for (int c = 0; c < p->channels; c++) {
         double n = p->ior[c], T = Tall[c];
-        double l1 = 0.0, sgn = 0.0, dmax = 0.0, vmax = 0.0;
+        est_acc acc = {0.0, 0.0, 0.0, 0.0};
         for (size_t iu = 0; iu < j->nu; iu++) {
             for (size_t ip = 0; ip < j->npsi; ip++) {
                 double w = wmax * ((double)iu + unif(&rng)) / (double)j->nu;
                 double psi = M_PI * ((double)ip + unif(&rng)) / (double)j->npsi;
                 double u = sqrt(-log1p(-w)); /* w < 1: finite */
-                double rr = 2.0 * u / s, q = 1.0 + rr * rr;
-                double ctn = 1.0 / sqrt(q), stn = rr * ctn;
+                double rr = 2.0 * u / s;
+                double ctn = 1.0 / sqrt(1.0 + rr * rr), stn = rr * ctn;
                 facet_geo g;
                 pts++;
                 if (!facet_eval(n, s, p->k0, &a, stn, ctn, cos(psi), sin(psi), &g))
                     continue; /* no outgoing direction: both the table and Eq. 25 are 0 */
-                /* d(omega_h) per unit w and psi: sin tn dtn/du du/dw, written without
-                   dividing by u: (2/s^2) e^{u^2} / q^{3/2}; doubled for psi < 0. */
-                double meas = g.weight * (2.0 / (s * s)) * exp(u * u) / (q * sqrt(q)) *
-                              (wmax / (double)j->nu) * (M_PI / (double)j->npsi) * 2.0;
+                double va = g.weight * a_measure(u, s, dw, dpsi);
+                double vb = -g.cos_to * dmu * dphi * 2.0;
                 double to = atan2(g.sin_to, g.cos_to);
                 double pf = fabs(atan2(g.sin_phi, g.cos_phi));
                 table_eval_sc(t, ti, sti, cti, g.sin_to, g.cos_to, g.cos_phi, g.sin_phi, pf,
                               to, tab);
-                double d = tab[c] - g.rho;
-                l1 += fabs(d) * meas;
-                sgn += d * meas;
-                dmax = fmax(dmax, fabs(d));
-                vmax = fmax(vmax, g.rho);
+                /* g.rho is Eq. 25 through the kernel, independent of the table */
+                est_add(&acc, tab[c], g.rho, va > 0.0 ? va * vb / (va + vb) : 0.0);
             }
         }
-        if (t->kind == BTDF_TABLE_GRID) {
-            /* A grid interpolates across the edge of the reachable region; directions
-               no facet reaches (Eq. 25 is 0) are not covered above, so sample the
-               hemisphere uniformly there. A facet table is exactly 0 there. */
-            for (size_t im = 0; im < j->nmu; im++) {
-                for (size_t ip = 0; ip < j->nphi; ip++) {
-                    double mu = -((double)im + unif(&rng)) / (double)j->nmu; /* cos to */
-                    double ph = M_PI * ((double)ip + unif(&rng)) / (double)j->nphi;
-                    double sto = sqrt(fmax(0.0, 1.0 - mu * mu)), cph = cos(ph), sph = sin(ph);
-                    double tn, ps;
-                    pts++;
-                    if (facet_of(n, sti, cti, sto, mu, cph, sph, &tn, &ps))
-                        continue; /* reachable: counted in facet space */
-                    table_eval_sc(t, ti, sti, cti, sto, mu, cph, sph, ph, atan2(sto, mu), tab);
-                    double meas = -mu * (1.0 / (double)j->nmu) * (M_PI / (double)j->nphi) * 2.0;
-                    l1 += tab[c] * meas;
-                    sgn += tab[c] * meas;
-                    dmax = fmax(dmax, tab[c]);
+        for (size_t im = 0; im < j->nmu; im++) {
+            for (size_t ip = 0; ip < j->nphi; ip++) {
+                double mu = -((double)im + unif(&rng)) / (double)j->nmu; /* cos to */
+                double ph = M_PI * ((double)ip + unif(&rng)) / (double)j->nphi;
+                double sto = sqrt(fmax(0.0, 1.0 - mu * mu)), cph = cos(ph), sph = sin(ph);
+                double vb = -mu * dmu * dphi * 2.0, share = vb, tn, ps;
+                pts++;
+                if (facet_of(n, sti, cti, sto, mu, cph, sph, &tn, &ps)) {
+                    double u = 0.5 * s * tan(tn);
+                    facet_geo g;
+                    if (u < U_EST &&
+                        facet_eval(n, s, p->k0, &a, sin(tn), cos(tn), cos(ps), sin(ps), &g)) {
+                        double va = g.weight * a_measure(u, s, dw, dpsi);
+                        share = va * vb / (va + vb);
+                    }
                 }
+                rho_out b;
+                rho_out_init(&b, sto, mu, s, p->k0);
+                double rho = rho_kernel(n, s, &a, &b, cph, sph);
+                table_eval_sc(t, ti, sti, cti, sto, mu, cph, sph, ph, atan2(sto, mu), tab);
+                est_add(&acc, tab[c], rho, share);
             }
         }
         double fl = fmax(T, 0.01); /* MODEL.md section 6 floor */
-        double el1 = l1 / fl, et = fabs(sgn) / fl;
-        double em = (T >= 0.01 && vmax > 0.0) ? dmax / vmax : 0.0;
+        double el1 = acc.l1 / fl, et = fabs(acc.sgn) / fl;
+        double em = (T >= 0.01 && acc.vmax > 0.0) ? acc.dmax / acc.vmax : 0.0;
         if (c == 0) {
             r->T = T;
-            r->T_table = T + sgn;
+            r->T_table = T + acc.sgn;
         }
         r->e_l1 = fmax(r->e_l1, el1);
         r->e_t = fmax(r->e_t, et);
@@ -139,8 +168,8 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
     j.angles = test_angles;
     j.npsi = 32;
     j.nu = (points_per_angle + 31) / 32;
-    j.nmu = 48;
-    j.nphi = 48;
+    j.nmu = 64;
+    j.nphi = 64;
     j.seed = seed;
     j.res = calloc(test_angles, sizeof *j.res);
     j.points = calloc(test_angles, sizeof *j.points);

@@ -176,6 +176,24 @@ double blend_ti(double v0, double v1, double w, double g, double g0, double g1)
     return g * ((1.0 - w) * r0 + w * r1);
 }
 
+const char *table_kind_name(btdf_table_kind k)
+{
+    return k == BTDF_TABLE_GRID ? "grid"
+                                : (k == BTDF_TABLE_FACET_RECIPROCAL ? "facet-reciprocal" : "facet");
+}
+
+int table_kind_parse(const char *name, btdf_table_kind *k)
+{
+    const btdf_table_kind all[3] = {BTDF_TABLE_FACET, BTDF_TABLE_GRID,
+                                    BTDF_TABLE_FACET_RECIPROCAL};
+    for (int i = 0; i < 3; i++)
+        if (!strcmp(name, table_kind_name(all[i]))) {
+            *k = all[i];
+            return 1;
+        }
+    return 0;
+}
+
 /* ------------------------------------------------------------------------- */
 /* The object                                                                */
 /* ------------------------------------------------------------------------- */

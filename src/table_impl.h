@@ -49,6 +49,11 @@ double incident_factor(const btdf_params *p, double ti);
    g (query), g0, g1 (the two slices): g ((1 - w) v0/g0 + w v1/g1). */
 double blend_ti(double v0, double v1, double w, double g, double g0, double g1);
 
+/* "facet", "grid" or "facet-reciprocal", as files name the kinds; parse returns 0
+   for an unknown name. */
+const char *table_kind_name(btdf_table_kind k);
+int table_kind_parse(const char *name, btdf_table_kind *k);
+
 /* Monotonic wall clock in seconds. */
 double btdf_now(void);
 

@@ -70,5 +70,29 @@ rm -f "$W/t.csv"
 expect 1 "not a btdftab table" "foreign table" -- sh -c "echo 'a,b' > '$W/f.csv'; echo '30 150 180' | '$B' eval --table '$W/f.csv'"
 expect 2 "unknown command" "unknown command" -- "$B" frob
 
+# optional formats: round trips when built in, a clear refusal and no file when not
+if "$B" --version | grep -q 'OpenEXR on'; then
+    "$B" tabulate -q --theta-i 0:30 --tolerance 1e-2 -o "$W/x.exr" && [ -s "$W/x.exr" ] && \
+        ok "tabulate -o .exr" || no "tabulate -o .exr"
+    x=$(echo "20 150 175" | "$B" eval --table "$W/x.exr")
+    y=$(echo "20 150 175" | "$B" eval)
+    awk -v x="$x" -v y="$y" 'BEGIN { d = x - y; if (d < 0) d = -d; exit !(d < 0.05 * y) }' && \
+        ok "eval --table .exr ($x vs $y)" || no "eval --table .exr: $x vs $y"
+    expect 1 "truncated\|EXR\|exr" "truncated EXR" -- sh -c "head -c 300 '$W/x.exr' > '$W/t.exr' && echo '30 150 180' | '$B' eval --table '$W/t.exr'; s=\$?; rm -f '$W/t.exr'; exit \$s"
+    rm -f "$W/x.exr"
+else
+    expect 1 "switched off at build time (-Dopenexr=disabled)" "no OpenEXR" -- "$B" tabulate -o "$W/t.exr"
+fi
+if "$B" --version | grep -q 'PNG on'; then
+    "$B" tabulate -q --theta-i 0:30 --tolerance 1e-2 -o "$W/m.png" --preview render=/"$W/r.png" && \
+        [ -s "$W/m.png" ] && [ -s "$W/r.png" ] && ok "montage and render previews" || no "previews"
+    "$B" polar -o "$W/p.png" --material 1.4:3 --material 0.714:3 --angles 0,30 && [ -s "$W/p.png" ] && \
+        ok "polar picture" || no "polar"
+    rm -f "$W"/*.png
+    expect 2 "kind must be" "bad preview kind" -- "$B" tabulate --preview sketch="$W/t.png"
+else
+    expect 1 "switched off at build time (-Dpng=disabled)" "no PNG" -- "$B" tabulate -o "$W/t.png"
+fi
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

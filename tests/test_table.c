@@ -59,35 +59,41 @@ static void tolerance_met(void **state)
 
 /* An estimate is true: a brute-force e_L1 over a fine (cos to, phi) grid of the
    outgoing hemisphere, independent of the facet-space sampling, agrees within 20%. */
+static void estimate_case(double n, double s, double tol, double ti_deg, int grid)
+{
+    btdf_table *t = build(n, s, 0, 60, tol, 0, BTDF_OK);
+    double ti = rad(ti_deg);
+    btdf_report r;
+    memset(&r, 0, sizeof r);
+    assert_status(BTDF_OK, btdf_table_estimate(t, ti, ti, 1, 16384, 99, 1, &r));
+    double T = r.per_ti[0].T, est = r.per_ti[0].e_l1;
+    double sum = 0.0;
+    for (int i = 0; i < grid; i++) {
+        double mu = -(i + 0.5) / grid; /* cos to, midpoint rule */
+        double to = acos(mu);
+        for (int j = 0; j < grid; j++) {
+            double ph = M_PI * (j + 0.5) / grid, tv;
+            btdf_table_eval(t, ti, to, ph, &tv);
+            double rv = btdf_rho(n, s, 0.7, ti, to, ph);
+            sum += fabs(tv - rv) * (-mu) * (1.0 / grid) * (M_PI / grid) * 2.0;
+        }
+    }
+    double brute = sum / fmax(T, 0.01);
+    print_message("n %g ti %.1f: estimate %.4g, brute force %.4g\n", n, ti_deg, est, brute);
+    assert_close(est, brute, 0.2, 0.0);
+    btdf_report_clear(&r);
+    btdf_table_free(t);
+}
+
+/* An estimate is true: a brute-force e_L1 over a fine (cos to, phi) grid of the
+   outgoing hemisphere, independent of the estimate's sampling, agrees within 20%.
+   n = 0.6667 at 56.9 deg is where facet sampling alone once reported 3x the truth. */
 static void estimate_is_true(void **state)
 {
     (void)state;
-    btdf_table *t = build(1.5, 3, 0, 60, 3e-3, 0, BTDF_OK);
-    const double tis[] = {17.3, 42.1};
-    for (int a = 0; a < 2; a++) {
-        double ti = rad(tis[a]);
-        btdf_report r;
-        memset(&r, 0, sizeof r);
-        assert_status(BTDF_OK, btdf_table_estimate(t, ti, ti, 1, 16384, 99, 1, &r));
-        double T = r.per_ti[0].T, est = r.per_ti[0].e_l1;
-        int nm = 1500, np = 1500;
-        double sum = 0.0;
-        for (int i = 0; i < nm; i++) {
-            double mu = -(i + 0.5) / nm; /* cos to, midpoint rule */
-            double to = acos(mu);
-            for (int j = 0; j < np; j++) {
-                double ph = M_PI * (j + 0.5) / np, tv;
-                btdf_table_eval(t, ti, to, ph, &tv);
-                double rv = btdf_rho(1.5, 3, 0.7, ti, to, ph);
-                sum += fabs(tv - rv) * (-mu) * (1.0 / nm) * (M_PI / np) * 2.0;
-            }
-        }
-        double brute = sum / fmax(T, 0.01);
-        print_message("ti %.1f: estimate %.4g, brute force %.4g\n", tis[a], est, brute);
-        assert_close(est, brute, 0.2, 0.0);
-        btdf_report_clear(&r);
-    }
-    btdf_table_free(t);
+    estimate_case(1.5, 3, 3e-3, 17.3, 1500);
+    estimate_case(1.5, 3, 3e-3, 42.1, 1500);
+    estimate_case(0.6667, 6, 1e-3, 56.944619, 1500);
 }
 
 static char *slurp(const char *path, size_t *len)

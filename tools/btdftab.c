@@ -53,6 +53,7 @@ static void usage(FILE *f, int verbose)
             "usage: btdftab eval [options] [TI TO PHI]     rho at angles (degrees), or rows on stdin\n"
             "       btdftab tabulate [options] -o FILE      write a table (.csv%s)\n"
             "       btdftab albedo [options] [TI ...]       T(ti) and the flat Ft(ti)\n"
+            "       btdftab polar [options] -o FILE.png     lobes in the plane of incidence\n"
             "       btdftab --help | --version\n",
             btdf_format_available("exr") ? ", .exr" : "");
     if (!verbose) {
@@ -80,6 +81,15 @@ static void usage(FILE *f, int verbose)
             "  --threads N          worker threads, 0 = all cores (default 0)\n"
             "  --report FILE.json   write the error report as JSON\n"
             "  --best-effort        write the table even if the budget stopped refinement\n"
+            "  --preview [KIND=]F.png  a picture of the table; KIND is montage (default),\n"
+            "                       render (the paper's Figs. 10-11) or render-analytic\n"
+            "                       (with Eq. 25 and the difference beside it); repeatable;\n"
+            "                       -o F.png is the same as --preview F.png\n"
+            "  --size WxH           picture size in pixels (default: per kind)\n"
+            "\npolar:\n"
+            "  --material N:S       one material (repeatable, at most 8 curves in all);\n"
+            "                       default: --ior and --smoothness\n"
+            "  --angles A,B,...     incident angles in degrees (default 30)\n"
             "  -q, --quiet          no report line on standard error\n"
             "\nExit status: 0 success, 1 failed run, 2 usage error, 3 tolerance not met.\n",
             btdf_format_available("exr") ? ", .exr" : "");
@@ -444,6 +454,61 @@ static int parse_range(const char *s, double *a, double *b)
     return 1;
 }
 
+static int ends_with(const char *s, const char *suffix)
+{
+    size_t ls = strlen(s), lx = strlen(suffix);
+    return ls >= lx && strcmp(s + ls - lx, suffix) == 0;
+}
+
+#define MAX_PREVIEWS 4
+
+typedef struct preview_req {
+    btdf_preview_kind kind;
+    int analytic;
+    const char *path;
+} preview_req;
+
+/* [montage|render|render-analytic=]FILE.png */
+static int parse_preview(const char *s, preview_req *r)
+{
+    const char *eq = strchr(s, '=');
+    r->kind = BTDF_PREVIEW_MONTAGE;
+    r->analytic = 0;
+    r->path = eq ? eq + 1 : s;
+    if (eq) {
+        size_t l = (size_t)(eq - s);
+        if (l == 7 && !strncmp(s, "montage", 7)) {
+            r->kind = BTDF_PREVIEW_MONTAGE;
+        } else if (l == 6 && !strncmp(s, "render", 6)) {
+            r->kind = BTDF_PREVIEW_RENDER;
+        } else if (l == 15 && !strncmp(s, "render-analytic", 15)) {
+            r->kind = BTDF_PREVIEW_RENDER;
+            r->analytic = 1;
+        } else {
+            fail(EXIT_USAGE, "--preview: '%.*s': kind must be montage, render or "
+                             "render-analytic", (int)l, s);
+            return 0;
+        }
+    }
+    if (!ends_with(r->path, ".png")) {
+        fail(EXIT_USAGE, "--preview: '%s': the picture's name must end in .png", r->path);
+        return 0;
+    }
+    return 1;
+}
+
+static int parse_picture_size(const char *s, int *w, int *h)
+{
+    char tail;
+    if (sscanf(s, "%dx%d%c", w, h, &tail) != 2 || *w < 64 || *h < 64 ||
+        *w > BTDF_PREVIEW_MAX_SIDE || *h > BTDF_PREVIEW_MAX_SIDE) {
+        fail(EXIT_USAGE, "--size: '%s': expected WxH, each in [64, %d] pixels", s,
+             BTDF_PREVIEW_MAX_SIDE);
+        return 0;
+    }
+    return 1;
+}
+
 static int write_text_atomic(const char *path, const btdf_table_opts *o, const btdf_report *r,
                              const char *prov)
 {
@@ -468,7 +533,8 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     btdf_table_opts o;
     btdf_table_opts_default(&o);
     const char *out = NULL, *report = NULL;
-    int best_effort = 0;
+    int best_effort = 0, npreview = 0, pic_w = 0, pic_h = 0;
+    preview_req previews[MAX_PREVIEWS];
     double ti0 = 0.0, ti1 = 90.0;
     size_t mib = 256;
     for (int i = 1; i < argc; i++) {
@@ -531,22 +597,48 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             report = argv[++i];
         } else if (!strcmp(a, "--best-effort")) {
             best_effort = 1;
+        } else if (!strcmp(a, "--preview")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            if (npreview == MAX_PREVIEWS)
+                return fail(EXIT_USAGE, "--preview: at most %d pictures", MAX_PREVIEWS);
+            if (!parse_preview(argv[++i], &previews[npreview++]))
+                return EXIT_USAGE;
+        } else if (!strcmp(a, "--size")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            if (!parse_picture_size(argv[++i], &pic_w, &pic_h))
+                return EXIT_USAGE;
         } else {
             fail(EXIT_USAGE, "tabulate: unknown option '%s'", a);
             usage(stderr, 0);
             return EXIT_USAGE;
         }
     }
-    if (!out)
+    if (out && ends_with(out, ".png")) { /* -o F.png is a montage preview */
+        if (npreview == MAX_PREVIEWS)
+            return fail(EXIT_USAGE, "--preview: at most %d pictures", MAX_PREVIEWS);
+        previews[npreview].kind = BTDF_PREVIEW_MONTAGE;
+        previews[npreview].analytic = 0;
+        previews[npreview++].path = out;
+        out = NULL;
+    }
+    if (!out && npreview == 0)
         return fail(EXIT_USAGE, "tabulate: no output: give -o FILE (or -o - for CSV on stdout)");
     if (!check_params(&c.p))
         return EXIT_USAGE;
-    const btdf_format_ops *fmt = strcmp(out, "-") ? btdf_format_for_path(out) : &btdf_format_csv;
-    if (!fmt)
-        return fail(EXIT_USAGE, "%s: unknown output format: use .csv or .exr", out);
-    if (!fmt->available)
-        return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
-                    fmt->name, fmt->feature);
+    const btdf_format_ops *fmt = NULL;
+    if (out) {
+        fmt = strcmp(out, "-") ? btdf_format_for_path(out) : &btdf_format_csv;
+        if (!fmt)
+            return fail(EXIT_USAGE, "%s: unknown output format: use .csv, .exr or .png", out);
+        if (!fmt->available)
+            return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
+                        fmt->name, fmt->feature);
+    }
+    if (npreview > 0 && !BTDF_HAVE_PNG)
+        return fail(1, "%s: PNG support was switched off at build time (-Dpng=disabled)",
+                    previews[0].path);
     o.params = c.p;
     o.threads = c.threads;
     o.ti_min = ti0 * M_PI / 180.0;
@@ -594,7 +686,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             code = EXIT_BUDGET;
         }
     }
-    if (code == 0) {
+    if (code == 0 && out) {
         btdf_write_opts w = {&r, prov};
         btdf_output_ctx ctx = {t, &w};
         if (!strcmp(out, "-")) {
@@ -607,11 +699,116 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         if (st != BTDF_OK)
             code = fail(1, "%s: %s", out, msg[0] ? msg : btdf_strerror(st));
     }
+    for (int k = 0; k < npreview && code == 0; k++) {
+        btdf_preview_opts po;
+        btdf_preview_opts_default(&po);
+        po.kind = previews[k].kind;
+        po.analytic = previews[k].analytic;
+        po.table = t;
+        po.width = pic_w;
+        po.height = pic_h;
+        st = btdf_preview_write(&po, previews[k].path, msg, sizeof msg);
+        if (st != BTDF_OK)
+            code = fail(1, "%s: %s", previews[k].path, msg[0] ? msg : btdf_strerror(st));
+    }
     if (code == 0 && report)
         code = write_text_atomic(report, &o, &r, prov);
     btdf_report_clear(&r);
     btdf_table_free(t);
     return code;
+}
+
+/* ------------------------------------------------------------------------- */
+/* polar                                                                     */
+/* ------------------------------------------------------------------------- */
+
+static int cmd_polar(int argc, char **argv)
+{
+    common c = {0};
+    btdf_params_default(&c.p);
+    btdf_params mats[BTDF_PREVIEW_MAX_CURVES];
+    double angles[BTDF_PREVIEW_MAX_CURVES];
+    size_t nm = 0, na = 0;
+    const char *out = NULL;
+    int w = 0, h = 0;
+    for (int i = 1; i < argc; i++) {
+        int r = common_opt(&c, argc, argv, &i);
+        if (r < 0)
+            return EXIT_USAGE;
+        if (r)
+            continue;
+        const char *a = argv[i];
+        if (i + 1 >= argc && (!strcmp(a, "-o") || !strcmp(a, "--material") ||
+                              !strcmp(a, "--angles") || !strcmp(a, "--size")))
+            return fail(EXIT_USAGE, "%s: missing value", a);
+        if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
+            out = argv[++i];
+        } else if (!strcmp(a, "--material")) {
+            const char *v = argv[++i];
+            const char *colon = strchr(v, ':');
+            char buf[64];
+            if (!colon || nm == BTDF_PREVIEW_MAX_CURVES)
+                return fail(EXIT_USAGE, "--material: '%s': expected N:S (at most %d)", v,
+                            BTDF_PREVIEW_MAX_CURVES);
+            btdf_params_default(&mats[nm]);
+            snprintf(buf, sizeof buf, "%.*s", (int)(colon - v), v);
+            if (!parse_double("--material", buf, &mats[nm].ior[0]) ||
+                !parse_double("--material", colon + 1, &mats[nm].smoothness))
+                return EXIT_USAGE;
+            mats[nm].k0 = c.p.k0;
+            if (!check_params(&mats[nm]))
+                return EXIT_USAGE;
+            nm++;
+        } else if (!strcmp(a, "--angles")) {
+            char buf[256];
+            snprintf(buf, sizeof buf, "%s", argv[++i]);
+            na = 0;
+            for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+                if (na == BTDF_PREVIEW_MAX_CURVES)
+                    return fail(EXIT_USAGE, "--angles: at most %d", BTDF_PREVIEW_MAX_CURVES);
+                if (!parse_double("--angles", tok, &angles[na]))
+                    return EXIT_USAGE;
+                if (!(angles[na] >= 0.0 && angles[na] < 90.0))
+                    return fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees",
+                                angles[na]);
+                na++;
+            }
+        } else if (!strcmp(a, "--size")) {
+            if (!parse_picture_size(argv[++i], &w, &h))
+                return EXIT_USAGE;
+        } else {
+            fail(EXIT_USAGE, "polar: unknown option '%s'", a);
+            usage(stderr, 0);
+            return EXIT_USAGE;
+        }
+    }
+    if (!out || !ends_with(out, ".png"))
+        return fail(EXIT_USAGE, "polar: give -o FILE.png");
+    if (nm == 0) {
+        if (!check_params(&c.p))
+            return EXIT_USAGE;
+        mats[nm++] = c.p;
+    }
+    if (na == 0)
+        angles[na++] = 30.0;
+    if (nm * na > BTDF_PREVIEW_MAX_CURVES)
+        return fail(EXIT_USAGE, "polar: %zu materials x %zu angles: at most %d curves", nm, na,
+                    BTDF_PREVIEW_MAX_CURVES);
+    btdf_preview_opts po;
+    btdf_preview_opts_default(&po);
+    po.kind = BTDF_PREVIEW_POLAR;
+    po.materials = mats;
+    po.nmaterials = nm;
+    po.ti_deg = angles;
+    po.nti = na;
+    po.width = w;
+    po.height = h;
+    char msg[512] = "";
+    btdf_status st = btdf_preview_write(&po, out, msg, sizeof msg);
+    if (st != BTDF_OK)
+        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", out,
+                    msg[0] ? msg : btdf_strerror(st));
+    return 0;
 }
 
 int main(int argc, char **argv)
@@ -626,7 +823,8 @@ int main(int argc, char **argv)
         return 0;
     }
     if (!strcmp(cmd, "--version")) {
-        printf("btdftab %s\n", btdf_version_string());
+        printf("btdftab %s (OpenEXR %s, PNG %s)\n", btdf_version_string(),
+               btdf_format_available("exr") ? "on" : "off", BTDF_HAVE_PNG ? "on" : "off");
         return 0;
     }
     /* The command line, recorded in outputs as their provenance. */
@@ -647,6 +845,8 @@ int main(int argc, char **argv)
         return cmd_tabulate(argc - 1, argv + 1, prov);
     if (!strcmp(cmd, "albedo"))
         return cmd_albedo(argc - 1, argv + 1);
+    if (!strcmp(cmd, "polar"))
+        return cmd_polar(argc - 1, argv + 1);
     fail(EXIT_USAGE, "unknown command '%s'", cmd);
     usage(stderr, 0);
     return EXIT_USAGE;
