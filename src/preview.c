@@ -341,9 +341,10 @@ static btdf_status draw_montage(const btdf_preview_opts *o, plot_canvas *c, char
         return say(BTDF_ENOMEM, msg, msglen, "out of memory for a %d x %d picture", W, H);
     char title[300], nbuf[64];
     format_n(nbuf, sizeof nbuf, p);
+    int recip = kind == BTDF_TABLE_FACET_RECIPROCAL, facet = kind != BTDF_TABLE_GRID;
     snprintf(title, sizeof title, "%s table: %s  s = %.4g  k0 = %.3g;  %zu slices, %zu nodes",
-             kind == BTDF_TABLE_FACET ? "facet" : "grid", nbuf, p->smoothness, p->k0, n,
-             btdf_table_node_count(t));
+             recip ? "facet-reciprocal" : (facet ? "facet" : "grid"), nbuf, p->smoothness,
+             p->k0, n, btdf_table_node_count(t));
     plot_text(c, 10, 8, 0, 0, o->title ? o->title : title, ts, ink);
     char sub[200];
     snprintf(sub, sizeof sub,
@@ -352,6 +353,17 @@ static btdf_status draw_montage(const btdf_preview_opts *o, plot_canvas *c, char
     if (o->title)
         plot_text(c, 10, 8 + 11 * ts, 0, 0, title, small, grey);
     plot_text(c, 10, 8 + 11 * ts + 11, 0, 0, sub, small, grey);
+    if (recip) {
+        /* The slices are the facet table of 1/n at ti' = pi - to (btdf.h): say so, and
+           label each tile with the outgoing angle of the light leaving. */
+        char rn[200];
+        snprintf(rn, sizeof rn,
+                 "reciprocal: each tile is the facet table of index 1/n (1/%.4g = %.4g) at "
+                 PLOT_THETA "i' = 180" PLOT_DEG " - " PLOT_THETA "o; " PLOT_RHO
+                 " = n^2 " PLOT_RHO "(1/n)",
+                 p->ior[0], 1.0 / p->ior[0]);
+        plot_text(c, 10, 8 + 11 * ts + 22, 0, 0, rn, small, grey);
+    }
     double lo = vmax * pow(10.0, -DECADES);
     for (size_t k = 0; k < shown; k++) {
         btdf_slice s;
@@ -359,7 +371,10 @@ static btdf_status draw_montage(const btdf_preview_opts *o, plot_canvas *c, char
         int gx = (int)(k % (size_t)cols), gy = (int)(k / (size_t)cols);
         int x0 = left + gx * (tile + gap), y0 = top + gy * (tile + labh + gap) + labh;
         char lab[64];
-        snprintf(lab, sizeof lab, PLOT_THETA "i = %.2f" PLOT_DEG, s.ti * DEG);
+        if (recip)
+            snprintf(lab, sizeof lab, PLOT_THETA "o = %.2f" PLOT_DEG, 180.0 - s.ti * DEG);
+        else
+            snprintf(lab, sizeof lab, PLOT_THETA "i = %.2f" PLOT_DEG, s.ti * DEG);
         plot_text(c, x0, y0 - 3, 0, 1, lab, small, ink);
         double r0 = s.rows[0], r1 = s.rows[s.nrows - 1];
         double c0 = s.cols[0], c1 = s.cols[s.ncols - 1];
@@ -390,11 +405,11 @@ static btdf_status draw_montage(const btdf_preview_opts *o, plot_canvas *c, char
     }
     int gh = rows * (tile + labh + gap) - gap;
     plot_text_up(c, 14, top + gh / 2,
-                 kind == BTDF_TABLE_FACET ? "rows: " PLOT_THETA "n, facet tilt (deg)"
+                 facet ? "rows: " PLOT_THETA "n, facet tilt (deg)"
                                           : "rows: " PLOT_THETA "o (deg)",
                  small, ink);
     plot_text(c, left + (cols * (tile + gap) - gap) / 2, H - 12, 0.5, 1,
-              kind == BTDF_TABLE_FACET ? "cols: " PLOT_PSI ", facet azimuth (deg)"
+              facet ? "cols: " PLOT_PSI ", facet azimuth (deg)"
                                        : "cols: " PLOT_PHI " (deg)",
               small, ink);
     /* Colour bar, decades labelled. */
@@ -569,10 +584,18 @@ static btdf_status draw_render(const btdf_preview_opts *o, plot_canvas *c, char 
         plot_text_up(c, left / 2, y0 + P / 2, rl, small, ink);
     }
     char foot[300];
-    snprintf(foot, sizeof foot,
-             "radiance " PLOT_RHO " cos " PLOT_THETA "i I / r^2, linear as in the paper; table "
-             "covers " PLOT_THETA "i %.3g-%.3g" PLOT_DEG " (near light needs 0-41.5" PLOT_DEG ")",
-             s0.ti * DEG, s1.ti * DEG);
+    if (btdf_table_get_kind(t) == BTDF_TABLE_FACET_RECIPROCAL) /* slices at ti' = pi - to */
+        snprintf(foot, sizeof foot,
+                 "radiance " PLOT_RHO " cos " PLOT_THETA "i I / r^2, linear as in the paper; "
+                 "reciprocal table, slices cover " PLOT_THETA "o %.4g-%.4g" PLOT_DEG
+                 " (the eye needs 138.5-180" PLOT_DEG ")",
+                 180.0 - s1.ti * DEG, 180.0 - s0.ti * DEG);
+    else
+        snprintf(foot, sizeof foot,
+                 "radiance " PLOT_RHO " cos " PLOT_THETA "i I / r^2, linear as in the paper; "
+                 "table covers " PLOT_THETA "i %.3g-%.3g" PLOT_DEG
+                 " (near light needs 0-41.5" PLOT_DEG ")",
+                 s0.ti * DEG, s1.ti * DEG);
     plot_text(c, 10, H - 30, 0, 1, foot, small, ink);
     plot_text(c, 10, H - 12, 0, 1,
               "far: 100 W, nearly normal incidence (Fig. 10); near: 0.8 W (Fig. 11); "
