@@ -15,6 +15,11 @@ static double now(void)
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return ts.tv_sec + 1e-9 * ts.tv_nsec;
 }
+
+static const char *kind_name(btdf_table_kind k)
+{
+    return k == BTDF_TABLE_GRID ? "grid" : (k == BTDF_TABLE_FACET ? "facet" : "facet-reciprocal");
+}
 #endif
 
 int main(int argc, char **argv)
@@ -50,7 +55,8 @@ int main(int argc, char **argv)
         btdf_slice x, y;
         btdf_table_slice(a, k, &x);
         btdf_table_slice(b, k, &y);
-        diff += x.ti != y.ti || x.nrows != y.nrows || x.ncols != y.ncols;
+        diff += x.ti != y.ti || x.nrows != y.nrows || x.ncols != y.ncols ||
+                btdf_table_get_kind(a) != btdf_table_get_kind(b);
         for (size_t i = 0; i < x.nrows && !diff; i++)
             diff += x.rows[i] != y.rows[i];
         for (size_t i = 0; i < x.ncols && !diff; i++)
@@ -61,7 +67,7 @@ int main(int argc, char **argv)
         }
     }
     printf("%s: %s table, %zu slices, %zu nodes x %d channel(s), max rho %.9g 1/sr\n", argv[1],
-           btdf_table_get_kind(a) == BTDF_TABLE_FACET ? "facet" : "grid", n,
+           kind_name(btdf_table_get_kind(a)), n,
            btdf_table_node_count(a), ch, vmax);
     printf("read %.3f s, write %.3f s; rewritten copy: %zu values compared, %zu differ\n",
            t1 - t0, t2 - t1, vals, diff);
