@@ -345,7 +345,9 @@ static btdf_status draw_montage(const btdf_preview_opts *o, plot_canvas *c, char
     snprintf(title, sizeof title, "%s table: %s  s = %.4g  k0 = %.3g;  %zu slices, %zu nodes",
              recip ? "facet-reciprocal" : (facet ? "facet" : "grid"), nbuf, p->smoothness,
              p->k0, n, btdf_table_node_count(t));
-    plot_text(c, 10, 8, 0, 0, o->title ? o->title : title, ts, ink);
+    const char *head = o->title ? o->title : title;
+    /* A narrow picture takes the title at the small scale rather than cutting it. */
+    plot_text(c, 10, 8, 0, 0, head, plot_text_width(head, ts) > W - 20 ? small : ts, ink);
     char sub[200];
     snprintf(sub, sizeof sub,
              "log10 " PLOT_RHO " (1/sr), channel %s; tiles in coordinates, row 0 on top%s",
@@ -371,10 +373,11 @@ static btdf_status draw_montage(const btdf_preview_opts *o, plot_canvas *c, char
         int gx = (int)(k % (size_t)cols), gy = (int)(k / (size_t)cols);
         int x0 = left + gx * (tile + gap), y0 = top + gy * (tile + labh + gap) + labh;
         char lab[64];
-        if (recip)
-            snprintf(lab, sizeof lab, PLOT_THETA "o = %.2f" PLOT_DEG, 180.0 - s.ti * DEG);
-        else
-            snprintf(lab, sizeof lab, PLOT_THETA "i = %.2f" PLOT_DEG, s.ti * DEG);
+        double la = recip ? 180.0 - s.ti * DEG : s.ti * DEG;
+        snprintf(lab, sizeof lab, "%s = %.2f" PLOT_DEG, recip ? PLOT_THETA "o" : PLOT_THETA "i",
+                 la);
+        if (plot_text_width(lab, small) > tile + gap - 2) /* narrow tiles: the angle only */
+            snprintf(lab, sizeof lab, "%.4g" PLOT_DEG, la);
         plot_text(c, x0, y0 - 3, 0, 1, lab, small, ink);
         double r0 = s.rows[0], r1 = s.rows[s.nrows - 1];
         double c0 = s.cols[0], c1 = s.cols[s.ncols - 1];
