@@ -98,6 +98,17 @@ static int setup_y(void **state)
     return 0;
 }
 
+/* The kind the builder gives every n < 1; the file layout is the facet one. */
+static int setup_recip(void **state)
+{
+    fixture *f = calloc(1, sizeof *f);
+    f->table = make_table(1, BTDF_TABLE_FACET_RECIPROCAL, 0);
+    f->rounded = make_table(1, BTDF_TABLE_FACET_RECIPROCAL, 1);
+    temp_path(f->path, sizeof f->path, "recip");
+    *state = f;
+    return 0;
+}
+
 static int teardown(void **state)
 {
     fixture *f = *state;
@@ -338,6 +349,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(test_round_trip, setup_rgb, teardown),
         cmocka_unit_test_setup_teardown(test_round_trip, setup_y, teardown),
+        cmocka_unit_test_setup_teardown(test_round_trip, setup_recip, teardown),
         cmocka_unit_test_setup_teardown(test_attributes, setup_rgb, teardown),
         cmocka_unit_test_setup_teardown(test_truncated, setup_y, teardown),
         cmocka_unit_test_setup_teardown(test_foreign, setup_y, teardown),
