@@ -382,6 +382,7 @@ enum { SIDE_ENTER = 0, SIDE_LEAVE = 1 };
 typedef struct pair {
     double *a; /* nst * m coefficients, channel-major (Y, R, B) */
     uint32_t m;
+    int done;  /* computed in an earlier pass with the same budget */
 } pair;
 
 typedef struct build_ctx {
@@ -416,6 +417,7 @@ typedef struct build_ws {
     double *y;       /* inverse values */
     double *ia;      /* interpolated coefficients, nst * (nmax + 1) */
     double *rho;     /* per model channel scratch */
+    double *cosg, *sing; /* cos and sin of j pi / nmax, j = 0..nmax */
 } build_ws;
 
 static void *build_ws_new(void *vctx)
@@ -432,11 +434,25 @@ static void *build_ws_new(void *vctx)
     w->ia = malloc(len * sizeof(double));
     w->y = malloc((c->nmax + 1) * sizeof(double));
     w->rho = malloc(4 * sizeof(double));
-    if (!w->x || !w->x2 || !w->a || !w->a2 || !w->ia || !w->y || !w->rho ||
+    w->cosg = malloc((c->nmax + 1) * sizeof(double));
+    w->sing = malloc((c->nmax + 1) * sizeof(double));
+    if (w->cosg && w->sing) {
+        for (size_t j = 0; j <= c->nmax; j++) {
+            w->cosg[j] = cos(M_PI * (double)j / (double)c->nmax);
+            w->sing[j] = sin(M_PI * (double)j / (double)c->nmax);
+        }
+        /* exact forward, side and backward planes */
+        w->cosg[0] = 1.0, w->sing[0] = 0.0;
+        w->cosg[c->nmax] = -1.0, w->sing[c->nmax] = 0.0;
+        w->cosg[c->nmax / 2] = 0.0, w->sing[c->nmax / 2] = 1.0;
+    }
+    if (!w->cosg || !w->sing || !w->x || !w->x2 || !w->a || !w->a2 || !w->ia || !w->y || !w->rho ||
         fft_reserve(&w->fb, 2 * c->nmax)) {
         fft_free(&w->fb);
         free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
         free(w->rho);
+        free(w->cosg);
+        free(w->sing);
         free(w);
         return NULL;
     }
@@ -451,6 +467,8 @@ static void build_ws_free(void *vw)
     fft_free(&w->fb);
     free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
     free(w->rho);
+    free(w->cosg);
+    free(w->sing);
     free(w);
 }
 
@@ -472,8 +490,9 @@ static void stored_values(const build_ctx *c, int side, const rho_in *ri, const 
 
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
    j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones). */
-static void sample_grid(const build_ctx *c, int side, double mu_s, double mu_f, size_t N,
-                        size_t stride, size_t step, size_t phase, double *x)
+static void sample_grid(const build_ctx *c, const build_ws *w, int side, double mu_s,
+                        double mu_f, size_t N, size_t stride, size_t step, size_t phase,
+                        double *x)
 {
     rho_in ri;
     rho_out ro;
@@ -482,15 +501,10 @@ static void sample_grid(const build_ctx *c, int side, double mu_s, double mu_f, 
     rho_in_init(&ri, sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), mu_s, c->p->smoothness, c->p->k0);
     rho_out_init(&ro, sqrt(fmax(0.0, 1.0 - mu_f * mu_f)), -mu_f, c->p->smoothness, c->p->k0);
     double v[3];
+    size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
     for (size_t j = phase; j <= N; j += step) {
         /* phi_d = j pi / N; phi = pi - phi_d, so cos phi = -cos phi_d. */
-        double pd = M_PI * (double)j / (double)N;
-        double cph = -cos(pd), sph = sin(pd);
-        if (j == N)
-            cph = 1.0, sph = 0.0; /* exact backward plane */
-        if (j == 0)
-            cph = -1.0, sph = 0.0; /* exact forward plane */
-        stored_values(c, side, &ri, &ro, mu_f, cph, sph, v);
+        stored_values(c, side, &ri, &ro, mu_f, -w->cosg[j * g], w->sing[j * g], v);
         for (int k = 0; k < c->nst; k++)
             x[k * stride + j] = v[k];
     }
@@ -505,10 +519,14 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
 {
     size_t S = c->nmax + 1;
     size_t N = c->nmin;
-    sample_grid(c, side, mu_s, mu_f, N, S, 1, 0, w->x);
+    sample_grid(c, w, side, mu_s, mu_f, N, S, 1, 0, w->x);
     for (int k = 0; k < c->nst; k++)
         if (dct_forward(&w->fb, w->x + k * S, N, w->a + k * S))
             return 0;
+    int zero = 1;
+    for (int k = 0; k < c->nst && zero; k++)
+        for (size_t j = 0; j <= N && zero; j++)
+            zero = w->x[k * S + j] == 0.0;
     for (;;) {
         if (2 * N > c->nmax) {
             pthread_mutex_lock(&c->lock);
@@ -521,7 +539,18 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
         for (int k = 0; k < c->nst; k++)
             for (size_t j = N + 1; j-- > 0;)
                 w->x[k * S + 2 * j] = w->x[k * S + j];
-        sample_grid(c, side, mu_s, mu_f, N2, S, 2, 1, w->x);
+        sample_grid(c, w, side, mu_s, mu_f, N2, S, 2, 1, w->x);
+        if (zero) {
+            /* no transmission on either grid (an unreachable pair): all zero */
+            for (int k = 0; k < c->nst && zero; k++)
+                for (size_t j = 1; j <= N2 && zero; j += 2)
+                    zero = w->x[k * S + j] == 0.0;
+            if (zero) {
+                for (size_t q = 0; q < (size_t)c->nst * S; q++)
+                    w->a[q] = 0.0;
+                return N2;
+            }
+        }
         double worst = 0.0;
         for (int k = 0; k < c->nst; k++) {
             if (dct_forward(&w->fb, w->x + k * S, N2, w->a2 + k * S))
@@ -586,6 +615,8 @@ static void job_row(void *vctx, void *vws, size_t idx)
     const double *norm = c->Tn[r][side];
     for (size_t col = 0; col < c->K; col++) {
         pair *pr = &c->pairs[side][r * c->K + col];
+        if (pr->done)
+            continue;
         size_t N = converge(c, w, side, c->P[r], c->P[col], norm, share_alias(c));
         if (N == 0)
             goto oom;
@@ -599,6 +630,7 @@ static void job_row(void *vctx, void *vws, size_t idx)
             for (int k = 0; k < c->nst; k++)
                 memcpy(pr->a + (size_t)k * m, w->a + k * S, m * sizeof(double));
         }
+        pr->done = 1;
     }
     return;
 oom:
@@ -976,7 +1008,8 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
         c.Tm = calloc(K, sizeof *c.Tm);
         c.mid = malloc(K * sizeof *c.mid);
         for (int s = 0; s < 2; s++) {
-            c.pairs[s] = calloc(K * K, sizeof(pair));
+            if (!c.pairs[s])
+                c.pairs[s] = calloc(K * K, sizeof(pair));
             c.errc[s] = calloc(K * K, sizeof(double));
             c.errr[s] = calloc(K, sizeof(double));
             if (!c.pairs[s] || !c.errc[s] || !c.errr[s]) {
@@ -1049,24 +1082,11 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                     /* error ~ the last interval's angle: aim at half the share */
                     endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / c.errr[s][j]));
             for (size_t j = 0; j < K; j++)
-                if (c.errr[s][j] > (rowbad ? 0.7 : 1.0) * share_row(&c)) {
+                if (c.errr[s][j] > (rowbad ? 0.7 : 1.0) * share_row(&c))
                     split[j] = 1;
-                    if (getenv("SCATFUN_DEBUG")) fprintf(stderr, "  row s%d j %zu [%g %g] err %.3g\n", s, j, j ? P[j-1] : 0.0, P[j], c.errr[s][j]);
-                }
         }
         for (size_t j = 0; j < K; j++)
             nsplit += split[j];
-        if (getenv("SCATFUN_DEBUG")) {
-            double mc = 0, mr = 0; size_t nc_ = 0, nr_ = 0, tot = 0;
-            for (int s = 0; s < 2; s++) { if (!c.want[s]) continue;
-                for (size_t r = 0; r < K; r++) { double sum = 0;
-                    for (size_t j = 0; j < K; j++) sum += (P[j] - (j ? P[j-1] : 0)) * c.errc[s][r*K+j];
-                    mc = fmax(mc, sum); nc_ += sum > share_col(&c); }
-                for (size_t j = 0; j < K; j++) { if (c.errr[s][j] > mr) mr = c.errr[s][j]; if (c.errr[s][j] > share_row(&c)) nr_++; }
-                for (size_t i = 0; i < K*K; i++) tot += c.pairs[s][i].m; }
-            fprintf(stderr, "pass %d K %zu budget %g colmax %.3g (%zu rows bad) rowmax %.3g (%zu bad) split %zu coeffs %zu t %.2f\n",
-                pass, K, c.budget, mc, nc_, mr, nr_, nsplit, tot, now_seconds() - t0);
-        }
         if (nsplit == 0) {
             /* The node checks pass: measure the file itself and tighten if needed. */
             btdf_scatfun *f = NULL;
@@ -1119,14 +1139,35 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                 Q[KQ++] = m;
             Q[KQ++] = P[j];
         }
-        memcpy(P, Q, KQ * sizeof *P);
         free(split);
         if (KQ == K) {
             st = BTDF_EBUDGET; /* float spacing reached: nothing left to split */
             break;
         }
+        /* keep the series of pairs whose nodes stay (same budget, same values) */
+        for (int s = 0; s < 2; s++) {
+            pair *np = calloc(KQ * KQ, sizeof(pair));
+            size_t *map = malloc(K * sizeof *map);
+            if (!np || !map) {
+                free(np);
+                free(map);
+                st = BTDF_ENOMEM;
+                goto done;
+            }
+            for (size_t r = 0, q = 0; r < K; r++) {
+                while (Q[q] != c.P[r])
+                    q++; /* every old node is in the new list, in order */
+                map[r] = q;
+            }
+            for (size_t r = 0; r < K; r++)
+                for (size_t col = 0; col < K; col++)
+                    np[map[r] * KQ + map[col]] = c.pairs[s][r * K + col];
+            free(c.pairs[s]);
+            c.pairs[s] = np;
+            free(map);
+        }
+        memcpy(P, Q, KQ * sizeof *P);
         K = KQ;
-        free_pairs(&c);
         (void)pass;
     }
     if (st == BTDF_EBUDGET || !best) {
