@@ -405,7 +405,11 @@ typedef struct build_ctx {
     double (*Tm)[2][4]; /* norms at midpoints */
     double *errc[2];    /* [side][r * nint + j]: column check errors (already normalised) */
     double *errr[2];    /* [side][j]: row check errors (normalised, mu-integrated) */
-    double endr;        /* angle fraction of the last interval's split point */
+    double *gapr[2];    /* [side][j * K + col]: row check gap at one column */
+    unsigned char *okc[2], *okr[2]; /* errc / gapr entries carried from the last pass */
+    pair *pcol[2];      /* [side][r * K + j]: series at (P[r], mid[j]), a future pair */
+    pair *prow[2];      /* [side][j * K + col]: series at (mid[j], P[col]) */
+    unsigned char *hasTn, *hasTm; /* norms carried from the last pass */
     int oom, capped;    /* flags raised by workers */
     pthread_mutex_t lock;
 } build_ctx;
@@ -602,6 +606,28 @@ static double share_trunc(const build_ctx *c) { return 0.10 * c->budget; }
 static double share_col(const build_ctx *c) { return 0.35 * c->budget; }
 static double share_row(const build_ctx *c) { return 0.35 * c->budget; }
 
+/* Keeps the truncated series of the converged coefficients in w->a as pair pr. */
+static int keep_series(build_ctx *c, build_ws *w, size_t N, const double *norm, pair *pr)
+{
+    size_t S = c->nmax + 1;
+    size_t m = truncate_len(c, w->a, S, N, norm, share_trunc(c));
+    free(pr->a);
+    pr->a = NULL;
+    pr->m = (uint32_t)m;
+    pr->done = 0;
+    if (m) {
+        pr->a = malloc((size_t)c->nst * m * sizeof(double));
+        if (!pr->a) {
+            pr->m = 0;
+            return -1;
+        }
+        for (int k = 0; k < c->nst; k++)
+            memcpy(pr->a + (size_t)k * m, w->a + k * S, m * sizeof(double));
+    }
+    pr->done = 1;
+    return 0;
+}
+
 /* One slow row of one side: the series of every pair (r, c). */
 static void job_row(void *vctx, void *vws, size_t idx)
 {
@@ -611,26 +637,14 @@ static void job_row(void *vctx, void *vws, size_t idx)
     size_t r = idx % c->K;
     if (!c->want[side])
         return;
-    size_t S = c->nmax + 1;
     const double *norm = c->Tn[r][side];
     for (size_t col = 0; col < c->K; col++) {
         pair *pr = &c->pairs[side][r * c->K + col];
         if (pr->done)
             continue;
         size_t N = converge(c, w, side, c->P[r], c->P[col], norm, share_alias(c));
-        if (N == 0)
+        if (N == 0 || keep_series(c, w, N, norm, pr))
             goto oom;
-        size_t m = truncate_len(c, w->a, S, N, norm, share_trunc(c));
-        pr->m = (uint32_t)m;
-        pr->a = NULL;
-        if (m) {
-            pr->a = malloc((size_t)c->nst * m * sizeof(double));
-            if (!pr->a)
-                goto oom;
-            for (int k = 0; k < c->nst; k++)
-                memcpy(pr->a + (size_t)k * m, w->a + k * S, m * sizeof(double));
-        }
-        pr->done = 1;
     }
     return;
 oom:
@@ -698,9 +712,11 @@ static void job_colcheck(void *vctx, void *vws, size_t idx)
     size_t nfull = 2 * c->K + 2;
     const double *norm = c->Tn[r][side];
     for (size_t j = 0; j < c->nint; j++) {
+        if (c->okc[side][r * c->nint + j])
+            continue; /* same row, same stencil, same budget as last pass */
         double x = c->mid[j];
         size_t N = converge(c, w, side, c->P[r], x, norm, share_alias(c));
-        if (N == 0)
+        if (N == 0 || keep_series(c, w, N, norm, &c->pcol[side][r * c->K + j]))
             goto oom;
         long off;
         double wt[4];
@@ -743,8 +759,15 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
     int ok = cr_weights(c->full, nfull, x, &off, wt);
     double total = 0.0;
     for (size_t col = 0; col < c->K; col++) {
+        double lo = col == 0 ? 0.0 : c->P[col - 1];
+        double hi = col + 1 < c->K ? c->P[col + 1] : c->P[col];
+        double *gap = &c->gapr[side][j * c->K + col];
+        if (c->okr[side][j * c->K + col]) {
+            total += 0.5 * (hi - lo) * *gap;
+            continue;
+        }
         size_t N = converge(c, w, side, x, c->P[col], norm, share_alias(c));
-        if (N == 0)
+        if (N == 0 || keep_series(c, w, N, norm, &c->prow[side][j * c->K + col]))
             goto oom;
         for (size_t q = 0; q < (size_t)c->nst * S; q++)
             w->ia[q] = 0.0;
@@ -756,9 +779,8 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
                     add_pair(c, side, (size_t)h, col, wt[a], w->ia, S, &mlen);
             }
         }
-        double lo = col == 0 ? 0.0 : c->P[col - 1];
-        double hi = col + 1 < c->K ? c->P[col + 1] : c->P[col];
-        total += 0.5 * (hi - lo) * l1_gap(c, w, N, mlen, norm);
+        *gap = l1_gap(c, w, N, mlen, norm);
+        total += 0.5 * (hi - lo) * *gap;
     }
     c->errr[side][j] = total;
     return;
@@ -787,28 +809,211 @@ static void norms_at(const build_ctx *c, int side, double mu, double *out)
     }
 }
 
-static void free_pairs(build_ctx *c)
+static void free_pair_array(pair **pp, size_t count)
 {
+    if (!*pp)
+        return;
+    for (size_t i = 0; i < count; i++)
+        free((*pp)[i].a);
+    free(*pp);
+    *pp = NULL;
+}
+
+/* Frees everything that belongs to one node set (sizes follow c->K). */
+static void free_state(build_ctx *c)
+{
+    size_t KK = c->K * c->K;
+    for (int s = 0; s < 2; s++) {
+        free_pair_array(&c->pairs[s], KK);
+        free_pair_array(&c->pcol[s], KK);
+        free_pair_array(&c->prow[s], KK);
+        free(c->errc[s]);
+        free(c->errr[s]);
+        free(c->gapr[s]);
+        free(c->okc[s]);
+        free(c->okr[s]);
+        c->errc[s] = c->errr[s] = c->gapr[s] = NULL;
+        c->okc[s] = c->okr[s] = NULL;
+    }
+    free(c->Tn);
+    free(c->Tm);
+    free(c->hasTn);
+    free(c->hasTm);
+    free(c->mid);
+    c->Tn = c->Tm = NULL;
+    c->hasTn = c->hasTm = NULL;
+    c->mid = NULL;
+}
+
+/* Allocates what is missing for the current node set; 0 on success. */
+static int ensure_state(build_ctx *c)
+{
+    size_t K = c->K, KK = K * K;
     for (int s = 0; s < 2; s++) {
         if (!c->pairs[s])
-            continue;
-        for (size_t i = 0; i < c->K * c->K; i++)
-            free(c->pairs[s][i].a);
-        free(c->pairs[s]);
-        c->pairs[s] = NULL;
+            c->pairs[s] = calloc(KK, sizeof(pair));
+        if (!c->pcol[s])
+            c->pcol[s] = calloc(KK, sizeof(pair));
+        if (!c->prow[s])
+            c->prow[s] = calloc(KK, sizeof(pair));
+        if (!c->errc[s])
+            c->errc[s] = calloc(KK, sizeof(double));
+        if (!c->gapr[s])
+            c->gapr[s] = calloc(KK, sizeof(double));
+        if (!c->okc[s])
+            c->okc[s] = calloc(KK, 1);
+        if (!c->okr[s])
+            c->okr[s] = calloc(KK, 1);
+        free(c->errr[s]);
+        c->errr[s] = calloc(K, sizeof(double));
+        if (!c->pairs[s] || !c->pcol[s] || !c->prow[s] || !c->errc[s] || !c->gapr[s] ||
+            !c->okc[s] || !c->okr[s] || !c->errr[s])
+            return -1;
     }
+    if (!c->Tn)
+        c->Tn = calloc(K, sizeof *c->Tn);
+    if (!c->Tm)
+        c->Tm = calloc(K, sizeof *c->Tm);
+    if (!c->hasTn)
+        c->hasTn = calloc(K, 1);
+    if (!c->hasTm)
+        c->hasTm = calloc(K, 1);
+    free(c->mid);
+    c->mid = malloc(K * sizeof *c->mid);
+    return c->Tn && c->Tm && c->hasTn && c->hasTm && c->mid ? 0 : -1;
+}
+
+static int set_nodes(build_ctx *c, const double *P, size_t K);
+
+/* Moves everything still valid to the refined node set Q (KQ nodes, a superset of
+   c->P). ins[j] = 1 when old interval j got the node mid[j], whose check series
+   become pairs; 2 when it got another node. Series at unchanged nodes, checks
+   whose stencil is unchanged and norms are kept, so a pass only computes what the
+   new nodes touch. Returns 0 on success; on failure the old state is intact. */
+static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned char *ins)
+{
+    size_t K = c->K, KK2 = KQ * KQ;
+    size_t *map = malloc(K * sizeof *map), *qn = malloc(K * sizeof *qn);
+    unsigned char *same = malloc(K), *sten = malloc(K);
+    pair *np[2][3] = {{NULL}};
+    double *ne[2] = {NULL}, *ng[2] = {NULL};
+    unsigned char *noc[2] = {NULL}, *nor[2] = {NULL};
+    double(*tn)[2][4] = calloc(KQ, sizeof *tn), (*tm)[2][4] = calloc(KQ, sizeof *tm);
+    unsigned char *htn = calloc(KQ, 1), *htm = calloc(KQ, 1);
+    int ok = map && qn && same && sten && tn && tm && htn && htm;
+    for (int s = 0; s < 2 && ok; s++) {
+        for (int k = 0; k < 3; k++)
+            ok &= (np[s][k] = calloc(KK2, sizeof(pair))) != NULL;
+        ok &= (ne[s] = calloc(KK2, sizeof(double))) != NULL;
+        ok &= (ng[s] = calloc(KK2, sizeof(double))) != NULL;
+        ok &= (noc[s] = calloc(KK2, 1)) != NULL;
+        ok &= (nor[s] = calloc(KK2, 1)) != NULL;
+    }
+    if (!ok) {
+        for (int s = 0; s < 2; s++) {
+            for (int k = 0; k < 3; k++)
+                free(np[s][k]);
+            free(ne[s]);
+            free(ng[s]);
+            free(noc[s]);
+            free(nor[s]);
+        }
+        free(map); free(qn); free(same); free(sten); free(tn); free(tm); free(htn); free(htm);
+        return -1;
+    }
+    for (size_t r = 0, q = 0; r < K; r++) {
+        while (Q[q] != c->P[r])
+            q++; /* every old node is in the new list, in order */
+        map[r] = q;
+    }
+    for (size_t j = 0; j < K; j++) {
+        same[j] = !ins[j];
+        qn[j] = ins[j] ? map[j] - 1 : (size_t)-1; /* the new node sits just before P[j] */
+    }
+    for (size_t j = 0; j < K; j++)
+        sten[j] = same[j] && (j == 0 || same[j - 1]) && (j + 1 >= K || same[j + 1]);
+    for (int s = 0; s < 2; s++) {
+        pair *pp = c->pairs[s], *pc = c->pcol[s], *pr = c->prow[s];
+        for (size_t r = 0; r < K; r++)
+            for (size_t col = 0; col < K; col++) {
+                np[s][0][map[r] * KQ + map[col]] = pp[r * K + col];
+                pp[r * K + col].a = NULL;
+            }
+        for (size_t j = 0; j < K; j++) {
+            for (size_t r = 0; r < K; r++) {
+                pair *src = &pc[r * K + j];
+                if (ins[j] == 1)
+                    np[s][0][map[r] * KQ + qn[j]] = *src; /* (P[r], new node) */
+                else if (same[j])
+                    np[s][1][map[r] * KQ + map[j]] = *src;
+                else
+                    free(src->a);
+                src->a = NULL;
+            }
+            for (size_t col = 0; col < K; col++) {
+                pair *src = &pr[j * K + col];
+                if (ins[j] == 1)
+                    np[s][0][qn[j] * KQ + map[col]] = *src; /* (new node, P[col]) */
+                else if (same[j])
+                    np[s][2][map[j] * KQ + map[col]] = *src;
+                else
+                    free(src->a);
+                src->a = NULL;
+            }
+            if (sten[j]) {
+                for (size_t r = 0; r < K; r++) {
+                    ne[s][map[r] * KQ + map[j]] = c->errc[s][r * K + j];
+                    noc[s][map[r] * KQ + map[j]] = 1;
+                }
+                for (size_t col = 0; col < K; col++) {
+                    ng[s][map[j] * KQ + map[col]] = c->gapr[s][j * K + col];
+                    nor[s][map[j] * KQ + map[col]] = 1;
+                }
+            }
+        }
+    }
+    for (size_t r = 0; r < K; r++) {
+        memcpy(tn[map[r]], c->Tn[r], sizeof tn[0]);
+        htn[map[r]] = c->hasTn[r];
+    }
+    for (size_t j = 0; j < K; j++) {
+        if (ins[j] == 1) {
+            memcpy(tn[qn[j]], c->Tm[j], sizeof tn[0]);
+            htn[qn[j]] = c->hasTm[j];
+        }
+        if (same[j]) {
+            memcpy(tm[map[j]], c->Tm[j], sizeof tm[0]);
+            htm[map[j]] = c->hasTm[j];
+        }
+    }
+    free_state(c); /* the moved series were detached above */
+    for (int s = 0; s < 2; s++) {
+        c->pairs[s] = np[s][0];
+        c->pcol[s] = np[s][1];
+        c->prow[s] = np[s][2];
+        c->errc[s] = ne[s];
+        c->gapr[s] = ng[s];
+        c->okc[s] = noc[s];
+        c->okr[s] = nor[s];
+    }
+    c->Tn = tn;
+    c->Tm = tm;
+    c->hasTn = htn;
+    c->hasTm = htm;
+    free(map); free(qn); free(same); free(sten);
+    return set_nodes(c, Q, KQ); /* sets K first, so sizes stay consistent on failure */
 }
 
 static double to_float_node(double v) { return (double)(float)v; }
 
 static int set_nodes(build_ctx *c, const double *P, size_t K)
 {
+    c->K = K; /* first: the per-node-set arrays already have this size */
     double *np = realloc(c->P, K * sizeof *np);
     if (!np)
         return -1;
     c->P = np;
     memcpy(c->P, P, K * sizeof *P);
-    c->K = K;
     double *full = realloc(c->full, (2 * K + 2) * sizeof *full);
     if (!full)
         return -1;
@@ -976,7 +1181,6 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
         c.nmin = BTDF_SCATFUN_MAX_PHI / 2;
     c.nmax = BTDF_SCATFUN_MAX_PHI;
     c.budget = tolerance;
-    c.endr = 0.5;
 
     btdf_scatfun *best = NULL;
     double best_err = HUGE_VAL;
@@ -998,37 +1202,23 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
             st = BTDF_ENOMEM;
             goto done;
         }
-        free(c.Tn);
-        free(c.Tm);
-        free(c.mid);
-        free(c.errc[0]); free(c.errc[1]); free(c.errr[0]); free(c.errr[1]);
-        c.errc[0] = c.errc[1] = c.errr[0] = c.errr[1] = NULL;
         c.nint = K;
-        c.Tn = calloc(K, sizeof *c.Tn);
-        c.Tm = calloc(K, sizeof *c.Tm);
-        c.mid = malloc(K * sizeof *c.mid);
-        for (int s = 0; s < 2; s++) {
-            if (!c.pairs[s])
-                c.pairs[s] = calloc(K * K, sizeof(pair));
-            c.errc[s] = calloc(K * K, sizeof(double));
-            c.errr[s] = calloc(K, sizeof(double));
-            if (!c.pairs[s] || !c.errc[s] || !c.errr[s]) {
-                st = BTDF_ENOMEM;
-                goto done;
-            }
-        }
-        if (!c.Tn || !c.Tm || !c.mid) {
+        if (ensure_state(&c)) {
             st = BTDF_ENOMEM;
             goto done;
         }
         for (size_t j = 0; j < K; j++) {
-            c.mid[j] = split_point(P, K, j, c.endr);
+            /* checked where a split would put the node, so check series become pairs */
+            c.mid[j] = to_float_node(split_point(P, K, j, 0.5));
             for (int s = 0; s < 2; s++) {
                 if (!c.want[s])
                     continue;
-                norms_at(&c, s, P[j], c.Tn[j][s]);
-                norms_at(&c, s, c.mid[j], c.Tm[j][s]);
+                if (!c.hasTn[j])
+                    norms_at(&c, s, P[j], c.Tn[j][s]);
+                if (!c.hasTm[j])
+                    norms_at(&c, s, c.mid[j], c.Tm[j][s]);
             }
+            c.hasTn[j] = c.hasTm[j] = 1;
         }
         if (parallel_for(threads, 2 * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
             st = BTDF_ENOMEM;
@@ -1119,7 +1309,7 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
             }
             c.budget *= 0.5;
             free(split);
-            free_pairs(&c);
+            free_state(&c); /* every series and check depends on the budget */
             continue; /* same nodes, tighter series and checks */
         }
         if (K + nsplit > BTDF_SCATFUN_MAX_HALF_NODES) {
@@ -1129,43 +1319,36 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
         }
         /* insert split points (rounded to float, strictly inside their interval) */
         double *Q = P + BTDF_SCATFUN_MAX_HALF_NODES;
+        unsigned char *ins = calloc(K, 1);
+        if (!ins) {
+            free(split);
+            st = BTDF_ENOMEM;
+            goto done;
+        }
         size_t KQ = 0;
         if (endr > 0.5)
             endr = 0.5;
         for (size_t j = 0; j < K; j++) {
             double lo = j == 0 ? 0.0 : P[j - 1];
             double m = to_float_node(split_point(P, K, j, endr));
-            if (split[j] && m > lo && m < P[j])
+            if (split[j] && m > lo && m < P[j]) {
                 Q[KQ++] = m;
+                ins[j] = m == c.mid[j] ? 1 : 2;
+            }
             Q[KQ++] = P[j];
         }
         free(split);
         if (KQ == K) {
+            free(ins);
             st = BTDF_EBUDGET; /* float spacing reached: nothing left to split */
             break;
         }
-        /* keep the series of pairs whose nodes stay (same budget, same values) */
-        for (int s = 0; s < 2; s++) {
-            pair *np = calloc(KQ * KQ, sizeof(pair));
-            size_t *map = malloc(K * sizeof *map);
-            if (!np || !map) {
-                free(np);
-                free(map);
-                st = BTDF_ENOMEM;
-                goto done;
-            }
-            for (size_t r = 0, q = 0; r < K; r++) {
-                while (Q[q] != c.P[r])
-                    q++; /* every old node is in the new list, in order */
-                map[r] = q;
-            }
-            for (size_t r = 0; r < K; r++)
-                for (size_t col = 0; col < K; col++)
-                    np[map[r] * KQ + map[col]] = c.pairs[s][r * K + col];
-            free(c.pairs[s]);
-            c.pairs[s] = np;
-            free(map);
+        if (carry_over(&c, Q, KQ, ins)) {
+            free(ins);
+            st = BTDF_ENOMEM;
+            goto done;
         }
+        free(ins);
         memcpy(P, Q, KQ * sizeof *P);
         K = KQ;
         (void)pass;
@@ -1198,13 +1381,9 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
             st = BTDF_OK;
     }
 done:
-    free_pairs(&c);
+    free_state(&c);
     free(c.P);
     free(c.full);
-    free(c.Tn);
-    free(c.Tm);
-    free(c.mid);
-    free(c.errc[0]); free(c.errc[1]); free(c.errr[0]); free(c.errr[1]);
     free(P);
     pthread_mutex_destroy(&c.lock);
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
