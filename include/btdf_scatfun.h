@@ -1,0 +1,152 @@
+/* SPDX-License-Identifier: MIT */
+/* btdf_scatfun.h: SCATFUN v1 Fourier-series files (.bsdf) for pbrt-v3 "fourier" and Mitsuba 0.5 "tabulated". */
+#ifndef BTDF_SCATFUN_H
+#define BTDF_SCATFUN_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#include "btdf.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/*
+ * A SCATFUN v1 file holds, for every pair of elevation nodes (slow mu_s, fast mu_f),
+ * the cosine series in phi_d of rho * |mu_f|, where phi_d = pi - phi (phi_d = 0 is the
+ * forward plane) and rho is the radiance-form BTDF for light arriving from the slow
+ * direction's side and leaving through the fast direction's side:
+ *   mu_s > 0, mu_f > 0: light entering, Eq. 25 with index n,
+ *       ti = acos(mu_s), to = pi - acos(mu_f);
+ *   mu_s < 0, mu_f < 0: light leaving, Eq. 25 with index 1/n, mirrored:
+ *       ti = acos(|mu_s|), to = pi - acos(|mu_f|).
+ * Reflection pairs (mu_s mu_f < 0) are empty. The header eta is n (ior[1], green,
+ * for three channels). Three-channel files store the series of Y, R and B.
+ * docs/scatfun.md describes the file, the node placement and the measured sizes.
+ *
+ * Threads: a btdf_scatfun is immutable once built or read; it may be evaluated,
+ * reported on and written from many threads at once. Freeing is not concurrent
+ * with other uses.
+ * Ownership: objects returned through **out belong to the caller, who frees them
+ * with btdf_scatfun_free (NULL is a no-op). Out-parameters are untouched on error
+ * unless said otherwise. Messages go to msg (msglen bytes, may be NULL).
+ */
+typedef struct btdf_scatfun btdf_scatfun;
+
+/* How a value is read back from a file, matching pbrt-v3's two transport modes. */
+typedef enum {
+    /* The block whose slow index is the light's side, no eta factor: Eq. 25 directly
+       (pbrt-v3 in importance mode with the light direction as wo). */
+    BTDF_SCATFUN_DIRECT = 0,
+    /* The block whose slow index is the camera's side, times pbrt-v3's radiance-mode
+       factor e^2: what pbrt-v3 renders; equal to DIRECT by reciprocity. */
+    BTDF_SCATFUN_ADJOINT = 1
+} btdf_scatfun_mode;
+
+/* Largest half-node count and series length a build may use (its budget). */
+#define BTDF_SCATFUN_MAX_HALF_NODES 512
+#define BTDF_SCATFUN_MAX_PHI 16384
+
+/* Builds the nodes and coefficients from Eq. 25 (not from a table) for the sides
+   asked (BTDF_SIDE_BOTH is the usual choice), refining the elevation nodes and each
+   pair's series until the error estimate of btdf_scatfun_report (e_L1, MODEL.md 6)
+   is at most `tolerance` on every side built. threads: 0 = all cores, 1 = none;
+   the result is byte-identical for any thread count.
+   BTDF_OK when the tolerance was met; BTDF_EBUDGET when the node or series budget
+   stopped refinement first: *out then still holds the best file reached and msg
+   says the error reached. Errors: BTDF_EINVAL (parameters, tolerance outside
+   [1e-6, 0.5], side not 1..3), BTDF_ENOMEM, BTDF_EOVERFLOW. */
+BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
+                                        btdf_side side, int threads, btdf_scatfun **out,
+                                        char *msg, size_t msglen);
+
+/* Writes f to path (exact SCATFUN v1 layout, float32 little-endian) with the given
+   metadata text appended (NULL: a short JSON of the build parameters). The file is
+   written under a temporary name in the same folder and renamed at the end; on
+   error no file is left at path. BTDF_EIO when writing fails, BTDF_EOVERFLOW when
+   the file would not fit the format's 32-bit counts. */
+BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
+                                        const char *metadata_json, char *msg,
+                                        size_t msglen);
+
+/* Serialises f into a new buffer (caller frees *buf with free()). Same bytes as
+   btdf_scatfun_write. */
+BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *metadata_json,
+                                         unsigned char **buf, size_t *len, char *msg,
+                                         size_t msglen);
+
+/* Reads and checks a SCATFUN v1 file: magic, version, flags, counts, nBases = 1,
+   no parameters, exact size, nodes ascending from -1 to +1, offsets and lengths
+   inside the coefficients, lengths <= mMax, every float finite. BTDF_EFORMAT with
+   the field and value for corrupt, truncated or foreign files; BTDF_EIO when the
+   file cannot be read. */
+BTDF_API btdf_status btdf_scatfun_read(const char *path, btdf_scatfun **out, char *msg,
+                                       size_t msglen);
+
+/* The same from len bytes at buf (not kept after the call). */
+BTDF_API btdf_status btdf_scatfun_read_mem(const void *buf, size_t len, btdf_scatfun **out,
+                                           char *msg, size_t msglen);
+
+/* pbrt-v3's FourierBSDF::f in the file's own terms: slow cosine mu_s (pbrt's wo.z),
+   fast cosine mu_f (pbrt's -wi.z), cos phi_d; radiance != 0 applies pbrt's e^2 to
+   transmission. out[c] for c < btdf_scatfun_channels(f) (R, G, B for three
+   channels, G rebuilt from Y as pbrt does). 0 outside the nodes, at mu_f = 0 and
+   for empty blocks. BTDF_EINVAL for NULL or non-finite input. */
+BTDF_API btdf_status btdf_scatfun_eval_mu(const btdf_scatfun *f, double mu_s, double mu_f,
+                                          double cos_phi_d, int radiance, double *out);
+
+/* rho read back from the file in MODEL.md's convention for one side: ENTER gives
+   Eq. 25 at index n, LEAVE at index 1/n in that side's own (mirrored) frame;
+   ti in [0, pi/2], to in [pi/2, pi], phi = pi forward, radians. out[channels].
+   Sides the file does not hold read as 0. BTDF_EDOMAIN for angles out of range,
+   BTDF_EINVAL for a bad side or mode. */
+BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side side,
+                                            btdf_scatfun_mode mode, double ti, double to,
+                                            double phi, double *out);
+
+/* btdf_scatfun_eval_side(f, BTDF_SIDE_ENTER, BTDF_SCATFUN_DIRECT, ...): compare with
+   btdf_rho(n, s, k0, ti, to, phi). */
+BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double to,
+                                       double phi, double *out);
+
+/* Error of the file's evaluation (mode DIRECT) against Eq. 25 for one side (ENTER or
+   LEAVE), MODEL.md section 6: test_angles stratified incident angles in [0, pi/2)
+   (0 = 24) with about points_per_angle stratified (mu_f, phi) points each (0 = 32768),
+   from the seed. p gives the truth (channel count must match the file). Fills *r
+   (zero it first; r->per_ti is malloc'd and owned by the report: free it with
+   btdf_report_clear or free()). seconds_build is the build time (0 for a read
+   file); slices = node count, samples = coefficient count. */
+BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_params *p,
+                                         btdf_side side, size_t test_angles,
+                                         size_t points_per_angle, uint64_t seed,
+                                         int threads, btdf_report *r);
+
+/* Prints header fields and statistics (nodes, coefficient count, mMax, series
+   lengths, file size, eta, channels, sides present). BTDF_EIO if printing fails. */
+BTDF_API btdf_status btdf_scatfun_info(const btdf_scatfun *f, FILE *out);
+
+/* Small getters. */
+BTDF_API int btdf_scatfun_channels(const btdf_scatfun *f);
+BTDF_API size_t btdf_scatfun_node_count(const btdf_scatfun *f);
+BTDF_API size_t btdf_scatfun_coeff_count(const btdf_scatfun *f);
+BTDF_API size_t btdf_scatfun_max_order(const btdf_scatfun *f);
+BTDF_API double btdf_scatfun_eta(const btdf_scatfun *f);
+/* Size in bytes of the file btdf_scatfun_write makes with this metadata. */
+BTDF_API size_t btdf_scatfun_file_size(const btdf_scatfun *f, const char *metadata_json);
+/* Read-only views into f (live as long as f): nodes[node_count], and for pair
+   (i, o) its offset and length; cdf[node_count * node_count]; coeffs[coeff_count]. */
+BTDF_API const float *btdf_scatfun_nodes(const btdf_scatfun *f);
+BTDF_API const float *btdf_scatfun_cdf(const btdf_scatfun *f);
+BTDF_API const float *btdf_scatfun_coeffs(const btdf_scatfun *f);
+BTDF_API btdf_status btdf_scatfun_pair(const btdf_scatfun *f, size_t i, size_t o,
+                                       size_t *offset, size_t *length);
+
+BTDF_API void btdf_scatfun_free(btdf_scatfun *f);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* BTDF_SCATFUN_H */

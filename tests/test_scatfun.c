@@ -1,0 +1,492 @@
+/* SPDX-License-Identifier: MIT */
+/* test_scatfun.c: SCATFUN v1 files: layout, round trip, reciprocity, energy, accuracy, hostile input, threads. */
+#include <math.h>
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <cmocka.h>
+
+#include "btdf.h"
+#include "btdf_scatfun.h"
+
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+/* The fixture's tolerance: loose enough that the suite builds in about a second. */
+#define TOL 0.02
+
+static void assert_close_(double a, double b, double rtol, double atol, const char *what,
+                          const char *file, int line)
+{
+    double d = fabs(a - b);
+    if (!(d <= atol + rtol * fmax(fabs(a), fabs(b)))) {
+        print_error("%s: %.12g vs %.12g (diff %.3g, rtol %g, atol %g)\n", what, a, b, d, rtol,
+                    atol);
+        _fail(file, line);
+    }
+}
+#define assert_close(a, b, rtol, atol) assert_close_((a), (b), (rtol), (atol), #a " ~ " #b, __FILE__, __LINE__)
+
+static uint32_t u32_at(const unsigned char *b, size_t pos)
+{
+    return (uint32_t)b[pos] | ((uint32_t)b[pos + 1] << 8) | ((uint32_t)b[pos + 2] << 16) |
+           ((uint32_t)b[pos + 3] << 24);
+}
+
+static void put_u32_at(unsigned char *b, size_t pos, uint32_t v)
+{
+    for (int k = 0; k < 4; k++)
+        b[pos + (size_t)k] = (unsigned char)(v >> (8 * k));
+}
+
+static float f32_at(const unsigned char *b, size_t pos)
+{
+    uint32_t u = u32_at(b, pos);
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+static void put_f32_at(unsigned char *b, size_t pos, float f)
+{
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    put_u32_at(b, pos, u);
+}
+
+typedef struct fixture {
+    btdf_params p;
+    btdf_scatfun *f;
+    unsigned char *bytes;
+    size_t len;
+} fixture;
+
+static fixture fx;
+
+static int setup(void **state)
+{
+    (void)state;
+    btdf_params_default(&fx.p); /* n = 1.5, s = 3, k0 = 0.7 */
+    char msg[256] = "";
+    btdf_status st = btdf_scatfun_build(&fx.p, TOL, BTDF_SIDE_BOTH, 2, &fx.f, msg, sizeof msg);
+    if (st != BTDF_OK) {
+        fprintf(stderr, "build: %s: %s\n", btdf_strerror(st), msg);
+        return -1;
+    }
+    if (btdf_scatfun_to_mem(fx.f, "{\"test\": 1}", &fx.bytes, &fx.len, msg, sizeof msg) !=
+        BTDF_OK)
+        return -1;
+    return 0;
+}
+
+static int teardown(void **state)
+{
+    (void)state;
+    btdf_scatfun_free(fx.f);
+    free(fx.bytes);
+    return 0;
+}
+
+static void test_header_and_size(void **state)
+{
+    (void)state;
+    const unsigned char *b = fx.bytes;
+    assert_memory_equal(b, "SCATFUN\x01", 8);
+    uint32_t n = u32_at(b, 12), nco = u32_at(b, 16), mmax = u32_at(b, 20);
+    assert_int_equal(u32_at(b, 8), 1);  /* flags */
+    assert_int_equal(u32_at(b, 24), 1); /* channels */
+    assert_int_equal(u32_at(b, 28), 1); /* nBases */
+    uint32_t meta = u32_at(b, 32);
+    assert_int_equal(meta, strlen("{\"test\": 1}"));
+    assert_int_equal(u32_at(b, 36), 0);
+    assert_int_equal(u32_at(b, 40), 0);
+    assert_true(f32_at(b, 44) == 1.5f);
+    assert_int_equal(n, btdf_scatfun_node_count(fx.f));
+    assert_int_equal(nco, btdf_scatfun_coeff_count(fx.f));
+    /* the size formula of the format, nBases = 1, no parameters */
+    size_t want = 64 + 4 * (size_t)n + 4 * (size_t)n * n + 8 * (size_t)n * n + 4 * (size_t)nco + meta;
+    assert_int_equal(fx.len, want);
+    assert_int_equal(btdf_scatfun_file_size(fx.f, "{\"test\": 1}"), want);
+    /* nodes: ascending, -1 .. +1, symmetric, the double zero in the middle */
+    assert_true(n % 2 == 0 && n >= 6);
+    const float *x = btdf_scatfun_nodes(fx.f);
+    assert_true(x[0] == -1.0f && x[n - 1] == 1.0f);
+    assert_true(x[n / 2 - 1] == 0.0f && x[n / 2] == 0.0f);
+    for (uint32_t i = 1; i < n; i++)
+        assert_true(x[i] >= x[i - 1]);
+    for (uint32_t i = 0; i < n; i++)
+        assert_true(x[i] == -x[n - 1 - i]);
+    /* offsets contiguous, lengths <= mMax, mMax reached, reflection and zero-node pairs
+       empty, both transmission quadrants present */
+    size_t pos = 0, maxlen = 0, enter = 0, leave = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        for (uint32_t o = 0; o < n; o++) {
+            size_t off, m;
+            assert_int_equal(btdf_scatfun_pair(fx.f, i, o, &off, &m), BTDF_OK);
+            assert_int_equal(off, pos);
+            pos += m;
+            if (m > maxlen)
+                maxlen = m;
+            if (m) {
+                assert_true((double)x[i] * (double)x[o] > 0.0);
+                enter += x[i] > 0;
+                leave += x[i] < 0;
+            }
+        }
+    }
+    assert_int_equal(pos, nco);
+    assert_int_equal(maxlen, mmax);
+    assert_true(enter > 0 && leave > 0);
+}
+
+static void test_round_trip(void **state)
+{
+    (void)state;
+    char path[] = "scatfun-test-XXXXXX";
+    int fd = mkstemp(path);
+    assert_true(fd >= 0);
+    close(fd);
+    char msg[256] = "";
+    assert_int_equal(btdf_scatfun_write(fx.f, path, "{\"test\": 1}", msg, sizeof msg), BTDF_OK);
+    btdf_scatfun *g = NULL;
+    assert_int_equal(btdf_scatfun_read(path, &g, msg, sizeof msg), BTDF_OK);
+    unlink(path);
+    unsigned char *b2 = NULL;
+    size_t len2 = 0;
+    /* NULL metadata re-uses what the file held */
+    assert_int_equal(btdf_scatfun_to_mem(g, NULL, &b2, &len2, msg, sizeof msg), BTDF_OK);
+    assert_int_equal(len2, fx.len);
+    assert_memory_equal(b2, fx.bytes, fx.len);
+    free(b2);
+    /* evaluation of the read file equals that of the built one */
+    for (int k = 0; k < 20; k++) {
+        double ti = 0.07 * k, to = M_PI - 0.05 - 0.07 * k, phi = 0.3 * k;
+        double a, c;
+        assert_int_equal(btdf_scatfun_eval(fx.f, ti, to, phi, &a), BTDF_OK);
+        assert_int_equal(btdf_scatfun_eval(g, ti, to, phi, &c), BTDF_OK);
+        assert_true(a == c);
+    }
+    btdf_scatfun_free(g);
+    /* a write into a missing folder fails and leaves nothing */
+    assert_int_equal(btdf_scatfun_write(fx.f, "no-such-dir-xyz/a.bsdf", NULL, msg, sizeof msg),
+                     BTDF_EIO);
+    assert_int_equal(access("no-such-dir-xyz/a.bsdf", F_OK), -1);
+}
+
+/* rho(n; i -> o) = n^2 rho(1/n; o -> i): the stored enter block at (mu_i, mu_o) holds
+   rho_n mu_o, the leave block at (-mu_o, -mu_i) holds rho_{1/n} mu_i. Each a_k is a
+   separately computed azimuthal transform, exact to the build's aliasing share
+   (0.05 TOL of max(T, 0.01) in L1), so compare to that scale. */
+static void test_reciprocity(void **state)
+{
+    (void)state;
+    size_t n = btdf_scatfun_node_count(fx.f), h = n / 2 + 1;
+    const float *x = btdf_scatfun_nodes(fx.f), *c = btdf_scatfun_coeffs(fx.f);
+    double nn = 1.5 * 1.5;
+    size_t compared = 0;
+    for (size_t i = h; i < n; i++) {
+        for (size_t o = h; o < n; o++) {
+            size_t oe, me, ol, ml;
+            btdf_scatfun_pair(fx.f, i, o, &oe, &me);
+            btdf_scatfun_pair(fx.f, n - 1 - o, n - 1 - i, &ol, &ml);
+            double mi = x[i], mo = x[o];
+            double a = me ? c[oe] * mi : 0.0;
+            double b = ml ? nn * c[ol] * mo : 0.0;
+            /* 2 pi a_0 differences in the pair's L1 units, relative to T ~ 0.95 */
+            assert_close(2.0 * M_PI * a, 2.0 * M_PI * b, 0.0, 0.1 * TOL);
+            compared += me > 0;
+        }
+    }
+    assert_true(compared > 10);
+    /* the same through evaluation: pbrt's radiance path (leave block times eta^2)
+       against the direct enter block, within the file's error scale */
+    double worst = 0.0;
+    for (int k = 0; k < 40; k++) {
+        double ti = 0.02 + 0.035 * k, to = M_PI - 0.3 - 0.02 * k, phi = M_PI - 0.05 * k;
+        double d, a;
+        btdf_scatfun_eval_side(fx.f, BTDF_SIDE_ENTER, BTDF_SCATFUN_DIRECT, ti, to, phi, &d);
+        btdf_scatfun_eval_side(fx.f, BTDF_SIDE_ENTER, BTDF_SCATFUN_ADJOINT, ti, to, phi, &a);
+        double r = btdf_rho(1.5, 3.0, 0.7, ti, to, phi);
+        worst = fmax(worst, fabs(d - a) / fmax(r, 1.0));
+    }
+    assert_true(worst < 0.05);
+}
+
+/* a_0 of a row, integrated with the format's spline (2 pi cdf[i][n-1]), is the
+   table's transmittance at that node. Its error is at most the L1 error, which the
+   build keeps below TOL x max(T, 0.01); so |2 pi cdf - T| <= TOL max(T, 0.01). */
+static void test_a0_integrates_to_T(void **state)
+{
+    (void)state;
+    size_t n = btdf_scatfun_node_count(fx.f);
+    const float *x = btdf_scatfun_nodes(fx.f), *cdf = btdf_scatfun_cdf(fx.f);
+    btdf_params q = fx.p;
+    for (size_t i = 0; i < n; i++) {
+        if (x[i] == 0.0f)
+            continue;
+        q.ior[0] = x[i] > 0 ? 1.5 : 1.0 / 1.5;
+        double T;
+        assert_int_equal(btdf_transmittance(&q, acos(fabs((double)x[i])), &T), BTDF_OK);
+        double Tt = 2.0 * M_PI * cdf[i * n + n - 1];
+        assert_close(Tt, T, 0.0, TOL * fmax(T, 0.01));
+    }
+    /* and between the nodes through the report, where e_T <= e_L1 always */
+    for (int s = BTDF_SIDE_ENTER; s <= BTDF_SIDE_LEAVE; s++) {
+        btdf_report r;
+        memset(&r, 0, sizeof r);
+        assert_int_equal(btdf_scatfun_report(fx.f, &fx.p, (btdf_side)s, 12, 4096, 7, 2, &r),
+                         BTDF_OK);
+        for (size_t k = 0; k < r.test_angles; k++) {
+            const btdf_ti_error *e = &r.per_ti[k];
+            assert_close(e->T_table, e->T, 0.0, r.e_t_max * fmax(e->T, 0.01) + 1e-12);
+        }
+        assert_true(r.e_t_max <= TOL);
+        free(r.per_ti);
+    }
+}
+
+/* The report's e_L1 is below the tolerance on both sides, and an independent
+   estimate (other seed, other point count) agrees with it. */
+static void test_eval_against_rho(void **state)
+{
+    (void)state;
+    for (int s = BTDF_SIDE_ENTER; s <= BTDF_SIDE_LEAVE; s++) {
+        btdf_report r;
+        memset(&r, 0, sizeof r);
+        assert_int_equal(btdf_scatfun_report(fx.f, &fx.p, (btdf_side)s, 0, 0, 1, 2, &r), BTDF_OK);
+        assert_int_equal(r.test_angles, 24);
+        assert_true(r.e_l1_max <= TOL);
+        assert_true(r.e_l1_mean <= r.e_l1_max && r.e_t_mean <= r.e_t_max);
+        assert_int_equal(r.slices, btdf_scatfun_node_count(fx.f));
+        free(r.per_ti);
+    }
+    /* direct spot checks: the L1 error at ti = 20 deg by midpoint sums */
+    double ti = 20.0 * M_PI / 180.0, T, l1 = 0.0;
+    assert_int_equal(btdf_transmittance(&fx.p, ti, &T), BTDF_OK);
+    const int NM = 200, NP = 200;
+    for (int i = 0; i < NM; i++) {
+        double mu = (i + 0.5) / NM, to = M_PI - acos(mu);
+        for (int j = 0; j < NP; j++) {
+            double phi = M_PI - (j + 0.5) * M_PI / NP, v;
+            assert_int_equal(btdf_scatfun_eval(fx.f, ti, to, phi, &v), BTDF_OK);
+            double r = btdf_rho(1.5, 3.0, 0.7, ti, to, phi);
+            l1 += fabs(v - r) * mu * (1.0 / NM) * (2.0 * M_PI / NP);
+        }
+    }
+    assert_true(l1 / fmax(T, 0.01) <= TOL);
+}
+
+static btdf_status read_bytes(const unsigned char *b, size_t len)
+{
+    btdf_scatfun *g = NULL;
+    char msg[256] = "";
+    btdf_status st = btdf_scatfun_read_mem(b, len, &g, msg, sizeof msg);
+    if (st == BTDF_OK)
+        btdf_scatfun_free(g);
+    else
+        assert_true(strlen(msg) > 0); /* every rejection says why */
+    return st;
+}
+
+static void test_hostile_files(void **state)
+{
+    (void)state;
+    size_t len = fx.len;
+    unsigned char *b = malloc(len + 1);
+    assert_non_null(b);
+    assert_int_equal(read_bytes(fx.bytes, len), BTDF_OK);
+    /* truncated at many sizes, and one byte too many */
+    for (size_t cut = 0; cut < len; cut += 1 + cut / 3)
+        assert_int_equal(read_bytes(fx.bytes, cut), BTDF_EFORMAT);
+    assert_int_equal(read_bytes(fx.bytes, len - 1), BTDF_EFORMAT);
+    memcpy(b, fx.bytes, len);
+    b[len] = 0;
+    assert_int_equal(read_bytes(b, len + 1), BTDF_EFORMAT);
+    uint32_t n = u32_at(fx.bytes, 12), nco = u32_at(fx.bytes, 16), mmax = u32_at(fx.bytes, 20);
+    size_t nodes = 64, cdf = nodes + 4 * (size_t)n, offs = cdf + 4 * (size_t)n * n,
+           coeffs = offs + 8 * (size_t)n * n;
+    /* header fields: {byte offset, bad value} */
+    const struct {
+        size_t pos;
+        uint32_t v;
+    } fields[] = {{8, 0},  {8, 3},        {12, n + 1},   {12, n - 1}, {12, 0},  {12, 0xffffffffu},
+                  {16, nco + 1}, {16, 0xffffffffu}, {24, 2}, {24, 0}, {28, 2}, {28, 0},
+                  {32, 0xfffffff0u}, {36, 1}, {40, 1}, {20, 0xffffffffu}};
+    for (size_t k = 0; k < sizeof fields / sizeof fields[0]; k++) {
+        memcpy(b, fx.bytes, len);
+        put_u32_at(b, fields[k].pos, fields[k].v);
+        assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    }
+    /* magic and version */
+    memcpy(b, fx.bytes, len);
+    b[0] = 's';
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    memcpy(b, fx.bytes, len);
+    b[7] = 2;
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    /* eta NaN, 0, inf; alpha NaN */
+    const float badf[] = {NAN, 0.0f, INFINITY, -1.5f};
+    for (size_t k = 0; k < 4; k++) {
+        memcpy(b, fx.bytes, len);
+        put_f32_at(b, 44, badf[k]);
+        assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    }
+    memcpy(b, fx.bytes, len);
+    put_f32_at(b, 48, NAN);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    /* nodes: descending pair, ends not +-1, NaN */
+    memcpy(b, fx.bytes, len);
+    put_f32_at(b, nodes + 4, f32_at(fx.bytes, nodes + 8));
+    put_f32_at(b, nodes + 8, f32_at(fx.bytes, nodes + 4));
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    memcpy(b, fx.bytes, len);
+    put_f32_at(b, nodes, -0.5f);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    memcpy(b, fx.bytes, len);
+    put_f32_at(b, nodes + 4 * ((size_t)n - 1), 2.0f);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    memcpy(b, fx.bytes, len);
+    put_f32_at(b, nodes + 4 * ((size_t)n / 3), NAN);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    /* cdf and coefficient NaN / inf */
+    memcpy(b, fx.bytes, len);
+    put_f32_at(b, cdf + 4 * ((size_t)n * n / 2), NAN);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    memcpy(b, fx.bytes, len);
+    put_f32_at(b, coeffs + 4 * ((size_t)nco / 2), INFINITY);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    /* offsets past the end, lengths past mMax or past nCoeffs */
+    size_t last = offs + 8 * ((size_t)n * n - 1);
+    memcpy(b, fx.bytes, len);
+    put_u32_at(b, last, nco);
+    put_u32_at(b, last + 4, 1);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    memcpy(b, fx.bytes, len);
+    put_u32_at(b, offs, 0xfffffff0u);
+    put_u32_at(b, offs + 4, mmax);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    memcpy(b, fx.bytes, len);
+    put_u32_at(b, offs + 4, mmax + 1);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    /* mMax below the longest series */
+    memcpy(b, fx.bytes, len);
+    put_u32_at(b, 20, mmax - 1);
+    assert_int_equal(read_bytes(b, len), BTDF_EFORMAT);
+    /* a foreign file, an empty buffer, a missing file */
+    const char *text = "P6\n640 480\n255\n plus enough bytes to pass the header length test......";
+    assert_int_equal(read_bytes((const unsigned char *)text, strlen(text)), BTDF_EFORMAT);
+    assert_int_equal(read_bytes((const unsigned char *)"", 0), BTDF_EFORMAT);
+    btdf_scatfun *g = NULL;
+    char msg[128];
+    assert_int_equal(btdf_scatfun_read("no-such-file.bsdf", &g, msg, sizeof msg), BTDF_EIO);
+    assert_null(g);
+    free(b);
+}
+
+static void test_threads_identical(void **state)
+{
+    (void)state;
+    btdf_params p;
+    btdf_params_default(&p);
+    p.smoothness = 6.0;
+    btdf_scatfun *a = NULL, *c = NULL;
+    char msg[256];
+    assert_int_equal(btdf_scatfun_build(&p, 0.05, BTDF_SIDE_BOTH, 1, &a, msg, sizeof msg), BTDF_OK);
+    assert_int_equal(btdf_scatfun_build(&p, 0.05, BTDF_SIDE_BOTH, 2, &c, msg, sizeof msg), BTDF_OK);
+    unsigned char *ba, *bc;
+    size_t la, lc;
+    assert_int_equal(btdf_scatfun_to_mem(a, "", &ba, &la, msg, sizeof msg), BTDF_OK);
+    assert_int_equal(btdf_scatfun_to_mem(c, "", &bc, &lc, msg, sizeof msg), BTDF_OK);
+    assert_int_equal(la, lc);
+    assert_memory_equal(ba, bc, la);
+    free(ba);
+    free(bc);
+    btdf_scatfun_free(a);
+    btdf_scatfun_free(c);
+}
+
+static void test_one_side_and_colour(void **state)
+{
+    (void)state;
+    btdf_params p;
+    btdf_params_default(&p);
+    p.channels = 3;
+    p.ior[0] = 1.48;
+    p.ior[1] = 1.5;
+    p.ior[2] = 1.53;
+    btdf_scatfun *f = NULL;
+    char msg[256];
+    assert_int_equal(btdf_scatfun_build(&p, 0.05, BTDF_SIDE_ENTER, 2, &f, msg, sizeof msg), BTDF_OK);
+    assert_int_equal(btdf_scatfun_channels(f), 3);
+    assert_close(btdf_scatfun_eta(f), 1.5, 1e-7, 0.0);
+    double v[3];
+    /* the leaving side is absent: reads as 0 */
+    assert_int_equal(btdf_scatfun_eval_side(f, BTDF_SIDE_LEAVE, BTDF_SCATFUN_DIRECT, 0.3, 2.9, 3.0, v),
+                     BTDF_OK);
+    assert_true(v[0] == 0.0 && v[1] == 0.0 && v[2] == 0.0);
+    btdf_report r;
+    memset(&r, 0, sizeof r);
+    assert_int_equal(btdf_scatfun_report(f, &p, BTDF_SIDE_ENTER, 8, 4096, 3, 2, &r), BTDF_OK);
+    assert_true(r.e_l1_max <= 0.05);
+    free(r.per_ti);
+    /* channel count must match the truth */
+    btdf_params q;
+    btdf_params_default(&q);
+    assert_int_equal(btdf_scatfun_report(f, &q, BTDF_SIDE_ENTER, 8, 4096, 3, 2, &r), BTDF_EINVAL);
+    FILE *sink = fopen("/dev/null", "w");
+    if (sink) {
+        assert_int_equal(btdf_scatfun_info(f, sink), BTDF_OK);
+        fclose(sink);
+    }
+    btdf_scatfun_free(f);
+}
+
+static void test_bad_arguments(void **state)
+{
+    (void)state;
+    btdf_params p;
+    btdf_params_default(&p);
+    btdf_scatfun *f = NULL;
+    char msg[256];
+    p.ior[0] = 1.0;
+    assert_int_equal(btdf_scatfun_build(&p, 1e-3, BTDF_SIDE_BOTH, 1, &f, msg, sizeof msg), BTDF_EINVAL);
+    btdf_params_default(&p);
+    assert_int_equal(btdf_scatfun_build(&p, 0.0, BTDF_SIDE_BOTH, 1, &f, msg, sizeof msg), BTDF_EINVAL);
+    assert_int_equal(btdf_scatfun_build(&p, NAN, BTDF_SIDE_BOTH, 1, &f, msg, sizeof msg), BTDF_EINVAL);
+    assert_int_equal(btdf_scatfun_build(&p, 1e-3, (btdf_side)0, 1, &f, msg, sizeof msg), BTDF_EINVAL);
+    assert_null(f);
+    double v;
+    assert_int_equal(btdf_scatfun_eval(fx.f, -0.1, 3.0, 0.0, &v), BTDF_EDOMAIN);
+    assert_int_equal(btdf_scatfun_eval(fx.f, 0.1, 1.0, 0.0, &v), BTDF_EDOMAIN);
+    assert_int_equal(btdf_scatfun_eval(fx.f, 0.1, 3.0, NAN, &v), BTDF_EDOMAIN);
+    assert_int_equal(btdf_scatfun_eval_mu(fx.f, NAN, 0.5, 1.0, 0, &v), BTDF_EINVAL);
+    /* grazing and out-of-node queries give 0, never NaN */
+    assert_int_equal(btdf_scatfun_eval(fx.f, M_PI / 2, M_PI / 2, 0.0, &v), BTDF_OK);
+    assert_true(v == 0.0);
+    assert_int_equal(btdf_scatfun_eval_mu(fx.f, 2.0, 0.5, 1.0, 0, &v), BTDF_OK);
+    assert_true(v == 0.0);
+    btdf_scatfun_free(NULL);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_header_and_size),
+        cmocka_unit_test(test_round_trip),
+        cmocka_unit_test(test_reciprocity),
+        cmocka_unit_test(test_a0_integrates_to_T),
+        cmocka_unit_test(test_eval_against_rho),
+        cmocka_unit_test(test_hostile_files),
+        cmocka_unit_test(test_threads_identical),
+        cmocka_unit_test(test_one_side_and_colour),
+        cmocka_unit_test(test_bad_arguments),
+    };
+    return cmocka_run_group_tests_name("scatfun", tests, setup, teardown);
+}
