@@ -299,5 +299,6 @@ BTDF_API int btdf_format_available(const char *ext);
 #endif
 
 #include "btdf_preview.h"
+#include "btdf_scatfun.h"
 
 #endif /* BTDF_H */

@@ -12,6 +12,8 @@
 
 #include "btdf.h"
 #include "formats.h"
+#include "manifest.h"
+#include "table_impl.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -47,6 +49,12 @@ static int fail(int code, const char *fmt, ...)
     return code;
 }
 
+static int ends_with(const char *s, const char *suffix)
+{
+    size_t ls = strlen(s), lx = strlen(suffix);
+    return ls >= lx && strcmp(s + ls - lx, suffix) == 0;
+}
+
 static void usage(FILE *f, int verbose)
 {
     fprintf(f,
@@ -54,6 +62,8 @@ static void usage(FILE *f, int verbose)
             "       btdftab tabulate [options] -o FILE      write a table (.csv%s)\n"
             "       btdftab albedo [options] [TI ...]       T(ti) and the flat Ft(ti)\n"
             "       btdftab polar [options] -o FILE.png     lobes in the plane of incidence\n"
+            "       btdftab build [--force] SCENE.ini       the outputs a scene manifest lists\n"
+            "       btdftab inspect FILE                    header and statistics of a file\n"
             "       btdftab --help | --version\n",
             btdf_format_available("exr") ? ", .exr" : "");
     if (!verbose) {
@@ -69,12 +79,15 @@ static void usage(FILE *f, int verbose)
             "  -s, --smoothness S   s = correlation length / RMS height (default 3)\n"
             "  --k0 K               shadowing constant (default 0.7)\n"
             "\neval:\n"
-            "  --table FILE         evaluate a written table (.csv%s) instead of Eq. 25\n"
+            "  --table FILE         evaluate a written table (.csv%s, .bsdf) instead of Eq. 25\n"
             "\ntabulate:\n"
-            "  -o, --output FILE    output file; '-' writes CSV to standard output\n"
+            "  -o, --output FILE    .csv, .exr, .png, or .bsdf (pbrt-v3/Mitsuba tabulated,\n"
+            "                       built from Eq. 25 directly); '-' writes CSV to stdout\n"
             "  --tolerance E        target error of the adaptive table (default 1e-3)\n"
             "  --metric l1|max      which error must meet E (default l1)\n"
             "  --grid NI,NO,NPHI    a plain regular grid in (theta_i, theta_o, phi) instead\n"
+            "  --side S             enter (index n, default), leave (index 1/n); for .bsdf\n"
+            "                       also both (the default there)\n"
             "  --theta-i A:B        incidence range in degrees (default 0:90)\n"
             "  --max-samples N      node budget (default 8000000)\n"
             "  --max-memory MIB     memory cap for the nodes (default 256)\n"
@@ -86,6 +99,9 @@ static void usage(FILE *f, int verbose)
             "                       (with Eq. 25 and the difference beside it); repeatable;\n"
             "                       -o F.png is the same as --preview F.png\n"
             "  --size WxH           picture size in pixels (default: per kind)\n"
+            "\nbuild:\n"
+            "  --force              redo outputs that are up to date\n"
+            "  (also --threads, --quiet, --best-effort; docs/pipelines.md has the manifest)\n"
             "\npolar:\n"
             "  --material N:S       one material (repeatable, at most 8 curves in all);\n"
             "                       default: --ior and --smoothness\n"
@@ -288,7 +304,14 @@ static int cmd_eval(int argc, char **argv)
     if (npos != 0 && npos != 3)
         return fail(EXIT_USAGE, "eval: give exactly three angles TI TO PHI, or none to read rows");
     btdf_table *t = NULL;
-    if (table_path) {
+    btdf_scatfun *sf = NULL;
+    if (table_path && ends_with(table_path, ".bsdf")) {
+        char msg[512];
+        btdf_status st = btdf_scatfun_read(table_path, &sf, msg, sizeof msg);
+        if (st != BTDF_OK)
+            return fail(1, "%s: %s", table_path, msg);
+        c.p.channels = btdf_scatfun_channels(sf);
+    } else if (table_path) {
         char msg[512];
         btdf_status st = btdf_table_read(table_path, &t, msg, sizeof msg);
         if (st != BTDF_OK)
@@ -325,6 +348,10 @@ static int cmd_eval(int argc, char **argv)
         }
         if (t) {
             btdf_table_eval(t, v[0] * M_PI / 180.0, v[1] * M_PI / 180.0, v[2] * M_PI / 180.0, out);
+        } else if (sf) {
+            /* light entering through the top (index n), as pbrt-v3 would read it */
+            btdf_scatfun_eval(sf, v[0] * M_PI / 180.0, v[1] * M_PI / 180.0, v[2] * M_PI / 180.0,
+                              out);
         } else {
             for (int ch = 0; ch < c.p.channels; ch++)
                 out[ch] = btdf_rho_deg(c.p.ior[ch], c.p.smoothness, c.p.k0, v[0], v[1], v[2]);
@@ -332,6 +359,7 @@ static int cmd_eval(int argc, char **argv)
         print_values(out, c.p.channels);
     }
     btdf_table_free(t);
+    btdf_scatfun_free(sf);
     if (fflush(stdout) != 0 && code == 0)
         code = fail(1, "standard output: %s", strerror(errno));
     return code;
@@ -390,8 +418,8 @@ static int cmd_albedo(int argc, char **argv)
 /* tabulate                                                                  */
 /* ------------------------------------------------------------------------- */
 
-static void json_report(FILE *f, const btdf_table_opts *o, const btdf_report *r,
-                        const char *provenance)
+static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
+                        const btdf_report *r, const char *provenance)
 {
     fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n", BTDF_VERSION_STRING);
     fprintf(f, "  \"command\": \"");
@@ -401,7 +429,7 @@ static void json_report(FILE *f, const btdf_table_opts *o, const btdf_report *r,
         if ((unsigned char)*s >= 0x20)
             fputc(*s, f);
     }
-    fprintf(f, "\",\n  \"kind\": \"%s\",\n", o->kind == BTDF_TABLE_GRID ? "grid" : "facet");
+    fprintf(f, "\",\n  \"kind\": \"%s\",\n", table_kind_name(kind));
     fprintf(f, "  \"ior\": [");
     for (int c = 0; c < o->params.channels; c++)
         fprintf(f, "%s%.17g", c ? ", " : "", o->params.ior[c]);
@@ -454,12 +482,6 @@ static int parse_range(const char *s, double *a, double *b)
     return 1;
 }
 
-static int ends_with(const char *s, const char *suffix)
-{
-    size_t ls = strlen(s), lx = strlen(suffix);
-    return ls >= lx && strcmp(s + ls - lx, suffix) == 0;
-}
-
 #define MAX_PREVIEWS 4
 
 typedef struct preview_req {
@@ -509,21 +531,85 @@ static int parse_picture_size(const char *s, int *w, int *h)
     return 1;
 }
 
-static int write_text_atomic(const char *path, const btdf_table_opts *o, const btdf_report *r,
-                             const char *prov)
+static int write_text_atomic(const char *path, const btdf_table_opts *o, btdf_table_kind kind,
+                             const btdf_report *r, const char *prov)
 {
     char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.tmp", path);
+    snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
     FILE *f = fopen(tmp, "w");
     if (!f)
         return fail(1, "%s: cannot create: %s", path, strerror(errno));
-    json_report(f, o, r, prov);
+    json_report(f, o, kind, r, prov);
     int bad = ferror(f);
     if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
         unlink(tmp);
         return fail(1, "%s: writing failed: %s", path, strerror(errno));
     }
     return 0;
+}
+
+int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int threads,
+             int quiet, int best_effort, const char *prov)
+{
+    char msg[512] = "";
+    btdf_scatfun *f = NULL;
+    double t0 = now_seconds();
+    btdf_status st = btdf_scatfun_build(p, tol, (btdf_side)sides, threads, &f, msg, sizeof msg);
+    double t1 = now_seconds();
+    if (st != BTDF_OK && st != BTDF_EBUDGET)
+        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", path,
+                    msg[0] ? msg : btdf_strerror(st));
+    if (!f)
+        return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+    /* The error a renderer will see: the format's own evaluation, per side. */
+    int met = 1;
+    char meta[1024];
+    int k = snprintf(meta, sizeof meta, "{\"program\": \"btdftab %s\", \"tolerance\": %g",
+                     BTDF_VERSION_STRING, tol);
+    for (int s = BTDF_SIDE_ENTER; s <= BTDF_SIDE_LEAVE; s++) {
+        if (!(sides & s))
+            continue;
+        btdf_report r;
+        memset(&r, 0, sizeof r);
+        double e0 = now_seconds();
+        btdf_status es = btdf_scatfun_report(f, p, (btdf_side)s, 0, 0, REPORT_SEED, threads, &r);
+        double e1 = now_seconds();
+        if (es != BTDF_OK) {
+            btdf_scatfun_free(f);
+            return fail(1, "%s: error estimate: %s", path, btdf_strerror(es));
+        }
+        int ok = r.e_l1_max <= tol;
+        met = met && ok;
+        const char *name = s == BTDF_SIDE_ENTER ? "enter" : "leave";
+        if (!quiet)
+            fprintf(stderr,
+                    "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients; "
+                    "build %.3f s, estimate %.3f s (%zu angles, %zu points); e_L1 max %.3g "
+                    "mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
+                    prog, path, name, btdf_scatfun_node_count(f), btdf_scatfun_coeff_count(f),
+                    t1 - t0, e1 - e0, r.test_angles, r.test_points, r.e_l1_max, r.e_l1_mean,
+                    r.e_max_max, r.e_t_max, ok ? "; tolerance met" : "; TOLERANCE NOT MET");
+        if (k > 0 && (size_t)k < sizeof meta)
+            k += snprintf(meta + k, sizeof meta - (size_t)k,
+                          ", \"%s\": {\"e_l1_max\": %.4g, \"e_max_max\": %.4g, \"e_t_max\": %.4g}",
+                          name, r.e_l1_max, r.e_max_max, r.e_t_max);
+        btdf_report_clear(&r);
+    }
+    if (k > 0 && (size_t)k < sizeof meta)
+        snprintf(meta + k, sizeof meta - (size_t)k, ", \"command\": \"%s\"}", prov ? prov : "");
+    int code = 0;
+    if (!met && !best_effort) {
+        fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
+                        "to write it anyway)\n",
+                prog, path, tol, msg[0] ? ": " : "", msg);
+        code = EXIT_BUDGET;
+    } else {
+        st = btdf_scatfun_write(f, path, meta, msg, sizeof msg);
+        if (st != BTDF_OK)
+            code = fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+    }
+    btdf_scatfun_free(f);
+    return code;
 }
 
 static int cmd_tabulate(int argc, char **argv, const char *prov)
@@ -533,7 +619,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     btdf_table_opts o;
     btdf_table_opts_default(&o);
     const char *out = NULL, *report = NULL;
-    int best_effort = 0, npreview = 0, pic_w = 0, pic_h = 0;
+    int best_effort = 0, npreview = 0, pic_w = 0, pic_h = 0, sides = 0, theta_given = 0;
     preview_req previews[MAX_PREVIEWS];
     double ti0 = 0.0, ti1 = 90.0;
     size_t mib = 256;
@@ -581,6 +667,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
                 return fail(EXIT_USAGE, "%s: missing value", a);
             if (!parse_range(argv[++i], &ti0, &ti1))
                 return EXIT_USAGE;
+            theta_given = 1;
         } else if (!strcmp(a, "--max-samples")) {
             if (!has)
                 return fail(EXIT_USAGE, "%s: missing value", a);
@@ -597,6 +684,18 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             report = argv[++i];
         } else if (!strcmp(a, "--best-effort")) {
             best_effort = 1;
+        } else if (!strcmp(a, "--side")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            const char *v = argv[++i];
+            if (!strcmp(v, "enter"))
+                sides = BTDF_SIDE_ENTER;
+            else if (!strcmp(v, "leave"))
+                sides = BTDF_SIDE_LEAVE;
+            else if (!strcmp(v, "both"))
+                sides = BTDF_SIDE_BOTH;
+            else
+                return fail(EXIT_USAGE, "--side: '%s': must be enter, leave or both", v);
         } else if (!strcmp(a, "--preview")) {
             if (!has)
                 return fail(EXIT_USAGE, "%s: missing value", a);
@@ -615,6 +714,24 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             return EXIT_USAGE;
         }
     }
+    if (out && ends_with(out, ".bsdf")) {
+        /* A renderer file is built from Eq. 25 directly: no table is needed. */
+        if (!check_params(&c.p))
+            return EXIT_USAGE;
+        if (theta_given || o.kind == BTDF_TABLE_GRID || npreview)
+            return fail(EXIT_USAGE, "%s: --theta-i, --grid and --preview do not apply to .bsdf "
+                                    "(the file covers every direction of both hemispheres)", out);
+        return run_bsdf(out, &c.p, o.tolerance, sides ? sides : BTDF_SIDE_BOTH, c.threads,
+                        c.quiet, best_effort, prov);
+    }
+    if (sides && sides != BTDF_SIDE_ENTER && out) {
+        /* Tables hold one side: light leaving is the table of index 1/n. */
+        if (sides == BTDF_SIDE_BOTH)
+            return fail(EXIT_USAGE, "--side both: a table holds one side; write two tables, "
+                                    "or a .bsdf, which holds both");
+        for (int ch = 0; ch < c.p.channels; ch++)
+            c.p.ior[ch] = 1.0 / c.p.ior[ch];
+    }
     if (out && ends_with(out, ".png")) { /* -o F.png is a montage preview */
         if (npreview == MAX_PREVIEWS)
             return fail(EXIT_USAGE, "--preview: at most %d pictures", MAX_PREVIEWS);
@@ -631,7 +748,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     if (out) {
         fmt = strcmp(out, "-") ? btdf_format_for_path(out) : &btdf_format_csv;
         if (!fmt)
-            return fail(EXIT_USAGE, "%s: unknown output format: use .csv, .exr or .png", out);
+            return fail(EXIT_USAGE, "%s: unknown output format: use .csv, .exr, .png or .bsdf", out);
         if (!fmt->available)
             return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
                         fmt->name, fmt->feature);
@@ -712,7 +829,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             code = fail(1, "%s: %s", previews[k].path, msg[0] ? msg : btdf_strerror(st));
     }
     if (code == 0 && report)
-        code = write_text_atomic(report, &o, &r, prov);
+        code = write_text_atomic(report, &o, btdf_table_get_kind(t), &r, prov);
     btdf_report_clear(&r);
     btdf_table_free(t);
     return code;
@@ -811,6 +928,76 @@ static int cmd_polar(int argc, char **argv)
     return 0;
 }
 
+static int cmd_inspect(int argc, char **argv)
+{
+    if (argc != 2 || argv[1][0] == '-')
+        return fail(EXIT_USAGE, "inspect: give one file, e.g. btdftab inspect glass.bsdf");
+    const char *path = argv[1];
+    char msg[512] = "";
+    if (ends_with(path, ".bsdf")) {
+        btdf_scatfun *f = NULL;
+        btdf_status st = btdf_scatfun_read(path, &f, msg, sizeof msg);
+        if (st != BTDF_OK)
+            return fail(1, "%s: %s", path, msg);
+        st = btdf_scatfun_info(f, stdout);
+        btdf_scatfun_free(f);
+        return st == BTDF_OK ? 0 : fail(1, "standard output: %s", strerror(errno));
+    }
+    btdf_table *t = NULL;
+    btdf_status st = btdf_table_read(path, &t, msg, sizeof msg);
+    if (st != BTDF_OK)
+        return fail(1, "%s: %s", path, msg);
+    const btdf_params *p = btdf_table_get_params(t);
+    printf("kind: %s\nchannels: %d\nior:", table_kind_name(btdf_table_get_kind(t)), p->channels);
+    for (int ch = 0; ch < p->channels; ch++)
+        printf(" %.17g", p->ior[ch]);
+    printf("\nsmoothness: %.17g\nk0: %.17g\nslices: %zu\nnodes: %zu\n", p->smoothness, p->k0,
+           btdf_table_slice_count(t), btdf_table_node_count(t));
+    for (size_t k = 0; k < btdf_table_slice_count(t); k++) {
+        btdf_slice s;
+        btdf_table_slice(t, k, &s);
+        printf("slice %zu: index %.6f deg, %zu x %zu\n", k, s.ti * 180.0 / M_PI, s.nrows,
+               s.ncols);
+    }
+    btdf_table_free(t);
+    return 0;
+}
+
+static int cmd_build(int argc, char **argv)
+{
+    manifest_opts mo;
+    memset(&mo, 0, sizeof mo);
+    mo.prog = prog;
+    common c = {0};
+    btdf_params_default(&c.p);
+    for (int i = 1; i < argc; i++) {
+        int r = common_opt(&c, argc, argv, &i);
+        if (r < 0)
+            return EXIT_USAGE;
+        if (r)
+            continue;
+        if (!strcmp(argv[i], "--force")) {
+            mo.force = 1;
+        } else if (!strcmp(argv[i], "--best-effort")) {
+            mo.best_effort = 1;
+        } else if (argv[i][0] == '-' && argv[i][1]) {
+            fail(EXIT_USAGE, "build: unknown option '%s'", argv[i]);
+            usage(stderr, 0);
+            return EXIT_USAGE;
+        } else if (mo.path) {
+            return fail(EXIT_USAGE, "build: give one manifest, not '%s' and '%s'", mo.path, argv[i]);
+        } else {
+            mo.path = argv[i];
+        }
+    }
+    if (!mo.path)
+        return fail(EXIT_USAGE, "build: give a manifest, e.g. btdftab build scene.ini");
+    mo.quiet = c.quiet;
+    mo.threads = c.threads;
+    mo.progress = !c.quiet && isatty(2); /* progress lines only for a person watching */
+    return manifest_run(&mo);
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -847,6 +1034,10 @@ int main(int argc, char **argv)
         return cmd_albedo(argc - 1, argv + 1);
     if (!strcmp(cmd, "polar"))
         return cmd_polar(argc - 1, argv + 1);
+    if (!strcmp(cmd, "build"))
+        return cmd_build(argc - 1, argv + 1);
+    if (!strcmp(cmd, "inspect"))
+        return cmd_inspect(argc - 1, argv + 1);
     fail(EXIT_USAGE, "unknown command '%s'", cmd);
     usage(stderr, 0);
     return EXIT_USAGE;
