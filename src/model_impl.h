@@ -57,18 +57,16 @@ static inline void rho_out_init(rho_out *b, double sin_to, double cos_to, double
 }
 
 /* Eq. 25 (MODEL.md section 2) for one channel, from hoisted incoming and outgoing
-   terms and (cos phi, sin phi). Branch-light so that loops over phi vectorise.
+   terms and v = e_i + n e_o with e_i.v and e_o.v; rho_kernel below computes those
+   from (cos phi, sin phi). Branch-light so that loops over phi vectorise.
    With v = e_i + n e_o, the facet normal is h = sg v/|v| with sg = sign(v_z), and
      cos a = sg (e_i.v)/|v|,  cos b = -sg (e_o.v)/|v|,  cos tn = |v_z|/|v|,
      (n cos b - cos a)^2 = |v|^2 exactly,  so chi = n^2 cos b / |v|^2,
      1/cos^2 tn = 1 + tan^2 tn = |v|^2 / v_z^2,
      Ft = 2 n ca cb (1/(ca + n cb)^2 + 1/(n ca + cb)^2)   (1 - R without cancellation). */
-static inline double rho_kernel(double n, double s, const rho_in *a, const rho_out *b,
-                                double cos_phi, double sin_phi)
+static inline double rho_kernel_v(double n, double s, const rho_in *a, const rho_out *b,
+                                  double vx, double vy, double vz, double ei_v, double eo_v)
 {
-    double vx = a->sin_ti + n * b->sin_to * cos_phi;
-    double vy = n * b->sin_to * sin_phi;
-    double vz = a->cos_ti + n * b->cos_to;
     double rxy2 = vx * vx + vy * vy;
     double vz2 = vz * vz;
     double len2 = rxy2 + vz2;
@@ -77,8 +75,6 @@ static inline double rho_kernel(double n, double s, const rho_in *a, const rho_o
     if (!(0.25 * s * s * rxy2 < BTDF_EXP_CUT * vz2))
         return 0.0;
     double sg = vz < 0.0 ? -1.0 : 1.0; /* h = sg v / |v| has h_z > 0 */
-    double ei_v = a->sin_ti * vx + a->cos_ti * vz; /* e_i . v */
-    double eo_v = b->sin_to * (cos_phi * vx + sin_phi * vy) + b->cos_to * vz;
     double ca_l = sg * ei_v;  /* cos a * |v| */
     double cb_l = -sg * eo_v; /* cos b * |v| */
     if (!(ca_l > 0.0 && cb_l > 0.0))
@@ -94,6 +90,17 @@ static inline double rho_kernel(double n, double s, const rho_in *a, const rho_o
     double r = a->pref * b->pref * ca * ft * chi * sec2 * sec2 * exp(-0.25 * s * s * t2);
     /* Results below the smallest normal double are 0 (MODEL.md 3.6). */
     return r >= DBL_MIN ? r : 0.0;
+}
+
+static inline double rho_kernel(double n, double s, const rho_in *a, const rho_out *b,
+                                double cos_phi, double sin_phi)
+{
+    double vx = a->sin_ti + n * b->sin_to * cos_phi;
+    double vy = n * b->sin_to * sin_phi;
+    double vz = a->cos_ti + n * b->cos_to;
+    double ei_v = a->sin_ti * vx + a->cos_ti * vz; /* e_i . v */
+    double eo_v = b->sin_to * (cos_phi * vx + sin_phi * vy) + b->cos_to * vz;
+    return rho_kernel_v(n, s, a, b, vx, vy, vz, ei_v, eo_v);
 }
 
 /* sin and cos of an angle in degrees, exact at multiples of 90 degrees, for tools
