@@ -1146,12 +1146,13 @@ static size_t pow2_at_least(double v)
     return p;
 }
 
-/* Error estimate of one side with a small, fixed sample (for the build's own loop). */
+/* Error estimate of one side with a fixed sample (for the build's own loop). */
 static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads)
 {
     btdf_report r;
     memset(&r, 0, sizeof r);
-    if (btdf_scatfun_report(f, p, side, 16, 8192, 0x5ca7f00dULL, threads, &r) != BTDF_OK)
+    /* as dense as the default report (narrow lobes need it), on other points */
+    if (btdf_scatfun_report(f, p, side, 24, 32768, 0x5ca7f00dULL, threads, &r) != BTDF_OK)
         return HUGE_VAL;
     free(r.per_ti);
     return r.e_l1_max;
