@@ -39,6 +39,7 @@ struct btdf_scatfun {
     uint32_t n, ncoeffs, mmax, channels;
     float eta, alpha[2];
     float *nodes;      /* n */
+    double *xd;        /* the nodes as doubles, for the spline weights */
     float *cdf;        /* n * n */
     uint32_t *offsets; /* 2 * n * n: offset, length */
     float *coeffs;     /* ncoeffs */
@@ -565,7 +566,7 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
                 d += fabs(w->a2[k * S + q] - w->a[k * S + q]);
             for (size_t q = N + 1; q <= N2; q++)
                 d += fabs(w->a2[k * S + q]);
-            d = 2.0 * M_PI * d / norm[k];
+            d = 2.0 * M_PI * d / norm[k]; /* norm >= T_FLOOR > 0 */
             if (d > worst)
                 worst = d;
             memcpy(w->a + k * S, w->a2 + k * S, (N2 + 1) * sizeof(double));
@@ -589,6 +590,7 @@ static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t
         double tail = 0.0;
         size_t q = N + 1;
         while (q > 0) {
+            /* norm >= T_FLOOR > 0 */
             double add = (q - 1 == 0 ? 2.0 * M_PI : 4.0) * fabs(ak[q - 1]) / norm[k];
             if (tail + add > eps_trunc)
                 break;
@@ -690,7 +692,7 @@ static double l1_gap(build_ctx *c, build_ws *w, size_t N, size_t mlen, const dou
             double d = fabs(w->y[j] - w->x[k * S + j]);
             sum += (j == 0 || j == N) ? 0.5 * d : d;
         }
-        /* trapezoid over [0, pi] doubled for the circle */
+        /* trapezoid over [0, pi] doubled for the circle; N >= 64, norm >= T_FLOOR */
         double l1 = 2.0 * sum * M_PI / (double)N / norm[k];
         if (l1 > worst)
             worst = l1;
@@ -1026,6 +1028,8 @@ static int set_nodes(build_ctx *c, const double *P, size_t K)
     return 0;
 }
 
+static int nodes_d(btdf_scatfun *f);
+
 /* Fills a btdf_scatfun from the pairs of the current pass. */
 static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t msglen)
 {
@@ -1051,7 +1055,8 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     f->mmax = (uint32_t)mmax;
     f->channels = (uint32_t)c->nst;
     f->eta = (float)(c->nc == 3 ? c->p->ior[1] : c->p->ior[0]);
-    /* Beckmann alpha of Eq. 25's facet distribution: RMS slope 2/s (MODEL.md 2) */
+    /* Beckmann alpha of Eq. 25's facet distribution: RMS slope 2/s (MODEL.md 2);
+       s >= BTDF_S_MIN > 0 was checked */
     f->alpha[0] = f->alpha[1] = (float)(2.0 / c->p->smoothness);
     f->nodes = malloc(n * sizeof(float));
     f->cdf = malloc(n * n * sizeof(float));
@@ -1066,6 +1071,12 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     }
     for (size_t i = 0; i < n; i++)
         f->nodes[i] = (float)c->full[i];
+    if (nodes_d(f)) {
+        free(v);
+        free(cd);
+        btdf_scatfun_free(f);
+        return BTDF_ENOMEM;
+    }
     size_t pos = 0;
     for (size_t i = 0; i < n; i++) {
         for (size_t o = 0; o < n; o++) {
@@ -1135,12 +1146,13 @@ static size_t pow2_at_least(double v)
     return p;
 }
 
-/* Error estimate of one side with a small, fixed sample (for the build's own loop). */
+/* Error estimate of one side with a fixed sample (for the build's own loop). */
 static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads)
 {
     btdf_report r;
     memset(&r, 0, sizeof r);
-    if (btdf_scatfun_report(f, p, side, 16, 8192, 0x5ca7f00dULL, threads, &r) != BTDF_OK)
+    /* as dense as the default report (narrow lobes need it), on other points */
+    if (btdf_scatfun_report(f, p, side, 24, 32768, 0x5ca7f00dULL, threads, &r) != BTDF_OK)
         return HUGE_VAL;
     free(r.per_ti);
     return r.e_l1_max;
@@ -1405,15 +1417,14 @@ done:
 /* Evaluation as pbrt-v3 does it                                             */
 /* ------------------------------------------------------------------------- */
 
-/* Node list as doubles for the spline weights (n <= a few thousand in practice). */
-static int nodes_d(const btdf_scatfun *f, double *buf, size_t cap, double **out)
+/* Fills f->xd from f->nodes; 0 on success. */
+static int nodes_d(btdf_scatfun *f)
 {
-    double *x = f->n <= cap ? buf : malloc(f->n * sizeof *x);
-    if (!x)
+    f->xd = malloc(f->n * sizeof *f->xd);
+    if (!f->xd)
         return -1;
     for (uint32_t i = 0; i < f->n; i++)
-        x[i] = (double)f->nodes[i];
-    *out = x;
+        f->xd[i] = (double)f->nodes[i];
     return 0;
 }
 
@@ -1465,14 +1476,9 @@ BTDF_API btdf_status btdf_scatfun_eval_mu(const btdf_scatfun *f, double mu_s, do
         return BTDF_EINVAL;
     for (uint32_t k = 0; k < f->channels; k++)
         out[k] = 0.0;
-    double buf[512], *x;
-    if (nodes_d(f, buf, 512, &x))
-        return BTDF_ENOMEM;
     double val[3];
     double cphi = fmin(1.0, fmax(-1.0, cos_phi_d));
-    int ok = eval_stored(f, x, mu_s, mu_f, cphi, val);
-    if (x != buf)
-        free(x);
+    int ok = eval_stored(f, f->xd, mu_s, mu_f, cphi, val);
     /* f = value / |mu_f|: at mu_f = 0 (grazing) the stored value is 0 too; return 0. */
     if (!ok || !(fabs(mu_f) > 0.0))
         return BTDF_OK;
@@ -1556,7 +1562,7 @@ typedef struct rep_ctx {
     btdf_side side;
     size_t A, Nm, Np;
     uint64_t seed;
-    double *x; /* nodes as doubles */
+    const double *x; /* nodes as doubles */
     btdf_ti_error *out;
     int oom;
     pthread_mutex_t lock;
@@ -1691,7 +1697,7 @@ static void rep_angle(void *vctx, void *ws, size_t a)
     e->T_table = Tt[0];
     e->e_l1 = e->e_t = e->e_max = 0.0;
     for (int k = 0; k < nc; k++) {
-        double norm = fmax(T[k], T_FLOOR);
+        double norm = fmax(T[k], T_FLOOR); /* the floor keeps the division finite */
         e->e_l1 = fmax(e->e_l1, l1[k] / norm);
         e->e_t = fmax(e->e_t, fabs(Tt[k] - T[k]) / norm);
         /* e_max only where T >= 0.01 (MODEL.md 6); rmax > 0 there */
@@ -1735,19 +1741,15 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
         c.Np = 1;
     c.seed = seed;
     c.out = calloc(test_angles, sizeof *c.out);
-    double buf[1];
-    if (!c.out || nodes_d(f, buf, 0, &c.x)) {
-        free(c.out);
+    c.x = f->xd;
+    if (!c.out)
         return BTDF_ENOMEM;
-    }
     if (pthread_mutex_init(&c.lock, NULL) != 0) {
         free(c.out);
-        free(c.x);
         return BTDF_ENOMEM;
     }
     int bad = parallel_for(threads, test_angles, rep_angle, &c, NULL, NULL);
     pthread_mutex_destroy(&c.lock);
-    free(c.x);
     if (bad || c.oom) {
         free(c.out);
         return BTDF_ENOMEM;
@@ -2121,6 +2123,10 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
         }
         f->coeffs[i] = v;
     }
+    if (nodes_d(f)) {
+        st = say(msg, msglen, BTDF_ENOMEM, "out of memory");
+        goto fail;
+    }
     memcpy(f->meta, b + pos, nmeta);
     f->meta[nmeta] = '\0';
     f->sides = 0;
@@ -2267,6 +2273,7 @@ BTDF_API void btdf_scatfun_free(btdf_scatfun *f)
     if (!f)
         return;
     free(f->nodes);
+    free(f->xd);
     free(f->cdf);
     free(f->offsets);
     free(f->coeffs);

@@ -51,8 +51,9 @@ typedef enum {
 
 /* Builds the nodes and coefficients from Eq. 25 (not from a table) for the sides
    asked (BTDF_SIDE_BOTH is the usual choice), refining the elevation nodes and each
-   pair's series until the error estimate of btdf_scatfun_report (e_L1, MODEL.md 6)
-   is at most `tolerance` on every side built. threads: 0 = all cores, 1 = none;
+   pair's series until midpoint checks against Eq. 25 pass and then an internal
+   btdf_scatfun_report (24 angles x 32768 points, its own fixed seed) finds e_L1 (MODEL.md 6)
+   at most `tolerance` on every side built. threads: 0 = all cores, 1 = none;
    the result is byte-identical for any thread count.
    BTDF_OK when the tolerance was met; BTDF_EBUDGET when the node or series budget
    stopped refinement first: *out then still holds the best file reached and msg
