@@ -23,7 +23,9 @@ static uint64_t mix(uint64_t *x)
 static double unif(uint64_t *x) { return (double)(mix(x) >> 11) * (1.0 / 9007199254740992.0); }
 
 typedef struct est_job {
-    const btdf_table *t;
+    const btdf_params *p; /* the truth: Eq. 25 with these parameters */
+    est_eval_fn fn;       /* the evaluation under test */
+    const void *obj;
     double ti_min, span;
     size_t angles, nu, npsi, nmu, nphi;
     uint64_t seed;
@@ -68,8 +70,7 @@ static double a_measure(double u, double s, double dw, double dpsi)
 static void est_angle(void *arg, size_t k)
 {
     est_job *j = arg;
-    const btdf_table *t = j->t;
-    const btdf_params *p = &t->p;
+    const btdf_params *p = j->p;
     uint64_t rng = j->seed ^ (0xa0761d6478bd642full * (uint64_t)(k + 1));
     double ti = j->ti_min + j->span * ((double)k + unif(&rng)) / (double)j->angles;
     if (ti > M_PI / 2)
@@ -105,8 +106,8 @@ static void est_angle(void *arg, size_t k)
                 double vb = -g.cos_to * dmu * dphi * 2.0;
                 double to = atan2(g.sin_to, g.cos_to);
                 double pf = fabs(atan2(g.sin_phi, g.cos_phi));
-                table_eval_sc(t, ti, sti, cti, g.sin_to, g.cos_to, g.cos_phi, g.sin_phi, pf,
-                              to, tab);
+                const double q[8] = {sti, cti, g.sin_to, g.cos_to, g.cos_phi, g.sin_phi, pf, to};
+                j->fn(j->obj, ti, q, tab);
                 /* g.rho is Eq. 25 through the kernel, independent of the table */
                 est_add(&acc, tab[c], g.rho, va > 0.0 ? va * vb / (va + vb) : 0.0);
             }
@@ -130,7 +131,8 @@ static void est_angle(void *arg, size_t k)
                 rho_out b;
                 rho_out_init(&b, sto, mu, s, p->k0);
                 double rho = rho_kernel(n, s, &a, &b, cph, sph);
-                table_eval_sc(t, ti, sti, cti, sto, mu, cph, sph, ph, atan2(sto, mu), tab);
+                const double q[8] = {sti, cti, sto, mu, cph, sph, ph, atan2(sto, mu)};
+                j->fn(j->obj, ti, q, tab);
                 est_add(&acc, tab[c], rho, share);
             }
         }
@@ -148,11 +150,16 @@ static void est_angle(void *arg, size_t k)
     j->points[k] = pts;
 }
 
-BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
-                                         size_t test_angles, size_t points_per_angle,
-                                         uint64_t seed, int threads, btdf_report *r)
+static void table_fn(const void *obj, double ti, const double *q, double *out)
 {
-    if (!t || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
+    table_eval_sc(obj, ti, q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], out);
+}
+
+btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
+                             size_t test_angles, size_t points_per_angle, uint64_t seed,
+                             int threads, est_eval_fn fn, const void *obj, btdf_report *r)
+{
+    if (!p || !fn || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
         return BTDF_EINVAL;
     if (test_angles == 0)
         test_angles = 48;
@@ -162,7 +169,9 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
         return BTDF_EINVAL;
     double t0 = btdf_now();
     est_job j;
-    j.t = t;
+    j.p = p;
+    j.fn = fn;
+    j.obj = obj;
     j.ti_min = ti_min;
     j.span = ti_max - ti_min;
     j.angles = test_angles;
@@ -180,8 +189,6 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
     }
     btdf_parallel_for(threads, test_angles, est_angle, &j);
     memset(r, 0, sizeof *r);
-    r->slices = t->ns;
-    r->samples = btdf_table_node_count(t);
     r->test_angles = test_angles;
     r->per_ti = j.res;
     for (size_t k = 0; k < test_angles; k++) {
@@ -197,6 +204,21 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
     free(j.points);
     r->seconds_estimate = btdf_now() - t0;
     return BTDF_OK;
+}
+
+BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
+                                         size_t test_angles, size_t points_per_angle,
+                                         uint64_t seed, int threads, btdf_report *r)
+{
+    if (!t)
+        return BTDF_EINVAL;
+    btdf_status st = btdf_estimate_fn(&t->p, ti_min, ti_max, test_angles, points_per_angle,
+                                      seed, threads, table_fn, t, r);
+    if (st == BTDF_OK) {
+        r->slices = t->ns;
+        r->samples = btdf_table_node_count(t);
+    }
+    return st;
 }
 
 BTDF_API void btdf_report_clear(btdf_report *r)

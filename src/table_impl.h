@@ -54,6 +54,17 @@ double blend_ti(double v0, double v1, double w, double g, double g0, double g1);
 const char *table_kind_name(btdf_table_kind k);
 int table_kind_parse(const char *name, btdf_table_kind *k);
 
+/* An evaluation under test: rho~ for every channel at incidence ti and outgoing
+   direction q = {sin ti, cos ti, sin to, cos to, cos phi, sin phi, |phi| folded to
+   [0, pi], to}. */
+typedef void (*est_eval_fn)(const void *obj, double ti, const double *q, double *out);
+
+/* The error of fn against Eq. 25 with parameters p (MODEL.md section 6), as
+   btdf_table_estimate computes it for tables. */
+btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
+                             size_t test_angles, size_t points_per_angle, uint64_t seed,
+                             int threads, est_eval_fn fn, const void *obj, btdf_report *r);
+
 /* Monotonic wall clock in seconds. */
 double btdf_now(void);
 
