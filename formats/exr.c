@@ -12,6 +12,7 @@
 #include <openexr.h>
 
 #include "formats.h"
+#include "model_impl.h"
 #include "table_impl.h"
 
 /* Layout (docs/formats.md is the reference):
@@ -41,16 +42,7 @@ static void on_exr_error(exr_const_context_t ctx, exr_result_t code, const char 
     snprintf(e->text, sizeof e->text, "%s", text ? text : exr_get_default_error_message(code));
 }
 
-static btdf_status say(btdf_status st, char *msg, size_t msglen, const char *fmt, ...)
-{
-    if (msg && msglen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, msglen, fmt, ap);
-        va_end(ap);
-    }
-    return st;
-}
+#define say btdf_say /* model_impl.h */
 
 /* The OpenEXR message for a failed call rc, or its default text. */
 static const char *exr_text(const exr_err *e, exr_result_t rc)

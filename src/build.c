@@ -217,18 +217,10 @@ static double facet_rho(double n, double s, double k0, const rho_in *a, double s
                         double ctn, double cpsi, double spsi, double beck, double *w)
 {
     *w = 0.0;
-    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
-    if (!(ca > 0.0))
-        return 0.0; /* the facet faces away from e_i */
-    double sb2 = (1.0 - ca * ca) / (n * n);
-    if (!(sb2 < 1.0))
-        return 0.0; /* total internal reflection on this facet */
-    double cb = sqrt(1.0 - sb2);
-    double gg = ca / n - cb;
-    double ox = -a->sin_ti / n + gg * stn * cpsi, oy = gg * stn * spsi;
-    double oz = -a->cos_ti / n + gg * ctn;
-    if (!(oz < 0.0) || !(cb > 0.0))
-        return 0.0; /* refracted into the upper hemisphere, or grazing on the facet */
+    facet_ray fr;
+    if (!facet_refract(n, a->sin_ti, a->cos_ti, stn, ctn, cpsi, spsi, &fr))
+        return 0.0;
+    double ca = fr.ca, cb = fr.cb, ox = fr.ox, oy = fr.oy, oz = fr.oz;
     double d = ca - n * cb; /* |v|; nonzero for n != 1 */
     double d1 = ca + n * cb, d2 = n * ca + cb;
     double ft = 2.0 * n * ca * cb * (1.0 / (d1 * d1) + 1.0 / (d2 * d2));

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* model.c: Eq. 25 of Xu & Sun (2008), its validation, and the hemispherical transmittance. */
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,6 +30,17 @@ BTDF_API void btdf_params_default(btdf_params *p)
     p->ior[0] = p->ior[1] = p->ior[2] = 1.5;
     p->smoothness = 3.0;
     p->k0 = 0.7;
+}
+
+btdf_status btdf_say(btdf_status st, char *msg, size_t msglen, const char *fmt, ...)
+{
+    if (msg && msglen) {
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(msg, msglen, fmt, ap);
+        va_end(ap);
+    }
+    return st;
 }
 
 static btdf_status fail(char *msg, size_t msglen, const char *fmt, double v)
@@ -258,24 +270,16 @@ static const double GL_W[8] = {0.05061426814518813, 0.11119051722668724,
 static double facet_term(double n, double s, double k0, double sti, double cti,
                          double stn, double ctn, double cpsi)
 {
-    double ca = stn * cpsi * sti + ctn * cti;
-    if (!(ca > 0.0))
-        return 0.0; /* the facet faces away from e_i */
-    double sb2 = (1.0 - ca * ca) / (n * n);
-    if (!(sb2 < 1.0))
-        return 0.0; /* total internal reflection on this facet */
-    double cb = sqrt(1.0 - sb2);
-    /* e_o = -e_i/n + (ca/n - cb) h; only its z component and |sin to| matter. */
-    double g = ca / n - cb;
-    double oz = -cti / n + g * ctn;
-    if (!(oz < 0.0))
-        return 0.0; /* refracted back into the upper hemisphere */
-    double oz2 = oz * oz;
+    facet_ray r;
+    if (!facet_refract(n, sti, cti, stn, ctn, cpsi, 0.0, &r))
+        return 0.0;
+    /* only e_o's z component and |sin to| matter here */
+    double oz2 = r.oz * r.oz;
     double st2 = 1.0 - oz2;
-    double tan_to = st2 > 0.0 ? sqrt(st2) / -oz : 0.0; /* -oz > 0 checked above */
-    double d1 = ca + n * cb, d2 = n * ca + cb;
-    double ft = 2.0 * n * ca * cb * (1.0 / (d1 * d1) + 1.0 / (d2 * d2));
-    return ca * ft * shadow_v(tan_to, s, k0) / ctn;
+    double tan_to = st2 > 0.0 ? sqrt(st2) / -r.oz : 0.0; /* -oz > 0 after facet_refract */
+    double d1 = r.ca + n * r.cb, d2 = n * r.ca + r.cb;
+    double ft = 2.0 * n * r.ca * r.cb * (1.0 / (d1 * d1) + 1.0 / (d2 * d2));
+    return r.ca * ft * shadow_v(tan_to, s, k0) / ctn;
 }
 
 /* Composite Gauss-Legendre of f over [a, b] in `panels` panels, f(x) = facet sum. */

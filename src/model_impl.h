@@ -6,6 +6,8 @@
 #include <float.h>
 #include <math.h>
 
+#include "btdf.h"
+
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif
@@ -102,6 +104,39 @@ static inline double rho_kernel(double n, double s, const rho_in *a, const rho_o
     double eo_v = b->sin_to * (cos_phi * vx + sin_phi * vy) + b->cos_to * vz;
     return rho_kernel_v(n, s, a, b, vx, vy, vz, ei_v, eo_v);
 }
+
+/* Refraction of e_i = (sin ti, 0, cos ti) through the facet with normal
+   h = (sin tn cos psi, sin tn sin psi, cos tn): e_o = -e_i/n + (cos a/n - cos b) h.
+   1 with the two cosines and e_o when the facet refracts e_i into the lower
+   hemisphere; 0 when it faces away (cos a <= 0), reflects totally (sin a >= n), or
+   sends the ray back up (e_o,z >= 0). */
+typedef struct facet_ray {
+    double ca, cb, ox, oy, oz;
+} facet_ray;
+
+static inline int facet_refract(double n, double sti, double cti, double stn, double ctn,
+                                double cpsi, double spsi, facet_ray *r)
+{
+    double ca = stn * cpsi * sti + ctn * cti;
+    if (!(ca > 0.0))
+        return 0; /* the facet faces away from e_i */
+    double sb2 = (1.0 - ca * ca) / (n * n);
+    if (!(sb2 < 1.0))
+        return 0; /* total internal reflection on this facet */
+    double cb = sqrt(1.0 - sb2);
+    if (!(cb > 0.0))
+        return 0; /* grazing on the facet: no transmitted direction */
+    double g = ca / n - cb;
+    r->ca = ca;
+    r->cb = cb;
+    r->ox = -sti / n + g * stn * cpsi;
+    r->oy = g * stn * spsi;
+    r->oz = -cti / n + g * ctn;
+    return r->oz < 0.0; /* refracted back into the upper hemisphere otherwise */
+}
+
+/* Writes a formatted message to msg (if any) and returns st. */
+btdf_status btdf_say(btdf_status st, char *msg, size_t msglen, const char *fmt, ...);
 
 /* sin and cos of an angle in degrees, exact at multiples of 90 degrees, for tools
    and tests that speak degrees: reduces to [-45, 45] before converting. */

@@ -27,16 +27,7 @@ static const plot_rgb palette[BTDF_PREVIEW_MAX_CURVES] = {
     {130, 80, 190}, {120, 80, 40}, {220, 80, 170}, {90, 90, 90},
 };
 
-static btdf_status say(btdf_status st, char *msg, size_t msglen, const char *fmt, ...)
-{
-    if (msg && msglen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, msglen, fmt, ap);
-        va_end(ap);
-    }
-    return st;
-}
+#define say btdf_say /* model_impl.h */
 
 static const char *channel_name(int channels)
 {

@@ -81,30 +81,20 @@ int facet_eval(double n, double s, double k0, const rho_in *a, double stn, doubl
 {
     g->rho = 0.0;
     g->weight = 0.0;
-    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
-    if (!(ca > 0.0))
-        return 0; /* the facet faces away from e_i */
-    double sb2 = (1.0 - ca * ca) / (n * n);
-    if (!(sb2 < 1.0))
-        return 0; /* total internal reflection on this facet */
-    double cb = sqrt(1.0 - sb2);
-    double gg = ca / n - cb;
-    double ox = -a->sin_ti / n + gg * stn * cpsi;
-    double oy = gg * stn * spsi;
-    double oz = -a->cos_ti / n + gg * ctn;
-    if (!(oz < 0.0) || !(cb > 0.0))
-        return 0; /* refracted into the upper hemisphere, or grazing on the facet */
-    double st = sqrt(ox * ox + oy * oy);
+    facet_ray r;
+    if (!facet_refract(n, a->sin_ti, a->cos_ti, stn, ctn, cpsi, spsi, &r))
+        return 0;
+    double st = sqrt(r.ox * r.ox + r.oy * r.oy);
     g->sin_to = st;
-    g->cos_to = oz;
+    g->cos_to = r.oz;
     /* e_o on the axis: phi is undefined and does not matter, take phi = 0. */
-    g->cos_phi = st > 0.0 ? ox / st : 1.0;
-    g->sin_phi = st > 0.0 ? oy / st : 0.0;
+    g->cos_phi = st > 0.0 ? r.ox / st : 1.0;
+    g->sin_phi = st > 0.0 ? r.oy / st : 0.0;
     rho_out b;
-    rho_out_init(&b, st, oz, s, k0);
+    rho_out_init(&b, st, r.oz, s, k0);
     g->rho = rho_kernel(n, s, a, &b, g->cos_phi, g->sin_phi);
-    double d = ca - n * cb; /* |v| with v = e_i + n e_o = (ca - n cb) h; != 0 for n != 1 */
-    g->weight = -oz * d * d / (n * n * cb);
+    double d = r.ca - n * r.cb; /* |v| with v = e_i + n e_o = (ca - n cb) h; != 0 for n != 1 */
+    g->weight = -r.oz * d * d / (n * n * r.cb);
     return 1;
 }
 
