@@ -52,7 +52,7 @@ typedef enum {
 /* Builds the nodes and coefficients from Eq. 25 (not from a table) for the sides
    asked (BTDF_SIDE_BOTH is the usual choice), refining the elevation nodes and each
    pair's series until midpoint checks against Eq. 25 pass and then an internal
-   btdf_scatfun_report (24 angles x 32768 points, its own fixed seed) finds e_L1 (MODEL.md 6)
+   btdf_scatfun_report (24 angles x 8192 points, its own fixed seed) finds e_L1 (MODEL.md 6)
    at most `tolerance` on every side built. threads: 0 = all cores, 1 = none;
    the result is byte-identical for any thread count.
    BTDF_OK when the tolerance was met; BTDF_EBUDGET when the node or series budget
@@ -114,7 +114,8 @@ BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double 
 
 /* Error of the file's evaluation (mode DIRECT) against Eq. 25 for one side (ENTER or
    LEAVE), MODEL.md section 6: test_angles stratified incident angles in [0, pi/2)
-   (0 = 24) with about points_per_angle stratified (mu_f, phi) points each (0 = 32768),
+   (0 = 24) with points_per_angle facet-space points each (0 = 8192) plus 4096 uniform
+   directions, combined as btdf_table_estimate does,
    from the seed. p gives the truth (channel count must match the file). Fills *r
    (zero it first; r->per_ti is malloc'd and owned by the report: free it with
    btdf_report_clear or free()). seconds_build is the build time (0 for a read
