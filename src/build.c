@@ -777,7 +777,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     }
     /* Split the tolerance between slice interpolation and incidence blending, check
        the result with an independent estimate, and tighten while it falls short. */
-    double fs = 0.8, ft = 0.8;
+    double fs = 0.8, ft = 0.6;
     int budget_hit = 0, met = 0;
     size_t peak = 0;
     for (int pass = 0; pass < 5; pass++) {
