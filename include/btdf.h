@@ -201,6 +201,9 @@ typedef struct btdf_table_opts {
     size_t max_samples;     /* node budget, 0 = default 5e7 */
     size_t max_bytes;       /* memory cap for the node values, 0 = default 1 GiB */
     int threads;            /* 0 = all cores */
+    double to_min, to_max;  /* GRID: outgoing range, radians within [pi/2, pi] */
+    double phi_min, phi_max; /* GRID: azimuth range, radians within [0, pi] (rho depends
+                               on cos phi only, so [0, pi] holds every azimuth) */
 } btdf_table_opts;
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o);

@@ -24,6 +24,10 @@ BTDF_API void btdf_table_opts_default(btdf_table_opts *o)
     o->max_samples = 0;
     o->max_bytes = 0;
     o->threads = 0;
+    o->to_min = M_PI / 2;
+    o->to_max = M_PI;
+    o->phi_min = 0.0;
+    o->phi_max = M_PI;
 }
 
 #define DEFAULT_MAX_SAMPLES ((size_t)8000000)
@@ -57,6 +61,12 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
         if (o->grid_phi < 2 || o->grid_phi > 100000)
             return bad(msg, msglen, "grid phi count %g: must lie in [2, 100000]",
                        (double)o->grid_phi);
+        if (!(o->to_min >= M_PI / 2 && o->to_min < o->to_max && o->to_max <= M_PI))
+            return bad(msg, msglen, "theta-o range starting at %g deg: need 90 <= A < B <= 180",
+                       o->to_min * 180 / M_PI);
+        if (!(o->phi_min >= 0.0 && o->phi_min < o->phi_max && o->phi_max <= M_PI))
+            return bad(msg, msglen, "phi range starting at %g deg: need 0 <= A < B <= 180 "
+                                    "(rho depends on cos phi only)", o->phi_min * 180 / M_PI);
         if (o->grid_ti > 1 && !(o->ti_max > o->ti_min))
             return bad(msg, msglen, "theta-i range of width %g: several grid slices need "
                                     "start < end", o->ti_max - o->ti_min);
@@ -152,9 +162,9 @@ static btdf_status build_grid(const btdf_table_opts *o, btdf_table *t, char *msg
             break;
         }
         for (size_t i = 0; i < nr; i++)
-            s[k].rows[i] = M_PI / 2 + (M_PI / 2) * (double)i / (double)(nr - 1);
+            s[k].rows[i] = o->to_min + (o->to_max - o->to_min) * (double)i / (double)(nr - 1);
         for (size_t j = 0; j < nc; j++)
-            s[k].cols[j] = M_PI * (double)j / (double)(nc - 1);
+            s[k].cols[j] = o->phi_min + (o->phi_max - o->phi_min) * (double)j / (double)(nc - 1);
     }
     if (st == BTDF_OK) {
         grid_job g = {o, s};

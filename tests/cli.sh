@@ -46,6 +46,10 @@ awk -v x="$x" -v y="$y" 'BEGIN { d = x - y; if (d < 0) d = -d; exit !(d < 0.05 *
     ok "eval --table close to Eq. 25 ($x vs $y)" || no "eval --table: $x vs $y"
 rm -f "$W"/a.* "$W"/g.*
 
+"$B" tabulate -q --grid 3,5,4 --theta-i 10:30 --theta-o 150:170 --phi 90:180 -o - | \
+    awk -F, '!/^#/ && NR > 1 && $1 != "theta_i_deg" { if ($1 < 10 || $1 > 30 || $2 < 150 || $2 > 170 || $3 < 90) bad = 1; n++ }
+             END { exit !(n == 60 && !bad) }' && ok "grid ranges for theta-i, theta-o and phi" || no "grid ranges"
+
 # bad runs: status 2 for usage, 1 for failures, 3 for a missed tolerance; nothing written
 expect 2 "unknown option" "unknown flag" -- "$B" tabulate --frobnicate -o "$W/t.csv"
 expect 2 "n = 1 has no BTDF" "n = 1" -- "$B" tabulate --ior 1 -o "$W/t.csv"
@@ -61,6 +65,8 @@ expect 2 "line 2" "bad stdin row" -- sh -c "printf '30 150 180\n30 x 180\n' | '$
 expect 2 "theta-i" "bad --theta-i" -- "$B" tabulate --theta-i 50:10 -o "$W/t.csv"
 expect 2 "tolerance" "bad tolerance" -- "$B" tabulate --tolerance 0 -o "$W/t.csv"
 expect 2 "grid" "bad grid" -- "$B" tabulate --grid 3,x,4 -o "$W/t.csv"
+expect 2 "need 90 <= A < B <= 180" "bad theta-o range" -- "$B" tabulate --grid 3,4,4 --theta-o 60:120 -o "$W/t.csv"
+expect 2 "apply to --grid" "theta-o without --grid" -- "$B" tabulate --theta-o 100:120 -o "$W/t.csv"
 expect 2 "unknown output format" "unknown extension" -- "$B" tabulate -o "$W/t.xyz"
 expect 1 "No such file" "unwritable output" -- "$B" tabulate -q --grid 2,3,3 -o "$W/none/t.csv"
 expect 3 "TOLERANCE NOT MET" "budget exhausted" -- "$B" tabulate --tolerance 1e-5 --max-samples 20000 -o "$W/t.csv"

@@ -89,6 +89,9 @@ static void usage(FILE *f, int verbose)
             "  --side S             enter (index n, default), leave (index 1/n); for .bsdf\n"
             "                       also both (the default there)\n"
             "  --theta-i A:B        incidence range in degrees (default 0:90)\n"
+            "  --theta-o A:B        --grid only: outgoing range, within 90:180 (default)\n"
+            "  --phi A:B            --grid only: azimuth range, within 0:180 (default; rho\n"
+            "                       depends on cos phi, so 0:180 holds every azimuth)\n"
             "  --max-samples N      node budget (default 8000000)\n"
             "  --max-memory MIB     memory cap for the nodes (default 256)\n"
             "  --threads N          worker threads, 0 = all cores (default 0)\n"
@@ -464,19 +467,22 @@ static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
 /* Seed of the reported estimate; the builder checks itself with a different one. */
 #define REPORT_SEED 20081231u
 
-static int parse_range(const char *s, double *a, double *b)
+/* A:B in degrees within [lo, hi], A <= B (A < B when strict). */
+static int parse_range(const char *flag, const char *s, double lo, double hi, int strict,
+                       double *a, double *b)
 {
     const char *colon = strchr(s, ':');
     if (!colon) {
-        fail(EXIT_USAGE, "--theta-i: '%s': expected A:B in degrees, e.g. 0:60", s);
+        fail(EXIT_USAGE, "%s: '%s': expected A:B in degrees, e.g. %g:%g", flag, s, lo, hi);
         return 0;
     }
     char buf[128];
     snprintf(buf, sizeof buf, "%.*s", (int)(colon - s), s);
-    if (!parse_double("--theta-i", buf, a) || !parse_double("--theta-i", colon + 1, b))
+    if (!parse_double(flag, buf, a) || !parse_double(flag, colon + 1, b))
         return 0;
-    if (!(*a >= 0.0 && *b <= 90.0 && *a <= *b)) {
-        fail(EXIT_USAGE, "--theta-i: '%s': need 0 <= A <= B <= 90 degrees", s);
+    if (!(*a >= lo && *b <= hi && (strict ? *a < *b : *a <= *b))) {
+        fail(EXIT_USAGE, "%s: '%s': need %g <= A %s B <= %g degrees", flag, s, lo,
+             strict ? "<" : "<=", hi);
         return 0;
     }
     return 1;
@@ -621,7 +627,8 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     const char *out = NULL, *report = NULL;
     int best_effort = 0, npreview = 0, pic_w = 0, pic_h = 0, sides = 0, theta_given = 0;
     preview_req previews[MAX_PREVIEWS];
-    double ti0 = 0.0, ti1 = 90.0;
+    double ti0 = 0.0, ti1 = 90.0, to0 = 90.0, to1 = 180.0, ph0 = 0.0, ph1 = 180.0;
+    int grid_range = 0;
     size_t mib = 256;
     for (int i = 1; i < argc; i++) {
         int r = common_opt(&c, argc, argv, &i);
@@ -665,9 +672,21 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         } else if (!strcmp(a, "--theta-i")) {
             if (!has)
                 return fail(EXIT_USAGE, "%s: missing value", a);
-            if (!parse_range(argv[++i], &ti0, &ti1))
+            if (!parse_range(a, argv[++i], 0.0, 90.0, 0, &ti0, &ti1))
                 return EXIT_USAGE;
             theta_given = 1;
+        } else if (!strcmp(a, "--theta-o")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            if (!parse_range(a, argv[++i], 90.0, 180.0, 1, &to0, &to1))
+                return EXIT_USAGE;
+            grid_range = 1;
+        } else if (!strcmp(a, "--phi")) {
+            if (!has)
+                return fail(EXIT_USAGE, "%s: missing value", a);
+            if (!parse_range(a, argv[++i], 0.0, 180.0, 1, &ph0, &ph1))
+                return EXIT_USAGE;
+            grid_range = 1;
         } else if (!strcmp(a, "--max-samples")) {
             if (!has)
                 return fail(EXIT_USAGE, "%s: missing value", a);
@@ -756,10 +775,17 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     if (npreview > 0 && !BTDF_HAVE_PNG)
         return fail(1, "%s: PNG support was switched off at build time (-Dpng=disabled)",
                     previews[0].path);
+    if (grid_range && o.kind != BTDF_TABLE_GRID)
+        return fail(EXIT_USAGE, "--theta-o and --phi apply to --grid tables (an adaptive table "
+                                "covers every outgoing direction)");
     o.params = c.p;
     o.threads = c.threads;
     o.ti_min = ti0 * M_PI / 180.0;
     o.ti_max = ti1 * M_PI / 180.0;
+    o.to_min = to0 * M_PI / 180.0;
+    o.to_max = to1 * M_PI / 180.0;
+    o.phi_min = ph0 * M_PI / 180.0;
+    o.phi_max = ph1 * M_PI / 180.0;
     o.max_bytes = mib << 20;
     char msg[512] = "";
     btdf_table *t = NULL;
