@@ -258,6 +258,8 @@ typedef struct btdf_report {
     int met;                     /* 1 when the chosen metric's max <= tolerance */
     size_t peak_bytes;           /* memory the build held at its peak */
     btdf_ti_error *per_ti;       /* test_angles entries, owned by the report */
+    size_t e_max_angles;         /* test angles with T >= 0.01, where e_max is defined;
+                                    e_max_* are 0 when there are none */
 } btdf_report;
 
 /* Estimates the errors of t over [ti_min, ti_max] at test_angles stratified incident

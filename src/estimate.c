@@ -199,8 +199,12 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
         r->e_max_max = fmax(r->e_max_max, e->e_max);
         r->e_l1_mean += e->e_l1 / (double)test_angles;
         r->e_t_mean += e->e_t / (double)test_angles;
-        r->e_max_mean += e->e_max / (double)test_angles;
+        if (e->T >= 0.01)
+            r->e_max_angles++;
     }
+    for (size_t k = 0; k < test_angles; k++) /* e_max's mean is over the angles it has */
+        if (j.res[k].T >= 0.01)
+            r->e_max_mean += j.res[k].e_max / (double)r->e_max_angles;
     free(j.points);
     r->seconds_estimate = btdf_now() - t0;
     return BTDF_OK;

@@ -450,7 +450,8 @@ static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
             r->test_points);
     fprintf(f, "  \"peak_bytes\": %zu,\n", r->peak_bytes);
     fprintf(f, "  \"e_l1\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_l1_max, r->e_l1_mean);
-    fprintf(f, "  \"e_max\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_max_max, r->e_max_mean);
+    fprintf(f, "  \"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n", r->e_max_max,
+            r->e_max_mean, r->e_max_angles);
     fprintf(f, "  \"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_t_max, r->e_t_mean);
     fprintf(f, "  \"per_theta_i\": [\n");
     for (size_t k = 0; k < r->test_angles; k++) {
@@ -809,13 +810,18 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     r.metric = o.metric;
     double e = o.metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max;
     r.met = o.kind == BTDF_TABLE_GRID ? 1 : e <= o.tolerance;
+    char emax[96];
+    if (r.e_max_angles)
+        snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", r.e_max_max, r.e_max_mean);
+    else
+        snprintf(emax, sizeof emax, "e_max n/a (T < 0.01 at every test angle)");
     if (!c.quiet)
         fprintf(stderr,
                 "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
-                "(%zu angles, %zu points); e_L1 max %.3g mean %.3g; e_max max %.3g mean %.3g; "
+                "(%zu angles, %zu points); e_L1 max %.3g mean %.3g; %s; "
                 "e_T max %.3g mean %.3g; peak memory %.1f MiB%s\n",
                 prog, r.slices, r.samples, r.seconds_build, r.seconds_estimate, r.test_angles,
-                r.test_points, r.e_l1_max, r.e_l1_mean, r.e_max_max, r.e_max_mean, r.e_t_max,
+                r.test_points, r.e_l1_max, r.e_l1_mean, emax, r.e_t_max,
                 r.e_t_mean, (double)r.peak_bytes / 1048576.0,
                 o.kind == BTDF_TABLE_GRID ? "" : (r.met ? "; tolerance met" : "; TOLERANCE NOT MET"));
     int code = 0;
