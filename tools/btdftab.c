@@ -457,7 +457,7 @@ static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
     for (size_t k = 0; k < r->test_angles; k++) {
         const btdf_ti_error *e = &r->per_ti[k];
         fprintf(f,
-                "    {\"theta_i_deg\": %.6f, \"T\": %.9f, \"T_table\": %.9f, \"e_l1\": %.6g, "
+                "    {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_table\": %.9g, \"e_l1\": %.6g, "
                 "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
                 e->ti * 180 / M_PI, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
                 k + 1 < r->test_angles ? "," : "");
