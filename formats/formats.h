@@ -30,8 +30,8 @@ typedef struct btdf_format_ops {
 /* The format a path's extension names (case-insensitive), or NULL if none. */
 const btdf_format_ops *btdf_format_for_path(const char *path);
 
-/* Writes path through write_path/write_stream under a temporary name and renames;
-   removes the temporary file on failure and on SIGINT/SIGTERM. */
+/* Writes path through write_path/write_stream under a temporary name and renames
+   (src/tmpfile.h); on failure nothing is left at path. */
 btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c,
                               const char *path, char *msg, size_t msglen);
 

@@ -2,13 +2,12 @@
 /* registry.c: finds a format by extension and writes files atomically. */
 #include <ctype.h>
 #include <errno.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "formats.h"
+#include "tmpfile.h"
 
 static const btdf_format_ops *const all_formats[] = {&btdf_format_csv, &btdf_format_exr};
 
@@ -43,16 +42,31 @@ BTDF_API int btdf_format_available(const char *ext)
     return f && f->available;
 }
 
-/* The temporary file being written, removed if a signal ends the process. */
-static char pending_tmp[4096];
-static volatile sig_atomic_t pending_set;
+typedef struct reg_ctx {
+    const btdf_format_ops *f;
+    const btdf_output_ctx *c;
+} reg_ctx;
 
-static void on_signal(int sig)
+static btdf_status reg_write(void *ctx, const char *tmp, char *msg, size_t msglen)
 {
-    if (pending_set)
-        unlink(pending_tmp); /* async-signal-safe */
-    signal(sig, SIG_DFL);
-    raise(sig);
+    const reg_ctx *r = ctx;
+    if (r->f->write_path)
+        return r->f->write_path(r->c, tmp, msg, msglen);
+    FILE *fp = fopen(tmp, "wb");
+    if (!fp) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "cannot create %s: %s", tmp, strerror(errno));
+        return BTDF_EIO;
+    }
+    btdf_status st = r->f->write_stream(r->c, fp, msg, msglen);
+    int bad = fflush(fp) != 0 || ferror(fp);
+    bad |= fclose(fp) != 0;
+    if (st == BTDF_OK && bad) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "writing %s failed: %s", tmp, strerror(errno));
+        st = BTDF_EIO;
+    }
+    return st;
 }
 
 btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c,
@@ -64,60 +78,8 @@ btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c
                      f->name, f->feature ? f->feature : f->name);
         return BTDF_ENOTSUP;
     }
-    if (strlen(path) + 16 >= sizeof pending_tmp) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "path is longer than %zu bytes", sizeof pending_tmp - 16);
-        return BTDF_EINVAL;
-    }
-    /* The temporary name keeps the extension: some writers choose by it. */
-    const char *base = strrchr(path, '/');
-    base = base ? base + 1 : path;
-    char tmp[sizeof pending_tmp];
-    snprintf(tmp, sizeof tmp, "%.*s.%s.tmp%ld%s", (int)(base - path), path, base,
-             (long)getpid(), f->ext);
-    struct sigaction sa, old_int, old_term;
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    memcpy(pending_tmp, tmp, sizeof tmp);
-    pending_set = 1;
-    sigaction(SIGINT, &sa, &old_int);
-    sigaction(SIGTERM, &sa, &old_term);
-    btdf_status st;
-    if (f->write_path) {
-        st = f->write_path(c, tmp, msg, msglen);
-    } else {
-        FILE *fp = fopen(tmp, "wb");
-        if (!fp) {
-            if (msg && msglen)
-                snprintf(msg, msglen, "cannot create %s: %s", tmp, strerror(errno));
-            st = BTDF_EIO;
-        } else {
-            st = f->write_stream(c, fp, msg, msglen);
-            if (fflush(fp) != 0 || ferror(fp)) {
-                if (st == BTDF_OK && msg && msglen)
-                    snprintf(msg, msglen, "writing %s failed: %s", tmp, strerror(errno));
-                if (st == BTDF_OK)
-                    st = BTDF_EIO;
-            }
-            if (fclose(fp) != 0 && st == BTDF_OK) {
-                if (msg && msglen)
-                    snprintf(msg, msglen, "closing %s failed: %s", tmp, strerror(errno));
-                st = BTDF_EIO;
-            }
-        }
-    }
-    if (st == BTDF_OK && rename(tmp, path) != 0) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "cannot rename to %s: %s", path, strerror(errno));
-        st = BTDF_EIO;
-    }
-    if (st != BTDF_OK)
-        unlink(tmp);
-    pending_set = 0;
-    sigaction(SIGINT, &old_int, NULL);
-    sigaction(SIGTERM, &old_term, NULL);
-    return st;
+    reg_ctx r = {f, c};
+    return btdf_write_file_atomic(path, f->ext, reg_write, &r, msg, msglen);
 }
 
 BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,

@@ -9,13 +9,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "btdf.h"
 #include "btdf_scatfun.h"
 #include "table_impl.h"
+#include "tmpfile.h"
 #include "model_impl.h"
 
 /* Layout constants of SCATFUN v1 (docs/scatfun.md). */
@@ -1772,56 +1772,13 @@ BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
     btdf_status st = btdf_scatfun_to_mem(f, metadata_json, &b, &len, msg, msglen);
     if (st != BTDF_OK)
         return st;
-    size_t pl = strlen(path);
-    char *tmp = malloc(pl + 16);
-    if (!tmp) {
-        free(b);
-        return say(msg, msglen, BTDF_ENOMEM, "out of memory");
-    }
-    memcpy(tmp, path, pl);
-    memcpy(tmp + pl, ".tmp.XXXXXX", 12);
-    int fd = mkstemp(tmp);
-    if (fd < 0) {
-        st = say(msg, msglen, BTDF_EIO, "%s: cannot create a temporary file: %s", path,
-                 strerror(errno));
-        free(tmp);
-        free(b);
-        return st;
-    }
-    /* mkstemp makes the file private; give it the permissions of an ordinary file */
-    if (fchmod(fd, 0644) != 0) {
-        /* not fatal: the file is still correct, only more private */
-    }
-    FILE *fp = fdopen(fd, "wb");
-    if (!fp) {
-        st = say(msg, msglen, BTDF_EIO, "%s: %s", path, strerror(errno));
-        close(fd);
-        unlink(tmp);
-        free(tmp);
-        free(b);
-        return st;
-    }
-    size_t wrote = fwrite(b, 1, len, fp);
-    int werr = wrote != len || fflush(fp) != 0;
-    int cerr = fclose(fp) != 0;
-    if (werr || cerr) {
-        st = say(msg, msglen, BTDF_EIO, "%s: write failed: %s", path, strerror(errno));
-        unlink(tmp);
-        free(tmp);
-        free(b);
-        return st;
-    }
-    if (rename(tmp, path) != 0) {
-        st = say(msg, msglen, BTDF_EIO, "%s: cannot rename the temporary file: %s", path,
-                 strerror(errno));
-        unlink(tmp);
-        free(tmp);
-        free(b);
-        return st;
-    }
-    free(tmp);
+    btdf_bytes bytes = {b, len};
+    char why[256] = "";
+    st = btdf_write_file_atomic(path, ".bsdf", btdf_write_bytes, &bytes, why, sizeof why);
+    if (st != BTDF_OK)
+        say(msg, msglen, st, "%s: %s", path, why);
     free(b);
-    return BTDF_OK;
+    return st;
 }
 
 #define FMT_FAIL(...) say(msg, msglen, BTDF_EFORMAT, __VA_ARGS__)

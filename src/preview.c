@@ -6,10 +6,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "btdf_preview.h"
 #include "model_impl.h"
+#include "tmpfile.h"
 #include "plot.h"
 #include "png_impl.h"
 
@@ -644,6 +644,20 @@ BTDF_API void btdf_preview_free(unsigned char *rgb)
     free(rgb);
 }
 
+#if BTDF_HAVE_PNG
+typedef struct png_job {
+    const unsigned char *rgb;
+    int w, h;
+    const char *what;
+} png_job;
+
+static btdf_status png_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
+{
+    const png_job *j = ctx;
+    return btdf_png_write_rgb(tmp, j->rgb, j->w, j->h, j->what, msg, msglen);
+}
+#endif
+
 BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *path,
                                         char *msg, size_t msglen)
 {
@@ -659,23 +673,12 @@ BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *
     btdf_status st = btdf_preview_render(o, &rgb, &w, &h, msg, msglen);
     if (st != BTDF_OK)
         return st;
-    size_t len = strlen(path) + 32;
-    char *tmp = malloc(len);
-    if (!tmp) {
-        btdf_preview_free(rgb);
-        return say(BTDF_ENOMEM, msg, msglen, "out of memory");
-    }
-    snprintf(tmp, len, "%s.%ld.tmp", path, (long)getpid());
     static const char *const what[3] = {"btdftab polar plot of rho |cos to|",
                                         "btdftab montage of table slices",
                                         "btdftab render of a rough face"};
-    st = btdf_png_write_rgb(tmp, rgb, w, h, what[o->kind], msg, msglen);
+    png_job job = {rgb, w, h, what[o->kind]};
+    st = btdf_write_file_atomic(path, ".png", png_writer, &job, msg, msglen);
     btdf_preview_free(rgb);
-    if (st == BTDF_OK && rename(tmp, path) != 0)
-        st = say(BTDF_EIO, msg, msglen, "cannot rename the finished file into place");
-    if (st != BTDF_OK)
-        remove(tmp);
-    free(tmp);
     return st;
 #endif
 }

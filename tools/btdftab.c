@@ -5,6 +5,7 @@
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <signal.h>
 #include <string.h>
 #include <sys/resource.h>
 #include <time.h>
@@ -14,6 +15,7 @@
 #include "formats.h"
 #include "manifest.h"
 #include "table_impl.h"
+#include "tmpfile.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -538,20 +540,38 @@ static int parse_picture_size(const char *s, int *w, int *h)
     return 1;
 }
 
+typedef struct json_job {
+    const btdf_table_opts *o;
+    btdf_table_kind kind;
+    const btdf_report *r;
+    const char *prov;
+} json_job;
+
+static btdf_status json_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
+{
+    const json_job *j = ctx;
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        snprintf(msg, msglen, "cannot create: %s", strerror(errno));
+        return BTDF_EIO;
+    }
+    json_report(f, j->o, j->kind, j->r, j->prov);
+    int bad = ferror(f);
+    bad |= fclose(f) != 0;
+    if (bad) {
+        snprintf(msg, msglen, "writing failed: %s", strerror(errno));
+        return BTDF_EIO;
+    }
+    return BTDF_OK;
+}
+
 static int write_text_atomic(const char *path, const btdf_table_opts *o, btdf_table_kind kind,
                              const btdf_report *r, const char *prov)
 {
-    char tmp[4200];
-    snprintf(tmp, sizeof tmp, "%s.tmp%ld", path, (long)getpid());
-    FILE *f = fopen(tmp, "w");
-    if (!f)
-        return fail(1, "%s: cannot create: %s", path, strerror(errno));
-    json_report(f, o, kind, r, prov);
-    int bad = ferror(f);
-    if (fclose(f) != 0 || bad || rename(tmp, path) != 0) {
-        unlink(tmp);
-        return fail(1, "%s: writing failed: %s", path, strerror(errno));
-    }
+    json_job j = {o, kind, r, prov};
+    char msg[512] = "";
+    if (btdf_write_file_atomic(path, ".json", json_writer, &j, msg, sizeof msg) != BTDF_OK)
+        return fail(1, "%s: %s", path, msg);
     return 0;
 }
 
@@ -1030,8 +1050,24 @@ static int cmd_build(int argc, char **argv)
     return manifest_run(&mo);
 }
 
+/* SIGINT, SIGTERM, SIGHUP: remove the files being written, then die of the signal, so
+   an interrupted run leaves no partial output (make and shells see the signal). */
+static void on_signal(int sig)
+{
+    btdf_tmp_remove_all(); /* async-signal-safe: flags and unlink */
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
 int main(int argc, char **argv)
 {
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    sigaction(SIGHUP, &sa, NULL);
     if (argc < 2) {
         usage(stderr, 0);
         return EXIT_USAGE;

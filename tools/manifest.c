@@ -12,6 +12,7 @@
 #include "btdf.h"
 #include "formats.h"
 #include "manifest.h"
+#include "tmpfile.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -245,19 +246,10 @@ static int up_to_date(const char *out, const char *stamp)
 
 static int write_stamp(const char *out, const char *stamp)
 {
-    char sp[4200], tmp[4300];
+    char sp[4200];
     stamp_path(sp, sizeof sp, out);
-    snprintf(tmp, sizeof tmp, "%s.tmp%ld", sp, (long)getpid());
-    FILE *f = fopen(tmp, "w");
-    if (!f)
-        return 0;
-    int ok = fputs(stamp, f) >= 0;
-    ok = (fclose(f) == 0) && ok;
-    if (!ok || rename(tmp, sp) != 0) {
-        unlink(tmp);
-        return 0;
-    }
-    return 1;
+    btdf_bytes b = {stamp, strlen(stamp)};
+    return btdf_write_file_atomic(sp, NULL, btdf_write_bytes, &b, NULL, 0) == BTDF_OK;
 }
 
 static int fail(const char *prog, const char *fmt, const char *a, const char *b)

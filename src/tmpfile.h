@@ -1,0 +1,38 @@
+/* SPDX-License-Identifier: MIT */
+/* tmpfile.h: temporary names of files being written, removable from a signal handler. */
+#ifndef BTDF_TMPFILE_H
+#define BTDF_TMPFILE_H
+
+#include <stddef.h>
+
+#include "btdf.h"
+
+/* Writes into tmp a temporary name beside path, ending in ext (may be NULL), and
+   records it as being written. Returns the slot to pass to btdf_tmp_end (>= 0); -1
+   when it could not be recorded (tmp usable, just not removed on a signal); -2 when
+   the name does not fit in tmplen (tmp unusable). */
+int btdf_tmp_begin(const char *path, const char *ext, char *tmp, size_t tmplen);
+
+/* The write of that slot has ended (renamed or removed). */
+void btdf_tmp_end(int slot);
+
+/* Removes every file being written; async-signal-safe, for signal handlers. */
+void btdf_tmp_remove_all(void);
+
+/* Writes the file at tmp (a temporary name); BTDF_OK or an error with msg set. */
+typedef btdf_status (*btdf_file_writer)(void *ctx, const char *tmp, char *msg, size_t msglen);
+
+/* Writes path through writer under a recorded temporary name ending in ext and
+   renames it into place; on any error the temporary file is removed and nothing is
+   left at path. */
+btdf_status btdf_write_file_atomic(const char *path, const char *ext, btdf_file_writer writer,
+                                   void *ctx, char *msg, size_t msglen);
+
+/* A writer for bytes in memory: ctx is a btdf_bytes. */
+typedef struct btdf_bytes {
+    const void *data;
+    size_t len;
+} btdf_bytes;
+btdf_status btdf_write_bytes(void *ctx, const char *tmp, char *msg, size_t msglen);
+
+#endif
