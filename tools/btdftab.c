@@ -639,6 +639,19 @@ int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int 
     return code;
 }
 
+/* The options of tabulate that take a value. */
+static int takes_value(const char *a)
+{
+    static const char *const with[] = {"-o", "--output", "--tolerance", "--metric", "--grid",
+                                       "--theta-i", "--theta-o", "--phi", "--max-samples",
+                                       "--max-memory", "--report", "--side", "--preview",
+                                       "--size"};
+    for (size_t k = 0; k < sizeof with / sizeof with[0]; k++)
+        if (!strcmp(a, with[k]))
+            return 1;
+    return 0;
+}
+
 static int cmd_tabulate(int argc, char **argv, const char *prov)
 {
     common c = {0};
@@ -658,19 +671,14 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         if (r)
             continue;
         const char *a = argv[i];
-        int has = i + 1 < argc;
+        if (takes_value(a) && i + 1 >= argc)
+            return fail(EXIT_USAGE, "%s: missing value", a);
         if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             out = argv[++i];
         } else if (!strcmp(a, "--tolerance")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             if (!parse_double(a, argv[++i], &o.tolerance))
                 return EXIT_USAGE;
         } else if (!strcmp(a, "--metric")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             const char *m = argv[++i];
             if (!strcmp(m, "l1"))
                 o.metric = BTDF_METRIC_L1;
@@ -679,8 +687,6 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             else
                 return fail(EXIT_USAGE, "--metric: '%s': must be l1 or max", m);
         } else if (!strcmp(a, "--grid")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             const char *g = argv[++i];
             unsigned long x, y, z;
             char tail;
@@ -691,42 +697,28 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             o.grid_to = y;
             o.grid_phi = z;
         } else if (!strcmp(a, "--theta-i")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             if (!parse_range(a, argv[++i], 0.0, 90.0, 0, &ti0, &ti1))
                 return EXIT_USAGE;
             theta_given = 1;
         } else if (!strcmp(a, "--theta-o")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             if (!parse_range(a, argv[++i], 90.0, 180.0, 1, &to0, &to1))
                 return EXIT_USAGE;
             grid_range = 1;
         } else if (!strcmp(a, "--phi")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             if (!parse_range(a, argv[++i], 0.0, 180.0, 1, &ph0, &ph1))
                 return EXIT_USAGE;
             grid_range = 1;
         } else if (!strcmp(a, "--max-samples")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             if (!parse_size(a, argv[++i], 1000, (size_t)1 << 40, &o.max_samples))
                 return EXIT_USAGE;
         } else if (!strcmp(a, "--max-memory")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             if (!parse_size(a, argv[++i], 1, 1u << 20, &mib))
                 return EXIT_USAGE;
         } else if (!strcmp(a, "--report")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             report = argv[++i];
         } else if (!strcmp(a, "--best-effort")) {
             best_effort = 1;
         } else if (!strcmp(a, "--side")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             const char *v = argv[++i];
             if (!strcmp(v, "enter"))
                 sides = BTDF_SIDE_ENTER;
@@ -737,15 +729,11 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             else
                 return fail(EXIT_USAGE, "--side: '%s': must be enter, leave or both", v);
         } else if (!strcmp(a, "--preview")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             if (npreview == MAX_PREVIEWS)
                 return fail(EXIT_USAGE, "--preview: at most %d pictures", MAX_PREVIEWS);
             if (!parse_preview(argv[++i], &previews[npreview++]))
                 return EXIT_USAGE;
         } else if (!strcmp(a, "--size")) {
-            if (!has)
-                return fail(EXIT_USAGE, "%s: missing value", a);
             if (!parse_picture_size(argv[++i], &pic_w, &pic_h))
                 return EXIT_USAGE;
         } else {
