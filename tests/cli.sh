@@ -138,7 +138,7 @@ else
     expect 1 "switched off at build time (-Dopenexr=disabled)" "no OpenEXR" -- "$B" tabulate -o "$W/t.exr"
 fi
 if "$B" --version | grep -q 'PNG on'; then
-    "$B" tabulate -q --theta-i 0:30 --tolerance 1e-2 -o "$W/m.png" --preview render=/"$W/r.png" && \
+    "$B" tabulate -q --theta-i 0:30 --tolerance 1e-2 -o "$W/m.png" --preview render="$W/r.png" && \
         [ -s "$W/m.png" ] && [ -s "$W/r.png" ] && ok "montage and render previews" || no "previews"
     "$B" polar -o "$W/p.png" --material 1.4:3 --material 0.714:3 --angles 0,30 && [ -s "$W/p.png" ] && \
         ok "polar picture" || no "polar"
