@@ -29,8 +29,8 @@ extern "C" {
  *   Light entering glass from air: n = 1.5; leaving glass into air: n = 1/1.5.
  *   n = 1 has no BTDF (the transmission is a delta) and is rejected.
  *
- * Value: rho is the BTDF in 1/sr, WITHOUT any cosine factor. Radiance form: a
- *   renderer multiplies by |cos to| itself. Reciprocity:
+ * Value: rho is the BTDF in 1/sr, WITHOUT any cosine factor: a renderer multiplies
+ *   by |cos to| itself. Reciprocity:
  *   rho(n; ti, to, phi) = n^2 rho(1/n; pi - to, pi - ti, phi).
  *
  * Out of domain: directions the model cannot connect (transmitted direction in the
@@ -46,6 +46,12 @@ extern "C" {
  * Threads: the model functions are pure and thread-safe. A btdf_table is immutable
  *   once built, so it may be evaluated from many threads at once; building and
  *   freeing one are not concurrent with other uses of the same table.
+ *
+ * Files: every writer writes under a temporary name beside the output and renames it
+ *   at the end, so an output appears whole or not at all; on error the temporary file
+ *   is removed. The library installs no signal handler (the btdftab tool removes its
+ *   temporary files on SIGINT, SIGTERM and SIGHUP). The same inputs give the same
+ *   bytes, whatever the thread count.
  *
  * Ownership: objects returned through `**out` belong to the caller, who frees them
  *   with the matching *_free function; every *_free(NULL) is a no-op. Views returned
