@@ -373,34 +373,37 @@ static void build_slice(const slice_target *tg, slice_out *o)
         /* vmax = 0 means the slice is empty (grazing incidence): nothing to refine. */
         double norm = is_max ? (vmax > 0.0 ? 1.0 / vmax : 0.0) : 1.0;
         double total = 0.0, worst = 0.0;
+        /* Per interval, the worst channel (the metric's, MODEL.md 6), not their sum. */
         for (size_t i = 0; i + 1 < nr; i++) {
-            double e = 0.0;
+            double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0};
             for (size_t j = 0; j < nc; j++)
                 for (size_t c = 0; c < nch; c++) {
                     double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
                                         vals[((i + 1) * nc + j) * nch + c]);
                     double d = fabs(vr[(i * nc + j) * nch + c] - lin);
                     if (is_max)
-                        e = fmax(e, d * norm);
+                        ech[c] = fmax(ech[c], d * norm);
                     else
-                        e += d * wr[i * nc + j] * trap(cols, nc, j) * (rows[i + 1] - rows[i]) * 2.0;
+                        ech[c] += d * wr[i * nc + j] * trap(cols, nc, j) * (rows[i + 1] - rows[i]) * 2.0;
                 }
+            double e = fmax(ech[0], fmax(ech[1], ech[2]));
             er[i] = e;
             total += e;
             worst = fmax(worst, e);
         }
         for (size_t j = 0; j + 1 < nc; j++) {
-            double e = 0.0;
+            double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0};
             for (size_t i = 0; i < nr; i++)
                 for (size_t c = 0; c < nch; c++) {
                     double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
                                         vals[(i * nc + j + 1) * nch + c]);
                     double d = fabs(vc[(i * (nc - 1) + j) * nch + c] - lin);
                     if (is_max)
-                        e = fmax(e, d * norm);
+                        ech[c] = fmax(ech[c], d * norm);
                     else
-                        e += d * wc[i * (nc - 1) + j] * trap(rows, nr, i) * (cols[j + 1] - cols[j]) * 2.0;
+                        ech[c] += d * wc[i * (nc - 1) + j] * trap(rows, nr, i) * (cols[j + 1] - cols[j]) * 2.0;
                 }
+            double e = fmax(ech[0], fmax(ech[1], ech[2]));
             ec[j] = e;
             total += e;
             worst = fmax(worst, e);
@@ -531,7 +534,8 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
     tmp.s = two;
     const tslice *s = &M->s;
     size_t nch = (size_t)o->params.channels;
-    double wa = (B->s.ti - M->s.ti) / (B->s.ti - A->s.ti), e = 0.0, vmax = 0.0, dmax = 0.0;
+    double wa = (B->s.ti - M->s.ti) / (B->s.ti - A->s.ti), vmax = 0.0, dmax = 0.0;
+    double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0}; /* per channel: the metric takes the worst */
     double g = incident_factor(&o->params, M->s.ti), ga = incident_factor(&o->params, A->s.ti),
            gb = incident_factor(&o->params, B->s.ti);
     for (size_t i = 0; i < s->nr; i++) {
@@ -545,13 +549,13 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
                 double d = fabs(bl - tv);
                 vmax = fmax(vmax, tv);
                 dmax = fmax(dmax, d);
-                e += d * M->w[i * s->nc + j] * tw * trap(s->cols, s->nc, j) * 2.0;
+                ech[c] += d * M->w[i * s->nc + j] * tw * trap(s->cols, s->nc, j) * 2.0;
             }
         }
     }
     if (o->metric == BTDF_METRIC_MAX)
         return vmax > 0.0 ? dmax / vmax : 0.0; /* empty slices have no max error */
-    return e / t_floor(&o->params, M->s.ti);
+    return fmax(ech[0], fmax(ech[1], ech[2])) / t_floor(&o->params, M->s.ti);
 }
 
 static void free_slice_out(slice_out *s)
