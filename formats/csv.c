@@ -160,7 +160,7 @@ static btdf_status flush_slice(btdf_table *t, double ti, dvec *rr, dvec *cc, dve
 {
     if (rr->n == 0)
         return BTDF_OK;
-    size_t nch = (size_t)t->p.channels, npts = rr->n;
+    size_t npts = rr->n;
     size_t nc = 1;
     while (nc < npts && rr->v[nc] == rr->v[0])
         nc++;
@@ -189,7 +189,6 @@ static btdf_status flush_slice(btdf_table *t, double ti, dvec *rr, dvec *cc, dve
     btdf_status st = btdf_table_add_slice(t, ti, nr, rows, nc, cols, vv->v, why, sizeof why);
     free(rows);
     free(cols);
-    (void)nch;
     if (st == BTDF_EINVAL)
         return ferr(msg, msglen, path, line, why);
     rr->n = cc->n = vv->n = 0;

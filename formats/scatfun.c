@@ -63,91 +63,6 @@ static btdf_status say(char *msg, size_t msglen, btdf_status st, const char *fmt
     return st;
 }
 
-static double now_seconds(void)
-{
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
-
-/* ------------------------------------------------------------------------- */
-/* Threads: a parallel loop over indices, results written per index only     */
-/* ------------------------------------------------------------------------- */
-
-typedef struct pfor {
-    pthread_mutex_t lock;
-    size_t next, count;
-    void (*fn)(void *ctx, void *ws, size_t i);
-    void *ctx;
-    void *(*ws_new)(void *ctx);
-    void (*ws_free)(void *ws);
-    int failed; /* a workspace could not be allocated */
-} pfor;
-
-static void *pfor_worker(void *arg)
-{
-    pfor *p = arg;
-    void *ws = p->ws_new ? p->ws_new(p->ctx) : NULL;
-    if (p->ws_new && !ws) {
-        pthread_mutex_lock(&p->lock);
-        p->failed = 1;
-        pthread_mutex_unlock(&p->lock);
-        return NULL;
-    }
-    for (;;) {
-        pthread_mutex_lock(&p->lock);
-        size_t i = p->next < p->count ? p->next++ : p->count;
-        pthread_mutex_unlock(&p->lock);
-        if (i >= p->count)
-            break;
-        p->fn(p->ctx, ws, i);
-    }
-    if (p->ws_free)
-        p->ws_free(ws);
-    return NULL;
-}
-
-static int thread_count(int threads)
-{
-    if (threads > 0)
-        return threads > 256 ? 256 : threads;
-    long c = sysconf(_SC_NPROCESSORS_ONLN);
-    return c < 1 ? 1 : (c > 256 ? 256 : (int)c);
-}
-
-/* Runs fn(ctx, ws, i) for i < count on `threads` threads. Returns 0 on success. */
-static int parallel_for(int threads, size_t count, void (*fn)(void *, void *, size_t),
-                        void *ctx, void *(*ws_new)(void *), void (*ws_free)(void *))
-{
-    pfor p;
-    p.next = 0;
-    p.count = count;
-    p.fn = fn;
-    p.ctx = ctx;
-    p.ws_new = ws_new;
-    p.ws_free = ws_free;
-    p.failed = 0;
-    if (pthread_mutex_init(&p.lock, NULL) != 0)
-        return -1;
-    int nt = thread_count(threads);
-    if ((size_t)nt > count)
-        nt = count > 0 ? (int)count : 1;
-    pthread_t tid[256];
-    int started = 0;
-    for (int t = 1; t < nt; t++) {
-        if (pthread_create(&tid[started], NULL, pfor_worker, &p) != 0)
-            break; /* fewer threads still finish the loop */
-        started++;
-    }
-    pfor_worker(&p);
-    for (int t = 0; t < started; t++)
-        pthread_join(tid[t], NULL);
-    pthread_mutex_destroy(&p.lock);
-    /* A worker that failed to start its workspace did no items; the others did them
-       all unless every worker failed. */
-    return p.next < p.count || p.failed ? -1 : 0;
-}
-
 /* ------------------------------------------------------------------------- */
 /* Catmull-Rom weights as pbrt-v3 computes them                              */
 /* ------------------------------------------------------------------------- */
@@ -1159,7 +1074,7 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
     if (side < BTDF_SIDE_ENTER || side > BTDF_SIDE_BOTH)
         return say(msg, msglen, BTDF_EINVAL, "side %d: must be 1 (enter), 2 (leave) or 3 (both)",
                    (int)side);
-    double t0 = now_seconds();
+    double t0 = btdf_now();
     build_ctx c;
     memset(&c, 0, sizeof c);
     if (pthread_mutex_init(&c.lock, NULL) != 0)
@@ -1219,7 +1134,7 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
             }
             c.hasTn[j] = c.hasTm[j] = 1;
         }
-        if (parallel_for(threads, 2 * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
+        if (btdf_parallel_for_ws(threads, 2 * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
             st = BTDF_ENOMEM;
             goto done;
         }
@@ -1231,8 +1146,8 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
             st = BTDF_EBUDGET;
             break;
         }
-        if (parallel_for(threads, 2 * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
-            parallel_for(threads, 2 * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
+        if (btdf_parallel_for_ws(threads, 2 * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
+            btdf_parallel_for_ws(threads, 2 * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
             c.oom) {
             st = BTDF_ENOMEM;
             goto done;
@@ -1390,7 +1305,7 @@ done:
         return st;
     }
     best->tolerance = tolerance;
-    best->seconds_build = now_seconds() - t0;
+    best->seconds_build = btdf_now() - t0;
     *out = best;
     if (st == BTDF_EBUDGET)
         return say(msg, msglen, BTDF_EBUDGET,

@@ -9,6 +9,7 @@
 
 #include "btdf_preview.h"
 #include "model_impl.h"
+#include "table_impl.h"
 #include "tmpfile.h"
 #include "plot.h"
 #include "png_impl.h"
@@ -241,47 +242,6 @@ static btdf_status draw_polar(const btdf_preview_opts *o, plot_canvas *cv_out, c
 }
 
 /* ------------------------------------------------------------------------- */
-/* Slice interpolation in coordinates (shared by MONTAGE)                    */
-/* ------------------------------------------------------------------------- */
-
-/* Index i with x[i] <= q <= x[i + 1] and the fraction, or 0 outside [x[0], x[n-1]]. */
-static int bracket(const double *x, size_t n, double q, size_t *i, double *f)
-{
-    if (n == 0 || !(q >= x[0] && q <= x[n - 1]))
-        return 0;
-    if (n == 1) {
-        *i = 0;
-        *f = 0.0;
-        return 1;
-    }
-    size_t lo = 0, hi = n - 1;
-    while (hi - lo > 1) {
-        size_t mid = lo + (hi - lo) / 2;
-        if (x[mid] <= q)
-            lo = mid;
-        else
-            hi = mid;
-    }
-    *i = lo;
-    /* Rows and cols increase strictly, so the cell width is > 0. */
-    *f = (q - x[lo]) / (x[hi] - x[lo]);
-    return 1;
-}
-
-static double slice_at(const btdf_slice *s, int channels, double r, double col)
-{
-    size_t i, j;
-    double fr, fc;
-    if (!bracket(s->rows, s->nrows, r, &i, &fr) || !bracket(s->cols, s->ncols, col, &j, &fc))
-        return 0.0;
-    size_t i1 = i + 1 < s->nrows ? i + 1 : i, j1 = j + 1 < s->ncols ? j + 1 : j;
-#define VAL(a, b) s->values[((a) * s->ncols + (b)) * (size_t)channels]
-    return (1 - fr) * ((1 - fc) * VAL(i, j) + fc * VAL(i, j1)) +
-           fr * ((1 - fc) * VAL(i1, j) + fc * VAL(i1, j1));
-#undef VAL
-}
-
-/* ------------------------------------------------------------------------- */
 /* MONTAGE                                                                   */
 /* ------------------------------------------------------------------------- */
 
@@ -376,7 +336,7 @@ static btdf_status draw_montage(const btdf_preview_opts *o, plot_canvas *c, char
             for (int x = 0; x < tile; x++) {
                 double rq = r0 + (r1 - r0) * (y + 0.5) / tile;
                 double cq = c0 + (c1 - c0) * (x + 0.5) / tile;
-                double v = slice_at(&s, p->channels, rq, cq);
+                double v = slice_interp(t, idx[k], rq, cq, 0); /* the table's own rule */
                 /* lo = 0 when the table is all zeros: everything is below range. */
                 plot_rgb col = v > lo && lo > 0.0
                                    ? plot_cmap((log10(v) - log10(lo)) / DECADES)

@@ -28,48 +28,84 @@ int btdf_thread_count(int requested)
 typedef struct pool {
     pthread_mutex_t lock;
     size_t next, count;
-    void (*fn)(void *, size_t);
-    void *arg;
+    void (*fn)(void *ctx, void *ws, size_t i);
+    void *ctx;
+    void *(*ws_new)(void *ctx);
+    void (*ws_free)(void *ws);
+    int failed; /* a worker could not allocate its workspace */
 } pool;
 
 static void *pool_worker(void *v)
 {
     pool *p = v;
+    void *ws = p->ws_new ? p->ws_new(p->ctx) : NULL;
+    if (p->ws_new && !ws) {
+        pthread_mutex_lock(&p->lock);
+        p->failed = 1;
+        pthread_mutex_unlock(&p->lock);
+        return NULL;
+    }
     for (;;) {
         pthread_mutex_lock(&p->lock);
-        size_t i = p->next++;
+        size_t i = p->next < p->count ? p->next++ : p->count;
         pthread_mutex_unlock(&p->lock);
         if (i >= p->count)
-            return NULL;
-        p->fn(p->arg, i);
+            break;
+        p->fn(p->ctx, ws, i);
     }
+    if (p->ws_free)
+        p->ws_free(ws);
+    return NULL;
 }
 
-void btdf_parallel_for(int threads, size_t count, void (*fn)(void *arg, size_t i), void *arg)
+int btdf_parallel_for_ws(int threads, size_t count, void (*fn)(void *ctx, void *ws, size_t i),
+                         void *ctx, void *(*ws_new)(void *ctx), void (*ws_free)(void *ws))
 {
-    int nt = btdf_thread_count(threads);
-    if ((size_t)nt > count)
-        nt = (int)count;
-    if (nt <= 1) {
-        for (size_t i = 0; i < count; i++)
-            fn(arg, i);
-        return;
-    }
     pool p;
-    pthread_mutex_init(&p.lock, NULL);
     p.next = 0;
     p.count = count;
     p.fn = fn;
-    p.arg = arg;
+    p.ctx = ctx;
+    p.ws_new = ws_new;
+    p.ws_free = ws_free;
+    p.failed = 0;
+    if (pthread_mutex_init(&p.lock, NULL) != 0)
+        return -1;
+    int nt = btdf_thread_count(threads);
+    if ((size_t)nt > count)
+        nt = count > 0 ? (int)count : 1;
     pthread_t tid[256];
     int started = 0;
     for (int k = 1; k < nt; k++)
         if (pthread_create(&tid[started], NULL, pool_worker, &p) == 0)
-            started++;
-    pool_worker(&p); /* the calling thread works too; fewer threads only slow it down */
+            started++; /* fewer threads only slow the loop down */
+    pool_worker(&p); /* the calling thread works too */
     for (int k = 0; k < started; k++)
         pthread_join(tid[k], NULL);
     pthread_mutex_destroy(&p.lock);
+    /* A worker without a workspace did no items; the others did them all unless
+       every worker failed. */
+    return p.next < p.count || p.failed ? -1 : 0;
+}
+
+typedef struct plain {
+    void (*fn)(void *arg, size_t i);
+    void *arg;
+} plain;
+
+static void plain_fn(void *ctx, void *ws, size_t i)
+{
+    (void)ws;
+    const plain *p = ctx;
+    p->fn(p->arg, i);
+}
+
+void btdf_parallel_for(int threads, size_t count, void (*fn)(void *arg, size_t i), void *arg)
+{
+    plain p = {fn, arg};
+    if (btdf_parallel_for_ws(threads, count, plain_fn, &p, NULL, NULL) != 0)
+        for (size_t i = 0; i < count; i++) /* no mutex: run the loop here */
+            fn(arg, i);
 }
 
 /* ------------------------------------------------------------------------- */

@@ -75,4 +75,10 @@ int btdf_thread_count(int requested);
    which i does not change any result: each i writes only its own output. */
 void btdf_parallel_for(int threads, size_t count, void (*fn)(void *arg, size_t i), void *arg);
 
+/* The same with a workspace per thread from ws_new (NULL: none), freed by ws_free.
+   Returns 0, or -1 when some items were not run (no mutex, or no workspace could be
+   made). */
+int btdf_parallel_for_ws(int threads, size_t count, void (*fn)(void *ctx, void *ws, size_t i),
+                         void *ctx, void *(*ws_new)(void *ctx), void (*ws_free)(void *ws));
+
 #endif
