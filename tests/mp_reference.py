@@ -78,7 +78,6 @@ def cases():
 def main():
     tool = sys.argv[1]
     cs = cases()
-    inp = "".join("%.17g %.17g %.17g\n" % (c[3], c[4], c[5]) for c in cs)
     bad = checked = 0
     worst = 0.0
     # one btdftab run per material, the rows of that material on stdin
@@ -92,7 +91,6 @@ def main():
                            input=rows, capture_output=True, text=True, check=True)
         for i, line in zip(idx, r.stdout.split("\n")):
             got[i] = float(line)
-    del inp
     for c, g in zip(cs, got):
         ref = rho(*c)
         if ref < mp.mpf("1e-290"):
