@@ -262,7 +262,9 @@ typedef struct btdf_report {
     double tolerance;            /* requested (0 for GRID) */
     btdf_metric metric;
     int met;                     /* 1 when the chosen metric's max <= tolerance */
-    size_t peak_bytes;           /* memory the build held at its peak */
+    size_t peak_bytes;           /* peak memory: btdf_table_estimate leaves it 0 for the
+                                    caller to fill (btdftab stores the peak resident size);
+                                    btdf_scatfun_report gives the file's data size */
     btdf_ti_error *per_ti;       /* test_angles entries, owned by the report */
     size_t e_max_angles;         /* test angles with T >= 0.01, where e_max is defined;
                                     e_max_* are 0 when there are none */

@@ -213,7 +213,6 @@ typedef struct slice_target {
 typedef struct slice_out {
     tslice s;
     double *w; /* measure weight per node (channel 0), for incidence refinement */
-    size_t evals;
     int budget_hit;
     int nomem;
 } slice_out;
@@ -345,7 +344,6 @@ static void build_slice(const slice_target *tg, slice_out *o)
         cols[j] = M_PI * (double)j / (double)(nc - 1);
     if (!eval_nodes(p, &a, rows, nr, cols, nc, vals, w))
         goto nomem;
-    o->evals += nr * nc * nch;
     for (;;) {
         rm = malloc((nr - 1) * sizeof(double));
         cm = malloc((nc - 1) * sizeof(double));
@@ -366,7 +364,6 @@ static void build_slice(const slice_target *tg, slice_out *o)
         if (!eval_nodes(p, &a, rm, nr - 1, cols, nc, vr, wr) ||
             !eval_nodes(p, &a, rows, nr, cm, nc - 1, vc, wc))
             goto nomem;
-        o->evals += ((nr - 1) * nc + nr * (nc - 1)) * nch;
         double vmax = 0.0;
         for (size_t q = 0; q < nr * nc * nch; q++)
             vmax = fmax(vmax, vals[q]);
@@ -458,7 +455,6 @@ static void build_slice(const slice_target *tg, slice_out *o)
                     sw = wc[i * (nc - 1) + j];
                 } else {
                     eval_nodes(p, &a, &nrows[I], 1, &ncols[J], 1, cross, &sw); /* no alloc fail: nc = 1 */
-                    o->evals += nch;
                     src = cross;
                 }
                 memcpy(nv + (I * NC + J) * nch, src, nch * sizeof(double));
@@ -575,8 +571,7 @@ static int cmp_ti(const void *a, const void *b)
 
 /* One adaptive build with the given shares of the tolerance. */
 static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
-                                    double frac_ti, btdf_table *t, int *budget_hit,
-                                    size_t *peak_bytes)
+                                    double frac_ti, btdf_table *t, int *budget_hit)
 {
     size_t max_samples = o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES;
     size_t max_bytes = o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES;
@@ -721,9 +716,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         free(at);
     }
     free(open);
-    size_t bytes = 0;
     for (size_t k = 0; k < ns; k++) {
-        bytes += sl[k].s.nr * sl[k].s.nc * (nch + 1) * sizeof(double);
         free(sl[k].w);
         sl[k].w = NULL;
         if (st == BTDF_OK) {
@@ -735,8 +728,6 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
             free_slice_out(&sl[k]);
         }
     }
-    if (bytes > *peak_bytes)
-        *peak_bytes = bytes;
     free(sl);
     free(tis);
     return st;
@@ -793,13 +784,12 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
        the result with an independent estimate, and tighten while it falls short. */
     double fs = 0.8, ft = 0.6;
     int budget_hit = 0, met = 0;
-    size_t peak = 0;
     for (int pass = 0; pass < 5; pass++) {
         table_clear(t);
         t->kind = BTDF_TABLE_FACET;
         t->p = ob.params;
         budget_hit = 0;
-        st = build_facet_pass(&ob, fs, ft, t, &budget_hit, &peak);
+        st = build_facet_pass(&ob, fs, ft, t, &budget_hit);
         t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : BTDF_TABLE_FACET;
         t->p = o->params;
         if (st != BTDF_OK)
