@@ -224,10 +224,8 @@ static int apply(cli *c, const opt_hit *h)
     case OPT_REPORT: c->report = v; return 1;
     case OPT_TOLERANCE: return parse_double("--tolerance", v, &c->o.tolerance);
     case OPT_METRIC:
-        if (!strcmp(v, "l1") || !strcmp(v, "max")) {
-            c->o.metric = v[0] == 'l' ? BTDF_METRIC_L1 : BTDF_METRIC_MAX;
+        if (run_parse_metric(v, &c->o.metric))
             return 1;
-        }
         fail(EXIT_USAGE, "--metric: '%s': must be l1 or max", v);
         return 0;
     case OPT_GRID: {
@@ -244,17 +242,10 @@ static int apply(cli *c, const opt_hit *h)
         return 1;
     }
     case OPT_SIDE:
-        if (!strcmp(v, "enter"))
-            c->sides = BTDF_SIDE_ENTER;
-        else if (!strcmp(v, "leave"))
-            c->sides = BTDF_SIDE_LEAVE;
-        else if (!strcmp(v, "both"))
-            c->sides = BTDF_SIDE_BOTH;
-        else {
-            fail(EXIT_USAGE, "--side: '%s': must be enter, leave or both", v);
-            return 0;
-        }
-        return 1;
+        if ((c->sides = run_parse_side(v)) != 0)
+            return 1;
+        fail(EXIT_USAGE, "--side: '%s': must be enter, leave or both", v);
+        return 0;
     case OPT_THETA_I: return parse_range("--theta-i", v, 0.0, 90.0, 0, &c->ti0, &c->ti1);
     case OPT_THETA_O: return parse_range("--theta-o", v, 90.0, 180.0, 1, &c->to0, &c->to1);
     case OPT_PHI: return parse_range("--phi", v, 0.0, 180.0, 1, &c->ph0, &c->ph1);

@@ -146,11 +146,7 @@ static int on_entry(void *user, const char *section, const char *key, const char
         if (!num(value, &m->tol) || !(m->tol >= 1e-7 && m->tol <= 1.0))
             return set_why(mf, "tolerance '%s': must be a number in [1e-7, 1]%s", value, "");
     } else if (!strcmp(key, "metric")) {
-        if (!strcmp(value, "l1"))
-            m->metric = BTDF_METRIC_L1;
-        else if (!strcmp(value, "max"))
-            m->metric = BTDF_METRIC_MAX;
-        else
+        if (!run_parse_metric(value, &m->metric))
             return set_why(mf, "metric '%s': must be l1 or max%s", value, "");
     } else if (!strcmp(key, "theta_i")) {
         char a[64], b[64];
@@ -162,13 +158,7 @@ static int on_entry(void *user, const char *section, const char *key, const char
         if (!num(a, &m->ti0) || !num(b, &m->ti1) || !(m->ti0 >= 0 && m->ti0 <= m->ti1 && m->ti1 <= 90))
             return set_why(mf, "theta_i '%s': need 0 <= A <= B <= 90 degrees%s", value, "");
     } else if (!strcmp(key, "sides")) {
-        if (!strcmp(value, "enter"))
-            m->sides = BTDF_SIDE_ENTER;
-        else if (!strcmp(value, "leave"))
-            m->sides = BTDF_SIDE_LEAVE;
-        else if (!strcmp(value, "both"))
-            m->sides = BTDF_SIDE_BOTH;
-        else
+        if (!(m->sides = run_parse_side(value)))
             return set_why(mf, "sides '%s': must be enter, leave or both%s", value, "");
     } else if (!strcmp(key, "enter") || !strcmp(key, "leave")) {
         char **list = key[0] == 'e' ? m->enter : m->leave;

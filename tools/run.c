@@ -13,6 +13,23 @@ double run_now(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+int run_parse_side(const char *word)
+{
+    static const char *const names[4] = {NULL, "enter", "leave", "both"};
+    for (int s = BTDF_SIDE_ENTER; s <= BTDF_SIDE_BOTH; s++)
+        if (!strcmp(word, names[s]))
+            return s;
+    return 0;
+}
+
+int run_parse_metric(const char *word, btdf_metric *metric)
+{
+    if (strcmp(word, "l1") && strcmp(word, "max"))
+        return 0;
+    *metric = word[0] == 'l' ? BTDF_METRIC_L1 : BTDF_METRIC_MAX;
+    return 1;
+}
+
 static int fail(const char *prog, int code, const char *path, const char *what)
 {
     fprintf(stderr, "%s: %s: %s\n", prog, path, what);
