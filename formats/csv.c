@@ -10,16 +10,25 @@
 #include "table_impl.h"
 
 /*
- * Layout (docs/formats.md): comment lines starting with '#' carry the version, the
- * kind, the parameters and the error report; then a header row; then one row per
- * node, slice by slice, row by row, column by column:
+ * Layout (docs/formats.md): a header row; then comment lines starting with '#' carry
+ * the version, the kind, the parameters and the error report; then one row per node,
+ * slice by slice, row by row, column by column:
  *   theta_i_deg, theta_o_deg, phi_deg, rho (or rho_r, rho_g, rho_b), ti_rad, row_rad, col_rad
  * The three *_rad columns are the node coordinates the rule uses (for facet tables
  * row = facet tilt tn and col = facet azimuth psi; for grid tables row = to, col = phi),
- * printed with 17 significant digits so that they and rho read back bit for bit.
+ * printed as the shortest decimal that reads back to the same double, so that they
+ * and rho read back bit for bit.
  * theta_o_deg and phi_deg give the node's outgoing direction for people (for facet
  * tables that of channel 0; empty where no facet refracts into the lower hemisphere).
  */
+
+/* pre, the shortest decimal that reads back to x, post. */
+static void put_num(FILE *f, const char *pre, double x, const char *post)
+{
+    char b[40];
+    btdf_format_double(x, b, sizeof b);
+    fprintf(f, "%s%s%s", pre, b, post);
+}
 
 static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
 {
@@ -28,13 +37,20 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     const btdf_table *t = c->table;
     const btdf_params *p = &t->p;
     int nch = p->channels;
+    /* The header row comes first and the comment block after it, so that one call
+       reads the file: numpy.genfromtxt(f, delimiter=',', names=True) takes its names
+       from the first line, and pandas.read_csv(f, comment='#') skips the comments
+       wherever they are (docs/formats.md). */
+    fprintf(f, "theta_i_deg,theta_o_deg,phi_deg,%s,ti_rad,row_rad,col_rad\n",
+            nch == 1 ? "rho" : "rho_r,rho_g,rho_b");
     fprintf(f, "# btdftab %s table\n", BTDF_VERSION_STRING);
     fprintf(f, "# kind: %s\n", table_kind_name(t->kind));
     fprintf(f, "# channels: %d\n", nch);
     fprintf(f, "# ior:");
     for (int ch = 0; ch < nch; ch++)
-        fprintf(f, " %.17g", p->ior[ch]);
-    fprintf(f, "\n# smoothness: %.17g\n# k0: %.17g\n", p->smoothness, p->k0);
+        put_num(f, " ", p->ior[ch], "");
+    put_num(f, "\n# smoothness: ", p->smoothness, "\n");
+    put_num(f, "# k0: ", p->k0, "\n");
     fprintf(f, "# units: rho in 1/sr, no cosine factor; angles in degrees and radians\n");
     fprintf(f, "# rule: %s\n",
             t->kind == BTDF_TABLE_GRID
@@ -54,8 +70,6 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                 "%.4g; %zu test angles, %zu test points\n",
                 r->e_l1_max, r->e_l1_mean, r->e_max_max, r->e_max_mean, r->e_t_max,
                 r->e_t_mean, r->test_angles, r->test_points);
-    fprintf(f, "theta_i_deg,theta_o_deg,phi_deg,%s,ti_rad,row_rad,col_rad\n",
-            nch == 1 ? "rho" : "rho_r,rho_g,rho_b");
     for (size_t k = 0; k < t->ns; k++) {
         const tslice *s = &t->s[k];
         double ti = s->ti, sti = sin(ti), cti = cos(ti);
@@ -86,8 +100,10 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                 }
                 fprintf(f, "%s,%s,%s", recip && !to_s[0] ? "" : ti_s, to_s, ph_s);
                 for (int ch = 0; ch < nch; ch++)
-                    fprintf(f, ",%.17g", s->vals[(i * s->nc + j) * (size_t)nch + (size_t)ch]);
-                fprintf(f, ",%.17g,%.17g,%.17g\n", ti, s->rows[i], s->cols[j]);
+                    put_num(f, ",", s->vals[(i * s->nc + j) * (size_t)nch + (size_t)ch], "");
+                put_num(f, ",", ti, "");
+                put_num(f, ",", s->rows[i], "");
+                put_num(f, ",", s->cols[j], "\n");
             }
         }
     }
@@ -243,10 +259,16 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                           "not a btdftab table CSV (expected the header row theta_i_deg,...)");
                 break;
             }
+            header = 1;
+            continue;
+        }
+        /* The comments may come before the header row (files of btdftab 0.3.0 and
+           earlier) or after it: the parameters are needed by the first node row. */
+        if (!t) {
             if (!have_kind || !have_ch || !have_s || !have_k0 || have_ior != p.channels) {
                 st = ferr(msg, msglen, path, ln,
                           "missing '# kind', '# channels', '# ior', '# smoothness' or '# k0' "
-                          "comment before the header row");
+                          "comment before the first row");
                 break;
             }
             char why[200];
@@ -254,8 +276,6 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 st = ferr(msg, msglen, path, ln, why);
                 break;
             }
-            header = 1;
-            continue;
         }
         char *fld[16];
         int nf = split(line, fld, 16);
@@ -288,6 +308,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
         st = ferr(msg, msglen, path, ln, "read error");
     if (st == BTDF_OK && !header)
         st = ferr(msg, msglen, path, ln, "no header row: empty or foreign file");
+    if (st == BTDF_OK && !t)
+        st = ferr(msg, msglen, path, ln, "no table rows");
     if (st == BTDF_OK)
         st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
     if (st == BTDF_OK && t->ns == 0)
@@ -304,6 +326,27 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     return BTDF_OK;
 }
 
+/* The comment lines a reader does not need, as they were written: the provenance and
+   the error report. They sit in the comment block at the top of the file. */
+static btdf_status csv_stored(const char *path, FILE *out)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return BTDF_EIO;
+    char line[4096];
+    int rows = 0;
+    while (fgets(line, sizeof line, f) && rows < 2) {
+        if (line[0] != '#') {
+            rows++; /* the header row, then the first node row ends the block */
+            continue;
+        }
+        if (!strncmp(line, "# provenance: ", 14) || !strncmp(line, "# error: ", 9))
+            fputs(line + 2, out);
+    }
+    fclose(f);
+    return ferror(out) ? BTDF_EIO : BTDF_OK;
+}
+
 const btdf_format_ops btdf_format_csv = {
     .name = "CSV",
     .ext = ".csv",
@@ -311,4 +354,5 @@ const btdf_format_ops btdf_format_csv = {
     .needs = BTDF_NEEDS_TABLE,
     .write_stream = csv_write,
     .read_path = csv_read,
+    .stored = csv_stored,
 };

@@ -654,6 +654,37 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
     return BTDF_OK;
 }
 
+/* The error report and provenance stored in part 0's attributes (set_report). */
+static btdf_status exr_stored(const char *path, FILE *out)
+{
+    exr_context_t ctx = NULL;
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
+    if (exr_start_read(&ctx, path, &init) != EXR_ERR_SUCCESS) {
+        exr_finish(&ctx);
+        return BTDF_EFORMAT;
+    }
+    const char *prov = NULL;
+    if (exr_attr_get_string(ctx, 0, ATTR_PREFIX "provenance", NULL, &prov) == EXR_ERR_SUCCESS &&
+        prov)
+        fprintf(out, "provenance: %s\n", prov);
+    static const char *const names[8] = {"eL1Max",  "eL1Mean", "eMaxMax",    "eMaxMean",
+                                         "eTMax",   "eTMean",  "testAngles", "testPoints"};
+    double v[8];
+    int have = 1;
+    for (size_t k = 0; k < 8 && have; k++) {
+        char attr[64];
+        snprintf(attr, sizeof attr, ATTR_PREFIX "report.%s", names[k]);
+        have = exr_attr_get_double(ctx, 0, attr, &v[k]) == EXR_ERR_SUCCESS;
+    }
+    if (have) /* the wording of the CSV's "# error:" line */
+        fprintf(out, "error: e_L1 max %.4g mean %.4g; e_max max %.4g mean %.4g; e_T max %.4g "
+                     "mean %.4g; %.0f test angles, %.0f test points\n",
+                v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
+    exr_finish(&ctx);
+    return ferror(out) ? BTDF_EIO : BTDF_OK;
+}
+
 const btdf_format_ops btdf_format_exr = {
     .name = "OpenEXR",
     .ext = ".exr",
@@ -662,4 +693,5 @@ const btdf_format_ops btdf_format_exr = {
     .needs = BTDF_NEEDS_TABLE,
     .write_path = exr_write,
     .read_path = exr_read,
+    .stored = exr_stored,
 };

@@ -34,6 +34,9 @@ typedef struct btdf_format_ops {
     btdf_status (*read_path)(const char *path, btdf_table **out, char *msg, size_t msglen);
     /* Reads a series back (BTDF_NEEDS_SERIES), or NULL. */
     btdf_status (*read_series)(const char *path, btdf_scatfun **out, char *msg, size_t msglen);
+    /* Prints what the file stores beside the values (the error report, provenance),
+       one "key: value" line each, or NULL when the format stores nothing more. */
+    btdf_status (*stored)(const char *path, FILE *out);
     /* Prints what was read; NULL: the registry's table summary. */
     btdf_status (*inspect)(const btdf_input *in, FILE *out);
 } btdf_format_ops;

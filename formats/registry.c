@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "formats.h"
 #include "tmpfile.h"
@@ -288,18 +289,54 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
     return st;
 }
 
-/* The summary of a table file: its header, then one line per slice. */
+/* The summary of a table file: its header, ranges and sizes, then one line per slice. */
 static btdf_status table_inspect(const btdf_input *in, FILE *out)
 {
     const btdf_table *t = in->table;
     const btdf_params *p = btdf_table_get_params(t);
-    fprintf(out, "kind: %s\nchannels: %d\nior:", btdf_table_kind_name(btdf_table_get_kind(t)),
-            p->channels);
-    for (int ch = 0; ch < p->channels; ch++)
-        fprintf(out, " %.17g", p->ior[ch]);
-    fprintf(out, "\nsmoothness: %.17g\nk0: %.17g\nslices: %zu\nnodes: %zu\n", p->smoothness,
-            p->k0, btdf_table_slice_count(t), btdf_table_node_count(t));
-    for (size_t k = 0; k < btdf_table_slice_count(t); k++) {
+    btdf_table_kind kind = btdf_table_get_kind(t);
+    char b[40];
+    fprintf(out, "kind: %s\nchannels: %d\nior:", btdf_table_kind_name(kind), p->channels);
+    for (int ch = 0; ch < p->channels; ch++) {
+        btdf_format_double(p->ior[ch], b, sizeof b);
+        fprintf(out, " %s", b);
+    }
+    btdf_format_double(p->smoothness, b, sizeof b);
+    fprintf(out, "\nsmoothness: %s\n", b);
+    btdf_format_double(p->k0, b, sizeof b);
+    fprintf(out, "k0: %s\n", b);
+    size_t ns = btdf_table_slice_count(t), nodes = btdf_table_node_count(t);
+    btdf_slice s0, s1;
+    if (ns > 0 && btdf_table_slice(t, 0, &s0) == BTDF_OK &&
+        btdf_table_slice(t, ns - 1, &s1) == BTDF_OK) {
+        if (kind == BTDF_TABLE_FACET_RECIPROCAL) /* slices are indexed by pi - theta_o */
+            fprintf(out, "theta_i range: 0:90 deg (slices over theta_o %.6g:%.6g deg)\n",
+                    180.0 - s1.ti * 180.0 / M_PI, 180.0 - s0.ti * 180.0 / M_PI);
+        else
+            fprintf(out, "theta_i range: %.6g:%.6g deg\n", s0.ti * 180.0 / M_PI,
+                    s1.ti * 180.0 / M_PI);
+    }
+    /* Value range over every node of every channel. */
+    double lo = 0.0, hi = 0.0;
+    int first = 1;
+    for (size_t k = 0; k < ns; k++) {
+        btdf_slice s;
+        if (btdf_table_slice(t, k, &s) != BTDF_OK)
+            continue;
+        size_t m = s.nrows * s.ncols * (size_t)p->channels;
+        for (size_t q = 0; q < m; q++) {
+            if (first || s.values[q] < lo)
+                lo = s.values[q];
+            if (first || s.values[q] > hi)
+                hi = s.values[q];
+            first = 0;
+        }
+    }
+    fprintf(out, "rho range: %.6g to %.6g 1/sr\n", lo, hi);
+    fprintf(out, "slices: %zu\nnodes: %zu\nvalues: %zu doubles (%.1f MiB in memory)\n", ns,
+            nodes, nodes * (size_t)p->channels,
+            (double)(nodes * (size_t)(p->channels + 2) * sizeof(double)) / 1048576.0);
+    for (size_t k = 0; k < ns; k++) {
         btdf_slice s;
         btdf_table_slice(t, k, &s);
         fprintf(out, "slice %zu: index %.6f deg, %zu x %zu\n", k, s.ti * 180.0 / M_PI, s.nrows,
@@ -317,7 +354,13 @@ BTDF_API btdf_status btdf_inspect(const char *path, FILE *out, char *msg, size_t
     if (st != BTDF_OK)
         return st;
     const btdf_format_ops *f = btdf_format_for_path(path);
-    st = f->inspect ? f->inspect(&in, out) : table_inspect(&in, out);
+    struct stat sb;
+    if (stat(path, &sb) == 0)
+        fprintf(out, "file: %s, %s, %lld bytes\n", path, f->name, (long long)sb.st_size);
+    if (f->stored)
+        st = f->stored(path, out);
+    if (st == BTDF_OK)
+        st = f->inspect ? f->inspect(&in, out) : table_inspect(&in, out);
     if (st == BTDF_OK && fflush(out) != 0)
         st = BTDF_EIO;
     if (st != BTDF_OK)

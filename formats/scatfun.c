@@ -1060,9 +1060,10 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
     return r.e_l1_max;
 }
 
-BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
-                                        btdf_side side, int threads, btdf_scatfun **out,
-                                        char *msg, size_t msglen)
+BTDF_API btdf_status btdf_scatfun_build_progress(const btdf_params *p, double tolerance,
+                                                 btdf_side side, int threads,
+                                                 btdf_progress_fn progress, void *user,
+                                                 btdf_scatfun **out, char *msg, size_t msglen)
 {
     if (!out)
         return say(msg, msglen, BTDF_EINVAL, "output pointer missing");
@@ -1191,6 +1192,8 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
         }
         for (size_t j = 0; j < K; j++)
             nsplit += split[j];
+        if (progress) /* K nodes checked, nsplit intervals to split */
+            progress(user, tighten ? "series (tighter)" : "elevation nodes", K, nsplit);
         if (nsplit == 0) {
             /* The node checks pass: measure the file itself and tighten if needed. */
             btdf_scatfun *f = NULL;

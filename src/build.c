@@ -597,6 +597,8 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         tis[k] = n0 > 1 ? o->ti_min + span * (double)k / (double)(n0 - 1) : o->ti_min;
     j.ti = tis;
     j.out = sl;
+    if (o->progress)
+        o->progress(o->progress_user, "slices", 0, n0);
     btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
     btdf_status st = BTDF_OK;
     size_t nodes = 0;
@@ -621,6 +623,8 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                 nt++;
         if (nt == 0)
             break;
+        if (o->progress) /* ns slices built, nt midpoints to test now */
+            o->progress(o->progress_user, "incidence angles", ns, nt);
         double *mt = malloc(nt * sizeof(double));
         size_t *at = malloc(nt * sizeof(size_t));
         slice_out *cand = calloc(nt, sizeof *cand);
@@ -785,6 +789,8 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     double fs = 0.8, ft = 0.6;
     int budget_hit = 0, met = 0;
     for (int pass = 0; pass < 5; pass++) {
+        if (pass > 0 && o->progress) /* the check fell short: a tighter pass, at most 5 */
+            o->progress(o->progress_user, "tighter pass", (size_t)pass, (size_t)(5 - pass));
         table_clear(t);
         t->kind = BTDF_TABLE_FACET;
         t->p = ob.params;

@@ -16,6 +16,7 @@ else no "meson install"; cat "$W/log"; fi
 missing=""
 for f in include/btdf/btdf.h include/btdf/btdf_config.h include/btdf/btdf_preview.h \
          include/btdf/btdf_scatfun.h include/btdf/btdf_io.h share/man/man1/btdftab.1 \
+         share/bash-completion/completions/btdftab \
          lib/libbtdf.so lib/libbtdf.a lib/pkgconfig/btdf.pc bin/btdftab; do
     [ -e "$W/stage/$f" ] || missing="$missing $f"
 done

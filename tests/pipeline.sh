@@ -38,5 +38,10 @@ done
 [ "$bad" -eq 0 ] && ok "every file present after the kill is complete" || no "partial file after kill"
 make -j2 BTDFTAB="$B" >log2 2>&1 && diff -r out "$W/ser/out" >/dev/null && \
     ok "the next make finishes the job, same bytes" || no "make after kill"
+# The program is a prerequisite of every rule: a newer btdftab (an upgrade) makes
+# every output out of date.
+cd "$W/par" && cp "$B" "$W/btdftab-new" && sleep 1 && touch "$W/btdftab-new"
+if make -q BTDFTAB="$W/btdftab-new"; then no "a newer btdftab leaves the outputs up to date"
+else ok "a newer btdftab makes the outputs out of date"; fi
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

@@ -183,7 +183,7 @@ static int parse_picture_size(const char *s, int *w, int *h)
 typedef struct cli {
     unsigned char given[OPT_COUNT]; /* how often each option was given */
     btdf_params p;
-    int threads, quiet, force, best_effort, sides;
+    int threads, quiet, force, best_effort, sides, dry_run, shard_k, shard_n;
     const char *table, *out, *report;
     btdf_table_opts o; /* tolerance, metric, grid, max_samples */
     size_t mib;
@@ -300,6 +300,18 @@ static int apply(cli *c, const opt_hit *h)
         return 1;
     }
     case OPT_FORCE: c->force = 1; return 1;
+    case OPT_DRY_RUN: c->dry_run = 1; return 1;
+    case OPT_SHARD: {
+        int k, n;
+        char tail;
+        if (sscanf(v, "%d/%d%c", &k, &n, &tail) != 2 || n < 1 || n > 100000 || k < 1 || k > n) {
+            fail(EXIT_USAGE, "--shard: '%s': expected K/N with 1 <= K <= N, e.g. 3/8", v);
+            return 0;
+        }
+        c->shard_k = k;
+        c->shard_n = n;
+        return 1;
+    }
     case OPT_BEST_EFFORT: c->best_effort = 1; return 1;
     case OPT_QUIET: c->quiet = 1; return 1;
     case OPT_HELP:
@@ -423,10 +435,20 @@ static void table_ti_range(const btdf_table *t, double *range)
     range[1] = last.ti * 180.0 / M_PI;
 }
 
+/* The shortest decimal that reads back to x (btdf_format_double), in a static buffer. */
+static const char *num(double x)
+{
+    static char b[4][40];
+    static int k;
+    k = (k + 1) % 4;
+    btdf_format_double(x, b[k], sizeof b[k]);
+    return b[k];
+}
+
 static void print_values(const double *v, int n)
 {
     for (int c = 0; c < n; c++)
-        printf(c ? " %.17g" : "%.17g", v[c]);
+        printf(c ? " %s" : "%s", num(v[c]));
     putchar('\n');
 }
 
@@ -541,9 +563,11 @@ static int cmd_albedo(const cli *c)
             return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
         double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS];
         btdf_transmittance(p, ti, T);
-        printf("%.10g", angles[k]);
+        /* 7 significant digits: T is accurate to 1e-7 absolute (btdf_transmittance),
+           and a small T keeps its digits (8.01e-06, not 0.000008010) */
+        printf("%s", num(angles[k]));
         for (int ch = 0; ch < p->channels; ch++)
-            printf(",%.9f,%.9f", T[ch], btdf_fresnel_t(p->ior[ch], ti));
+            printf(",%.7g,%.7g", T[ch], btdf_fresnel_t(p->ior[ch], ti));
         printf("\n");
     }
     return 0;
@@ -567,13 +591,13 @@ static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
     fprintf(f, "\",\n  \"kind\": \"%s\",\n", btdf_table_kind_name(kind));
     fprintf(f, "  \"ior\": [");
     for (int c = 0; c < o->params.channels; c++)
-        fprintf(f, "%s%.17g", c ? ", " : "", o->params.ior[c]);
-    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", o->params.smoothness,
-            o->params.k0);
-    fprintf(f, "  \"theta_i_deg\": [%.17g, %.17g],\n", o->ti_min * 180 / M_PI,
-            o->ti_max * 180 / M_PI);
-    fprintf(f, "  \"tolerance\": %.17g,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
-            r->tolerance, r->metric == BTDF_METRIC_MAX ? "max" : "l1",
+        fprintf(f, "%s%s", c ? ", " : "", num(o->params.ior[c]));
+    fprintf(f, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n", num(o->params.smoothness),
+            num(o->params.k0));
+    fprintf(f, "  \"theta_i_deg\": [%s, %s],\n", num(o->ti_min * 180 / M_PI),
+            num(o->ti_max * 180 / M_PI));
+    fprintf(f, "  \"tolerance\": %s,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
+            num(r->tolerance), r->metric == BTDF_METRIC_MAX ? "max" : "l1",
             r->met ? "true" : "false");
     fprintf(f, "  \"slices\": %zu,\n  \"samples\": %zu,\n", r->slices, r->samples);
     fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"seconds_estimate\": %.6f,\n",
@@ -633,9 +657,11 @@ static int tabulate_series(const cli *c, const char *prov)
         return EXIT_USAGE;
     if (!folder_writable(c->out))
         return 1;
+    run_progress pr;
+    run_progress_start(&pr, !c->quiet && isatty(2), c->out);
     return run_series(prog, c->out, &c->p, c->o.tolerance,
                       c->sides ? c->sides : BTDF_SIDE_BOTH, c->threads, c->quiet,
-                      c->best_effort, prov);
+                      c->best_effort, prov, &pr);
 }
 
 static int cmd_tabulate(cli *c, const char *prov)
@@ -706,9 +732,18 @@ static int cmd_tabulate(cli *c, const char *prov)
     o.max_bytes = c->mib << 20;
     char msg[512] = "";
     btdf_table *t = NULL;
+    /* A progress bar on a terminal (run.h): the build, the estimate, the writes. */
+    run_progress pr;
+    run_progress_start(&pr, !c->quiet && isatty(2),
+                       out ? (strcmp(out, "-") ? out : "standard output") : c->previews[0].path);
+    o.progress = run_progress_cb;
+    o.progress_user = &pr;
     double t0 = run_now();
     btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
     double t1 = run_now();
+    run_progress_stage(&pr, "estimating the error");
+    if (st != BTDF_OK && st != BTDF_EBUDGET)
+        run_progress_end(&pr);
     if (st != BTDF_OK && st != BTDF_EBUDGET)
         return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s", msg[0] ? msg : btdf_strerror(st));
     if (!t)
@@ -716,6 +751,7 @@ static int cmd_tabulate(cli *c, const char *prov)
     btdf_report r;
     memset(&r, 0, sizeof r);
     btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);
+    run_progress_end(&pr); /* the report line below replaces the bar */
     if (es != BTDF_OK) {
         btdf_table_free(t);
         return fail(1, "error estimate: %s", btdf_strerror(es));
@@ -754,7 +790,10 @@ static int cmd_tabulate(cli *c, const char *prov)
     btdf_write_opts w = {&r, prov};
     if (code == 0 && out) {
         btdf_output what = {t, NULL, NULL, &w, NULL};
+        if (strcmp(out, "-"))
+            run_progress_stage(&pr, "writing");
         st = btdf_write(&what, out, msg, sizeof msg);
+        run_progress_end(&pr);
         if (st != BTDF_OK)
             code = fail(1, "%s: %s", out, msg[0] ? msg : btdf_strerror(st));
     }
@@ -861,7 +900,10 @@ static int cmd_build(const cli *c)
     mo.best_effort = c->best_effort;
     mo.quiet = c->quiet;
     mo.threads = c->threads;
-    mo.progress = !c->quiet && isatty(2); /* progress lines only for a person watching */
+    mo.progress = !c->quiet && isatty(2); /* progress bars only for a person watching */
+    mo.dry_run = c->dry_run;
+    mo.shard_k = c->shard_k;
+    mo.shard_n = c->shard_n;
     return manifest_run(&mo);
 }
 
@@ -913,6 +955,12 @@ int main(int argc, char **argv)
     }
     if (!strcmp(name, "--version") || !strcmp(name, "-V"))
         return print_version();
+    if (!strcmp(name, "--completion")) {
+        if (argc != 3 || strcmp(argv[2], "bash"))
+            return fail(EXIT_USAGE, "--completion: give 'bash' (the only shell supported)");
+        opt_bash(stdout);
+        return fflush(stdout) == 0 ? 0 : 1;
+    }
     if (!strcmp(name, "--man")) {
         opt_man(stdout, btdf_version_string());
         return fflush(stdout) == 0 ? 0 : 1;

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <ini.h>
@@ -36,6 +37,12 @@
  * Only the tables an output needs are built, once per material and side, and shared
  * by its outputs. An output is skipped when it exists and its stamp (a hidden file
  * beside it) records the same parameters and program version.
+ *
+ * Output paths that are not absolute are relative to the manifest's folder, so a
+ * manifest gives the same files from any working directory; missing folders are
+ * created. The work comes in jobs, in manifest order: per material, its enter
+ * tables, its leave tables, then each .bsdf. --shard K/N does jobs K-1, K-1+N, ...:
+ * every output belongs to exactly one job, so N shards write disjoint files.
  */
 
 #define MAX_MATERIALS 64
@@ -55,6 +62,7 @@ typedef struct material {
 typedef struct manifest {
     material m[MAX_MATERIALS];
     int n;
+    char dir[4096]; /* the manifest's folder with a final '/', or "" for the current one */
     char why[256]; /* reason for the first error */
 } manifest;
 
@@ -85,10 +93,12 @@ static int split_outputs(manifest *mf, const char *key, const char *value, char 
     for (char *tok = strtok(buf, " \t,"); tok; tok = strtok(NULL, " \t,")) {
         if (*n == MAX_OUTPUTS)
             return set_why(mf, "'%s': at most 8 outputs%s", key, "");
-        list[*n] = malloc(strlen(tok) + 1);
+        const char *dir = tok[0] == '/' ? "" : mf->dir; /* relative to the manifest */
+        list[*n] = malloc(strlen(dir) + strlen(tok) + 1);
         if (!list[*n])
             return set_why(mf, "out of memory%s%s", "", "");
-        strcpy(list[(*n)++], tok);
+        strcpy(list[*n], dir);
+        strcat(list[(*n)++], tok);
     }
     return 1;
 }
@@ -219,19 +229,53 @@ static void stamp_path(char *buf, size_t len, const char *out)
     snprintf(buf, len, "%.*s.%s.btdftab-stamp", (int)(base - out), out, base);
 }
 
-static int up_to_date(const char *out, const char *stamp)
+/* Why out must be (re)built, or NULL when it is up to date. */
+static const char *why_stale(const char *out, const char *stamp, int force)
 {
     char sp[4200], have[4096];
     if (access(out, F_OK) != 0)
-        return 0;
+        return "missing";
+    if (force)
+        return "--force";
     stamp_path(sp, sizeof sp, out);
     FILE *f = fopen(sp, "r");
     if (!f)
-        return 0;
+        return "no stamp beside it";
     size_t n = fread(have, 1, sizeof have - 1, f);
     fclose(f);
     have[n] = 0;
-    return strcmp(have, stamp) == 0;
+    return strcmp(have, stamp) == 0 ? NULL : "parameters or program version changed";
+}
+
+static int up_to_date(const char *out, const char *stamp)
+{
+    return why_stale(out, stamp, 0) == NULL;
+}
+
+/* Creates the folders of path that are missing (mkdir -p of its dirname). */
+static int make_parents(const char *path)
+{
+    char d[4096];
+    snprintf(d, sizeof d, "%s", path);
+    char *slash = strrchr(d, '/');
+    if (!slash || slash == d)
+        return 1;
+    *slash = 0;
+    for (char *q = d + 1; *q; q++) {
+        if (*q != '/')
+            continue;
+        *q = 0;
+        if (mkdir(d, 0777) != 0 && errno != EEXIST)
+            return 0;
+        *q = '/';
+    }
+    return mkdir(d, 0777) == 0 || errno == EEXIST;
+}
+
+/* Dry run: one line per output, what would be done and why. */
+static void plan(const char *name, const char *out, const char *why)
+{
+    printf("%s: %s: %s\n", name, out, why ? why : "up to date");
 }
 
 static int write_stamp(const char *out, const char *stamp)
@@ -247,6 +291,12 @@ static int fail(const char *prog, const char *fmt, const char *a, const char *b)
     fprintf(stderr, fmt, a, b);
     fputc('\n', stderr);
     return 1;
+}
+
+/* Whether job number j (0-based, manifest order) belongs to this shard. */
+static int mine(const manifest_opts *mo, int j)
+{
+    return mo->shard_n <= 1 || j % mo->shard_n == mo->shard_k - 1;
 }
 
 /* Builds one side's table and writes every output of that side that is stale. */
@@ -265,6 +315,17 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         if (mo->force || !up_to_date(outs[k], stamp))
             stale++;
     }
+    if (mo->dry_run) {
+        stamp_text(stamp, sizeof stamp, m, &p, side);
+        for (int k = 0; k < nouts; k++) {
+            const char *why = why_stale(outs[k], stamp, mo->force);
+            char what[128];
+            snprintf(what, sizeof what, "%s (%s)", m->name, side);
+            plan(what, outs[k], why);
+        }
+        *done += nouts;
+        return 0;
+    }
     if (stale == 0) {
         *done += nouts;
         if (!mo->quiet)
@@ -272,9 +333,16 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
                     nouts);
         return 0;
     }
-    if (mo->progress)
-        fprintf(stderr, "%s: [%d/%d] %s (%s): tabulating...\n", mo->prog, *done + 1, total,
-                m->name, side);
+    for (int k = 0; k < nouts; k++)
+        if (!make_parents(outs[k])) {
+            fprintf(stderr, "%s: %s: cannot create its folder: %s\n", mo->prog, outs[k],
+                    strerror(errno));
+            return 1;
+        }
+    char label[128];
+    snprintf(label, sizeof label, "[%d/%d] %s (%s)", *done + 1, total, m->name, side);
+    run_progress pr;
+    run_progress_start(&pr, mo->progress, label);
     btdf_table_opts o;
     btdf_table_opts_default(&o);
     o.params = p;
@@ -283,9 +351,13 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     o.tolerance = m->tol;
     o.metric = m->metric;
     o.threads = mo->threads;
+    o.progress = run_progress_cb;
+    o.progress_user = &pr;
     btdf_table *t = NULL;
     btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
+    run_progress_stage(&pr, "estimating the error");
     if (st != BTDF_OK && !(st == BTDF_EBUDGET && mo->best_effort)) {
+        run_progress_end(&pr);
         btdf_table_free(t);
         fprintf(stderr, "%s: %s (%s): %s\n", mo->prog, m->name, side,
                 msg[0] ? msg : btdf_strerror(st));
@@ -294,6 +366,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     btdf_report r;
     memset(&r, 0, sizeof r);
     btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);
+    run_progress_end(&pr);
     r.tolerance = o.tolerance;
     r.metric = o.metric;
     r.met = (o.metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max) <= o.tolerance;
@@ -339,7 +412,8 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
 
 /* Writes the stale .bsdf outputs of one material. */
 static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_params *p,
-                         double tol, int sides, char **outs, int nouts, int *done, int total)
+                         double tol, int sides, char **outs, int nouts, int *done, int total,
+                         int *job)
 {
     /* The stamp: everything the file depends on (theta_i does not apply). */
     material m;
@@ -351,15 +425,28 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
     snprintf(prov, sizeof prov, "btdftab build, material [%s]", name);
     for (int k = 0; k < nouts; k++) {
         (*done)++;
+        if (!mine(mo, (*job)++))
+            continue;
+        if (mo->dry_run) {
+            plan(name, outs[k], why_stale(outs[k], stamp, mo->force));
+            continue;
+        }
         if (!mo->force && up_to_date(outs[k], stamp)) {
             if (!mo->quiet)
                 fprintf(stderr, "%s: %s: up to date\n", mo->prog, outs[k]);
             continue;
         }
-        if (mo->progress)
-            fprintf(stderr, "%s: [%d/%d] %s: %s...\n", mo->prog, *done, total, name, outs[k]);
+        if (!make_parents(outs[k])) {
+            fprintf(stderr, "%s: %s: cannot create its folder: %s\n", mo->prog, outs[k],
+                    strerror(errno));
+            return 1;
+        }
+        char label[128];
+        snprintf(label, sizeof label, "[%d/%d] %s", *done, total, outs[k]);
+        run_progress pr;
+        run_progress_start(&pr, mo->progress, label);
         int code = run_series(mo->prog, outs[k], p, tol, sides, mo->threads, mo->quiet,
-                              mo->best_effort, prov);
+                              mo->best_effort, prov, &pr);
         if (code != 0)
             return code;
         if (!write_stamp(outs[k], stamp)) {
@@ -376,6 +463,9 @@ int manifest_run(const manifest_opts *mo)
     manifest *mf = calloc(1, sizeof *mf);
     if (!mf)
         return fail(mo->prog, "out of memory%s%s", "", "");
+    const char *slash = strrchr(mo->path, '/');
+    if (slash) /* outputs are relative to the manifest's folder */
+        snprintf(mf->dir, sizeof mf->dir, "%.*s/", (int)(slash - mo->path), mo->path);
     int line = ini_parse(mo->path, on_entry, mf);
     if (line < 0) {
         free(mf);
@@ -428,16 +518,24 @@ int manifest_run(const manifest_opts *mo)
         free(mf);
         return 2;
     }
-    int code = 0, done = 0;
+    int code = 0, done = 0, job = 0;
     for (int i = 0; i < mf->n && code == 0; i++) {
         material *m = &mf->m[i];
-        if (m->nenter)
-            code = do_side(mo, m, 0, m->enter, m->nenter, &done, total);
-        if (code == 0 && m->nleave)
-            code = do_side(mo, m, 1, m->leave, m->nleave, &done, total);
+        if (m->nenter) {
+            if (mine(mo, job++))
+                code = do_side(mo, m, 0, m->enter, m->nenter, &done, total);
+            else
+                done += m->nenter;
+        }
+        if (code == 0 && m->nleave) {
+            if (mine(mo, job++))
+                code = do_side(mo, m, 1, m->leave, m->nleave, &done, total);
+            else
+                done += m->nleave;
+        }
         if (code == 0 && m->nbsdf)
             code = manifest_bsdf(mo, m->name, &m->p, m->tol, m->sides, m->bsdf, m->nbsdf, &done,
-                                 total);
+                                 total, &job);
     }
     free_manifest(mf);
     free(mf);

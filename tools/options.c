@@ -60,6 +60,12 @@ const opt_def opt_table[] = {
     {OPT_ANGLES, "angles", 0, "A,B,...", 0, CMD_POLAR,
      "incident angles in degrees (default 30)"},
     {OPT_FORCE, "force", 0, NULL, 0, CMD_BUILD, "redo outputs that are up to date"},
+    {OPT_DRY_RUN, "dry-run", 0, NULL, 0, CMD_BUILD,
+     "list every output with what would be done and why (missing, stamp changed,\n"
+     "--force, up to date) on standard output; build nothing"},
+    {OPT_SHARD, "shard", 0, "K/N", 0, CMD_BUILD,
+     "build only the K-th of N deterministic shares of the jobs (1 <= K <= N), e.g.\n"
+     "one per task of a Slurm job array; shards write disjoint files"},
     {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD,
      "no report lines on standard error"},
     {OPT_HELP, "help", 'h', NULL, 0, ALL, "this help"},
@@ -85,7 +91,8 @@ const cmd_def cmd_table[] = {
      "like Figs. 5 and 6 of Xu & Sun (2008)."},
     {"build", CMD_BUILD, "[options] SCENE.ini", "the outputs a scene manifest lists",
      "Builds every output of a scene manifest (docs/pipelines.md) that is missing or\n"
-     "out of date; each table is built once and shared by its outputs."},
+     "out of date; each table is built once and shared by its outputs. Output paths\n"
+     "are relative to the manifest's folder; missing folders are created."},
     {"inspect", CMD_INSPECT, "FILE", "header and statistics of a file",
      "Prints the header and statistics of a table (.csv, .exr) or a .bsdf."},
     {NULL, 0, NULL, NULL, NULL},
@@ -496,4 +503,50 @@ void opt_man(FILE *f, const char *version)
                "at the end; an interrupted run leaves no output.\n");
     fprintf(f, ".SH SEE ALSO\nThe project's README.md and docs/ (tables, formats, scatfun, "
                "pipelines).\n");
+}
+
+/* ------------------------------------------------------------------------- */
+/* Bash completion                                                           */
+/* ------------------------------------------------------------------------- */
+
+void opt_bash(FILE *f)
+{
+    fprintf(f, "# bash completion for btdftab, written by 'btdftab --completion bash' from its\n"
+               "# option table.\n_btdftab()\n{\n"
+               "    local cur=${COMP_WORDS[COMP_CWORD]} prev=${COMP_WORDS[COMP_CWORD-1]}\n"
+               "    if [ \"$COMP_CWORD\" -eq 1 ]; then\n"
+               "        COMPREPLY=($(compgen -W \"");
+    for (const cmd_def *c = cmd_table; c->name; c++)
+        fprintf(f, "%s ", c->name);
+    fprintf(f, "help --help --version\" -- \"$cur\"))\n        return\n    fi\n");
+    /* Options that take a file name complete file names. */
+    fprintf(f, "    case $prev in\n        ");
+    int first = 1;
+    for (const opt_def *o = opt_table; o->name; o++)
+        if (o->value && strstr(o->value, "F") && (o == opt_table || strcmp(o[-1].name, o->name))) {
+            fprintf(f, "%s--%s", first ? "" : "|", o->name);
+            if (o->letter)
+                fprintf(f, "|-%c", o->letter);
+            first = 0;
+        }
+    fprintf(f, ")\n            COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n    esac\n");
+    fprintf(f, "    local opts\n    case ${COMP_WORDS[1]} in\n");
+    for (const cmd_def *c = cmd_table; c->name; c++) {
+        fprintf(f, "        %s) opts=\"", c->name);
+        const char *last = "";
+        for (const opt_def *o = opt_table; o->name; o++)
+            if ((o->cmds & c->bit) && strcmp(o->name, last)) {
+                fprintf(f, "--%s ", o->name);
+                last = o->name;
+            }
+        fprintf(f, "\" ;;\n");
+    }
+    fprintf(f, "        help) COMPREPLY=($(compgen -W \"");
+    for (const cmd_def *c = cmd_table; c->name; c++)
+        fprintf(f, "%s ", c->name);
+    fprintf(f, "\" -- \"$cur\")); return ;;\n        *) return ;;\n    esac\n"
+               "    if [[ $cur == -* ]]; then\n"
+               "        COMPREPLY=($(compgen -W \"$opts\" -- \"$cur\"))\n"
+               "    else\n        COMPREPLY=($(compgen -f -- \"$cur\"))\n    fi\n}\n"
+               "complete -F _btdftab btdftab\n");
 }

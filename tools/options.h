@@ -41,6 +41,8 @@ typedef enum {
     OPT_MATERIAL,
     OPT_ANGLES,
     OPT_FORCE,
+    OPT_DRY_RUN,
+    OPT_SHARD,
     OPT_QUIET,
     OPT_END
 } opt_id;
@@ -91,6 +93,9 @@ int opt_parse(const char *prog, const cmd_def *cmd, int argc, char **argv, opt_h
 
 /* Help of one command (its usage, details and options), or of the tool (cmd NULL). */
 void opt_help(FILE *f, const cmd_def *cmd);
+
+/* The bash completion script, from the same table. */
+void opt_bash(FILE *f);
 
 /* The manual page, btdftab.1, in troff -man. */
 void opt_man(FILE *f, const char *version);

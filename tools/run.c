@@ -30,6 +30,64 @@ int run_parse_metric(const char *word, btdf_metric *metric)
     return 1;
 }
 
+void run_progress_start(run_progress *pr, int on, const char *label)
+{
+    pr->on = on;
+    pr->drawn = 0;
+    snprintf(pr->label, sizeof pr->label, "%s", label);
+    pr->t0 = run_now();
+    pr->last = 0.0;
+}
+
+/* One line of at most 79 columns: label, bar, percent, stage, time left. */
+static void draw(run_progress *pr, const char *stage, double frac)
+{
+    double now = run_now(), el = now - pr->t0;
+    if (!pr->on || el < 1.0 || (pr->drawn && now - pr->last < 0.1))
+        return;
+    pr->last = now;
+    pr->drawn = 1;
+    char line[256], bar[25], eta[32] = "";
+    int k = 0;
+    if (frac >= 0.0) {
+        int fill = (int)(frac * 24.0 + 0.5);
+        for (k = 0; k < 24; k++)
+            bar[k] = k < fill ? '#' : '-';
+        bar[24] = 0;
+        if (frac >= 0.05 && frac < 1.0) /* too early an estimate says nothing */
+            snprintf(eta, sizeof eta, "  ETA %.0f s", el * (1.0 - frac) / frac);
+        snprintf(line, sizeof line, "%s [%s] %3.0f%% %s%s", pr->label, bar, 100.0 * frac, stage,
+                 eta);
+    } else {
+        snprintf(line, sizeof line, "%s: %s (%.0f s)", pr->label, stage, el);
+    }
+    line[79] = 0; /* one terminal line: a longer one would scroll on every redraw */
+    fprintf(stderr, "\r\033[K%s", line);
+    fflush(stderr);
+}
+
+void run_progress_cb(void *user, const char *stage, size_t done, size_t todo)
+{
+    run_progress *pr = user;
+    char what[96];
+    snprintf(what, sizeof what, "%s %zu, %zu to go", stage, done, todo);
+    draw(pr, what, done + todo ? (double)done / (double)(done + todo) : 0.0);
+}
+
+void run_progress_stage(run_progress *pr, const char *stage)
+{
+    draw(pr, stage, -1.0);
+}
+
+void run_progress_end(run_progress *pr)
+{
+    if (pr->drawn) {
+        fprintf(stderr, "\r\033[K");
+        fflush(stderr);
+    }
+    pr->drawn = 0;
+}
+
 static int fail(const char *prog, int code, const char *path, const char *what)
 {
     fprintf(stderr, "%s: %s: %s\n", prog, path, what);
@@ -37,22 +95,40 @@ static int fail(const char *prog, int code, const char *path, const char *what)
 }
 
 int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
-               int threads, int quiet, int best_effort, const char *prov)
+               int threads, int quiet, int best_effort, const char *prov, run_progress *pr)
 {
     char msg[512] = "";
     btdf_scatfun *f = NULL;
     double t0 = run_now();
-    btdf_status st = btdf_scatfun_build(p, tol, (btdf_side)sides, threads, &f, msg, sizeof msg);
+    btdf_status st = btdf_scatfun_build_progress(p, tol, (btdf_side)sides, threads,
+                                                 run_progress_cb, pr, &f, msg, sizeof msg);
     double t1 = run_now();
-    if (st != BTDF_OK && st != BTDF_EBUDGET)
+    run_progress_stage(pr, "estimating the error");
+    if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        run_progress_end(pr);
         return fail(prog, st == BTDF_EINVAL ? 2 : 1, path, msg[0] ? msg : btdf_strerror(st));
-    if (!f)
+    }
+    if (!f) {
+        run_progress_end(pr);
         return fail(prog, 1, path, msg[0] ? msg : btdf_strerror(st));
+    }
     /* The error a renderer will see: the format's own evaluation, per side. */
     int met = 1;
     char meta[1024];
-    int k = snprintf(meta, sizeof meta, "{\"program\": \"btdftab %s\", \"tolerance\": %g",
-                     btdf_version_string(), tol);
+    char nb[3][40];
+    int k = snprintf(meta, sizeof meta, "{\"program\": \"btdftab %s\", \"ior\": [",
+                     btdf_version_string());
+    for (int c = 0; c < p->channels && k > 0 && (size_t)k < sizeof meta; c++) {
+        btdf_format_double(p->ior[c], nb[0], sizeof nb[0]);
+        k += snprintf(meta + k, sizeof meta - (size_t)k, "%s%s", c ? ", " : "", nb[0]);
+    }
+    btdf_format_double(p->smoothness, nb[0], sizeof nb[0]);
+    btdf_format_double(p->k0, nb[1], sizeof nb[1]);
+    btdf_format_double(tol, nb[2], sizeof nb[2]);
+    if (k > 0 && (size_t)k < sizeof meta)
+        k += snprintf(meta + k, sizeof meta - (size_t)k,
+                      "], \"smoothness\": %s, \"k0\": %s, \"tolerance\": %s", nb[0], nb[1],
+                      nb[2]);
     for (int s = BTDF_SIDE_ENTER; s <= BTDF_SIDE_LEAVE; s++) {
         if (!(sides & s))
             continue;
@@ -61,7 +137,9 @@ int run_series(const char *prog, const char *path, const btdf_params *p, double 
         double e0 = run_now();
         btdf_status es = btdf_scatfun_report(f, p, (btdf_side)s, 0, 0, REPORT_SEED, threads, &r);
         double e1 = run_now();
+        run_progress_end(pr); /* the report line replaces the bar */
         if (es != BTDF_OK) {
+            run_progress_end(pr);
             btdf_scatfun_free(f);
             fprintf(stderr, "%s: %s: error estimate: %s\n", prog, path, btdf_strerror(es));
             return 1;
@@ -93,7 +171,9 @@ int run_series(const char *prog, const char *path, const btdf_params *p, double 
         code = 3;
     } else {
         btdf_output what = {NULL, f, NULL, NULL, meta};
+        run_progress_stage(pr, "writing");
         st = btdf_write(&what, path, msg, sizeof msg);
+        run_progress_end(pr);
         if (st != BTDF_OK)
             code = fail(prog, 1, path, msg[0] ? msg : btdf_strerror(st));
     }

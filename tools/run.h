@@ -16,10 +16,27 @@ double run_now(void);
 int run_parse_side(const char *word);
 int run_parse_metric(const char *word, btdf_metric *metric);
 
+/* A progress line on standard error for a person watching: a bar, the stage being
+   refined and an estimated time left. Drawn only when `on` (stderr is a terminal and
+   not --quiet) and once the run has lasted a second; redrawn at most 10 times a
+   second; run_progress_end erases it. */
+typedef struct run_progress {
+    int on, drawn;
+    char label[96];
+    double t0, last;
+} run_progress;
+
+void run_progress_start(run_progress *pr, int on, const char *label);
+/* A btdf_progress_fn: user is a run_progress. */
+void run_progress_cb(void *user, const char *stage, size_t done, size_t todo);
+/* A stage of the tool's own (the error estimate, the write), without a fraction. */
+void run_progress_stage(run_progress *pr, const char *stage);
+void run_progress_end(run_progress *pr);
+
 /* Builds a .bsdf from Eq. 25, reports its error per side on standard error (unless
    quiet) and writes it at path unless the tolerance was missed without best_effort.
    Returns an exit status: 0, 1 failed run, 2 bad parameters, 3 tolerance not met. */
 int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
-               int threads, int quiet, int best_effort, const char *prov);
+               int threads, int quiet, int best_effort, const char *prov, run_progress *pr);
 
 #endif

@@ -196,6 +196,14 @@ typedef struct btdf_slice {
 
 typedef enum { BTDF_METRIC_L1 = 0, BTDF_METRIC_MAX = 1 } btdf_metric;
 
+/* Progress of a long build, for a caller's progress bar: `stage` names what is being
+   refined ("slices", "incidence angles", "elevation nodes", ...), `done` counts the
+   units of it finished so far and `todo` those known to remain; refinement may find
+   more, so done / (done + todo) is an estimate that may step back. Called from the
+   thread that called the build, between units of work, never concurrently; it must
+   not call back into the build. NULL: no calls. */
+typedef void (*btdf_progress_fn)(void *user, const char *stage, size_t done, size_t todo);
+
 /* How to build a table. Fill with btdf_table_opts_default, then change fields. */
 typedef struct btdf_table_opts {
     btdf_params params;
@@ -210,6 +218,8 @@ typedef struct btdf_table_opts {
     double to_min, to_max;  /* GRID: outgoing range, radians within [pi/2, pi] */
     double phi_min, phi_max; /* GRID: azimuth range, radians within [0, pi] (rho depends
                                on cos phi only, so [0, pi] holds every azimuth) */
+    btdf_progress_fn progress; /* may be NULL (the default) */
+    void *progress_user;       /* passed to progress */
 } btdf_table_opts;
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o);

@@ -85,6 +85,12 @@ BTDF_API btdf_status btdf_inspect(const char *path, FILE *out, char *msg, size_t
 BTDF_API btdf_status btdf_write_buffer(const char *path, const char *ext, const void *data,
                                        size_t len, char *msg, size_t msglen);
 
+/* Writes to buf the shortest of %.15g, %.16g and %.17g of x that reads back (strtod)
+   to the same double: "0.7", not "0.69999999999999996". Returns what snprintf returns
+   (the length it needed); 32 bytes always suffice. Every number btdftab writes as
+   text goes through it. */
+BTDF_API int btdf_format_double(double x, char *buf, size_t len);
+
 /* Removes the temporary files of the writes in progress; async-signal-safe, for a
    signal handler that then ends the process. */
 BTDF_API void btdf_remove_partial_files(void);

@@ -63,6 +63,13 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                                         btdf_side side, int threads, btdf_scatfun **out,
                                         char *msg, size_t msglen);
 
+/* btdf_scatfun_build with a progress callback (btdf.h, btdf_progress_fn): stages
+   "elevation nodes" (nodes checked, intervals to split) and "series (tighter)". */
+BTDF_API btdf_status btdf_scatfun_build_progress(const btdf_params *p, double tolerance,
+                                                 btdf_side side, int threads,
+                                                 btdf_progress_fn progress, void *user,
+                                                 btdf_scatfun **out, char *msg, size_t msglen);
+
 /* Writes f to path (exact SCATFUN v1 layout, float32 little-endian) with the given
    metadata text appended (NULL: a short JSON of the build parameters). The file is
    written under a temporary name in the same folder and renamed at the end; on
