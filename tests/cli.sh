@@ -182,5 +182,77 @@ rm -f "$W/r60.csv"
 expect 1 "t.csv: cannot open: No such file" "one wording for a missing file (.csv)" -- "$B" inspect "$W/t.csv"
 expect 1 "t.bsdf: cannot open: No such file" "one wording for a missing file (.bsdf)" -- "$B" inspect "$W/t.bsdf"
 
+# readable numbers: the shortest decimal that reads back, significant digits in albedo
+"$B" tabulate -q --grid 2,3,3 --k0 0.7 -o "$W/n.csv" && grep -q '^# k0: 0.7$' "$W/n.csv" && \
+    ok "CSV parameters print as 0.7, not 0.69999999999999996" || no "CSV k0: $(grep '^# k0' "$W/n.csv")"
+head -n 1 "$W/n.csv" | grep -q '^theta_i_deg,' && ok "the CSV's first line is its header row" || no "CSV header first"
+[ "$("$B" eval --table "$W/n.csv" 30 150 180)" = "$("$B" eval --table "$W/n.csv" 30 150 180)" ] && \
+    "$B" inspect "$W/n.csv" | grep -q '^k0: 0.7$' && ok "the CSV reads back" || no "CSV read back"
+rm -f "$W/n.csv"
+v=$("$B" albedo --ior 1.5 -s 100 0 89.9 | tail -n 1)
+case "$v" in 89.9,0.006994374,0.01008812) ok "albedo in 7 significant digits ($v)" ;; *) no "albedo digits: $v" ;; esac
+[ "$("$B" eval --k0 0.7 30 150 180)" = "$("$B" eval 30 150 180)" ] && \
+    awk -v v="$("$B" eval 0 180 0)" 'BEGIN { exit !(v + 0 > 0) }' && ok "eval prints round-trip decimals" || no "eval numbers"
+
+# inspect: the stored report, the ranges and the sizes, for every format
+"$B" tabulate -q --theta-i 0:40 --tolerance 1e-2 -o "$W/i.csv" && "$B" inspect "$W/i.csv" > "$W/i.txt" && \
+    grep -q '^error: e_L1 max ' "$W/i.txt" && grep -q '^theta_i range: 0:40 deg' "$W/i.txt" && \
+    grep -q '^rho range: ' "$W/i.txt" && grep -q '^file: .*CSV, [0-9]* bytes' "$W/i.txt" && \
+    grep -q '^provenance: btdftab tabulate' "$W/i.txt" && ok "inspect a CSV: report, ranges, sizes" || { no "inspect CSV"; cat "$W/i.txt"; }
+if "$B" --version | grep -q 'OpenEXR on'; then
+    "$B" tabulate -q --theta-i 0:40 --tolerance 1e-2 -o "$W/i.exr" && "$B" inspect "$W/i.exr" > "$W/i.txt" && \
+        grep -q '^error: e_L1 max ' "$W/i.txt" && grep -q '^theta_i range: 0:40 deg' "$W/i.txt" && \
+        grep -q '^file: .*OpenEXR, [0-9]* bytes' "$W/i.txt" && ok "inspect an EXR: report, ranges, sizes" || { no "inspect EXR"; cat "$W/i.txt"; }
+fi
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 -o "$W/i.bsdf" && "$B" inspect "$W/i.bsdf" > "$W/i.txt" && \
+    grep -q '"enter": {"e_l1_max"' "$W/i.txt" && grep -q '"ior": \[1.5\]' "$W/i.txt" && \
+    grep -q '^file: .*SCATFUN, [0-9]* bytes' "$W/i.txt" && ok "inspect a .bsdf: stored report, sizes" || { no "inspect .bsdf"; cat "$W/i.txt"; }
+rm -f "$W"/i.*
+
+# progress: a bar on a terminal for a run over a second, none off a terminal or --quiet
+"$B" tabulate --ior 1.5 -s 3 --threads 1 -o "$W/p.exr" 2>"$W/p.err" && ! grep -q 'ETA' "$W/p.err" && \
+    ok "no progress bar when stderr is not a terminal" || no "progress off a terminal"
+if command -v script >/dev/null 2>&1 && "$B" --version | grep -q 'OpenEXR on'; then
+    script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 5e-4 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
+    grep -q 'p.exr \[#*-*\] *[0-9]*% .*ETA' "$W/p.tty" && ok "a progress bar with stage and ETA on a terminal" || { no "progress on a terminal"; cat "$W/p.tty"; }
+    script -qec "'$B' tabulate -q --ior 1.5 -s 3 --threads 1 --tolerance 5e-4 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
+    [ ! -s "$W/p.tty" ] && ok "--quiet: no progress bar on a terminal" || { no "progress with --quiet"; cat "$W/p.tty"; }
+    script -qec "'$B' tabulate --ior 1.5 -s 6 --threads 1 --tolerance 2e-3 -o '$W/p.bsdf'" /dev/null > "$W/p.tty" 2>&1
+    grep -q 'p.bsdf \[#*-*\] .*elevation nodes' "$W/p.tty" && ok "a progress bar for .bsdf" || { no "progress for .bsdf"; cat "$W/p.tty"; }
+fi
+rm -f "$W"/p.*
+
+# build: folders created, paths relative to the manifest, --dry-run, --shard
+mkdir -p "$W/lib"
+cat > "$W/lib/scene.ini" <<EOF2
+[a]
+ior = 1.5
+smoothness = 3
+theta_i = 0:30
+tolerance = 1e-2
+enter = out/sub/a.csv
+[b]
+ior = 1.33
+smoothness = 4
+theta_i = 0:30
+tolerance = 1e-2
+enter = out/b.csv
+leave = out/b-leave.csv
+EOF2
+"$B" build --dry-run "$W/lib/scene.ini" > "$W/plan" && grep -q "^a (enter): $W/lib/out/sub/a.csv: missing" "$W/plan" && \
+    [ "$(wc -l < "$W/plan")" -eq 3 ] && [ ! -e "$W/lib/out" ] && ok "build --dry-run lists what and why, builds nothing" || { no "dry run"; cat "$W/plan"; }
+"$B" build -q --shard 1/2 "$W/lib/scene.ini" && [ -s "$W/lib/out/sub/a.csv" ] && [ -s "$W/lib/out/b-leave.csv" ] && \
+    [ ! -e "$W/lib/out/b.csv" ] && ok "build --shard 1/2: jobs 1 and 3, folders created, relative to the manifest" || { no "shard 1/2"; ls -R "$W/lib"; }
+"$B" build -q --shard 2/2 "$W/lib/scene.ini" && [ -s "$W/lib/out/b.csv" ] && \
+    "$B" build --dry-run "$W/lib/scene.ini" | grep -vc 'up to date$' | grep -qx 0 && \
+    ok "build --shard 2/2 completes the set; nothing left to do" || no "shard 2/2"
+expect 2 "expected K/N" "a bad --shard" -- "$B" build --shard 3/2 "$W/lib/scene.ini"
+rm -rf "$W/lib"
+bash -n "$(dirname "$B")/completion/btdftab" 2>/dev/null && grep -q -- '--dry-run' "$(dirname "$B")/completion/btdftab" && \
+    ok "bash completion, generated from the option table" || no "bash completion"
+"$(dirname "$B")/btdf-bench" --help | grep -q '^usage: btdf-bench' && \
+    ok "btdf-bench --help" || no "btdf-bench --help"
+expect 2 "unknown section 'frob'" "btdf-bench: an unknown section" -- "$(dirname "$B")/btdf-bench" frob
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

@@ -155,12 +155,34 @@ static void run(FILE *out, const char *method, const char *label, btdf_table_opt
     fflush(out);
 }
 
+static const char usage[] =
+    "usage: btdf-bench [SECTION [REPS]]\n"
+    "Prints the machine, then CSV rows of timings and errors (docs/benchmarks.md).\n"
+    "  SECTION  all (default), sweep (adaptive and uniform tables: error against run\n"
+    "           time for four materials), scaling (work against the range and the\n"
+    "           channels asked), or throughput (Eq. 25 evaluations per second)\n"
+    "  REPS     runs per table, 1 to 9 (default 3); each row reports the median\n"
+    "Timings depend on the machine's load: quote medians and the machine line.\n";
+
 int main(int argc, char **argv)
 {
     const char *what = argc > 1 ? argv[1] : "all";
-    int reps = argc > 2 ? atoi(argv[2]) : 3;
-    if (reps < 1 || reps > 9)
-        reps = 3;
+    if (!strcmp(what, "--help") || !strcmp(what, "-h")) {
+        fputs(usage, stdout);
+        return 0;
+    }
+    char *end = NULL;
+    long r = argc > 2 ? strtol(argv[2], &end, 10) : 3;
+    if (strcmp(what, "all") && strcmp(what, "sweep") && strcmp(what, "scaling") &&
+        strcmp(what, "throughput")) {
+        fprintf(stderr, "btdf-bench: unknown section '%s'\n%s", what, usage);
+        return 2;
+    }
+    if (argc > 3 || (end && *end) || r < 1 || r > 9) {
+        fprintf(stderr, "btdf-bench: REPS must be an integer from 1 to 9\n%s", usage);
+        return 2;
+    }
+    int reps = (int)r;
     machine(stdout);
     const char *header = "method,case,n,s,tolerance,ti_max_deg,samples,seconds_tabulation,"
                          "seconds_estimate,peak_rss_mib,e_l1,e_max,e_t,status\n";

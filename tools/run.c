@@ -34,7 +34,11 @@ void run_progress_start(run_progress *pr, int on, const char *label)
 {
     pr->on = on;
     pr->drawn = 0;
-    snprintf(pr->label, sizeof pr->label, "%s", label);
+    size_t l = strlen(label);
+    if (l > 20) /* the end of a long path says which file: keep the line for the bar */
+        snprintf(pr->label, sizeof pr->label, "...%s", label + l - 17);
+    else
+        snprintf(pr->label, sizeof pr->label, "%s", label);
     pr->t0 = run_now();
     pr->last = 0.0;
 }
@@ -47,13 +51,13 @@ static void draw(run_progress *pr, const char *stage, double frac)
         return;
     pr->last = now;
     pr->drawn = 1;
-    char line[256], bar[25], eta[32] = "";
+    char line[256], bar[17], eta[32] = "";
     int k = 0;
     if (frac >= 0.0) {
-        int fill = (int)(frac * 24.0 + 0.5);
-        for (k = 0; k < 24; k++)
+        int fill = (int)(frac * 16.0 + 0.5);
+        for (k = 0; k < 16; k++)
             bar[k] = k < fill ? '#' : '-';
-        bar[24] = 0;
+        bar[16] = 0;
         if (frac >= 0.05 && frac < 1.0) /* too early an estimate says nothing */
             snprintf(eta, sizeof eta, "  ETA %.0f s", el * (1.0 - frac) / frac);
         snprintf(line, sizeof line, "%s [%s] %3.0f%% %s%s", pr->label, bar, 100.0 * frac, stage,
@@ -70,7 +74,7 @@ void run_progress_cb(void *user, const char *stage, size_t done, size_t todo)
 {
     run_progress *pr = user;
     char what[96];
-    snprintf(what, sizeof what, "%s %zu, %zu to go", stage, done, todo);
+    snprintf(what, sizeof what, "%s %zu/%zu", stage, done, done + todo);
     draw(pr, what, done + todo ? (double)done / (double)(done + todo) : 0.0);
 }
 
