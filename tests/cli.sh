@@ -215,9 +215,9 @@ rm -f "$W"/i.*
 if command -v script >/dev/null 2>&1 && "$B" --version | grep -q 'OpenEXR on'; then
     script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 5e-4 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
     grep -q 'p.exr \[#*-*\] *[0-9]*% .*ETA' "$W/p.tty" && ok "a progress bar with stage and ETA on a terminal" || { no "progress on a terminal"; cat "$W/p.tty"; }
-    script -qec "'$B' tabulate -q --ior 1.5 -s 3 --threads 1 --tolerance 5e-4 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
+    script -qec "'$B' tabulate -q --ior 1.5 -s 3 --threads 1 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
     [ ! -s "$W/p.tty" ] && ok "--quiet: no progress bar on a terminal" || { no "progress with --quiet"; cat "$W/p.tty"; }
-    script -qec "'$B' tabulate --ior 1.5 -s 6 --threads 1 --tolerance 2e-3 -o '$W/p.bsdf'" /dev/null > "$W/p.tty" 2>&1
+    script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 1e-2 -o '$W/p.bsdf'" /dev/null > "$W/p.tty" 2>&1
     grep -q 'p.bsdf \[#*-*\] .*elevation nodes' "$W/p.tty" && ok "a progress bar for .bsdf" || { no "progress for .bsdf"; cat "$W/p.tty"; }
 fi
 rm -f "$W"/p.*
