@@ -82,6 +82,11 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
     return BTDF_OK;
 }
 
+BTDF_API btdf_status btdf_table_opts_check(const btdf_table_opts *o, char *msg, size_t msglen)
+{
+    return o ? check_opts(o, msg, msglen) : BTDF_EINVAL;
+}
+
 /* ------------------------------------------------------------------------- */
 /* Uniform grid                                                              */
 /* ------------------------------------------------------------------------- */

@@ -106,6 +106,47 @@ printf 'ior 1.5\n' > "$W/m/bad.ini"
 expect 2 "bad.ini:1:" "manifest: syntax error" -- "$B" build "$W/m/bad.ini"
 rm -rf "$W/m"
 
+# manifests are checked whole before any work; damaged outputs are rebuilt
+mkdir -p "$W/m"
+mat() { printf '[%s]\nior = 1.5\nsmoothness = 3\ntheta_i = 0:10\ntolerance = %s\n' "$1" "${2:-5e-2}"; }
+{ mat a; echo "enter = $W/t.csv"; mat b 0.9; echo "bsdf = $W/t.bsdf"; } > "$W/m/v.ini"
+expect 2 "v.ini:11: material \[b\]: tolerance 0.9: must lie in \[1e-6, 0.5\]" \
+    "manifest: every value checked before any work" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/nowhere/t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:6: output '$W/nowhere/t.csv': folder" "manifest: output under a missing folder" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/t.csv"; mat b; echo "leave = $W/m/../t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:12: output .* is also written by \[a\] at line 6" "manifest: two materials, one file" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/t.csv $W/t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:6: .*also written by \[a\]" "manifest: one output twice in a material" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "smoothness = 4"; echo "enter = $W/t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:6: 'smoothness' given twice in \[a\] (first at line 3)" "manifest: duplicate key" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/t.csv"; printf '[a]\nk0 = 0.6\n'; } > "$W/m/v.ini"
+expect 2 "v.ini:7: material \[a\] appears twice (first at line 1)" "manifest: repeated section" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/t.csv"; echo "[typo]"; } > "$W/m/v.ini"
+expect 2 "v.ini:7: material \[typo\] is empty" "manifest: empty section" -- "$B" build "$W/m/v.ini"
+expect 1 "is a directory" "build of a folder" -- "$B" build "$W/m"
+{ mat a; echo "enter = $W/m/self.csv"; } > "$W/m/self.csv"
+cp "$W/m/self.csv" "$W/m/self.bak"
+expect 2 "is the manifest itself" "manifest: an output that is the manifest" -- "$B" build "$W/m/self.csv"
+cmp -s "$W/m/self.csv" "$W/m/self.bak" && ok "the manifest is left as it was" || no "manifest overwritten"
+long=$(printf 'x%.0s' $(seq 1 240)) # with .csv: a 244-byte name, legal (255 is the limit)
+{ printf '; %s\n' "$long$long"; mat a; echo "enter = $W/m/$long.csv   ; a comment after a long value $long"; } > "$W/m/v.ini"
+"$B" build -q "$W/m/v.ini" && [ -s "$W/m/$long.csv" ] && ok "manifest lines longer than 199 characters, a 244-byte output name" || no "long lines"
+ls -a "$W/m" | grep -q '\.tmp' && no "long name left a temporary" || ok "no temporary left beside it"
+{ mat a; echo "enter = $W/m/d.csv"; } > "$W/m/v.ini"
+"$B" build -q "$W/m/v.ini" && cp "$W/m/d.csv" "$W/m/d.good"
+head -c 300 "$W/m/d.good" > "$W/m/d.csv"
+"$B" build -q "$W/m/v.ini" && cmp -s "$W/m/d.csv" "$W/m/d.good" && ok "build redoes an output cut to 300 bytes" || no "cut output kept"
+: > "$W/m/d.csv"
+"$B" build -q "$W/m/v.ini" && cmp -s "$W/m/d.csv" "$W/m/d.good" && ok "build redoes an emptied output" || no "empty output kept"
+sed -i 's/^0,/1,/' "$W/m/d.csv"
+"$B" build -q "$W/m/v.ini" && cmp -s "$W/m/d.csv" "$W/m/d.good" && ok "build redoes an output changed in place" || no "changed output kept"
+rm -f "$W/m/d.csv"; mkdir "$W/m/d.csv"
+"$B" build -q "$W/m/v.ini" 2>"$W/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "is a folder" "$W/err" && ok "build refuses an output replaced by a folder" || no "folder output: $rc $(cat "$W/err")"
+"$B" build "$W/m/v.ini" 2>&1 | grep -q "up to date" && no "folder output counted as up to date" || ok "a folder is never up to date"
+rm -rf "$W/m"
+
 # .bsdf: built, inspected, evaluated; --theta-i does not apply
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 -o "$W/g.bsdf" && "$B" inspect "$W/g.bsdf" | grep -q 'SCATFUN v1' && \
     ok ".bsdf written and inspected" || no ".bsdf"
