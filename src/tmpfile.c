@@ -13,6 +13,7 @@
 #include <sys/types.h>
 #include <unistd.h>
 
+#include "btdf_io.h"
 #include "tmpfile.h"
 
 /*
@@ -177,7 +178,7 @@ size_t btdf_tmp_sweep(const char *path)
 /* What may be written                                                       */
 /* ------------------------------------------------------------------------- */
 
-btdf_status btdf_output_check(const char *path, char *msg, size_t msglen)
+BTDF_API btdf_status btdf_output_check(const char *path, char *msg, size_t msglen)
 {
     if (!path || !path[0]) {
         say(msg, msglen, "%s%san empty file name", "", "");
@@ -254,7 +255,7 @@ static int canonical(const char *path, char *out, size_t outlen)
     return n > 0 && (size_t)n < outlen;
 }
 
-int btdf_path_same(const char *a, const char *b)
+BTDF_API int btdf_same_file(const char *a, const char *b)
 {
     if (!a || !b)
         return 0;
@@ -369,6 +370,21 @@ btdf_status btdf_tmp_group_commit(char *msg, size_t msglen)
     grp.open = 0;
     grp.failed = 0;
     return st;
+}
+
+BTDF_API void btdf_outputs_begin(void)
+{
+    btdf_tmp_group_begin();
+}
+
+BTDF_API btdf_status btdf_outputs_commit(char *msg, size_t msglen)
+{
+    return btdf_tmp_group_commit(msg, msglen);
+}
+
+BTDF_API void btdf_outputs_abort(void)
+{
+    btdf_tmp_group_abort();
 }
 
 btdf_status btdf_write_file_atomic(const char *path, const char *ext, btdf_file_writer writer,

@@ -36,14 +36,7 @@ size_t btdf_tmp_sweep(const char *path);
 /* The PID in a temporary name of this scheme, or 0 if name is not one. */
 long btdf_tmp_name_pid(const char *name);
 
-/* Whether path may be written: its folder exists and is writable, the name is legal,
-   and what is there now (if anything) is a regular file. BTDF_OK, or an error with msg
-   saying why (without the path). Nothing is created. */
-btdf_status btdf_output_check(const char *path, char *msg, size_t msglen);
-
-/* 1 when a and b name the same file (the same inode, or the same canonical name when
-   one does not exist yet), 0 otherwise. */
-int btdf_path_same(const char *a, const char *b);
+/* btdf_output_check and btdf_same_file are public: btdf_io.h. */
 
 /* Outputs of one run that appear together or not at all. Between group_begin and
    group_commit, every btdf_write_file_atomic of this process leaves its finished file

@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "btdf_test.h"
+#include "btdf_io.h"
 #include "tmpfile.h"
 
 static char dir[256];
@@ -254,13 +255,13 @@ static void same_file(void **state)
     snprintf(a2, sizeof a2, "%s/./../%s/s.csv", dir, strrchr(dir, '/') + 1);
     at(h, sizeof h, "hard.csv");
     at(b, sizeof b, "t.csv");
-    assert_true(btdf_path_same(a, a2)); /* neither exists yet */
-    assert_false(btdf_path_same(a, b));
+    assert_true(btdf_same_file(a, a2)); /* neither exists yet */
+    assert_false(btdf_same_file(a, b));
     assert_status(BTDF_OK, put(a, "x"));
     assert_int_equal(link(a, h), 0);
-    assert_true(btdf_path_same(a, h));
-    assert_true(btdf_path_same(a2, h));
-    assert_false(btdf_path_same(a, b));
+    assert_true(btdf_same_file(a, h));
+    assert_true(btdf_same_file(a2, h));
+    assert_false(btdf_same_file(a, b));
     unlink(a);
     unlink(h);
 }
