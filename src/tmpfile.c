@@ -222,15 +222,15 @@ BTDF_API btdf_status btdf_output_check(const char *path, char *msg, size_t msgle
     else
         snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
     if (stat(dir, &st) != 0) {
-        say(msg, msglen, "folder %s: %s", dir, strerror(errno));
+        say(msg, msglen, "cannot write in the folder '%s': %s", dir, strerror(errno));
         return BTDF_EIO;
     }
     if (!S_ISDIR(st.st_mode)) {
-        say(msg, msglen, "%s is not a folder%s", dir, "");
+        say(msg, msglen, "cannot write in the folder '%s': %s", dir, strerror(ENOTDIR));
         return BTDF_EIO;
     }
     if (access(dir, W_OK | X_OK) != 0) {
-        say(msg, msglen, "cannot write in folder %s: %s", dir, strerror(errno));
+        say(msg, msglen, "cannot write in the folder '%s': %s", dir, strerror(errno));
         return BTDF_EIO;
     }
     return BTDF_OK;

@@ -54,8 +54,8 @@ rm -f "$W"/a.* "$W"/g.*
 expect 2 "unknown option" "unknown flag" -- "$B" tabulate --frobnicate -o "$W/t.csv"
 expect 2 "n = 1 has no BTDF" "n = 1" -- "$B" tabulate --ior 1 -o "$W/t.csv"
 expect 2 "not a number" "n = NaN text" -- "$B" tabulate --ior abc -o "$W/t.csv"
-expect 2 "finite" "n = nan" -- "$B" tabulate --ior nan -o "$W/t.csv"
-expect 2 "finite" "n = inf" -- "$B" tabulate --ior inf -o "$W/t.csv"
+expect 2 "not a number" "n = nan" -- "$B" tabulate --ior nan -o "$W/t.csv"
+expect 2 "not a number" "n = inf" -- "$B" tabulate --ior inf -o "$W/t.csv"
 expect 2 "must be > 0" "n <= 0" -- "$B" tabulate --ior -1.5 -o "$W/t.csv"
 expect 2 "smoothness 0" "s = 0" -- "$B" tabulate -s 0 -o "$W/t.csv"
 expect 2 "smoothness -3" "s < 0" -- "$B" tabulate -s -3 -o "$W/t.csv"
@@ -113,7 +113,7 @@ mat() { printf '[%s]\nior = 1.5\nsmoothness = 3\ntheta_i = 0:10\ntolerance = %s\
 expect 2 "v.ini:11: material \[b\]: tolerance 0.9: must lie in \[1e-6, 0.5\]" \
     "manifest: every value checked before any work" -- "$B" build "$W/m/v.ini"
 { mat a; echo "enter = $W/nowhere/t.csv"; } > "$W/m/v.ini"
-expect 2 "v.ini:6: output '$W/nowhere/t.csv': folder" "manifest: output under a missing folder" -- "$B" build "$W/m/v.ini"
+expect 2 "v.ini:6: output '$W/nowhere/t.csv': cannot write in the folder" "manifest: output under a missing folder" -- "$B" build "$W/m/v.ini"
 { mat a; echo "enter = $W/t.csv"; mat b; echo "leave = $W/m/../t.csv"; } > "$W/m/v.ini"
 expect 2 "v.ini:12: output .* is also written by \[a\] at line 6" "manifest: two materials, one file" -- "$B" build "$W/m/v.ini"
 { mat a; echo "enter = $W/t.csv $W/t.csv"; } > "$W/m/v.ini"
@@ -146,6 +146,44 @@ rm -f "$W/m/d.csv"; mkdir "$W/m/d.csv"
 [ "$rc" -eq 2 ] && grep -q "is a folder" "$W/err" && ok "build refuses an output replaced by a folder" || no "folder output: $rc $(cat "$W/err")"
 "$B" build "$W/m/v.ini" 2>&1 | grep -q "up to date" && no "folder output counted as up to date" || ok "a folder is never up to date"
 rm -rf "$W/m"
+
+# files the tool must never destroy or accept; outputs of one run appear together
+mkfifo "$W/t.json"
+expect 1 "not a regular file" "--report onto a pipe" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/t.json"
+[ -p "$W/t.json" ] && ok "the pipe is still a pipe" || no "the pipe was replaced"
+rm -f "$W/t.json"
+expect 2 "are the same file" "--report and -o naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/./t.csv"
+expect 1 "nowhere" "--report into a missing folder: no table either" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/nowhere/r.json"
+if "$B" --version | grep -q 'PNG on'; then
+    expect 1 "nowhere" "--preview into a missing folder: no table either" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --preview "$W/nowhere/p.png"
+    expect 2 "are the same file" "-o and --preview naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.png" --preview "$W/t.png"
+fi
+"$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" > /dev/null
+expect 1 "printing failed\|standard output" "inspect into a full disk" -- sh -c "'$B' inspect '$W/t.csv' > /dev/full; s=\$?; rm -f '$W/t.csv'; exit \$s"
+expect 1 "standard output" "albedo into a full disk" -- sh -c "'$B' albedo > /dev/full"
+expect 1 "standard output" "eval into a full disk" -- sh -c "'$B' eval 30 150 180 > /dev/full"
+expect 1 "standard output" "--version into a full disk" -- sh -c "'$B' --version > /dev/full"
+expect 2 "takes nothing after it" "--version extra" -- "$B" --version extra
+pad=$(printf ' %.0s' $(seq 1 2000))
+n=$(printf '%s30 150 180\n' "$pad" | "$B" eval | wc -l)
+[ "$n" -eq 1 ] && ok "eval: a 2010-character input line is one row" || no "eval long line: $n rows"
+
+# one number rule for every option
+expect 2 "out of range" "-s 1e-320 is out of range" -- "$B" tabulate -s 1e-320 -o "$W/t.csv"
+expect 2 "not a number" "--ior in hexadecimal" -- "$B" tabulate --ior 0x1.8p0 -o "$W/t.csv"
+expect 2 "--grid" "--grid with blanks" -- "$B" tabulate --grid ' 3, 5, 5' -o "$W/t.csv"
+expect 2 "--grid" "--grid in hexadecimal" -- "$B" tabulate --grid 0x3,5,5 -o "$W/t.csv"
+expect 2 "line 1: expected three angles" "eval input in hexadecimal" -- sh -c "echo '0x1e 150 180' | '$B' eval"
+
+# budgets are bounds
+expect 3 "below the 4199 nodes" "--max-samples below the coarsest table" -- "$B" tabulate -q --max-samples 1000 --best-effort -o "$W/t.csv"
+"$B" tabulate -q --tolerance 1e-5 --max-samples 20000 --best-effort -o "$W/b.csv" --report "$W/b.json"
+s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
+[ -n "$s" ] && [ "$s" -le 20000 ] && ok "--max-samples 20000 builds $s nodes" || no "--max-samples 20000: $s nodes"
+"$B" tabulate -q --ior 1.5,1.45,1.4 --tolerance 1e-5 --max-memory 1 --best-effort -o "$W/b.csv" --report "$W/b.json"
+s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
+[ -n "$s" ] && [ $((s * 32)) -le 1048576 ] && ok "3 channels at --max-memory 1: $s nodes, $((s * 32)) bytes" || no "--max-memory 1: $s nodes"
+rm -f "$W"/b.*
 
 # .bsdf: built, inspected, evaluated; --theta-i does not apply
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 -o "$W/g.bsdf" && "$B" inspect "$W/g.bsdf" | grep -q 'SCATFUN v1' && \
