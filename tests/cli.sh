@@ -164,6 +164,11 @@ expect 1 "standard output" "albedo into a full disk" -- sh -c "'$B' albedo > /de
 expect 1 "standard output" "eval into a full disk" -- sh -c "'$B' eval 30 150 180 > /dev/full"
 expect 1 "standard output" "--version into a full disk" -- sh -c "'$B' --version > /dev/full"
 expect 2 "takes nothing after it" "--version extra" -- "$B" --version extra
+gone=$(sh -c 'echo $$') # a process that has ended: its temporary is stale
+echo half > "$W/.k.csv.tmp$gone-0.csv"
+"$B" tabulate -q --grid 2,3,3 -o "$W/k.csv" && [ ! -e "$W/.k.csv.tmp$gone-0.csv" ] && \
+    ok "a killed run's temporary is removed by the next write into its folder" || no "stale temporary kept"
+rm -f "$W/k.csv"
 pad=$(printf ' %.0s' $(seq 1 2000))
 n=$(printf '%s30 150 180\n' "$pad" | "$B" eval | wc -l)
 [ "$n" -eq 1 ] && ok "eval: a 2010-character input line is one row" || no "eval long line: $n rows"
