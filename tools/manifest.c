@@ -177,8 +177,31 @@ static int on_entry(void *user, const char *section, const char *key, const char
     }
     m->key_line[ki] = line;
     if (ki == K_IOR) {
+        /* blanks around the commas go, as around every value; the numbers themselves
+           follow the tool's one rule */
+        char list[256];
+        size_t o = 0;
+        for (const char *c = value; *c && o + 1 < sizeof list;) {
+            const char *end = strchr(c, ',');
+            size_t n = end ? (size_t)(end - c) : strlen(c);
+            while (n > 0 && (*c == ' ' || *c == '\t'))
+                c++, n--;
+            while (n > 0 && (c[n - 1] == ' ' || c[n - 1] == '\t'))
+                n--;
+            if (o + n + 2 >= sizeof list)
+                break;
+            memcpy(list + o, c, n);
+            o += n;
+            if (end)
+                list[o++] = ',';
+            c = end ? end + 1 : c + n;
+            if (!end)
+                break;
+        }
+        list[o] = 0;
         int k = 0;
-        const char *r = num_double_list(value, m->p.ior, 1, 3, &k);
+        const char *r = strlen(value) >= sizeof list ? "is too long"
+                                                     : num_double_list(list, m->p.ior, 1, 3, &k);
         if (r || k == 2) {
             snprintf(mf->why, sizeof mf->why, "ior '%.200s': %s", value,
                      r ? r : "expected one number or three (R,G,B)");
