@@ -258,10 +258,15 @@ BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size
     memset(in, 0, sizeof *in);
     const btdf_format_ops *f = btdf_format_for_path(path);
     if (!f || (!f->read_path && !f->read_series))
-        return say(msg, msglen, BTDF_EINVAL,
-                   "unknown table format of '%s': use .csv or .exr (or .bsdf)%s", path, "");
+        return say(msg, msglen, BTDF_EINVAL, "not a file format btdf reads: use .csv, .exr or "
+                   ".bsdf%s%s", "", "");
     if (!f->available)
         return switched_off(f, msg, msglen);
+    /* One wording for a file that cannot be opened, whatever its format. */
+    FILE *probe = fopen(path, "rb");
+    if (!probe)
+        return say(msg, msglen, BTDF_EIO, "cannot open: %s%s", strerror(errno), "");
+    fclose(probe);
     if (f->read_series)
         return f->read_series(path, &in->scatfun, msg, msglen);
     return f->read_path(path, &in->table, msg, msglen);

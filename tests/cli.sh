@@ -259,6 +259,12 @@ expect 2 "do not apply with --table" "--ior with --table" -- "$B" eval --table "
 expect 2 "not to --grid" "--tolerance with --grid" -- "$B" tabulate --grid 3,3,3 --tolerance 1e-2 -o "$W/t.csv"
 expect 2 "applies to pictures" "--size without a picture" -- "$B" tabulate --size 640x480 -o "$W/t.csv"
 expect 1 "cannot write in the folder" "a missing output folder, before the work" -- "$B" tabulate -o "$W/nodir/t.csv"
+"$B" tabulate -q --theta-i 0:60 --tolerance 1e-2 -o "$W/r60.csv" && \
+    echo "60 150 180" | "$B" eval --table "$W/r60.csv" >/dev/null && ok "eval --table at the end of its range" || no "eval at range end"
+expect 2 "outside the incidence range of .*0:60" "eval --table outside the table's range" -- "$B" eval --table "$W/r60.csv" 70 150 180
+rm -f "$W/r60.csv"
+expect 1 "t.csv: cannot open: No such file" "one wording for a missing file (.csv)" -- "$B" inspect "$W/t.csv"
+expect 1 "t.bsdf: cannot open: No such file" "one wording for a missing file (.bsdf)" -- "$B" inspect "$W/t.bsdf"
 
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

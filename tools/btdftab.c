@@ -402,6 +402,20 @@ static int stdout_done(int code)
     return code;
 }
 
+/* The incidence range a table holds, in degrees: its first and last slices. A
+   facet-reciprocal table (n < 1) is sliced by the outgoing direction instead, so its
+   slices do not bound theta-i: the whole range is left open there. */
+static void table_ti_range(const btdf_table *t, double *range)
+{
+    size_t ns = btdf_table_slice_count(t);
+    btdf_slice first, last;
+    if (ns == 0 || btdf_table_get_kind(t) == BTDF_TABLE_FACET_RECIPROCAL ||
+        btdf_table_slice(t, 0, &first) != BTDF_OK || btdf_table_slice(t, ns - 1, &last) != BTDF_OK)
+        return;
+    range[0] = first.ti * 180.0 / M_PI;
+    range[1] = last.ti * 180.0 / M_PI;
+}
+
 static void print_values(const double *v, int n)
 {
     for (int c = 0; c < n; c++)
@@ -423,14 +437,16 @@ static int cmd_eval(const cli *c)
         return fail(EXIT_USAGE, "--ior, --smoothness and --k0 do not apply with --table "
                                 "(the table gives the material)");
     btdf_input in = {NULL, NULL};
+    double ti_range[2] = {0.0, 90.0}; /* degrees */
     if (c->table) {
         char msg[512];
         btdf_status st = btdf_read(c->table, &in, msg, sizeof msg);
         if (st != BTDF_OK)
             return fail(1, "%s: %s", c->table, msg);
-        if (in.table)
+        if (in.table) {
             p = *btdf_table_get_params(in.table);
-        else
+            table_ti_range(in.table, ti_range);
+        } else
             p.channels = btdf_scatfun_channels(in.scatfun);
     } else if (!check_params(&p)) {
         return EXIT_USAGE;
@@ -460,6 +476,16 @@ static int cmd_eval(const cli *c)
         }
         if (!check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
             code = EXIT_USAGE;
+            break;
+        }
+        /* the slices' angles are radians turned into degrees: the rounding of that
+           must not reject the range's own ends, so the ends get 1e-9 degrees */
+        if (!(v[0] >= ti_range[0] - 1e-9 && v[0] <= ti_range[1] + 1e-9)) {
+            char where[48] = "";
+            if (npos != 3)
+                snprintf(where, sizeof where, "line %ld: ", ln);
+            code = fail(EXIT_USAGE, "%stheta-i %g: outside the incidence range of %s, %.6g:%.6g "
+                        "degrees", where, v[0], c->table, ti_range[0], ti_range[1]);
             break;
         }
         double ti = v[0] * M_PI / 180.0, to = v[1] * M_PI / 180.0, phi = v[2] * M_PI / 180.0;
