@@ -111,7 +111,20 @@ static int params_ok(double n, double s, double k0)
            k0 <= BTDF_K0_MAX;
 }
 
-BTDF_API double btdf_rho(double n, double s, double k0, double ti, double to, double phi)
+/* One evaluation: the geometry first, the shadowing (four exponentials) only where
+   some facet connects the directions. The same operations as the loops, so the
+   same bits. */
+static double rho_point(double n, double s, double k0, bt_io *io, const bt_az *az)
+{
+    double d = n - 1.0;
+    if (!bt_rho_reach(n, d, s, io, az->h2, az->sphi))
+        return 0.0;
+    bt_io_pref(io, s, k0);
+    return bt_rho(n, d, s, io, az->h2, az->sphi);
+}
+
+BT_CLONES BTDF_API double btdf_rho(double n, double s, double k0, double ti, double to,
+                                   double phi)
 {
     if (!params_ok(n, s, k0) || !(ti >= 0.0 && ti <= M_PI / 2 + 1e-15 &&
                                   to >= M_PI / 2 - 1e-15 && to <= M_PI + 1e-15 &&
@@ -119,9 +132,9 @@ BTDF_API double btdf_rho(double n, double s, double k0, double ti, double to, do
         return 0.0;
     bt_io io;
     bt_az az;
-    bt_io_rad(&io, ti, to, s, k0);
+    bt_io_geom_rad(&io, ti, to);
     bt_az_rad(&az, bt_fold_rad(phi));
-    return bt_rho(n, n - 1.0, s, &io, az.h2, az.sphi);
+    return rho_point(n, s, k0, &io, &az);
 }
 
 BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti, double to,
@@ -132,9 +145,9 @@ BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti, double to
         return 0.0;
     bt_io io;
     bt_az az;
-    bt_io_deg(&io, ti, to, s, k0);
+    bt_io_geom_deg(&io, ti, to);
     bt_az_deg(&az, bt_fold_deg(phi));
-    return bt_rho(n, n - 1.0, s, &io, az.h2, az.sphi);
+    return rho_point(n, s, k0, &io, &az);
 }
 
 BTDF_API double btdf_rho_r(double n, double s, double k0, double ti, double tr, double phi)
@@ -197,10 +210,10 @@ BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double to, doubl
         return BTDF_EDOMAIN;
     bt_io io;
     bt_az az;
-    bt_io_rad(&io, ti, to, p->smoothness, p->k0);
+    bt_io_geom_rad(&io, ti, to);
     bt_az_rad(&az, bt_fold_rad(phi));
     for (int c = 0; c < p->channels; c++)
-        out[c] = bt_rho(p->ior[c], p->ior[c] - 1.0, p->smoothness, &io, az.h2, az.sphi);
+        out[c] = rho_point(p->ior[c], p->smoothness, p->k0, &io, &az);
     return BTDF_OK;
 }
 
@@ -262,7 +275,7 @@ BTDF_API btdf_status btdf_eval_dir(const btdf_params *p, const double wi[3],
    rare azimuth beyond one turn), then a branch-free loop the compiler vectorises. */
 #define BT_BLOCK 256
 
-static void batch_block(const btdf_params *p, size_t count, const double *ti,
+BT_CLONES static void batch_block(const btdf_params *p, size_t count, const double *ti,
                         const double *to, const double *phi, double *out)
 {
     double c[BT_BLOCK];
@@ -318,30 +331,33 @@ typedef struct grid_job {
     double *out;
 } grid_job;
 
-/* One (ti, to) row of the grid: the loop over phi is branch-free and vectorised. */
-static void grid_row(void *arg, size_t r)
+/* The loop over phi of one (ti, to) row: branch-free and vectorised. */
+BT_CLONES static void grid_line(const btdf_params *p, const bt_io *io, size_t nphi,
+                                const double *h2, const double *sp, double *o)
 {
-    const grid_job *g = arg;
-    const btdf_params *p = g->p;
-    size_t i = r / g->nto, j = r % g->nto;
-    const double s = p->smoothness;
-    bt_io io;
-    bt_io_rad(&io, g->ti[i], g->to[j], s, p->k0);
-    const size_t nphi = g->nphi;
     const int nc = p->channels;
-    double *o = g->out + r * nphi * (size_t)nc;
-    const double *h2 = g->h2, *sp = g->sphi;
+    const double s = p->smoothness;
     if (nc == 1) {
         const double n = p->ior[0], d = n - 1.0;
         for (size_t k = 0; k < nphi; k++)
-            o[k] = bt_rho(n, d, s, &io, h2[k], sp[k]);
+            o[k] = bt_rho(n, d, s, io, h2[k], sp[k]);
         return;
     }
     for (int c = 0; c < nc; c++) {
         const double n = p->ior[c], d = n - 1.0;
         for (size_t k = 0; k < nphi; k++)
-            o[k * (size_t)nc + (size_t)c] = bt_rho(n, d, s, &io, h2[k], sp[k]);
+            o[k * (size_t)nc + (size_t)c] = bt_rho(n, d, s, io, h2[k], sp[k]);
     }
+}
+
+static void grid_row(void *arg, size_t r)
+{
+    const grid_job *g = arg;
+    const btdf_params *p = g->p;
+    size_t i = r / g->nto, j = r % g->nto;
+    bt_io io;
+    bt_io_rad(&io, g->ti[i], g->to[j], p->smoothness, p->k0);
+    grid_line(p, &io, g->nphi, g->h2, g->sphi, g->out + r * g->nphi * (size_t)p->channels);
 }
 
 BTDF_API btdf_status btdf_eval_grid(const btdf_params *p, size_t nti, const double *ti,

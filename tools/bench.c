@@ -155,6 +155,189 @@ static void run(FILE *out, const char *method, const char *label, btdf_table_opt
     fflush(out);
 }
 
+/* ------------------------------------------------------------------------- */
+/* The public entry points beside the internal kernel, on one grid, one run  */
+/* ------------------------------------------------------------------------- */
+
+typedef struct api_grid {
+    size_t NI, NO, NP;
+    double *ti, *to, *phi;          /* the axes, radians */
+    double *ati, *ato, *aphi;       /* the same grid as flat arrays, for the batch */
+    double *out;
+    btdf_params p;
+} api_grid;
+
+static volatile double api_sink; /* keeps the scalar loops from being optimised out */
+
+static void api_rho(api_grid *g)
+{
+    double acc = 0.0;
+    for (size_t i = 0; i < g->NI; i++)
+        for (size_t j = 0; j < g->NO; j++)
+            for (size_t k = 0; k < g->NP; k++)
+                acc += btdf_rho(g->p.ior[0], g->p.smoothness, g->p.k0, g->ti[i], g->to[j],
+                                g->phi[k]);
+    api_sink = acc;
+}
+
+static void api_eval(api_grid *g)
+{
+    double *o = g->out;
+    for (size_t i = 0; i < g->NI; i++)
+        for (size_t j = 0; j < g->NO; j++)
+            for (size_t k = 0; k < g->NP; k++)
+                btdf_eval(&g->p, g->ti[i], g->to[j], g->phi[k], o++);
+}
+
+static void api_batch(api_grid *g)
+{
+    btdf_eval_batch(&g->p, g->NI * g->NO * g->NP, g->ati, g->ato, g->aphi, g->out, NULL);
+}
+
+static int api_threads;
+static void api_grid_fn(api_grid *g)
+{
+    btdf_eval_grid(&g->p, g->NI, g->ti, g->NO, g->to, g->NP, g->phi, api_threads, g->out);
+}
+
+static eval_job api_kernel_job;
+static void api_kernel(api_grid *g)
+{
+    btdf_parallel_for(api_threads, g->NI, eval_slice, &api_kernel_job);
+}
+
+/* Median seconds of reps runs of fn after one warm-up run. */
+static double api_time(void (*fn)(api_grid *), api_grid *g, int reps)
+{
+    double v[9];
+    fn(g);
+    for (int k = 0; k < reps; k++) {
+        double t0 = now();
+        fn(g);
+        v[k] = now() - t0;
+    }
+    return median(v, reps);
+}
+
+/* btdftab eval on rows piped through a file: rows/s of parsing, evaluating, printing. */
+static double cli_rows(const char *tool, size_t rows, int reps)
+{
+    char in[] = "/tmp/btdf-bench-in-XXXXXX";
+    int fd = mkstemp(in);
+    if (fd < 0)
+        return 0.0;
+    FILE *f = fdopen(fd, "w");
+    if (!f) {
+        close(fd);
+        unlink(in);
+        return 0.0;
+    }
+    for (size_t r = 0; r < rows; r++) /* a grid of angles as a user would write them */
+        fprintf(f, "%g %g %g\n", (double)(r % 90), 90.0 + (double)((r / 90) % 91),
+                (double)((r / 8190) % 181));
+    fclose(f);
+    char cmd[4096 + 256];
+    snprintf(cmd, sizeof cmd, "'%s' eval --ior 1.5 -s 3 < '%s' > /dev/null", tool, in);
+    double v[9];
+    int ok = 1;
+    for (int k = 0; k < reps && ok; k++) {
+        double t0 = now();
+        ok = system(cmd) == 0;
+        v[k] = now() - t0;
+    }
+    unlink(in);
+    return ok ? (double)rows / median(v, reps) : 0.0;
+}
+
+static void api_bench(int reps)
+{
+    api_grid g;
+    g.NI = 90;
+    g.NO = 180;
+    g.NP = 181;
+    size_t N = g.NI * g.NO * g.NP;
+    btdf_params_default(&g.p);
+    g.ti = malloc(g.NI * sizeof(double));
+    g.to = malloc(g.NO * sizeof(double));
+    g.phi = malloc(g.NP * sizeof(double));
+    g.ati = malloc(N * sizeof(double));
+    g.ato = malloc(N * sizeof(double));
+    g.aphi = malloc(N * sizeof(double));
+    g.out = malloc(N * sizeof(double));
+    api_kernel_job.buf = malloc(N * sizeof(double));
+    api_kernel_job.cph = malloc(g.NP * sizeof(double));
+    api_kernel_job.sph = malloc(g.NP * sizeof(double));
+    if (!g.ti || !g.to || !g.phi || !g.ati || !g.ato || !g.aphi || !g.out ||
+        !api_kernel_job.buf || !api_kernel_job.cph || !api_kernel_job.sph) {
+        fprintf(stderr, "btdf-bench: out of memory\n");
+        exit(1);
+    }
+    for (size_t i = 0; i < g.NI; i++)
+        g.ti[i] = (89.0 * M_PI / 180.0) * (double)i / (double)(g.NI - 1);
+    for (size_t j = 0; j < g.NO; j++)
+        g.to[j] = M_PI / 2 + (M_PI / 2) * (double)j / (double)(g.NO - 1);
+    for (size_t k = 0; k < g.NP; k++) {
+        g.phi[k] = M_PI * (double)k / (double)(g.NP - 1);
+        api_kernel_job.cph[k] = cos(g.phi[k]);
+        api_kernel_job.sph[k] = sin(g.phi[k]);
+    }
+    for (size_t i = 0, r = 0; i < g.NI; i++)
+        for (size_t j = 0; j < g.NO; j++)
+            for (size_t k = 0; k < g.NP; k++, r++) {
+                g.ati[r] = g.ti[i];
+                g.ato[r] = g.to[j];
+                g.aphi[r] = g.phi[k];
+            }
+    api_kernel_job.NI = g.NI;
+    api_kernel_job.NO = g.NO;
+    api_kernel_job.NP = g.NP;
+    printf("# public entry points and the internal kernel, n = 1.5, s = 3, the same "
+           "90x180x181 (ti, to, phi) grid, median of %d runs each, one process\n", reps);
+    printf("entry,threads,seconds,evaluations_per_second\n");
+    struct {
+        const char *name;
+        void (*fn)(api_grid *);
+        int threads;
+    } rows[] = {
+        {"btdf_rho", api_rho, 1},           {"btdf_eval", api_eval, 1},
+        {"btdf_eval_batch", api_batch, 1},  {"btdf_eval_grid", api_grid_fn, 1},
+        {"btdf_eval_grid", api_grid_fn, 2}, {"kernel (rho_kernel, tables)", api_kernel, 1},
+        {"kernel (rho_kernel, tables)", api_kernel, 2},
+    };
+    for (size_t r = 0; r < sizeof rows / sizeof rows[0]; r++) {
+        api_threads = rows[r].threads;
+        double m = api_time(rows[r].fn, &g, reps);
+        printf("%s,%d,%.4f,%.3g\n", rows[r].name, rows[r].threads, m, (double)N / m);
+        fflush(stdout);
+    }
+    /* the tool beside this program */
+    char self[4096];
+    ssize_t len = readlink("/proc/self/exe", self, sizeof self - 16);
+    if (len > 0) {
+        self[len] = 0;
+        char *slash = strrchr(self, '/');
+        if (slash) {
+            strcpy(slash + 1, "btdftab");
+            if (access(self, X_OK) == 0) {
+                size_t rows = 2000000;
+                double rps = cli_rows(self, rows, reps < 5 ? reps : 5);
+                printf("btdftab eval (stdin to stdout),1,%.4f,%.3g rows/s\n",
+                       rps > 0 ? (double)rows / rps : 0.0, rps);
+            }
+        }
+    }
+    free(g.ti);
+    free(g.to);
+    free(g.phi);
+    free(g.ati);
+    free(g.ato);
+    free(g.aphi);
+    free(g.out);
+    free(api_kernel_job.buf);
+    free(api_kernel_job.cph);
+    free(api_kernel_job.sph);
+}
+
 int main(int argc, char **argv)
 {
     const char *what = argc > 1 ? argv[1] : "all";
@@ -209,6 +392,8 @@ int main(int argc, char **argv)
         o.params.ior[2] = 1.51;
         run(stdout, "adaptive", "1.49,1.5,1.51/3 ti 0-90", &o, reps);
     }
+    if (!strcmp(what, "all") || !strcmp(what, "api"))
+        api_bench(reps < 5 ? 5 : reps);
     /* Last: the child processes above must not inherit this section's buffers, or
        their peak memory would include them. */
     if (!strcmp(what, "all") || !strcmp(what, "throughput")) {
