@@ -12,6 +12,8 @@
 #include <unistd.h>
 
 #include "btdf.h"
+#include "evalstream.h"
+#include "fastnum.h"
 #include "formats.h"
 #include "manifest.h"
 #include "table_impl.h"
@@ -62,7 +64,7 @@ static void usage(FILE *f, int verbose)
     fprintf(f,
             "usage: btdftab eval [options] [TI TO PHI]     rho at angles (degrees), or rows on stdin\n"
             "       btdftab tabulate [options] -o FILE      write a table (.csv%s)\n"
-            "       btdftab albedo [options] [TI ...]       T(ti) and the flat Ft(ti)\n"
+            "       btdftab albedo [options] [TI ...]       T(ti), the flat Ft(ti), R(ti), R + T\n"
             "       btdftab polar [options] -o FILE.png     lobes in the plane of incidence\n"
             "       btdftab build [--force] SCENE.ini       the outputs a scene manifest lists\n"
             "       btdftab inspect FILE                    header and statistics of a file\n"
@@ -82,6 +84,8 @@ static void usage(FILE *f, int verbose)
             "  --k0 K               shadowing constant (default 0.7)\n"
             "\neval:\n"
             "  --table FILE         evaluate a written table (.csv%s, .bsdf) instead of Eq. 25\n"
+            "  --part P             transmission (default), or reflection: rows TI TR PHI,\n"
+            "                       theta_r in [0, 90], phi = 180 the specular plane\n"
             "\ntabulate:\n"
             "  -o, --output FILE    .csv, .exr, .png, or .bsdf (pbrt-v3/Mitsuba tabulated,\n"
             "                       built from Eq. 25 directly); '-' writes CSV to stdout\n"
@@ -245,6 +249,23 @@ static int check_angles(double ti, double to, double phi, long line)
     return 1;
 }
 
+/* The reflected side: theta-r in [0, 90] (MODEL.md section 8). */
+static int check_angles_r(double ti, double tr, double phi, long line)
+{
+    char where[48] = "";
+    if (line > 0)
+        snprintf(where, sizeof where, "line %ld: ", line);
+    if (!(ti >= 0.0 && ti <= 90.0))
+        return fail(EXIT_USAGE, "%stheta-i %g: must lie in [0, 90] degrees", where, ti), 0;
+    if (!(tr >= 0.0 && tr <= 90.0))
+        return fail(EXIT_USAGE,
+                    "%stheta-r %g: must lie in [0, 90] degrees (the reflected hemisphere)",
+                    where, tr), 0;
+    if (!isfinite(phi))
+        return fail(EXIT_USAGE, "%sphi %g: must be finite", where, phi), 0;
+    return 1;
+}
+
 /* Reads up to `want` numbers separated by blanks or commas; returns how many, -1 on junk. */
 static int read_row(const char *line, double *v, int want)
 {
@@ -258,7 +279,7 @@ static int read_row(const char *line, double *v, int want)
         if (n == want)
             return -1;
         char *e;
-        double x = strtod(s, &e);
+        double x = fastnum_strtod(s, &e); /* strtod's result, faster */
         if (e == s || !isfinite(x))
             return -1;
         v[n++] = x;
@@ -270,11 +291,18 @@ static int read_row(const char *line, double *v, int want)
 /* eval                                                                      */
 /* ------------------------------------------------------------------------- */
 
+/* One row of %.17g values (fastnum_g17 gives printf's bytes, faster). */
 static void print_values(const double *v, int n)
 {
-    for (int c = 0; c < n; c++)
-        printf(c ? " %.17g" : "%.17g", v[c]);
-    putchar('\n');
+    char buf[BTDF_MAX_CHANNELS * 32 + 2];
+    int len = 0;
+    for (int c = 0; c < n; c++) {
+        if (c)
+            buf[len++] = ' ';
+        len += fastnum_g17(v[c], buf + len);
+    }
+    buf[len++] = '\n';
+    fwrite(buf, 1, (size_t)len, stdout);
 }
 
 static int cmd_eval(int argc, char **argv)
@@ -283,7 +311,7 @@ static int cmd_eval(int argc, char **argv)
     btdf_params_default(&c.p);
     const char *table_path = NULL;
     double pos[3];
-    int npos = 0;
+    int npos = 0, reflection = 0;
     for (int i = 1; i < argc; i++) {
         int r = common_opt(&c, argc, argv, &i);
         if (r < 0)
@@ -294,6 +322,16 @@ static int cmd_eval(int argc, char **argv)
             if (i + 1 >= argc)
                 return fail(EXIT_USAGE, "--table: missing value");
             table_path = argv[++i];
+        } else if (!strcmp(argv[i], "--part")) {
+            if (i + 1 >= argc)
+                return fail(EXIT_USAGE, "--part: missing value");
+            const char *v = argv[++i];
+            if (!strcmp(v, "reflection"))
+                reflection = 1;
+            else if (!strcmp(v, "transmission"))
+                reflection = 0;
+            else
+                return fail(EXIT_USAGE, "--part: '%s': must be transmission or reflection", v);
         } else if (argv[i][0] == '-' && argv[i][1] && !(argv[i][1] >= '0' && argv[i][1] <= '9') &&
                    argv[i][1] != '.') {
             fail(EXIT_USAGE, "eval: unknown option '%s'", argv[i]);
@@ -308,8 +346,15 @@ static int cmd_eval(int argc, char **argv)
     }
     if (npos != 0 && npos != 3)
         return fail(EXIT_USAGE, "eval: give exactly three angles TI TO PHI, or none to read rows");
+    if (reflection && table_path)
+        return fail(EXIT_USAGE, "--part reflection: evaluates the model only; tables and "
+                                ".bsdf files hold the transmission");
     btdf_table *t = NULL;
     btdf_scatfun *sf = NULL;
+    /* rows stream through large buffers: one system call per 256 KiB */
+    static char inbuf[1 << 18], outbuf[1 << 18];
+    setvbuf(stdin, inbuf, _IOFBF, sizeof inbuf);
+    setvbuf(stdout, outbuf, _IOFBF, sizeof outbuf);
     if (table_path && ends_with(table_path, ".bsdf")) {
         char msg[512];
         btdf_status st = btdf_scatfun_read(table_path, &sf, msg, sizeof msg);
@@ -324,6 +369,15 @@ static int cmd_eval(int argc, char **argv)
         c.p = *btdf_table_get_params(t);
     } else if (!check_params(&c.p)) {
         return EXIT_USAGE;
+    }
+    if (npos == 0 && !t && !sf) { /* the model on rows from stdin: blocks, threads */
+        char err[256];
+        int rc = eval_stream(stdin, stdout, &c.p, reflection, c.threads, err, sizeof err);
+        if (rc)
+            fail(rc, "%s", err);
+        if (fflush(stdout) != 0 && rc == 0)
+            rc = fail(1, "standard output: %s", strerror(errno));
+        return rc;
     }
     int code = 0;
     double out[BTDF_MAX_CHANNELS];
@@ -347,11 +401,15 @@ static int cmd_eval(int argc, char **argv)
                 break;
             }
         }
-        if (!check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
+        if (reflection ? !check_angles_r(v[0], v[1], v[2], npos == 3 ? 0 : ln)
+                       : !check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
             code = EXIT_USAGE;
             break;
         }
-        if (t) {
+        if (reflection) {
+            for (int ch = 0; ch < c.p.channels; ch++)
+                out[ch] = btdf_rho_r_deg(c.p.ior[ch], c.p.smoothness, c.p.k0, v[0], v[1], v[2]);
+        } else if (t) {
             btdf_table_eval(t, v[0] * M_PI / 180.0, v[1] * M_PI / 180.0, v[2] * M_PI / 180.0, out);
         } else if (sf) {
             /* light entering through the top (index n), as pbrt-v3 would read it */
@@ -403,17 +461,22 @@ static int cmd_albedo(int argc, char **argv)
         for (int k = 0; k <= 8; k++)
             angles[na++] = 10.0 * k;
     printf("theta_i_deg");
-    for (int ch = 0; ch < c.p.channels; ch++)
-        printf(c.p.channels == 1 ? ",T,Ft" : ",T_%c,Ft_%c", "rgb"[ch], "rgb"[ch]);
+    for (int ch = 0; ch < c.p.channels; ch++) {
+        char sfx[3] = {'_', "rgb"[ch], 0};
+        const char *x = c.p.channels == 1 ? "" : sfx;
+        printf(",T%s,Ft%s,R%s,R+T%s", x, x, x, x);
+    }
     printf("\n");
     for (int k = 0; k < na; k++) {
         if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
             return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
-        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS];
+        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS];
         btdf_transmittance(&c.p, ti, T);
+        btdf_reflectance(&c.p, ti, R);
         printf("%.10g", angles[k]);
         for (int ch = 0; ch < c.p.channels; ch++)
-            printf(",%.9f,%.9f", T[ch], btdf_fresnel_t(c.p.ior[ch], ti));
+            printf(",%.9f,%.9f,%.9f,%.9f", T[ch], btdf_fresnel_t(c.p.ior[ch], ti), R[ch],
+                   R[ch] + T[ch]);
         printf("\n");
     }
     return 0;
