@@ -111,16 +111,10 @@ static int params_ok(double n, double s, double k0)
            k0 <= BTDF_K0_MAX;
 }
 
-/* One evaluation: the geometry first, the shadowing (four exponentials) only where
-   some facet connects the directions. The same operations as the loops, so the
-   same bits. */
-static double rho_point(double n, double s, double k0, bt_io *io, const bt_az *az)
+/* One evaluation: the shadowing only where some facet connects the directions. */
+BT_INLINE double rho_point(double n, double s, double k0, bt_io *io, const bt_az *az)
 {
-    double d = n - 1.0;
-    if (!bt_rho_reach(n, d, s, io, az->h2, az->sphi))
-        return 0.0;
-    bt_io_pref(io, s, k0);
-    return bt_rho(n, d, s, io, az->h2, az->sphi);
+    return bt_rho_one(n, n - 1.0, s, k0, io, az->h2, az->sphi);
 }
 
 BT_CLONES BTDF_API double btdf_rho(double n, double s, double k0, double ti, double to,
@@ -137,8 +131,8 @@ BT_CLONES BTDF_API double btdf_rho(double n, double s, double k0, double ti, dou
     return rho_point(n, s, k0, &io, &az);
 }
 
-BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti, double to,
-                             double phi)
+BT_CLONES BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti,
+                                       double to, double phi)
 {
     if (!params_ok(n, s, k0) ||
         !(ti >= 0.0 && ti <= 90.0 && to >= 90.0 && to <= 180.0 && isfinite(phi)))
@@ -150,7 +144,8 @@ BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti, double to
     return rho_point(n, s, k0, &io, &az);
 }
 
-BTDF_API double btdf_rho_r(double n, double s, double k0, double ti, double tr, double phi)
+BT_CLONES BTDF_API double btdf_rho_r(double n, double s, double k0, double ti, double tr,
+                                     double phi)
 {
     if (!params_ok(n, s, k0) || !(ti >= 0.0 && ti <= M_PI / 2 + 1e-15 && tr >= 0.0 &&
                                   tr <= M_PI / 2 + 1e-15 && isfinite(phi)))
@@ -162,8 +157,8 @@ BTDF_API double btdf_rho_r(double n, double s, double k0, double ti, double tr, 
     return bt_rho_r(n, n - 1.0, s, &ir, az.h2, az.sphi);
 }
 
-BTDF_API double btdf_rho_r_deg(double n, double s, double k0, double ti, double tr,
-                               double phi)
+BT_CLONES BTDF_API double btdf_rho_r_deg(double n, double s, double k0, double ti,
+                                         double tr, double phi)
 {
     if (!params_ok(n, s, k0) ||
         !(ti >= 0.0 && ti <= 90.0 && tr >= 0.0 && tr <= 90.0 && isfinite(phi)))
@@ -201,8 +196,8 @@ static int angles_ok(double ti, double to, double phi)
     return ti >= 0.0 && ti <= M_PI / 2 && to >= M_PI / 2 && to <= M_PI && isfinite(phi);
 }
 
-BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double to, double phi,
-                               double *out)
+BT_CLONES BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double to,
+                                         double phi, double *out)
 {
     if (btdf_params_check(p, NULL, 0) != BTDF_OK || !out)
         return BTDF_EINVAL;

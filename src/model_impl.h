@@ -263,20 +263,25 @@ BT_INLINE void bt_sincos_deg(double x, double *s, double *c)
     bt_sincos_red(y, swap, s, c);
 }
 
-/* Shadowing over cosine, V(t) / cos t, from sin t >= 0 and cos t; 0 when cos t <= 0
-   (grazing: V -> 0 faster than 1/cos t grows, MODEL.md 3.5). */
-BT_INLINE double bt_shadow_over_cos(double sn, double cs, double s, double k0)
+/* The exponent of the shadowing, V(t) = e^-a with a = (k0 tan t / s) e^{-s^2/(4 tan^2 t)},
+   from sin t >= 0 and cos t. Kept as an exponent so that V(ti) V(to) and the Beckmann
+   factor share one exponential. cos t <= 0 (grazing) gives a finite a; the caller's
+   1/cos t factor is 0 there (MODEL.md 3.5). */
+BT_INLINE double bt_shadow_exponent(double sn, double cs, double s, double k0)
 {
-    int ok = cs > 0.0;
-    double c = ok ? cs : 1.0; /* no 1/0 on the discarded branch */
+    double c = cs > 0.0 ? cs : 1.0; /* no 1/0 on the discarded branch */
     double t = sn / c;
     double t2 = t * t;
     /* t = 0 is V = 1 (MODEL.md 3.4): the floor keeps s^2/(4 t^2) finite, and
        e^-(huge) = 0 */
     double q = 0.25 * s * s / (t2 > 1e-300 ? t2 : 1e-300);
-    double e = bt_exp_mul(-q, 1.0);
-    double v = bt_exp_mul(-(k0 * t / s) * e, 1.0);
-    return ok ? v / c : 0.0;
+    return (k0 * t / s) * bt_exp_mul(-q, 1.0);
+}
+
+/* 1/cos t, 0 for cos t <= 0. */
+BT_INLINE double bt_inv_cos(double cs)
+{
+    return cs > 0.0 ? 1.0 / (cs > 0.0 ? cs : 1.0) : 0.0;
 }
 
 /* The (ti, to) part of rho: sines and cosines, w = e_i + e_o without its azimuth
@@ -287,7 +292,8 @@ typedef struct bt_io {
     double cto;        /* |cos to| >= 0 */
     double wx0;        /* sin ti - sin to */
     double wz;         /* cos ti - |cos to| */
-    double pref;       /* s^2/(4 pi) V(ti)/cos ti V(to)/|cos to| (bt_io_pref) */
+    double pref;       /* s^2/(4 pi) / (cos ti |cos to|), 0 at grazing (bt_io_pref) */
+    double sh;         /* shadowing exponent: V(ti) V(to) = e^-sh */
 } bt_io;
 
 /* From sin/cos of ti and of b = pi - to, and sin/cos of p and sin m with
@@ -302,13 +308,15 @@ BT_INLINE void bt_io_set(bt_io *io, double sti, double cti, double sto, double c
     io->wx0 = 2.0 * cp * sm; /* sin ti - sin b */
     io->wz = -2.0 * sp * sm; /* cos ti - cos b */
     io->pref = 0.0;
+    io->sh = 0.0;
 }
 
 /* The shadowing prefactor, apart: a caller may skip it where no facet connects. */
 BT_INLINE void bt_io_pref(bt_io *io, double s, double k0)
 {
-    io->pref = s * s / (4.0 * M_PI) * bt_shadow_over_cos(io->sti, io->cti, s, k0) *
-               bt_shadow_over_cos(io->sto, io->cto, s, k0);
+    io->pref = s * s / (4.0 * M_PI) * bt_inv_cos(io->cti) * bt_inv_cos(io->cto);
+    io->sh = bt_shadow_exponent(io->sti, io->cti, s, k0) +
+             bt_shadow_exponent(io->sto, io->cto, s, k0);
 }
 
 /* sin and cos of four reduced arguments at once (the lanes of one vector where the
@@ -439,15 +447,23 @@ BT_INLINE void bt_az_deg(bt_az *az, double cdeg)
        no facet refracts e_i into e_o (MODEL.md 2, 3.7); & rather than &&: no branch */ \
     int ok = (ca_l > 0.0) & (cb_l > 0.0) & (e < BTDF_EXP_CUT * vz2)
 
-/* 1 where some facet refracts e_i into e_o and the exponential does not underflow:
-   where it is 0, bt_rho is 0 whatever the shadowing (so a caller may skip it). */
-BT_INLINE int bt_rho_reach(double n, double d, double s, const bt_io *io, double h2,
-                           double sphi)
-{
-    BT_RHO_GEOMETRY;
-    (void)len2;
-    return ok;
-}
+/* The value from BT_RHO_GEOMETRY's quantities and the prefactor pref. */
+#define BT_RHO_VALUE(pref)                                                              \
+    /* On the discarded branch every divisor is replaced by 1: no 1/0, no NaN. */      \
+    vz2 = ok ? vz2 : 1.0;                                                               \
+    len2 = ok ? len2 : 1.0;                                                             \
+    ca_l = ok ? ca_l : 1.0;                                                             \
+    cb_l = ok ? cb_l : 1.0;                                                             \
+    double inv_len = 1.0 / sqrt(len2); /* len2 >= d^2 > 0 */                            \
+    double inv_vz2 = 1.0 / vz2;                                                         \
+    double ca = ca_l * inv_len, cb = cb_l * inv_len;                                    \
+    double sec2 = len2 * inv_vz2;                                                       \
+    double d1 = ca + n * cb, d2 = n * ca + cb; /* > 0 */                                \
+    double q1 = d1 * d1, q2 = d2 * d2;                                                  \
+    double ft = 2.0 * n * ca * cb * ((q1 + q2) / (q1 * q2));                            \
+    double chi = n * n * cb * (inv_len * inv_len);                                      \
+    double r = bt_exp_mul(-(e * inv_vz2 + io->sh), (pref) * ca * ft * chi * (sec2 * sec2)); \
+    r = ok & (r >= DBL_MIN) ? r : 0.0
 
 /* Eq. 25 for index n = 1 + d from the parts above; branch-free (MODEL.md section 2,
    the algebra in the comment of rho_kernel_v). 0 where no facet connects the two
@@ -456,21 +472,22 @@ BT_INLINE double bt_rho(double n, double d, double s, const bt_io *io, double h2
                         double sphi)
 {
     BT_RHO_GEOMETRY;
-    /* On the discarded branch every divisor is replaced by 1: no 1/0, no NaN. */
-    vz2 = ok ? vz2 : 1.0;
-    len2 = ok ? len2 : 1.0;
-    ca_l = ok ? ca_l : 1.0;
-    cb_l = ok ? cb_l : 1.0;
-    double inv_len = 1.0 / sqrt(len2); /* len2 >= d^2 > 0 */
-    double inv_vz2 = 1.0 / vz2;
-    double ca = ca_l * inv_len, cb = cb_l * inv_len;
-    double sec2 = len2 * inv_vz2;
-    double d1 = ca + n * cb, d2 = n * ca + cb; /* > 0 */
-    double q1 = d1 * d1, q2 = d2 * d2;
-    double ft = 2.0 * n * ca * cb * ((q1 + q2) / (q1 * q2));
-    double chi = n * n * cb * (inv_len * inv_len);
-    double r = bt_exp_mul(-e * inv_vz2, io->pref * ca * ft * chi * (sec2 * sec2));
-    return ok & (r >= DBL_MIN) ? r : 0.0;
+    BT_RHO_VALUE(io->pref);
+    return r;
+}
+
+/* The same for one evaluation: the shadowing prefactor (four exponentials) is only
+   formed where some facet connects the directions; the same operations, the same
+   bits. */
+BT_INLINE double bt_rho_one(double n, double d, double s, double k0, bt_io *io, double h2,
+                            double sphi)
+{
+    BT_RHO_GEOMETRY;
+    if (!ok)
+        return 0.0;
+    bt_io_pref(io, s, k0);
+    BT_RHO_VALUE(io->pref);
+    return r;
 }
 
 /* The reflection of the same facets (MODEL.md section 8): the (ti, tr) part, with
@@ -479,17 +496,18 @@ typedef struct bt_ir {
     double str;  /* sin tr */
     double ux0;  /* sin ti - sin tr = 2 cos p sin m, p = (ti + tr)/2, m = (ti - tr)/2 */
     double uz;   /* cos ti + cos tr = 2 cos p cos m */
-    double pref; /* s^2/(4 pi) V(ti)/cos ti V(tr)/cos tr / 4 */
+    double pref; /* s^2/(16 pi) / (cos ti cos tr), 0 at grazing */
+    double sh;   /* shadowing exponent: V(ti) V(tr) = e^-sh */
 } bt_ir;
 
 BT_INLINE void bt_ir_set(bt_ir *ir, double sti, double cti, double str, double ctr,
-                             double cp, double sm, double cm, double s, double k0)
+                         double cp, double sm, double cm, double s, double k0)
 {
     ir->str = str;
     ir->ux0 = 2.0 * cp * sm;
     ir->uz = 2.0 * cp * cm;
-    ir->pref = s * s / (16.0 * M_PI) * bt_shadow_over_cos(sti, cti, s, k0) *
-               bt_shadow_over_cos(str, ctr, s, k0);
+    ir->pref = s * s / (16.0 * M_PI) * bt_inv_cos(cti) * bt_inv_cos(ctr);
+    ir->sh = bt_shadow_exponent(sti, cti, s, k0) + bt_shadow_exponent(str, ctr, s, k0);
 }
 
 BT_INLINE void bt_ir_rad(bt_ir *ir, double ti, double tr, double s, double k0)
@@ -549,7 +567,7 @@ BT_INLINE double bt_rho_r(double n, double d, double s, const bt_ir *ir, double 
     double ca = 0.5 * sqrt(u2);
     double fr = bt_fresnel_r(n, d, ca);
     double sec2 = u2 / uz2;
-    double r = bt_exp_mul(-e / uz2, ir->pref * fr * (sec2 * sec2));
+    double r = bt_exp_mul(-(e / uz2 + ir->sh), ir->pref * fr * (sec2 * sec2));
     return ok & (r >= DBL_MIN) ? r : 0.0;
 }
 
