@@ -196,10 +196,21 @@ static int angles_ok(double ti, double to, double phi)
     return ti >= 0.0 && ti <= M_PI / 2 && to >= M_PI / 2 && to <= M_PI && isfinite(phi);
 }
 
+/* btdf_params_check's verdict without its messages: the per-call check of btdf_eval. */
+static int params_valid(const btdf_params *p)
+{
+    if (!p || !(p->channels == 1 || p->channels == 3))
+        return 0;
+    for (int c = 0; c < p->channels; c++)
+        if (!params_ok(p->ior[c], p->smoothness, p->k0))
+            return 0;
+    return 1;
+}
+
 BT_CLONES BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double to,
                                          double phi, double *out)
 {
-    if (btdf_params_check(p, NULL, 0) != BTDF_OK || !out)
+    if (!params_valid(p) || !out)
         return BTDF_EINVAL;
     if (!angles_ok(ti, to, phi))
         return BTDF_EDOMAIN;

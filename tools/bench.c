@@ -206,31 +206,51 @@ static void api_kernel(api_grid *g)
     btdf_parallel_for(api_threads, g->NI, eval_slice, &api_kernel_job);
 }
 
-/* Median seconds of reps runs of fn after one warm-up run. */
-static double api_time(void (*fn)(api_grid *), api_grid *g, int reps)
+static double cpu_now(void)
 {
-    double v[9];
-    fn(g);
-    for (int k = 0; k < reps; k++) {
-        double t0 = now();
-        fn(g);
-        v[k] = now() - t0;
-    }
-    return median(v, reps);
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* btdftab eval on rows piped through a file: rows/s of parsing, evaluating, printing. */
-static double cli_rows(const char *tool, size_t rows, int reps)
+/* Median wall and CPU seconds (all threads of this process) of reps runs of fn after
+   one warm-up run. On a shared machine the wall time includes the time other
+   processes held the cores; the CPU time does not. */
+static void api_time(void (*fn)(api_grid *), api_grid *g, int reps, double *wall, double *cpu)
+{
+    double v[9], c[9];
+    fn(g);
+    for (int k = 0; k < reps; k++) {
+        double t0 = now(), c0 = cpu_now();
+        fn(g);
+        v[k] = now() - t0;
+        c[k] = cpu_now() - c0;
+    }
+    *wall = median(v, reps);
+    *cpu = median(c, reps);
+}
+
+static double children_cpu(void)
+{
+    struct rusage ru;
+    getrusage(RUSAGE_CHILDREN, &ru);
+    return (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+           (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
+}
+
+/* btdftab eval on rows piped through a file: rows/s of parsing, evaluating, printing,
+   by wall time and by the CPU time of the child processes. */
+static int cli_rows(const char *tool, size_t rows, int reps, double *wall, double *cpu)
 {
     char in[] = "/tmp/btdf-bench-in-XXXXXX";
     int fd = mkstemp(in);
     if (fd < 0)
-        return 0.0;
+        return 0;
     FILE *f = fdopen(fd, "w");
     if (!f) {
         close(fd);
         unlink(in);
-        return 0.0;
+        return 0;
     }
     for (size_t r = 0; r < rows; r++) /* a grid of angles as a user would write them */
         fprintf(f, "%g %g %g\n", (double)(r % 90), 90.0 + (double)((r / 90) % 91),
@@ -238,15 +258,18 @@ static double cli_rows(const char *tool, size_t rows, int reps)
     fclose(f);
     char cmd[4096 + 256];
     snprintf(cmd, sizeof cmd, "'%s' eval --ior 1.5 -s 3 < '%s' > /dev/null", tool, in);
-    double v[9];
+    double v[9], c[9];
     int ok = 1;
     for (int k = 0; k < reps && ok; k++) {
-        double t0 = now();
+        double t0 = now(), c0 = children_cpu();
         ok = system(cmd) == 0;
         v[k] = now() - t0;
+        c[k] = children_cpu() - c0;
     }
     unlink(in);
-    return ok ? (double)rows / median(v, reps) : 0.0;
+    *wall = median(v, reps);
+    *cpu = median(c, reps);
+    return ok;
 }
 
 static void api_bench(int reps)
@@ -293,7 +316,16 @@ static void api_bench(int reps)
     api_kernel_job.NP = g.NP;
     printf("# public entry points and the internal kernel, n = 1.5, s = 3, the same "
            "90x180x181 (ti, to, phi) grid, median of %d runs each, one process\n", reps);
-    printf("entry,threads,seconds,evaluations_per_second\n");
+    double la[3] = {0, 0, 0};
+    FILE *lf = fopen("/proc/loadavg", "r");
+    if (lf) {
+        if (fscanf(lf, "%lf %lf %lf", &la[0], &la[1], &la[2]) != 3)
+            la[0] = la[1] = la[2] = 0;
+        fclose(lf);
+    }
+    printf("# load average at the start: %.2f %.2f %.2f (on %ld cores)\n", la[0], la[1], la[2],
+           sysconf(_SC_NPROCESSORS_ONLN));
+    printf("entry,threads,wall_seconds,per_wall_second,cpu_seconds,per_cpu_second\n");
     struct {
         const char *name;
         void (*fn)(api_grid *);
@@ -306,8 +338,10 @@ static void api_bench(int reps)
     };
     for (size_t r = 0; r < sizeof rows / sizeof rows[0]; r++) {
         api_threads = rows[r].threads;
-        double m = api_time(rows[r].fn, &g, reps);
-        printf("%s,%d,%.4f,%.3g\n", rows[r].name, rows[r].threads, m, (double)N / m);
+        double w, c;
+        api_time(rows[r].fn, &g, reps, &w, &c);
+        printf("%s,%d,%.4f,%.3g,%.4f,%.3g\n", rows[r].name, rows[r].threads, w,
+               (double)N / w, c, (double)N / c);
         fflush(stdout);
     }
     /* the tool beside this program */
@@ -320,9 +354,10 @@ static void api_bench(int reps)
             strcpy(slash + 1, "btdftab");
             if (access(self, X_OK) == 0) {
                 size_t rows = 2000000;
-                double rps = cli_rows(self, rows, reps < 5 ? reps : 5);
-                printf("btdftab eval (stdin to stdout),1,%.4f,%.3g rows/s\n",
-                       rps > 0 ? (double)rows / rps : 0.0, rps);
+                double w, c;
+                if (cli_rows(self, rows, reps < 5 ? reps : 5, &w, &c))
+                    printf("btdftab eval rows (stdin to stdout),all,%.4f,%.3g,%.4f,%.3g\n", w,
+                           (double)rows / w, c, (double)rows / c);
             }
         }
     }
