@@ -4,11 +4,12 @@
 
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "fastnum.h"
-#include "table_impl.h"
 
 enum { BLOCK = 1 << 20, CHUNKS = 16 };
 
@@ -66,9 +67,8 @@ static const char *angle_error(int reflection, const double *v, char *msg, size_
     return msg;
 }
 
-static void run_chunk(void *arg, size_t i)
+static void run_chunk(job *j, size_t i)
 {
-    job *j = arg;
     chunk *c = &j->c[i];
     const btdf_params *p = j->p;
     long ln = c->first_line;
@@ -112,6 +112,46 @@ static void run_chunk(void *arg, size_t i)
     }
 }
 
+/* Worker t of nt runs chunks t, t + nt, ...: a fixed share, so no locking. */
+typedef struct worker {
+    job *j;
+    int t, nt;
+} worker;
+
+static void *run_worker(void *arg)
+{
+    worker *w = arg;
+    for (int k = w->t; k < CHUNKS; k += w->nt)
+        run_chunk(w->j, (size_t)k);
+    return NULL;
+}
+
+/* The chunks of one block on nt threads (the calling one included); a thread that
+   cannot be started leaves its chunks to the calling thread. */
+static void run_block(job *j, int nt)
+{
+    pthread_t tid[CHUNKS];
+    worker w[CHUNKS];
+    int started[CHUNKS] = {0};
+    for (int t = 1; t < nt; t++) {
+        w[t].j = j;
+        w[t].t = t;
+        w[t].nt = nt;
+        started[t] = pthread_create(&tid[t], NULL, run_worker, &w[t]) == 0;
+    }
+    w[0].j = j;
+    w[0].t = 0;
+    w[0].nt = nt;
+    run_worker(&w[0]);
+    for (int t = 1; t < nt; t++) {
+        if (started[t])
+            pthread_join(tid[t], NULL);
+        else
+            for (int k = t; k < CHUNKS; k += nt)
+                run_chunk(j, (size_t)k);
+    }
+}
+
 int eval_stream(FILE *in, FILE *out, const btdf_params *p, int reflection, int threads,
                 char *err, size_t errlen)
 {
@@ -126,6 +166,10 @@ int eval_stream(FILE *in, FILE *out, const btdf_params *p, int reflection, int t
     }
     j->p = p;
     j->reflection = reflection;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    int nt = threads > 0 ? threads : cores > 0 ? (int)cores : 1;
+    if (nt > CHUNKS)
+        nt = CHUNKS;
     size_t have = 0;
     long line = 1;
     int eof = 0;
@@ -175,7 +219,7 @@ int eval_stream(FILE *in, FILE *out, const btdf_params *p, int reflection, int t
                 line += *q == '\n';
             s = e;
         }
-        btdf_parallel_for(threads, CHUNKS, run_chunk, j);
+        run_block(j, nt);
         for (int k = 0; k < CHUNKS && code == 0; k++) {
             chunk *c = &j->c[k];
             if (c->len && fwrite(c->out, 1, c->len, out) != c->len) {
