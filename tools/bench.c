@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "btdf.h"
+#include "fastnum.h"
 #include "model_impl.h"
 #include "table_impl.h"
 
@@ -238,6 +239,51 @@ static double children_cpu(void)
            (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
 }
 
+/* The tool's number I/O against the C library's, per number, on the values and
+   strings of the CLI row below: printf("%.17g") against fastnum_g17 (the same bytes),
+   strtod against fastnum_strtod (the same values). */
+static void number_io(api_grid *g, int reps)
+{
+    size_t N = g->NI * g->NO * g->NP;
+    char buf[64];
+    double v[4][9];
+    for (int k = 0; k < reps; k++) {
+        size_t bytes = 0;
+        double c0 = cpu_now();
+        for (size_t i = 0; i < N; i += 7)
+            bytes += (size_t)snprintf(buf, sizeof buf, "%.17g", g->out[i]);
+        double c1 = cpu_now();
+        for (size_t i = 0; i < N; i += 7)
+            bytes += (size_t)fastnum_g17(g->out[i], buf);
+        double c2 = cpu_now();
+        double acc = 0.0;
+        for (size_t i = 0; i < N; i += 7) {
+            snprintf(buf, sizeof buf, "%g", g->ati[i] * 57.29577951308232);
+            acc += strtod(buf, NULL);
+        }
+        double c3 = cpu_now();
+        for (size_t i = 0; i < N; i += 7) {
+            snprintf(buf, sizeof buf, "%g", g->ati[i] * 57.29577951308232);
+            acc += fastnum_strtod(buf, NULL);
+        }
+        double c4 = cpu_now();
+        for (size_t i = 0; i < N; i += 7) /* the formatting both parse loops share */
+            snprintf(buf, sizeof buf, "%g", g->ati[i] * 57.29577951308232);
+        double c5 = cpu_now();
+        api_sink = acc + (double)bytes;
+        double per = 1e9 / (double)((N + 6) / 7);
+        v[0][k] = (c1 - c0) * per;
+        v[1][k] = (c2 - c1) * per;
+        v[2][k] = (c3 - c2 - (c5 - c4)) * per;
+        v[3][k] = (c4 - c3 - (c5 - c4)) * per;
+    }
+    const char *name[4] = {"printf %.17g", "fastnum_g17 (same bytes)", "strtod",
+                           "fastnum_strtod (same values)"};
+    printf("# number I/O of btdftab eval, CPU ns per number, median of %d\n", reps);
+    for (int k = 0; k < 4; k++)
+        printf("%s,%.1f ns\n", name[k], median(v[k], reps));
+}
+
 /* btdftab eval on rows piped through a file: rows/s of parsing, evaluating, printing,
    by wall time and by the CPU time of the child processes. */
 static int cli_rows(const char *tool, size_t rows, int reps, double *wall, double *cpu)
@@ -344,6 +390,7 @@ static void api_bench(int reps)
                (double)N / w, c, (double)N / c);
         fflush(stdout);
     }
+    number_io(&g, reps);
     /* the tool beside this program */
     char self[4096];
     ssize_t len = readlink("/proc/self/exe", self, sizeof self - 16);
