@@ -62,7 +62,9 @@ static inline void rho_out_init(rho_out *b, double sin_to, double cos_to, double
 
 /* Eq. 25 (MODEL.md section 2) for one channel, from hoisted incoming and outgoing
    terms and v = e_i + n e_o with e_i.v and e_o.v; rho_kernel below computes those
-   from (cos phi, sin phi). Branch-light so that loops over phi vectorise.
+   from (cos phi, sin phi). The tables' kernel: it returns early where no facet
+   connects the directions, so its loops are scalar; bt_rho below is the branch-free,
+   vectorised form of the public entry points, accurate near n = 1 as well.
    With v = e_i + n e_o, the facet normal is h = sg v/|v| with sg = sign(v_z), and
      cos a = sg (e_i.v)/|v|,  cos b = -sg (e_o.v)/|v|,  cos tn = |v_z|/|v|,
      (n cos b - cos a)^2 = |v|^2 exactly,  so chi = n^2 cos b / |v|^2,
@@ -427,7 +429,7 @@ BT_INLINE void bt_az_deg(bt_az *az, double cdeg)
 /* Eq. 25 for index n = 1 + d from the parts above; branch-free (MODEL.md section 2,
    the algebra in the comment of rho_kernel_v). 0 where no facet connects the two
    directions, and below the smallest normal double. */
-/* The geometry of v = w + d e_o shared by bt_rho and bt_rho_reach. */
+/* The geometry of v = w + d e_o shared by bt_rho and bt_rho_one. */
 #define BT_RHO_GEOMETRY                                                                 \
     double cph = 2.0 * h2 - 1.0;                                                        \
     double wx = io->wx0 + io->sto * (2.0 * h2); /* sin ti + sin to cos phi */         \
