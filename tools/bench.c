@@ -288,7 +288,10 @@ static void number_io(api_grid *g, int reps)
    by wall time and by the CPU time of the child processes. */
 static int cli_rows(const char *tool, size_t rows, int reps, double *wall, double *cpu)
 {
-    char in[] = "/tmp/btdf-bench-in-XXXXXX";
+    /* the rows go to a file in $TMPDIR (or the current folder) for the shell to redirect */
+    const char *dir = getenv("TMPDIR");
+    char in[4096];
+    snprintf(in, sizeof in, "%s/btdf-bench-in-XXXXXX", dir && *dir ? dir : ".");
     int fd = mkstemp(in);
     if (fd < 0)
         return 0;
@@ -302,7 +305,7 @@ static int cli_rows(const char *tool, size_t rows, int reps, double *wall, doubl
         fprintf(f, "%g %g %g\n", (double)(r % 90), 90.0 + (double)((r / 90) % 91),
                 (double)((r / 8190) % 181));
     fclose(f);
-    char cmd[4096 + 256];
+    char cmd[2 * 4096 + 256];
     snprintf(cmd, sizeof cmd, "'%s' eval --ior 1.5 -s 3 < '%s' > /dev/null", tool, in);
     double v[9], c[9];
     int ok = 1;
