@@ -42,6 +42,7 @@ typedef enum {
     OPT_ANGLES,
     OPT_FORCE,
     OPT_QUIET,
+    OPT_LOG_DECADES,
     OPT_END
 } opt_id;
 

@@ -53,7 +53,9 @@ typedef struct btdf_preview_opts {
     /* MONTAGE and RENDER. */
     const btdf_table *table;
     int analytic;                  /* RENDER: add the Eq. 25 and difference panels */
-    const char *title;             /* extra line written on the picture, may be NULL */
+    const char *title;             /* replaces the picture's own title when not NULL */
+    double log_decades;            /* RENDER: 0 linear (the paper's); 1 to 12: log10 scale
+                                      over that many decades below each row's maximum */
 } btdf_preview_opts;
 
 /* Zeroes o and sets kind = POLAR. Defaults when width/height are 0: POLAR 960 x 720;
