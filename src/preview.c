@@ -68,37 +68,47 @@ static void format_decade(char *buf, size_t len, int e)
         k += (size_t)snprintf(buf + k, len - k, "%s", sup[*d - '0']);
 }
 
-/* Text split at "; " into lines that fit maxw, drawn from (x, y) down when draw is set.
-   Returns the height used. A piece wider than maxw alone gets a smaller size (>= MIN_TEXT). */
+/* Text split at "; " into lines that fit maxw, drawn from (x, y) down when draw is set;
+   a piece wider than maxw alone is broken at spaces, and a word wider than maxw gets a
+   smaller size (>= MIN_TEXT). Returns the height used. */
 static double para(plot_canvas *c, double x, double y, const char *s, double size, double maxw,
                    plot_rgb col, int draw)
 {
-    char line[512], piece[512];
+    char line[1024], joined[1024];
     double lh = plot_text_height(c, size) * 1.1, used = 0.0;
     line[0] = '\0';
     const char *p = s;
     while (*p) {
         const char *e = strstr(p, "; ");
-        size_t l = e ? (size_t)(e - p) : strlen(p);
-        if (l >= sizeof piece)
-            l = sizeof piece - 1;
-        memcpy(piece, p, l);
-        piece[l] = '\0';
-        p = e ? e + 2 : p + strlen(p);
-        char joined[1024];
-        snprintf(joined, sizeof joined, "%s%s%s", line, line[0] ? "; " : "", piece);
-        if (!line[0] || plot_text_width(c, joined, size) <= maxw) {
-            size_t jl = strlen(joined);
-            jl = jl < sizeof line ? jl : sizeof line - 1;
-            memcpy(line, joined, jl);
-            line[jl] = '\0';
-            continue;
+        int l = (int)(e ? (size_t)(e - p) : strlen(p));
+        snprintf(joined, sizeof joined, "%s%s%.*s", line, line[0] ? "; " : "", l, p);
+        p = e ? e + 2 : p + l;
+        if (line[0] && plot_text_width(c, joined, size) > maxw) { /* the piece starts a line */
+            if (draw)
+                plot_text(c, x, y + used, 0, 0, line, size, col);
+            used += lh;
+            snprintf(joined, sizeof joined, "%.*s", l, e ? e - l : p - l);
         }
-        if (draw)
-            plot_text(c, x, y + used, 0, 0, line, plot_text_fit(c, line, size, MIN_TEXT, maxw),
-                      col);
-        used += lh;
-        snprintf(line, sizeof line, "%s", piece);
+        memcpy(line, joined, sizeof line);
+        /* Break a line still too wide at its last space that fits. */
+        while (plot_text_width(c, line, size) > maxw) {
+            char *cut = NULL;
+            for (char *q = strchr(line, ' '); q; q = strchr(q + 1, ' ')) {
+                *q = '\0';
+                int fits = plot_text_width(c, line, size) <= maxw;
+                *q = ' ';
+                if (!fits)
+                    break;
+                cut = q;
+            }
+            if (!cut)
+                break;
+            *cut = '\0';
+            if (draw)
+                plot_text(c, x, y + used, 0, 0, line, size, col);
+            used += lh;
+            memmove(line, cut + 1, strlen(cut + 1) + 1);
+        }
     }
     if (line[0]) {
         if (draw)
@@ -107,6 +117,13 @@ static double para(plot_canvas *c, double x, double y, const char *s, double siz
         used += lh;
     }
     return used;
+}
+
+/* A title's size: 1.2 times the body text, down to the body text's size to fit on one
+   line; para() breaks it if it is still too wide. */
+static double title_size(plot_canvas *c, const char *s, double fs, double maxw)
+{
+    return plot_text_fit(c, s, 1.2 * fs, fs, maxw);
 }
 
 /* A vertical colour bar at (x, y), w x h, top = value t 1 of map(t), and its labels at the
@@ -196,6 +213,22 @@ static int segment_hits(plot_box b, double x0, double y0, double x1, double y1)
             return 1;
     }
     return 0;
+}
+
+/* The radius of the half circle in a picture H high: `fixed` pixels of texts, a band
+   above the surface of at least band0 (the legend) and 0.3 R (the arrows), R <= Rh. */
+static double polar_radius(int H, double fixed, double Rh, double band0, double *band)
+{
+    *band = band0;
+    double R = fmin(Rh, H - fixed - band0);
+    if (band0 < 0.3 * R) {
+        *band = 0.3 * R;
+        R = fmin(Rh, H - fixed - *band);
+        if (R < Rh) /* R + 0.3 R = H - fixed */
+            R = (H - fixed) / 1.3;
+        *band = fmax(band0, 0.3 * R);
+    }
+    return R;
 }
 
 static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen)
@@ -289,9 +322,8 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
         o->title ? o->title
                  : PLOT_RHO " |cos " PLOT_THETA "o| in the plane of incidence (Xu & Sun 2008, "
                             "Eq. 25)";
-    plot_box tb = plot_text(c, m, m, 0, 0, title, plot_text_fit(c, title, 1.2 * fs, MIN_TEXT, W - 2 * m),
-                            ink);
-    double top0 = tb.y1 + 0.6 * m;
+    double th = para(c, m, m, title, title_size(c, title, fs, W - 2 * m), W - 2 * m, ink, 1);
+    double top0 = m + th + 0.5 * m;
 
     /* Legend texts: one line per curve, or two when one does not fit. */
     char lab[BTDF_PREVIEW_MAX_CURVES][160], peak[BTDF_PREVIEW_MAX_CURVES][80];
@@ -330,21 +362,23 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
 
     /* Geometry: upper band (legend, arrows, tick labels), lower half circle, labels. */
     double labw = plot_text_width(c, "150" PLOT_DEG, fsS) + 0.4 * fsS;
-    double band = legend_h + 1.6 * lineS;
+    double band0 = legend_h + 1.6 * lineS, band = band0;
     double Rh = fmin((W / 2.0 - m - labw) / 0.87, W / 2.0 - m);
-    double Rv = H - m - foot_h - 0.6 * m - lineS - 0.3 * lineS - top0 - band;
-    double R = fmin(Rh, Rv);
-    if (band < 0.3 * R) { /* room for the incident arrows */
-        band = 0.3 * R;
-        Rv = H - m - foot_h - 0.6 * m - lineS - 0.3 * lineS - top0 - band;
-        R = fmin(Rh, Rv);
-    }
-    if (R < 60.0) {
+    double fixed = m + foot_h + 0.6 * m + 1.3 * lineS + top0; /* all but band and radius */
+    double R = polar_radius(H, fixed, Rh, band0, &band);
+    /* The plot must stay large beside its texts: a radius of at least 0.28 of the
+       picture's smaller side (in 4:3 terms). */
+    double Rmin = 0.28 * fmin(W, H * 4.0 / 3.0);
+    if (R < Rmin) {
+        int Hn = H;
+        while (Hn < BTDF_PREVIEW_MAX_SIDE &&
+               polar_radius(Hn, fixed, Rh, band0, &band) < 0.28 * fmin(W, Hn * 4.0 / 3.0))
+            Hn++;
         plot_canvas_free(c);
         return say(BTDF_EINVAL, msg, msglen,
-                   "%d x %d pixels leave a plot radius of %.0f pixels for %zu curves; make the "
-                   "picture taller",
-                   W, H, R, ncurves);
+                   "%d x %d pixels leave a plot radius of %.0f pixels beside the legend of %zu "
+                   "curves: at least %d pixels high at this width",
+                   W, H, R, ncurves, Hn);
     }
     double cx = W / 2.0, cy = top0 + band;
 
@@ -553,8 +587,8 @@ static int draw_montage(const btdf_preview_opts *o, plot_canvas *c, char *msg, s
                  " " PLOT_RHO "(1/n)",
                  1.0 / p->ior[0]);
     const char *head = o->title ? o->title : title;
-    double fsT = plot_text_fit(&scratch, head, 1.2 * fs, MIN_TEXT, W - 2 * m);
-    double th = plot_text_height(&scratch, fsT);
+    double fsT = title_size(&scratch, head, fs, W - 2 * m);
+    double th = para(&scratch, m, m, head, fsT, W - 2 * m, ink, 0);
     double sub_h = para(&scratch, m, 0, sub, fsS, W - 2 * m, grey, 0);
     /* Widths of the side columns: row labels at the left, the colour bar at the right. */
     char lab[64];
@@ -604,7 +638,7 @@ static int draw_montage(const btdf_preview_opts *o, plot_canvas *c, char *msg, s
                    ceil(top + minbar + bottom));
     if (plot_canvas_init(c, W, H, white) != 0)
         return say(BTDF_ENOMEM, msg, msglen, "out of memory for a %d x %d picture", W, H);
-    plot_text(c, m, m, 0, 0, head, fsT, ink);
+    para(c, m, m, head, fsT, W - 2 * m, ink, 1);
     para(c, m, m + th + 0.4 * m, sub, fsS, W - 2 * m, grey, 1);
 
     unsigned char *px = malloc((size_t)tile * (size_t)tile * 3);
@@ -816,7 +850,9 @@ static int draw_render(const btdf_preview_opts *o, plot_canvas *c, char *msg, si
     /* Auto width: at least as wide as the title needs at its size. */
     if (!o->width)
         W = fmax(W, fmin(plot_text_width(&scratch, title, 1.2 * fs) + 2 * m, 1400.0));
-    double th = plot_text_height(&scratch, 1.2 * fs);
+    const char *head = o->title ? o->title : title;
+    double fsT = title_size(&scratch, head, fs, W - 2 * m);
+    double th = para(&scratch, m, m, head, fsT, W - 2 * m, ink, 0);
     double sub_h = para(&scratch, m, 0, sub, fsS, W - 2 * m, grey, 0);
     double foot_h = para(&scratch, m, 0, foot, fsS, W - 2 * m, grey, 0);
     plot_canvas_free(&scratch);
@@ -842,8 +878,7 @@ static int draw_render(const btdf_preview_opts *o, plot_canvas *c, char *msg, si
         return say(BTDF_ENOMEM, msg, msglen, "out of memory for the render");
     }
     double *tab = img, *ana = img + npix * BTDF_MAX_CHANNELS;
-    const char *head = o->title ? o->title : title;
-    plot_text(c, m, m, 0, 0, head, plot_text_fit(c, head, 1.2 * fs, MIN_TEXT, Wi - 2 * m), ink);
+    para(c, m, m, head, fsT, Wi - 2 * m, ink, 1);
     para(c, m, m + th + 0.3 * m, sub, fsS, Wi - 2 * m, grey, 1);
 
     /* Column x positions. */
@@ -930,6 +965,8 @@ static int draw_render(const btdf_preview_opts *o, plot_canvas *c, char *msg, si
         char rl[80];
         snprintf(rl, sizeof rl, "light %s: %.3g W from the face", row == 0 ? "far" : "near",
                  depth);
+        if (plot_text_width(c, rl, MIN_TEXT) > P) /* small panels: the short form */
+            snprintf(rl, sizeof rl, "%s: %.3g W", row == 0 ? "far" : "near", depth);
         plot_text_up(c, m + lineS / 2, y0 + P / 2.0, rl, plot_text_fit(c, rl, fsS, MIN_TEXT, P),
                      ink);
     }
