@@ -8,9 +8,63 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <cairo-ft.h>
+#include <fontconfig/fontconfig.h>
+
 static void set_colour(cairo_t *cr, plot_rgb col)
 {
     cairo_set_source_rgb(cr, col.r / 255.0, col.g / 255.0, col.b / 255.0);
+}
+
+/* The pattern of PLOT_FONT's file: the name is matched with the machine's configuration,
+   then only the file and the rendering options below are kept, so that settings such as
+   hinting or sub-pixel order in a fonts.conf do not change the pictures. NULL if no file. */
+static FcPattern *font_pattern(void)
+{
+    FcPattern *want = FcNameParse((const FcChar8 *)PLOT_FONT);
+    if (!want)
+        return NULL;
+    FcConfigSubstitute(NULL, want, FcMatchPattern);
+    FcDefaultSubstitute(want);
+    FcResult res;
+    FcPattern *got = FcFontMatch(NULL, want, &res);
+    FcPatternDestroy(want);
+    if (!got)
+        return NULL;
+    FcChar8 *file = NULL;
+    int index = 0;
+    FcPattern *clean = NULL;
+    if (FcPatternGetString(got, FC_FILE, 0, &file) == FcResultMatch && file) {
+        if (FcPatternGetInteger(got, FC_INDEX, 0, &index) != FcResultMatch)
+            index = 0;
+        clean = FcPatternCreate();
+        if (clean) {
+            FcPatternAddString(clean, FC_FILE, file);
+            FcPatternAddInteger(clean, FC_INDEX, index);
+            FcPatternAddBool(clean, FC_ANTIALIAS, FcTrue);
+            FcPatternAddBool(clean, FC_HINTING, FcFalse);
+            FcPatternAddInteger(clean, FC_HINT_STYLE, FC_HINT_NONE);
+            FcPatternAddBool(clean, FC_AUTOHINT, FcFalse);
+            FcPatternAddInteger(clean, FC_RGBA, FC_RGBA_NONE);
+            FcPatternAddBool(clean, FC_EMBEDDED_BITMAP, FcFalse);
+        }
+    }
+    FcPatternDestroy(got);
+    return clean;
+}
+
+const char *plot_font_file(char *buf, size_t len)
+{
+    FcPattern *p = font_pattern();
+    FcChar8 *file = NULL;
+    const char *out = NULL;
+    if (p && FcPatternGetString(p, FC_FILE, 0, &file) == FcResultMatch && file) {
+        snprintf(buf, len, "%s", (const char *)file);
+        out = buf;
+    }
+    if (p)
+        FcPatternDestroy(p);
+    return out;
 }
 
 int plot_canvas_init(plot_canvas *c, int w, int h, plot_rgb bg)
@@ -31,7 +85,20 @@ int plot_canvas_init(plot_canvas *c, int w, int h, plot_rgb bg)
     c->h = h;
     /* One font, no hinting: glyph positions then depend on the font file alone, not
        on the machine's hinting settings, and scale smoothly with the size. */
-    cairo_select_font_face(c->cr, PLOT_FONT, CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
+    FcPattern *pat = font_pattern();
+    if (pat) {
+        c->face = cairo_ft_font_face_create_for_pattern(pat); /* cairo keeps its own copy */
+        FcPatternDestroy(pat);
+        if (cairo_font_face_status(c->face) != CAIRO_STATUS_SUCCESS) {
+            cairo_font_face_destroy(c->face);
+            c->face = NULL;
+        }
+    }
+    if (c->face)
+        cairo_set_font_face(c->cr, c->face);
+    else /* no font file found: cairo's own choice for the name */
+        cairo_select_font_face(c->cr, PLOT_FONT, CAIRO_FONT_SLANT_NORMAL,
+                               CAIRO_FONT_WEIGHT_NORMAL);
     cairo_font_options_t *fo = cairo_font_options_create();
     cairo_font_options_set_antialias(fo, CAIRO_ANTIALIAS_GRAY);
     cairo_font_options_set_hint_style(fo, CAIRO_HINT_STYLE_NONE);
@@ -51,6 +118,9 @@ void plot_canvas_free(plot_canvas *c)
         cairo_destroy(c->cr);
     if (c->surf)
         cairo_surface_destroy(c->surf);
+    if (c->face)
+        cairo_font_face_destroy(c->face);
+    c->face = NULL;
     c->cr = NULL;
     c->surf = NULL;
 }

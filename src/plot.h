@@ -26,11 +26,13 @@ typedef struct plot_canvas {
     int w, h;
     cairo_surface_t *surf;
     cairo_t *cr;
+    cairo_font_face_t *face; /* PLOT_FONT from its file, or NULL: cairo's toy choice */
     plot_box boxes[PLOT_MAX_BOXES];
     int nboxes;
 } plot_canvas;
 
-/* The one font of every picture, chosen through fontconfig by cairo's toy text API. */
+/* The one font of every picture: fontconfig finds its file by this name; it is then
+   drawn unhinted and anti-aliased in grey, whatever the machine's font settings. */
 #define PLOT_FONT "DejaVu Sans"
 
 /* UTF-8 letters the pictures use (all in DejaVu Sans). */
@@ -47,6 +49,10 @@ int plot_canvas_init(plot_canvas *c, int w, int h, plot_rgb bg);
 void plot_canvas_free(plot_canvas *c);
 /* The picture as packed 8-bit RGB rows from the top (malloc'ed; NULL when out of memory). */
 unsigned char *plot_canvas_rgb(plot_canvas *c);
+
+/* The file the pictures' font comes from (for messages and docs), or NULL if fontconfig
+   finds none; buf receives it. */
+const char *plot_font_file(char *buf, size_t len);
 
 /* Filled rectangle [x0, x1) x [y0, y1). */
 void plot_rect(plot_canvas *c, double x0, double y0, double x1, double y1, plot_rgb col);
