@@ -790,6 +790,11 @@ static int draw_render(const btdf_preview_opts *o, plot_canvas *c, char *msg, si
     if (!(D == 0.0 || (D >= 1.0 && D <= 12.0)))
         return say(BTDF_EINVAL, msg, msglen,
                    "log_decades = %g: 0 for a linear scale, or 1 to 12 decades", D);
+    double Z = o->zoom == 0.0 ? 1.0 : o->zoom;
+    if (!(Z >= 1.0 && Z <= 1000.0))
+        return say(BTDF_EINVAL, msg, msglen,
+                   "zoom = %g: 1 (or 0) for the whole face, up to 1000 for its central 1/1000",
+                   o->zoom);
     const btdf_params *p = btdf_table_get_params(t);
     int nimg = o->analytic ? 2 : 1, C = p->channels;
     btdf_slice s0, s1;
@@ -799,10 +804,14 @@ static int draw_render(const btdf_preview_opts *o, plot_canvas *c, char *msg, si
     char title[300], sub[400], foot[700];
     render_title(title, sizeof title, p);
     int lit_inside = p->ior[0] < 1.0;
+    char shown[80] = "face 1 W wide";
+    if (Z > 1.0)
+        snprintf(shown, sizeof shown, "the central %.3g W of a face 1 W wide (zoom %g)", 1.0 / Z,
+                 Z);
     snprintf(sub, sizeof sub,
-             "face 1 W wide; point light on its axis in the light's medium (%s the block); eye "
+             "%s; point light on its axis in the light's medium (%s the block); eye "
              "0.8 W from the face on its axis, %s",
-             lit_inside ? "inside" : "outside", lit_inside ? "outside" : "inside");
+             shown, lit_inside ? "inside" : "outside", lit_inside ? "outside" : "inside");
     char scale[160];
     if (D > 0.0)
         snprintf(scale, sizeof scale, "log10 scale over %g decades below each row's maximum", D);
@@ -899,7 +908,7 @@ static int draw_render(const btdf_preview_opts *o, plot_canvas *c, char *msg, si
         double vmax = 0.0, amax = 0.0;
         for (int j = 0; j < P; j++)
             for (int i = 0; i < P; i++) {
-                double x = (i + 0.5) / P - 0.5, y = 0.5 - (j + 0.5) / P;
+                double x = ((i + 0.5) / P - 0.5) / Z, y = (0.5 - (j + 0.5) / P) / Z;
                 size_t at = ((size_t)j * (size_t)P + (size_t)i) * BTDF_MAX_CHANNELS;
                 face_radiance(t, 0, x, y, depth, tab + at);
                 if (o->analytic)

@@ -317,6 +317,27 @@ static int dark_runs(const picture *p, int y, int len, int *x0, int most)
     return n;
 }
 
+/* The pixels brighter than 64 in the first panel of a render, found by its frame: the
+   first row with 100 pixels of the frame's grey in a row is the frame's top edge. */
+static long lit_first_panel(const picture *p)
+{
+    static const int frame[3] = {105, 105, 112};
+    for (int y = 0; y < p->h; y++)
+        for (int x = 0, run = 0; x < p->w; x++) {
+            run = near(at(p, x, y), frame, 8) ? run + 1 : 0;
+            if (run < 100)
+                continue;
+            int x0 = x - run + 2, y0 = y + 1; /* the frame lies just outside the panel */
+            long n = 0;
+            for (int j = 0; j < 300; j++)
+                for (int i = 0; i < 300; i++)
+                    n += at(p, x0 + i, y0 + j)[0] > 64;
+            return n;
+        }
+    fail_msg("no panel frame found");
+    return 0;
+}
+
 /* RENDER: the far light makes the face brightest in its middle and dark in its corners;
    panels are 300 pixels by default; the log scale lights more of the face. */
 static void test_render(void **state)
@@ -356,20 +377,25 @@ static void test_render(void **state)
     assert_true(at(&p, xs[0] + 150, y1 + 3)[0] < 20);
 
     /* Log scale over 6 decades: the same middle, more of the face lit. */
-    long lit_lin = 0, lit_log = 0;
-    for (int y = y0; y < y0 + P; y++)
-        for (int x = xs[0]; x < xs[0] + P; x++)
-            lit_lin += at(&p, x, y)[0] > 64;
+    long lit_lin = lit_first_panel(&p);
     free(p.px);
     o.analytic = 0;
     o.log_decades = 6.0;
     p = write_and_read(&o, "render-log");
-    for (int y = y0; y < y0 + P; y++)
-        for (int x = xs[0]; x < xs[0] + P; x++)
-            lit_log += at(&p, x, y)[0] > 64;
-    assert_true(at(&p, xs[0] + 150, y0 + 150)[0] > 240);
+    long lit_log = lit_first_panel(&p);
     if (!(lit_log > 2 * lit_lin))
         fail_msg("log scale lights %ld pixels, linear %ld: want more than twice", lit_log,
+                 lit_lin);
+    free(p.px);
+    /* Zoom 2: the same face points at twice the scale, so the lit area (the same face
+       region: each row is scaled to the same central maximum) is 4 times larger, to the
+       pixels along its rim (about 2 pi r / (pi r^2) = 5 % for r = 40 pixels). */
+    o.log_decades = 0.0;
+    o.zoom = 2.0;
+    p = write_and_read(&o, "render-zoom");
+    long lit_zoom = lit_first_panel(&p);
+    if (!(lit_zoom > 3.6 * lit_lin && lit_zoom < 4.4 * lit_lin))
+        fail_msg("zoom 2 lights %ld pixels, zoom 1 %ld: want 4 times (3.6 to 4.4)", lit_zoom,
                  lit_lin);
     btdf_table_free(t);
     free(p.px);
@@ -567,6 +593,11 @@ static void test_errors(void **state)
     o.log_decades = 0.5;
     assert_int_equal(btdf_preview_write(&o, path, msg, sizeof msg), BTDF_EINVAL);
     assert_non_null(strstr(msg, "log_decades"));
+    o.log_decades = 0.0;
+    o.zoom = 0.5;
+    assert_int_equal(btdf_preview_write(&o, path, msg, sizeof msg), BTDF_EINVAL);
+    assert_non_null(strstr(msg, "zoom"));
+    o.zoom = 0.0;
     o.log_decades = 0.0;
     o.width = 200;
     assert_int_equal(btdf_preview_write(&o, path, msg, sizeof msg), BTDF_EINVAL);

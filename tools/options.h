@@ -43,6 +43,7 @@ typedef enum {
     OPT_FORCE,
     OPT_QUIET,
     OPT_LOG_DECADES,
+    OPT_ZOOM,
     OPT_END
 } opt_id;
 
