@@ -45,6 +45,8 @@ typedef enum {
     OPT_DRY_RUN,
     OPT_SHARD,
     OPT_QUIET,
+    OPT_LOG_DECADES,
+    OPT_ZOOM,
     OPT_END
 } opt_id;
 
