@@ -833,8 +833,10 @@ static int cmd_tabulate(cli *c, const char *prov)
         run_progress_end(&pr);
     if (st != BTDF_OK && st != BTDF_EBUDGET)
         return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s", msg[0] ? msg : btdf_strerror(st));
-    if (!t)
+    if (!t) {
+        run_progress_end(&pr);
         return fail(st == BTDF_EBUDGET ? EXIT_BUDGET : 1, "%s", msg[0] ? msg : btdf_strerror(st));
+    }
     btdf_report r;
     memset(&r, 0, sizeof r);
     btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);

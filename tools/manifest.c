@@ -542,6 +542,8 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     }
     char prov[256];
     snprintf(prov, sizeof prov, "btdftab build, material [%s], side %s", m->name, side);
+    if (code == 0)
+        run_progress_stage(&pr, "writing");
     for (int k = 0; k < nouts && code == 0; k++) {
         stamp_text(stamp, sizeof stamp, m, &p, side);
         (*done)++;
@@ -564,6 +566,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
             code = 1;
         }
     }
+    run_progress_end(&pr);
     btdf_report_clear(&r);
     btdf_table_free(t);
     return code;

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* run.c: building, reporting and writing a .bsdf, for `tabulate -o F.bsdf` and `build`. */
+#include <pthread.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -32,42 +33,82 @@ int run_parse_metric(const char *word, btdf_metric *metric)
 
 void run_progress_start(run_progress *pr, int on, const char *label)
 {
+    memset(pr, 0, sizeof *pr);
     pr->on = on;
-    pr->drawn = 0;
     size_t l = strlen(label);
     if (l > 20) /* the end of a long path says which file: keep the line for the bar */
         snprintf(pr->label, sizeof pr->label, "...%s", label + l - 17);
     else
         snprintf(pr->label, sizeof pr->label, "%s", label);
     pr->t0 = run_now();
-    pr->last = 0.0;
 }
 
-/* One line of at most 79 columns: label, bar, percent, stage, time left. */
-static void draw(run_progress *pr, const char *stage, double frac)
+/* One line of at most 79 columns: label, bar, percent, stage, time left. Called with
+   pr->lock held (or before the ticker runs). */
+static void draw(run_progress *pr, int force)
 {
     double now = run_now(), el = now - pr->t0;
-    if (!pr->on || el < 1.0 || (pr->drawn && now - pr->last < 0.1))
+    if (!pr->on || !pr->stage[0] || el < 1.0 || (!force && pr->drawn && now - pr->last < 0.1))
         return;
     pr->last = now;
     pr->drawn = 1;
     char line[256], bar[17], eta[32] = "";
-    int k = 0;
+    double frac = pr->frac;
     if (frac >= 0.0) {
         int fill = (int)(frac * 16.0 + 0.5);
-        for (k = 0; k < 16; k++)
+        for (int k = 0; k < 16; k++)
             bar[k] = k < fill ? '#' : '-';
         bar[16] = 0;
         if (frac >= 0.05 && frac < 1.0) /* too early an estimate says nothing */
             snprintf(eta, sizeof eta, "  ETA %.0f s", el * (1.0 - frac) / frac);
-        snprintf(line, sizeof line, "%s [%s] %3.0f%% %s%s", pr->label, bar, 100.0 * frac, stage,
-                 eta);
+        snprintf(line, sizeof line, "%s [%s] %3.0f%% %s%s", pr->label, bar, 100.0 * frac,
+                 pr->stage, eta);
     } else {
-        snprintf(line, sizeof line, "%s: %s (%.0f s)", pr->label, stage, el);
+        snprintf(line, sizeof line, "%s: %s (%.0f s)", pr->label, pr->stage, el);
     }
     line[79] = 0; /* one terminal line: a longer one would scroll on every redraw */
     fprintf(stderr, "\r\033[K%s", line);
     fflush(stderr);
+}
+
+/* The ticker: redraws every quarter second, so the bar appears after a second and its
+   time keeps moving even while one unit of work runs long. */
+static void *ticker(void *arg)
+{
+    run_progress *pr = arg;
+    struct timespec q = {0, 250000000L};
+    for (;;) {
+        nanosleep(&q, NULL);
+        pthread_mutex_lock(&pr->lock);
+        int stop = pr->stop;
+        if (!stop)
+            draw(pr, 1);
+        pthread_mutex_unlock(&pr->lock);
+        if (stop)
+            return NULL;
+    }
+}
+
+/* Sets what is shown, starting the ticker at the first update. */
+static void update(run_progress *pr, const char *stage, double frac)
+{
+    if (!pr->on)
+        return;
+    if (!pr->running) {
+        pr->stop = 0;
+        if (pthread_mutex_init(&pr->lock, NULL) != 0)
+            return;
+        if (pthread_create(&pr->tid, NULL, ticker, pr) != 0) {
+            pthread_mutex_destroy(&pr->lock);
+            return; /* no ticker: no bar, the work goes on */
+        }
+        pr->running = 1;
+    }
+    pthread_mutex_lock(&pr->lock);
+    snprintf(pr->stage, sizeof pr->stage, "%s", stage);
+    pr->frac = frac;
+    draw(pr, 0);
+    pthread_mutex_unlock(&pr->lock);
 }
 
 void run_progress_cb(void *user, const char *stage, size_t done, size_t todo)
@@ -75,21 +116,30 @@ void run_progress_cb(void *user, const char *stage, size_t done, size_t todo)
     run_progress *pr = user;
     char what[96];
     snprintf(what, sizeof what, "%s %zu/%zu", stage, done, done + todo);
-    draw(pr, what, done + todo ? (double)done / (double)(done + todo) : 0.0);
+    update(pr, what, done + todo ? (double)done / (double)(done + todo) : 0.0);
 }
 
 void run_progress_stage(run_progress *pr, const char *stage)
 {
-    draw(pr, stage, -1.0);
+    update(pr, stage, -1.0);
 }
 
 void run_progress_end(run_progress *pr)
 {
+    if (pr->running) {
+        pthread_mutex_lock(&pr->lock);
+        pr->stop = 1;
+        pthread_mutex_unlock(&pr->lock);
+        pthread_join(pr->tid, NULL);
+        pthread_mutex_destroy(&pr->lock);
+        pr->running = 0;
+    }
     if (pr->drawn) {
         fprintf(stderr, "\r\033[K");
         fflush(stderr);
     }
     pr->drawn = 0;
+    pr->stage[0] = 0;
 }
 
 static int fail(const char *prog, int code, const char *path, const char *what)

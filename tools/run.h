@@ -3,6 +3,8 @@
 #ifndef BTDFTAB_RUN_H
 #define BTDFTAB_RUN_H
 
+#include <pthread.h>
+
 #include <btdf/btdf.h>
 
 /* Seed of the reported error estimates; the builders check themselves with others. */
@@ -18,12 +20,16 @@ int run_parse_metric(const char *word, btdf_metric *metric);
 
 /* A progress line on standard error for a person watching: a bar, the stage being
    refined and an estimated time left. Drawn only when `on` (stderr is a terminal and
-   not --quiet) and once the run has lasted a second; redrawn at most 10 times a
-   second; run_progress_end erases it. */
+   not --quiet) and once the run has lasted a second; a ticker thread, started at the
+   first update, redraws it 4 times a second (the elapsed time moves even while one
+   unit of work runs long); run_progress_end stops the ticker and erases the line, and
+   must be called before the run_progress goes out of scope. */
 typedef struct run_progress {
-    int on, drawn;
-    char label[96];
-    double t0, last;
+    int on, drawn, running, stop;
+    char label[96], stage[96];
+    double t0, last, frac;
+    pthread_t tid;
+    pthread_mutex_t lock;
 } run_progress;
 
 void run_progress_start(run_progress *pr, int on, const char *label);
