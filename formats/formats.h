@@ -8,9 +8,12 @@
 #include "btdf.h"
 
 /* What a writer gets: the table and what to record beside it. */
+struct btdf_rad;
+
 typedef struct btdf_output_ctx {
     const btdf_table *table;
     const btdf_write_opts *opts; /* never NULL inside a writer */
+    const struct btdf_rad *rad;  /* .xml: the Radiance BSDF built from the model, else NULL */
 } btdf_output_ctx;
 
 typedef struct btdf_format_ops {
@@ -38,5 +41,6 @@ btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c
 /* Format entries defined in their own files. */
 extern const btdf_format_ops btdf_format_csv;
 extern const btdf_format_ops btdf_format_exr;
+extern const btdf_format_ops btdf_format_xml;
 
 #endif

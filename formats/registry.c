@@ -9,7 +9,8 @@
 #include "formats.h"
 #include "tmpfile.h"
 
-static const btdf_format_ops *const all_formats[] = {&btdf_format_csv, &btdf_format_exr};
+static const btdf_format_ops *const all_formats[] = {&btdf_format_csv, &btdf_format_exr,
+                                                     &btdf_format_xml};
 
 static int ext_is(const char *path, const char *ext)
 {
@@ -94,7 +95,7 @@ BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
         return BTDF_EINVAL;
     }
     btdf_write_opts none = {NULL, NULL};
-    btdf_output_ctx c = {t, w ? w : &none};
+    btdf_output_ctx c = {t, w ? w : &none, NULL};
     return btdf_write_atomic(f, &c, path, msg, msglen);
 }
 
