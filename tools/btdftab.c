@@ -14,6 +14,7 @@
 #include "btdf.h"
 #include "formats.h"
 #include "manifest.h"
+#include "radiance.h"
 #include "table_impl.h"
 #include "tmpfile.h"
 
@@ -83,9 +84,13 @@ static void usage(FILE *f, int verbose)
             "\neval:\n"
             "  --table FILE         evaluate a written table (.csv%s, .bsdf) instead of Eq. 25\n"
             "\ntabulate:\n"
-            "  -o, --output FILE    .csv, .exr, .png, or .bsdf (pbrt-v3/Mitsuba tabulated,\n"
-            "                       built from Eq. 25 directly); '-' writes CSV to stdout\n"
-            "  --tolerance E        target error of the adaptive table (default 1e-3)\n"
+            "  -o, --output FILE    .csv, .exr, .png, .bsdf (pbrt-v3/Mitsuba tabulated) or\n"
+            "                       .xml (Radiance/WINDOW BSDF); the last two are built\n"
+            "                       from Eq. 25 directly; '-' writes CSV to stdout\n"
+            "  --basis B            .xml: tree3 (default), klems-full, klems-half or\n"
+            "                       klems-quarter (docs/radiance.md)\n"
+            "  --tolerance E        target error of the adaptive table (default 1e-3;\n"
+            "                       5e-2 for a tree3 .xml)\n"
             "  --metric l1|max      which error must meet E (default l1)\n"
             "  --grid NI,NO,NPHI    a plain regular grid in (theta_i, theta_o, phi) instead\n"
             "  --side S             enter (index n, default), leave (index 1/n); for .bsdf\n"
@@ -639,13 +644,189 @@ int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int 
     return code;
 }
 
+/* Reflection: the XML JSON report adds, per block, the error report and probes: light
+   and view directions in Radiance's frame with the value the file gives there. */
+#define XML_PROBES 1000
+
+static void xml_json(FILE *f, const btdf_rad *x, const btdf_report *rep, const char *prov)
+{
+    fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
+            BTDF_VERSION_STRING);
+    for (const char *s = prov ? prov : ""; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            fputc('\\', f);
+        if ((unsigned char)*s >= 0x20)
+            fputc(*s, f);
+    }
+    fprintf(f, "\",\n  \"format\": \"radiance-xml\",\n  \"basis\": \"%s\",\n",
+            rad_basis_name(x->basis));
+    fprintf(f, "  \"ior\": [%.17g],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", x->p.ior[0],
+            x->p.smoothness, x->p.k0);
+    fprintf(f, "  \"tolerance\": %.17g,\n  \"seconds_build\": %.6f,\n  \"blocks\": [\n",
+            x->tolerance, x->seconds_build);
+    for (int k = 0; k < x->nblocks; k++) {
+        const btdf_report *r = &rep[k];
+        const rad_block *b = &x->b[k];
+        fprintf(f, "   {\"label\": \"%s\", \"side\": \"%s\", \"n\": %.17g,\n", b->label,
+                b->light == BTDF_SIDE_ENTER ? "enter" : "leave", b->n_light);
+        fprintf(f, "    \"leaves\": %zu, \"depth\": %d, \"met\": %s,\n", b->leaves, b->depth,
+                r->met ? "true" : "false");
+        fprintf(f, "    \"seconds_estimate\": %.6f, \"test_angles\": %zu, \"test_points\": %zu,\n",
+                r->seconds_estimate, r->test_angles, r->test_points);
+        fprintf(f, "    \"e_l1\": {\"max\": %.6g, \"max_to_80_deg\": %.6g, \"mean\": %.6g},\n",
+                r->e_l1_max, rad_e_l1_checked(r), r->e_l1_mean);
+        fprintf(f, "    \"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n",
+                r->e_max_max, r->e_max_mean, r->e_max_angles);
+        fprintf(f, "    \"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_t_max, r->e_t_mean);
+        fprintf(f, "    \"per_theta_i\": [\n");
+        for (size_t a = 0; a < r->test_angles; a++) {
+            const btdf_ti_error *e = &r->per_ti[a];
+            fprintf(f,
+                    "     {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_file\": %.9g, \"e_l1\": %.6g, "
+                    "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
+                    e->ti * 180 / M_PI, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
+                    a + 1 < r->test_angles ? "," : "");
+        }
+        /* Probes [theta_p, phi_p, theta_q, phi_q, value, rho]: degrees (theta from +Z, phi
+           from +X) in Radiance's frame; p on the block's side (the view), q the light;
+           value is what Radiance's lookup gives, rho Eq. 25 for light from q to p. Half
+           spread over the hemisphere, half near the straight-through direction. */
+        fprintf(f, "    ],\n    \"probes\": [\n");
+        uint64_t z = 0x9e3779b97f4a7c15ull * (uint64_t)(k + 1);
+        for (int i = 0; i < XML_PROBES; i++) {
+            double u[4];
+            for (int d = 0; d < 4; d++) {
+                z = z * 6364136223846793005ull + 1442695040888963407ull;
+                u[d] = (double)(z >> 11) * (1.0 / 9007199254740992.0);
+            }
+            double ts = round(89.0 * u[0] * 1e4) / 1e4, ps = round(360.0 * u[1] * 1e4) / 1e4;
+            double tv, pv;
+            if (i % 2) {
+                tv = round(89.0 * sqrt(u[2]) * 1e4) / 1e4;
+                pv = round(360.0 * u[3] * 1e4) / 1e4;
+            } else { /* near the light's travel direction */
+                tv = round(fmin(89.0, ts * (0.7 + 0.6 * u[2])) * 1e4) / 1e4;
+                pv = round((ps + 180.0 + 40.0 * (u[3] - 0.5)) * 1e4) / 1e4;
+            }
+            double sg = b->side == BTDF_SIDE_ENTER ? -1.0 : 1.0; /* p's side */
+            double th_s = sg > 0 ? ts : 180.0 - ts, th_v = sg > 0 ? 180.0 - tv : tv;
+            double d2r = M_PI / 180.0;
+            double src[3] = {sin(th_s * d2r) * cos(ps * d2r), sin(th_s * d2r) * sin(ps * d2r),
+                             cos(th_s * d2r)};
+            double view[3] = {sin(th_v * d2r) * cos(pv * d2r), sin(th_v * d2r) * sin(pv * d2r),
+                              cos(th_v * d2r)};
+            double v = btdf_rad_lookup(x, k, src, view);
+            /* Eq. 25 for the light at q, in its own frame (rho depends on cos phi only) */
+            double truth = btdf_rho(b->n_light, x->p.smoothness, x->p.k0, tv * d2r,
+                                    M_PI - ts * d2r, (ps - pv) * d2r);
+            fprintf(f, "     [%.4f, %.4f, %.4f, %.4f, %.9g, %.9g]%s\n", th_s, ps, th_v, pv, v,
+                    truth, i + 1 < XML_PROBES ? "," : "");
+        }
+        fprintf(f, "    ]}%s\n", k + 1 < x->nblocks ? "," : "");
+    }
+    fprintf(f, "  ]\n}\n");
+}
+
+typedef struct xml_json_job {
+    const btdf_rad *x;
+    const btdf_report *rep;
+    const char *prov;
+} xml_json_job;
+
+static btdf_status xml_json_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
+{
+    const xml_json_job *j = ctx;
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        snprintf(msg, msglen, "cannot create: %s", strerror(errno));
+        return BTDF_EIO;
+    }
+    xml_json(f, j->x, j->rep, j->prov);
+    int bad = ferror(f);
+    bad |= fclose(f) != 0;
+    if (bad) {
+        snprintf(msg, msglen, "writing failed: %s", strerror(errno));
+        return BTDF_EIO;
+    }
+    return BTDF_OK;
+}
+
+/* tabulate -o FILE.xml: a WINDOW/Radiance BSDF built from Eq. 25 (docs/radiance.md). */
+static int run_xml(const char *path, const btdf_params *p, rad_basis basis, double tol,
+                   int threads, int quiet, int best_effort, const char *report,
+                   const char *prov)
+{
+    char msg[512] = "";
+    btdf_rad *x = NULL;
+    btdf_status st = btdf_rad_build(p, basis, tol, threads, &x, msg, sizeof msg);
+    if (st != BTDF_OK && st != BTDF_EBUDGET)
+        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", path,
+                    msg[0] ? msg : btdf_strerror(st));
+    /* The material's name: the file's base name without .xml. */
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    snprintf(x->name, sizeof x->name, "%.*s", (int)(strlen(base) - 4 < sizeof x->name - 1
+                                                         ? strlen(base) - 4
+                                                         : sizeof x->name - 1), base);
+    btdf_report rep[RAD_MAX_BLOCKS];
+    memset(rep, 0, sizeof rep);
+    int met = 1, code = 0;
+    for (int k = 0; k < x->nblocks && code == 0; k++) {
+        btdf_status es = btdf_rad_report(x, k, 0, 0, REPORT_SEED, threads, &rep[k]);
+        if (es != BTDF_OK) {
+            code = fail(1, "%s: error estimate: %s", path, btdf_strerror(es));
+            break;
+        }
+        x->e_l1[k] = rep[k].e_l1_max;
+        x->e_t[k] = rep[k].e_t_max;
+        met = met && rep[k].met;
+        if (!quiet)
+            fprintf(stderr,
+                    "%s: %s: %s (light %s, as Radiance reads it): %zu %s; build %.3f s, estimate "
+                    "%.3f s (%zu angles, %zu points); e_L1 max %.3g (%.3g up to 80 deg) mean "
+                    "%.3g; e_max max %.3g; e_T max %.3g%s\n",
+                    prog, path, x->b[k].label,
+                    x->b[k].light == BTDF_SIDE_ENTER ? "entering, n" : "leaving, 1/n",
+                    basis == RAD_BASIS_TREE3 ? x->b[k].leaves : rep[k].samples,
+                    basis == RAD_BASIS_TREE3 ? "leaves" : "entries", x->seconds_build,
+                    rep[k].seconds_estimate, rep[k].test_angles, rep[k].test_points,
+                    rep[k].e_l1_max, rad_e_l1_checked(&rep[k]), rep[k].e_l1_mean, rep[k].e_max_max, rep[k].e_t_max,
+                    basis != RAD_BASIS_TREE3 ? "" : (rep[k].met ? "; tolerance met"
+                                                                : "; TOLERANCE NOT MET"));
+    }
+    x->reported = code == 0;
+    if (code == 0 && !met && !best_effort) {
+        fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
+                        "to write it anyway)\n",
+                prog, path, tol, msg[0] ? ": " : "", msg);
+        code = EXIT_BUDGET;
+    }
+    if (code == 0) {
+        btdf_write_opts w = {NULL, prov};
+        btdf_output_ctx ctx = {NULL, &w, x};
+        st = btdf_write_atomic(&btdf_format_xml, &ctx, path, msg, sizeof msg);
+        if (st != BTDF_OK)
+            code = fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+    }
+    if (code == 0 && report) {
+        xml_json_job j = {x, rep, prov};
+        if (btdf_write_file_atomic(report, ".json", xml_json_writer, &j, msg, sizeof msg) !=
+            BTDF_OK)
+            code = fail(1, "%s: %s", report, msg);
+    }
+    for (int k = 0; k < RAD_MAX_BLOCKS; k++)
+        btdf_report_clear(&rep[k]);
+    btdf_rad_free(x);
+    return code;
+}
+
 /* The options of tabulate that take a value. */
 static int takes_value(const char *a)
 {
     static const char *const with[] = {"-o", "--output", "--tolerance", "--metric", "--grid",
                                        "--theta-i", "--theta-o", "--phi", "--max-samples",
                                        "--max-memory", "--report", "--side", "--preview",
-                                       "--size"};
+                                       "--size", "--basis"};
     for (size_t k = 0; k < sizeof with / sizeof with[0]; k++)
         if (!strcmp(a, with[k]))
             return 1;
@@ -662,7 +843,8 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     int best_effort = 0, npreview = 0, pic_w = 0, pic_h = 0, sides = 0, theta_given = 0;
     preview_req previews[MAX_PREVIEWS];
     double ti0 = 0.0, ti1 = 90.0, to0 = 90.0, to1 = 180.0, ph0 = 0.0, ph1 = 180.0;
-    int grid_range = 0;
+    int grid_range = 0, basis_given = 0, tol_given = 0;
+    rad_basis basis = RAD_BASIS_TREE3;
     size_t mib = 256;
     for (int i = 1; i < argc; i++) {
         int r = common_opt(&c, argc, argv, &i);
@@ -678,6 +860,12 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         } else if (!strcmp(a, "--tolerance")) {
             if (!parse_double(a, argv[++i], &o.tolerance))
                 return EXIT_USAGE;
+            tol_given = 1;
+        } else if (!strcmp(a, "--basis")) {
+            if (!rad_basis_parse(argv[++i], &basis))
+                return fail(EXIT_USAGE, "--basis: '%s': must be tree3, klems-full, klems-half "
+                                        "or klems-quarter", argv[i]);
+            basis_given = 1;
         } else if (!strcmp(a, "--metric")) {
             const char *m = argv[++i];
             if (!strcmp(m, "l1"))
@@ -742,6 +930,22 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             return EXIT_USAGE;
         }
     }
+    if (out && ends_with(out, ".xml")) {
+        /* Radiance/WINDOW BSDF: built from Eq. 25 directly, both transmission blocks. */
+        if (!check_params(&c.p))
+            return EXIT_USAGE;
+        if (theta_given || o.kind == BTDF_TABLE_GRID || npreview || sides)
+            return fail(EXIT_USAGE, "%s: --theta-i, --grid, --side and --preview do not apply "
+                                    "to .xml (it holds every direction, light from either side)",
+                        out);
+        if (tol_given && basis != RAD_BASIS_TREE3)
+            return fail(EXIT_USAGE, "--tolerance: a Klems matrix holds exact patch averages; "
+                                    "its error is set by the basis, not by a tolerance");
+        return run_xml(out, &c.p, basis, tol_given ? o.tolerance : 5e-2, c.threads, c.quiet,
+                       best_effort, report, prov);
+    }
+    if (basis_given)
+        return fail(EXIT_USAGE, "--basis applies to .xml output only");
     if (out && ends_with(out, ".bsdf")) {
         /* A renderer file is built from Eq. 25 directly: no table is needed. */
         if (!check_params(&c.p))
@@ -776,7 +980,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     if (out) {
         fmt = strcmp(out, "-") ? btdf_format_for_path(out) : &btdf_format_csv;
         if (!fmt)
-            return fail(EXIT_USAGE, "%s: unknown output format: use .csv, .exr, .png or .bsdf", out);
+            return fail(EXIT_USAGE, "%s: unknown output format: use .csv, .exr, .png, .bsdf or .xml", out);
         if (!fmt->available)
             return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
                         fmt->name, fmt->feature);
@@ -845,7 +1049,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     }
     if (code == 0 && out) {
         btdf_write_opts w = {&r, prov};
-        btdf_output_ctx ctx = {t, &w};
+        btdf_output_ctx ctx = {t, &w, NULL};
         if (!strcmp(out, "-")) {
             st = btdf_format_csv.write_stream(&ctx, stdout, msg, sizeof msg);
             if (st == BTDF_OK && fflush(stdout) != 0)
