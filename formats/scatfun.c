@@ -1060,12 +1060,9 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
     return r.e_l1_max;
 }
 
-BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
-                                        btdf_side side, int threads, btdf_scatfun **out,
-                                        char *msg, size_t msglen)
+BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
+                                        btdf_side side, char *msg, size_t msglen)
 {
-    if (!out)
-        return say(msg, msglen, BTDF_EINVAL, "output pointer missing");
     btdf_status st = btdf_params_check(p, msg, msglen);
     if (st != BTDF_OK)
         return st;
@@ -1074,6 +1071,18 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
     if (side < BTDF_SIDE_ENTER || side > BTDF_SIDE_BOTH)
         return say(msg, msglen, BTDF_EINVAL, "side %d: must be 1 (enter), 2 (leave) or 3 (both)",
                    (int)side);
+    return BTDF_OK;
+}
+
+BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
+                                        btdf_side side, int threads, btdf_scatfun **out,
+                                        char *msg, size_t msglen)
+{
+    if (!out)
+        return say(msg, msglen, BTDF_EINVAL, "output pointer missing");
+    btdf_status st = btdf_scatfun_check(p, tolerance, side, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
     double t0 = btdf_now();
     build_ctx c;
     memset(&c, 0, sizeof c);
@@ -1677,24 +1686,7 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
     return BTDF_OK;
 }
 
-BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
-                                        const char *metadata_json, char *msg, size_t msglen)
-{
-    if (!f || !path || !*path)
-        return say(msg, msglen, BTDF_EINVAL, "file or path missing");
-    unsigned char *b = NULL;
-    size_t len = 0;
-    btdf_status st = btdf_scatfun_to_mem(f, metadata_json, &b, &len, msg, msglen);
-    if (st != BTDF_OK)
-        return st;
-    btdf_bytes bytes = {b, len};
-    char why[256] = "";
-    st = btdf_write_file_atomic(path, ".bsdf", btdf_write_bytes, &bytes, why, sizeof why);
-    if (st != BTDF_OK)
-        say(msg, msglen, st, "%s: %s", path, why);
-    free(b);
-    return st;
-}
+/* btdf_scatfun_write is the registry's (formats/registry.c): one atomic write path. */
 
 #define FMT_FAIL(...) say(msg, msglen, BTDF_EFORMAT, __VA_ARGS__)
 

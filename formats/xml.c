@@ -90,8 +90,8 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     const btdf_rad *r = c->rad;
     if (!r) {
         if (msg && msglen)
-            snprintf(msg, msglen, "an .xml BSDF is built from the model (btdftab tabulate -o "
-                                  "FILE.xml), not written from a table");
+            snprintf(msg, msglen, "an .xml BSDF is built from the model (btdf_rad_build), "
+                                  "not written from a table");
         return BTDF_EINVAL;
     }
     int tree = r->basis == RAD_BASIS_TREE3;
@@ -173,4 +173,10 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     return ferror(f) ? BTDF_EIO : BTDF_OK;
 }
 
-const btdf_format_ops btdf_format_xml = {"xml", ".xml", NULL, 1, xml_write, NULL, NULL};
+const btdf_format_ops btdf_format_xml = {
+    .name = "Radiance BSDF XML",
+    .ext = ".xml",
+    .available = 1,
+    .needs = BTDF_NEEDS_RADIANCE,
+    .write_stream = xml_write,
+};

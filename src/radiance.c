@@ -10,7 +10,7 @@
 
 static const char *const basis_names[] = {"tree3", "klems-full", "klems-half", "klems-quarter"};
 
-int rad_basis_parse(const char *s, rad_basis *b)
+BTDF_API int btdf_rad_basis_parse(const char *s, btdf_rad_basis *b)
 {
     for (int k = 0; k < 4; k++)
         if (s && !strcmp(s, basis_names[k])) {
@@ -25,7 +25,44 @@ const char *rad_basis_name(rad_basis b)
     return (unsigned)b < 4 ? basis_names[b] : "unknown";
 }
 
-void btdf_rad_free(btdf_rad *r)
+BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b) { return rad_basis_name(b); }
+
+BTDF_API int btdf_rad_block_count(const btdf_rad *r) { return r ? r->nblocks : 0; }
+
+BTDF_API btdf_status btdf_rad_block(const btdf_rad *r, int k, btdf_rad_block_info *info)
+{
+    if (!r || !info || k < 0 || k >= r->nblocks)
+        return BTDF_EINVAL;
+    const rad_block *b = &r->b[k];
+    info->label = b->label;
+    info->light = b->light;
+    info->n_light = b->n_light;
+    info->values = r->basis == RAD_BASIS_TREE3 ? b->leaves
+                                               : (size_t)r->kb->npatch * (size_t)r->kb->npatch;
+    info->depth = r->basis == RAD_BASIS_TREE3 ? b->depth : 0;
+    return BTDF_OK;
+}
+
+BTDF_API btdf_rad_basis btdf_rad_get_basis(const btdf_rad *r) { return r->basis; }
+
+BTDF_API double btdf_rad_seconds_build(const btdf_rad *r) { return r ? r->seconds_build : 0.0; }
+
+BTDF_API void btdf_rad_set_name(btdf_rad *r, const char *name)
+{
+    if (r && name)
+        snprintf(r->name, sizeof r->name, "%s", name);
+}
+
+BTDF_API void btdf_rad_set_errors(btdf_rad *r, int k, double e_l1, double e_t)
+{
+    if (!r || k < 0 || k >= r->nblocks)
+        return;
+    r->e_l1[k] = e_l1;
+    r->e_t[k] = e_t;
+    r->reported = 1;
+}
+
+BTDF_API void btdf_rad_free(btdf_rad *r)
 {
     if (!r)
         return;
@@ -36,7 +73,7 @@ void btdf_rad_free(btdf_rad *r)
     free(r);
 }
 
-double rad_e_l1_checked(const btdf_report *rep)
+BTDF_API double btdf_rad_e_l1_checked(const btdf_report *rep)
 {
     double e = 0.0;
     for (size_t a = 0; a < rep->test_angles; a++)
@@ -51,8 +88,9 @@ double rad_e_l1_checked(const btdf_report *rep)
    jumps at the tree's cell edges in theta_i and a max over few angles is noisy. */
 #define RAD_CHECK_SEED 0x5ad1a7e5u
 
-btdf_status btdf_rad_build(const btdf_params *p, rad_basis basis, double tolerance,
-                           int threads, btdf_rad **out, char *msg, size_t msglen)
+BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
+                                    double tolerance, int threads, btdf_rad **out, char *msg,
+                                    size_t msglen)
 {
     btdf_status st = btdf_params_check(p, msg, msglen);
     if (st != BTDF_OK)
@@ -114,7 +152,7 @@ btdf_status btdf_rad_build(const btdf_params *p, rad_basis basis, double toleran
             btdf_report rep;
             memset(&rep, 0, sizeof rep);
             st = btdf_rad_report(r, k, 192, 4096, RAD_CHECK_SEED, threads, &rep);
-            double e = rad_e_l1_checked(&rep);
+            double e = btdf_rad_e_l1_checked(&rep);
             btdf_report_clear(&rep);
             if (getenv("BTDF_RAD_TRACE"))
                 fprintf(stderr, "block %d round %d eps %.3g leaves %zu e %.4g\n", k, round, eps,
@@ -166,7 +204,8 @@ static void tree_coords(const double p[3], const double q[3], double *u0, double
 
 static double deg(double r) { return r * (180.0 / M_PI); }
 
-double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3], const double q[3])
+BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
+                                const double q[3])
 {
     if (!r || k < 0 || k >= r->nblocks)
         return 0.0;
@@ -216,9 +255,9 @@ static void rad_est_fn(const void *obj, double ti, const double *q, double *out)
     out[0] = btdf_rad_render(e->r, e->light, ti, q[7], atan2(q[5], q[4]));
 }
 
-btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,
-                            size_t points_per_angle, uint64_t seed, int threads,
-                            btdf_report *rep)
+BTDF_API btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,
+                                     size_t points_per_angle, uint64_t seed, int threads,
+                                     btdf_report *rep)
 {
     if (!r || !rep || k < 0 || k >= r->nblocks)
         return BTDF_EINVAL;
@@ -232,7 +271,7 @@ btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,
         rep->seconds_build = r->seconds_build;
         rep->tolerance = r->tolerance;
         rep->metric = BTDF_METRIC_L1;
-        rep->met = r->basis != RAD_BASIS_TREE3 || rad_e_l1_checked(rep) <= r->tolerance;
+        rep->met = r->basis != RAD_BASIS_TREE3 || btdf_rad_e_l1_checked(rep) <= r->tolerance;
         if (r->basis == RAD_BASIS_TREE3) {
             rep->slices = (size_t)r->b[k].depth;
             rep->samples = r->b[k].leaves;

@@ -9,6 +9,7 @@
 #include <stdint.h>
 
 #include "btdf.h"
+#include "btdf_radiance.h"
 
 /*
  * Sides and Radiance's frame (docs/radiance.md). The BSDF material's surface normal
@@ -30,12 +31,11 @@
  *
  * Values are BTDF in 1/sr without a cosine factor (MODEL.md section 1).
  */
-typedef enum {
-    RAD_BASIS_TREE3 = 0,
-    RAD_BASIS_KLEMS_FULL = 1,
-    RAD_BASIS_KLEMS_HALF = 2,
-    RAD_BASIS_KLEMS_QUARTER = 3
-} rad_basis;
+typedef btdf_rad_basis rad_basis;
+#define RAD_BASIS_TREE3 BTDF_RAD_TREE3
+#define RAD_BASIS_KLEMS_FULL BTDF_RAD_KLEMS_FULL
+#define RAD_BASIS_KLEMS_HALF BTDF_RAD_KLEMS_HALF
+#define RAD_BASIS_KLEMS_QUARTER BTDF_RAD_KLEMS_QUARTER
 
 #define RAD_MAX_BLOCKS 4 /* two transmissions now; room for two reflections */
 
@@ -71,7 +71,7 @@ typedef struct rad_block {
     float *klems;
 } rad_block;
 
-typedef struct btdf_rad {
+struct btdf_rad {
     rad_basis basis;
     btdf_params p;
     double tolerance;
@@ -83,28 +83,12 @@ typedef struct btdf_rad {
     char name[128];               /* the material's name in the scene */
     int reported;                 /* 1 when e_l1, e_t below hold the blocks' reports */
     double e_l1[RAD_MAX_BLOCKS], e_t[RAD_MAX_BLOCKS];
-} btdf_rad;
+};
 
-/* Parses "tree3", "klems-full", "klems-half", "klems-quarter"; 0 if unknown. */
-int rad_basis_parse(const char *s, rad_basis *b);
-const char *rad_basis_name(rad_basis b);
 const rad_klems_basis *rad_klems(rad_basis b);
+const char *rad_basis_name(rad_basis b);
 
-/* Builds both transmission blocks from Eq. 25 with one channel.
-   tree3: adaptive TensorTree3 whose leaf averages meet `tolerance` on e_L1 (MODEL.md 6)
-   as Radiance looks them up, checked by an internal estimate (own seed); Klems: exact
-   patch-pair averages (tolerance unused). threads: 0 = all cores; the result does not
-   depend on it. BTDF_OK, BTDF_EBUDGET (tree budget reached first: *out holds the best
-   tree), BTDF_EINVAL (parameters, more than one channel), BTDF_ENOMEM. */
-btdf_status btdf_rad_build(const btdf_params *p, rad_basis basis, double tolerance,
-                           int threads, btdf_rad **out, char *msg, size_t msglen);
-void btdf_rad_free(btdf_rad *r);
 
-/* The value Radiance's library returns from block k for the direction p on the
-   block's side (its incident coordinate; the view in a render) and q on the other
-   (unit vectors in Radiance's local frame, both pointing away from the surface).
-   0 for a pair the block does not cover. */
-double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3], const double q[3]);
 
 /* What a render gets for light of the given side (ENTER: from -Z, LEAVE: from +Z) in
    that light's MODEL.md frame (ti in [0, pi/2], to in [pi/2, pi], phi): the block of
@@ -116,17 +100,8 @@ double btdf_rad_render(const btdf_rad *r, btdf_side light, double ti, double to,
    where the BTDF falls by orders of magnitude: every halving there halves the outgoing
    cells too (the octree splits all coordinates at once), so 1e-2 against the floor
    max(T, 0.01) would take tens of millions of leaves. The report still covers 0-90. */
-#define RAD_TI_CHECKED (80.0 * 3.14159265358979323846 / 180.0)
+#define RAD_TI_CHECKED (BTDF_RAD_TI_CHECKED_DEG * 3.14159265358979323846 / 180.0)
 
-/* The largest per-angle e_L1 of a report over incidence up to RAD_TI_CHECKED. */
-double rad_e_l1_checked(const btdf_report *rep);
-
-/* The error report (MODEL.md 6) of what a render gets from block k, against Eq. 25 for
-   the light it serves (b[k].n_light), over incidence 0-90 deg; rep->met says whether
-   the tolerance holds up to RAD_TI_CHECKED. */
-btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,
-                            size_t points_per_angle, uint64_t seed, int threads,
-                            btdf_report *rep);
 
 /* Radiance's concentric square <-> disk maps (Shirley and Chiu 1997), square [0,1)^2. */
 void rad_square_to_disk(double a, double b, double *x, double *y);

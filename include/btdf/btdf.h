@@ -214,6 +214,10 @@ typedef struct btdf_table_opts {
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o);
 
+/* The checks btdf_table_build makes of o before any work: BTDF_OK, or BTDF_EINVAL
+   with msg naming the value and what is allowed. */
+BTDF_API btdf_status btdf_table_opts_check(const btdf_table_opts *o, char *msg, size_t msglen);
+
 /* Builds a table. BTDF_OK when the tolerance was met (or for GRID). When the budget
    stops refinement first, *out still holds the best table reached and the status is
    BTDF_EBUDGET. Errors: BTDF_EINVAL (options), BTDF_ENOMEM, BTDF_EOVERFLOW. */
@@ -307,11 +311,16 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
 /* 1 if files of this extension (".exr", "exr") can be written by this build. */
 BTDF_API int btdf_format_available(const char *ext);
 
+/* The name of a table kind as files record it: "facet", "facet-reciprocal", "grid". */
+BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind);
+
 #ifdef __cplusplus
 }
 #endif
 
 #include "btdf_preview.h"
 #include "btdf_scatfun.h"
+#include "btdf_io.h"
+#include "btdf_radiance.h"
 
 #endif /* BTDF_H */
