@@ -154,9 +154,6 @@ BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
             st = btdf_rad_report(r, k, 192, 4096, RAD_CHECK_SEED, threads, &rep);
             double e = btdf_rad_e_l1_checked(&rep);
             btdf_report_clear(&rep);
-            if (getenv("BTDF_RAD_TRACE"))
-                fprintf(stderr, "block %d round %d eps %.3g leaves %zu e %.4g\n", k, round, eps,
-                        b->leaves, e);
             if (st != BTDF_OK)
                 break;
             /* aim below the tolerance: the reported estimate has another seed */
