@@ -467,13 +467,13 @@ static void test_size_sweep(void **state)
 static void test_built_sweep(void **state)
 {
     (void)state;
-    static const double tols[] = {1e-1, 3e-2, 2e-2, 1e-2, 3e-3, 1e-3};
-    static const double mats[][2] = {{1.5, 3.0}, {1.31, 20.0}, {1.5, 12.0}};
+    static const double tols[] = {1e-1, 3e-2, 1e-2, 3e-3, 1e-3};
+    static const double mats[][2] = {{1.5, 3.0}, {1.31, 20.0}};
     size_t raw_chunks = 0, files = 0;
     for (size_t m = 0; m < sizeof mats / sizeof mats[0]; m++)
         for (size_t it = 0; it < sizeof tols / sizeof tols[0]; it++)
             for (int nch = 1; nch <= 3; nch += 2) {
-                if (nch == 3 && tols[it] < 3e-3)
+                if (nch == 3 && tols[it] < 1e-2)
                     continue; /* time: three channels at the loose end suffice */
                 btdf_table_opts o;
                 btdf_table_opts_default(&o);
@@ -483,6 +483,7 @@ static void test_built_sweep(void **state)
                 o.params.channels = nch;
                 o.params.smoothness = mats[m][1];
                 o.tolerance = tols[it];
+                o.estimate = BTDF_ESTIMATE_NONE; /* the file is under test, not the error */
                 btdf_table *t = NULL;
                 char msg[300] = "";
                 btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
