@@ -99,6 +99,10 @@ static void usage(FILE *f, int verbose)
             "  --threads N          worker threads, 0 = all cores (default 0)\n"
             "  --report FILE.json   write the error report as JSON\n"
             "  --best-effort        write the table even if the budget stopped refinement\n"
+            "  --estimate MODE      full (default): check against Eq. 25 at every slice\n"
+            "                       interval and where the error changes fast; fast:\n"
+            "                       fewer points; none: one unchecked pass, the file says\n"
+            "                       \"error not estimated\"\n"
             "  --preview [KIND=]F.png  a picture of the table; KIND is montage (default),\n"
             "                       render (the paper's Figs. 10-11) or render-analytic\n"
             "                       (with Eq. 25 and the difference beside it); repeatable;\n"
@@ -645,7 +649,7 @@ static int takes_value(const char *a)
     static const char *const with[] = {"-o", "--output", "--tolerance", "--metric", "--grid",
                                        "--theta-i", "--theta-o", "--phi", "--max-samples",
                                        "--max-memory", "--report", "--side", "--preview",
-                                       "--size"};
+                                       "--size", "--estimate"};
     for (size_t k = 0; k < sizeof with / sizeof with[0]; k++)
         if (!strcmp(a, with[k]))
             return 1;
@@ -718,6 +722,16 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
             report = argv[++i];
         } else if (!strcmp(a, "--best-effort")) {
             best_effort = 1;
+        } else if (!strcmp(a, "--estimate")) {
+            const char *m = argv[++i];
+            if (!strcmp(m, "full"))
+                o.estimate = BTDF_ESTIMATE_FULL;
+            else if (!strcmp(m, "fast"))
+                o.estimate = BTDF_ESTIMATE_FAST;
+            else if (!strcmp(m, "none"))
+                o.estimate = BTDF_ESTIMATE_NONE;
+            else
+                return fail(EXIT_USAGE, "--estimate: '%s': must be full, fast or none", m);
         } else if (!strcmp(a, "--side")) {
             const char *v = argv[++i];
             if (!strcmp(v, "enter"))
@@ -784,6 +798,8 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     if (npreview > 0 && !BTDF_HAVE_PNG)
         return fail(1, "%s: PNG support was switched off at build time (-Dpng=disabled)",
                     previews[0].path);
+    if (o.estimate == BTDF_ESTIMATE_NONE && report)
+        return fail(EXIT_USAGE, "--report with --estimate none: there is no error to report");
     if (grid_range && o.kind != BTDF_TABLE_GRID)
         return fail(EXIT_USAGE, "--theta-o and --phi apply to --grid tables (an adaptive table "
                                 "covers every outgoing direction)");
@@ -807,44 +823,75 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         return fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
     btdf_report r;
     memset(&r, 0, sizeof r);
-    btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);
-    if (es != BTDF_OK) {
-        btdf_table_free(t);
-        return fail(1, "error estimate: %s", btdf_strerror(es));
+    int estimated = o.estimate != BTDF_ESTIMATE_NONE;
+    if (estimated) {
+        /* The builder's own check for an adaptive table (the same request returns it):
+           the report and the builder's verdict cannot differ. */
+        int fast = o.estimate == BTDF_ESTIMATE_FAST;
+        btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, fast ? 16 : 0,
+                                             fast ? 2048 : 0, REPORT_SEED, o.threads, &r);
+        if (es != BTDF_OK) {
+            btdf_table_free(t);
+            return fail(1, "error estimate: %s", btdf_strerror(es));
+        }
+    } else {
+        r.slices = btdf_table_slice_count(t);
+        r.samples = btdf_table_node_count(t);
     }
     r.seconds_build = t1 - t0;
     r.peak_bytes = peak_rss();
     r.tolerance = o.kind == BTDF_TABLE_GRID ? 0.0 : o.tolerance;
     r.metric = o.metric;
     double e = o.metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max;
-    r.met = o.kind == BTDF_TABLE_GRID ? 1 : e <= o.tolerance;
-    char emax[96];
-    if (r.e_max_angles)
-        snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", r.e_max_max, r.e_max_mean);
-    else
-        snprintf(emax, sizeof emax, "e_max n/a (T < 0.01 at every test angle)");
-    if (!c.quiet)
-        fprintf(stderr,
-                "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
-                "(%zu angles, %zu points); e_L1 max %.3g mean %.3g; %s; "
-                "e_T max %.3g mean %.3g; peak memory %.1f MiB%s\n",
-                prog, r.slices, r.samples, r.seconds_build, r.seconds_estimate, r.test_angles,
-                r.test_points, r.e_l1_max, r.e_l1_mean, emax, r.e_t_max,
-                r.e_t_mean, (double)r.peak_bytes / 1048576.0,
-                o.kind == BTDF_TABLE_GRID ? "" : (r.met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+    r.met = o.kind == BTDF_TABLE_GRID || !estimated ? 1 : e <= o.tolerance;
+    char line[640];
+    if (estimated) {
+        char emax[96];
+        if (r.e_max_angles)
+            snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", r.e_max_max, r.e_max_mean);
+        else
+            snprintf(emax, sizeof emax, "e_max n/a (T < 0.01 at every test angle)");
+        snprintf(line, sizeof line,
+                 "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
+                 "(%s, %zu angles, %zu points); e_L1 max %.3g mean %.3g; %s; "
+                 "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
+                 prog, r.slices, r.samples, r.seconds_build, r.seconds_estimate,
+                 o.estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", r.test_angles,
+                 r.test_points, r.e_l1_max, r.e_l1_mean, emax, r.e_t_max, r.e_t_mean,
+                 (double)r.peak_bytes / 1048576.0,
+                 o.kind == BTDF_TABLE_GRID ? "" : (r.met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+    } else {
+        snprintf(line, sizeof line,
+                 "%s: table: %zu slices, %zu samples; tabulation %.3f s; error not estimated "
+                 "(--estimate none); peak memory %.1f MiB",
+                 prog, r.slices, r.samples, r.seconds_build, (double)r.peak_bytes / 1048576.0);
+    }
     int code = 0;
+    if (!estimated && st == BTDF_OK && msg[0])
+        fprintf(stderr, "%s: %s\n", prog, msg); /* the budget stopped the unchecked pass */
     if (o.kind != BTDF_TABLE_GRID && !r.met) {
+        if (!c.quiet)
+            fprintf(stderr, "%s; total %.3f s\n", line, now_seconds() - t0);
         fprintf(stderr, "%s: %s: the table reached %s error %.3g, above the tolerance %g%s%s\n",
-                prog, out, o.metric == BTDF_METRIC_MAX ? "max" : "L1", e, o.tolerance,
-                st == BTDF_EBUDGET ? ": " : "", st == BTDF_EBUDGET ? msg : "");
+                prog, out ? out : "table", o.metric == BTDF_METRIC_MAX ? "max" : "L1", e,
+                o.tolerance, msg[0] ? ": " : "", msg);
         if (!best_effort) {
-            fprintf(stderr, "%s: nothing written; raise --max-samples/--max-memory, loosen "
-                            "--tolerance, or pass --best-effort\n", prog);
+            fprintf(stderr, "%s: nothing written; %s, loosen --tolerance, or pass "
+                            "--best-effort\n", prog,
+                    strstr(msg, "memory") ? "raise --max-memory"
+                    : strstr(msg, "budget") ? "raise --max-samples (and --max-memory)"
+                                             : "try again with --estimate full");
             code = EXIT_BUDGET;
         }
+        line[0] = '\0'; /* printed */
+    }
+    char prov2[1200];
+    if (!estimated) {
+        snprintf(prov2, sizeof prov2, "%s; error not estimated", prov ? prov : "btdftab");
+        prov = prov2;
     }
     if (code == 0 && out) {
-        btdf_write_opts w = {&r, prov};
+        btdf_write_opts w = {estimated ? &r : NULL, prov};
         btdf_output_ctx ctx = {t, &w};
         if (!strcmp(out, "-")) {
             st = btdf_format_csv.write_stream(&ctx, stdout, msg, sizeof msg);
@@ -870,6 +917,9 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     }
     if (code == 0 && report)
         code = write_text_atomic(report, &o, btdf_table_get_kind(t), &r, prov);
+    /* The one-line report, last: the total covers tabulation, estimate and writing. */
+    if (!c.quiet && line[0])
+        fprintf(stderr, "%s; total %.3f s\n", line, now_seconds() - t0);
     btdf_report_clear(&r);
     btdf_table_free(t);
     return code;
