@@ -622,7 +622,9 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         st = BTDF_ENOMEM;
     for (size_t k = 0; k + 1 < ns && open; k++)
         open[k] = 1;
-    double min_gap = 1e-4; /* rad: finer incidence steps buy nothing a renderer can see */
+    /* rad: finer incidence steps buy nothing a renderer can see, except where V(ti)
+       falls from 1 to 0 before grazing, over a width of order 1/s rad */
+    double min_gap = fmin(1e-4, 1e-2 / o->params.smoothness);
     while (st == BTDF_OK) {
         size_t nt = 0;
         for (size_t k = 0; k + 1 < ns; k++)

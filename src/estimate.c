@@ -178,7 +178,7 @@ static void table_fn(const void *obj, double ti, const double *q, double *out)
  *     or when the gap falls below REFINE_MIN_GAP.
  */
 #define REFINE_ROUNDS 6
-#define REFINE_MIN_GAP 2e-4 /* rad, 0.01 deg */
+#define REFINE_MIN_GAP 2e-4 /* rad, 0.01 deg; 2e-2/s where the shadowing edge is narrower */
 #define REFINE_MAX_ADD 96   /* angles per round */
 
 static int cmp_err_ti(const void *a, const void *b)
@@ -236,6 +236,8 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
     j.nphi = 64;
     j.seed = seed;
     double span = ti_max - ti_min;
+    /* V(ti) falls to 0 before grazing over about 1/s rad (smoothness >= 1e-3 checked) */
+    double min_gap = fmin(REFINE_MIN_GAP, 2e-2 / p->smoothness);
     /* capacity: stratified + 2 ends + knot midpoints + refinement rounds */
     size_t cap = test_angles + 2 + (nknots + 1) + REFINE_ROUNDS * REFINE_MAX_ADD;
     double *ti = malloc(cap * sizeof *ti);
@@ -261,7 +263,7 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
         ti[n++] = ti_max;
         for (size_t k = 0; k + 1 < nknots; k++) {
             double a = fmax(knots[k], ti_min), b = fmin(knots[k + 1], ti_max);
-            if (b > a && b - a > REFINE_MIN_GAP)
+            if (b > a && b - a > min_gap)
                 ti[n++] = 0.5 * (a + b);
         }
     }
@@ -291,7 +293,7 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
         size_t na = 0;
         for (size_t k = 0; k + 1 < n; k++) {
             const btdf_ti_error *a = &srt[k], *b = &srt[k + 1];
-            if (!(b->ti - a->ti > REFINE_MIN_GAP))
+            if (!(b->ti - a->ti > min_gap))
                 continue;
             int l1 = fmax(a->e_l1, b->e_l1) >= wl1 / 3.0 && wl1 > 0.0 &&
                      ratio(a->e_l1, b->e_l1, 0.01 * wl1) > 1.5;
