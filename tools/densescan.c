@@ -29,7 +29,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "btdf.h"
+#include <btdf/btdf.h>
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
