@@ -175,8 +175,9 @@ BTDF_API btdf_status btdf_transmittance(const btdf_params *p, double ti, double 
  *    |cos to|/chi diverges there); facet space of 1/n > 1 is not.
  *
  * The blend in ti divides both slice values by Eq. 25's incident factor V(ti)/cos ti
- * and multiplies the result by the query's. Outside the slices' ti range the table
- * gives 0.
+ * and multiplies the result by the query's; a slice where that factor is 0 (ti = 90
+ * deg) holds zeros, and its neighbour's divided value stands in for it. Outside the
+ * slices' ti range the table gives 0.
  */
 typedef enum {
     BTDF_TABLE_FACET = 0,
