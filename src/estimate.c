@@ -301,7 +301,8 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
                      ratio(a->e_max, b->e_max, 0.01 * wmx) > 1.5;
             /* T changing fast: the error's floor max(T, 0.01) and the lobe with it */
             int tf = ratio(a->T, b->T, 1e-3) > 1.5;
-            int near_worst = k + 1 == worst || k == worst || a->e_max == wmx || b->e_max == wmx;
+            int near_worst = (wl1 > 0.0 && (k + 1 == worst || k == worst)) ||
+                             (wmx > 0.0 && (a->e_max == wmx || b->e_max == wmx));
             if (l1 || mx || tf || near_worst)
                 add[na++] = 0.5 * (a->ti + b->ti);
         }
