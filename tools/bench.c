@@ -207,6 +207,10 @@ int main(int argc, char **argv)
         o.max_samples = 40000000;
         o.max_bytes = (size_t)1536 << 20;
         run(stdout, "adaptive-40M", "1.5/3", &o, reps);
+    }
+    if (!strcmp(what, "all") || !strcmp(what, "fullrange")) {
+        printf("%s", header);
+        btdf_table_opts o;
         const struct {
             const char *label;
             double n, s;
