@@ -14,6 +14,7 @@
 #include <btdf/btdf.h>
 
 #include "manifest.h"
+#include "numparse.h"
 #include "options.h"
 #include "run.h"
 
@@ -54,52 +55,30 @@ static int ends_with(const char *s, const char *suffix)
 /* Values                                                                    */
 /* ------------------------------------------------------------------------- */
 
+/* Every number of the command line goes through tools/numparse.c. */
 static int parse_double(const char *flag, const char *s, double *out)
 {
-    char *e;
-    errno = 0;
-    double v = strtod(s, &e);
-    if (e == s || *e || errno == ERANGE) {
-        fail(EXIT_USAGE, "%s: '%s' is not a number", flag, s);
-        return 0;
-    }
-    if (!isfinite(v)) {
-        fail(EXIT_USAGE, "%s: '%s': must be a finite number", flag, s);
-        return 0;
-    }
-    *out = v;
-    return 1;
+    const char *why = num_double(s, out);
+    if (why)
+        fail(EXIT_USAGE, "%s: '%s' %s", flag, s, why);
+    return !why;
 }
 
 static int parse_size(const char *flag, const char *s, size_t lo, size_t hi, size_t *out)
 {
-    char *e;
-    errno = 0;
-    unsigned long long v = strtoull(s, &e, 10);
-    if (e == s || *e || errno == ERANGE || s[0] == '-' || v < lo || v > hi) {
-        fail(EXIT_USAGE, "%s: '%s': must be an integer in [%zu, %zu]", flag, s, lo, hi);
-        return 0;
-    }
-    *out = (size_t)v;
-    return 1;
+    const char *why = num_size(s, lo, hi, out);
+    if (why)
+        fail(EXIT_USAGE, "%s: '%s': %s", flag, s, why);
+    return !why;
 }
 
 /* N or R,G,B */
 static int parse_ior(const char *val, btdf_params *p)
 {
-    char buf[256];
-    snprintf(buf, sizeof buf, "%s", val);
     int k = 0;
-    for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-        if (k == 3) {
-            fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
-            return 0;
-        }
-        if (!parse_double("--ior", tok, &p->ior[k++]))
-            return 0;
-    }
-    if (k != 1 && k != 3) {
-        fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
+    const char *why = num_double_list(val, p->ior, 1, 3, &k);
+    if (why || k == 2) {
+        fail(EXIT_USAGE, "--ior: '%s': %s", val, why ? why : "give 1 value or 3 (R,G,B)");
         return 0;
     }
     p->channels = k;
@@ -166,13 +145,20 @@ static int parse_preview(const char *s, preview_req *r)
 
 static int parse_picture_size(const char *s, int *w, int *h)
 {
-    char tail;
-    if (sscanf(s, "%dx%d%c", w, h, &tail) != 2 || *w < 64 || *h < 64 ||
-        *w > BTDF_PREVIEW_MAX_SIDE || *h > BTDF_PREVIEW_MAX_SIDE) {
+    const char *x = strchr(s, 'x');
+    char buf[32];
+    size_t W = 0, H = 0;
+    if (x && (size_t)(x - s) < sizeof buf)
+        snprintf(buf, sizeof buf, "%.*s", (int)(x - s), s);
+    if (!x || (size_t)(x - s) >= sizeof buf ||
+        num_size(buf, 64, BTDF_PREVIEW_MAX_SIDE, &W) ||
+        num_size(x + 1, 64, BTDF_PREVIEW_MAX_SIDE, &H)) {
         fail(EXIT_USAGE, "--size: '%s': expected WxH, each in [64, %d] pixels", s,
              BTDF_PREVIEW_MAX_SIDE);
         return 0;
     }
+    *w = (int)W;
+    *h = (int)H;
     return 1;
 }
 
@@ -229,16 +215,16 @@ static int apply(cli *c, const opt_hit *h)
         fail(EXIT_USAGE, "--metric: '%s': must be l1 or max", v);
         return 0;
     case OPT_GRID: {
-        unsigned long x, y, z;
-        char tail;
-        if (sscanf(v, "%lu,%lu,%lu%c", &x, &y, &z, &tail) != 3 || strchr(v, '-')) {
-            fail(EXIT_USAGE, "--grid: '%s': expected three counts NI,NO,NPHI", v);
+        size_t n3[3];
+        const char *why = num_size_list(v, 1, 100000, n3, 3);
+        if (why) {
+            fail(EXIT_USAGE, "--grid: '%s': %s (NI,NO,NPHI)", v, why);
             return 0;
         }
         c->o.kind = BTDF_TABLE_GRID;
-        c->o.grid_ti = x;
-        c->o.grid_to = y;
-        c->o.grid_phi = z;
+        c->o.grid_ti = n3[0];
+        c->o.grid_to = n3[1];
+        c->o.grid_phi = n3[2];
         return 1;
     }
     case OPT_SIDE:
@@ -282,21 +268,18 @@ static int apply(cli *c, const opt_hit *h)
         return 1;
     }
     case OPT_ANGLES: {
-        char buf[256];
-        snprintf(buf, sizeof buf, "%s", v);
-        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-            if (c->na == BTDF_PREVIEW_MAX_CURVES) {
-                fail(EXIT_USAGE, "--angles: at most %d", BTDF_PREVIEW_MAX_CURVES);
-                return 0;
-            }
-            if (!parse_double("--angles", tok, &c->angles[c->na]))
-                return 0;
-            if (!(c->angles[c->na] >= 0.0 && c->angles[c->na] < 90.0)) {
-                fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees", c->angles[c->na]);
-                return 0;
-            }
-            c->na++;
+        int k = 0;
+        const char *why = num_double_list(v, c->angles, 1, BTDF_PREVIEW_MAX_CURVES, &k);
+        if (why) {
+            fail(EXIT_USAGE, "--angles: '%s': %s", v, why);
+            return 0;
         }
+        for (int i = 0; i < k; i++)
+            if (!(c->angles[i] >= 0.0 && c->angles[i] < 90.0)) {
+                fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees", c->angles[i]);
+                return 0;
+            }
+        c->na = (size_t)k;
         return 1;
     }
     case OPT_FORCE: c->force = 1; return 1;
@@ -357,18 +340,13 @@ static int check_params(const btdf_params *p)
 }
 
 /* The folder of path exists and can take a new file: checked before the work. */
+/* An output may be written (btdf_output_check: its folder takes a new file, and what
+   is there now is a regular file), checked before the work. */
 static int folder_writable(const char *path)
 {
-    char dir[4096];
-    const char *slash = strrchr(path, '/');
-    if (!slash)
-        snprintf(dir, sizeof dir, ".");
-    else if (slash == path)
-        snprintf(dir, sizeof dir, "/");
-    else
-        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    if (access(dir, W_OK | X_OK) != 0) {
-        fail(1, "%s: cannot write in the folder '%s': %s", path, dir, strerror(errno));
+    char msg[512];
+    if (btdf_output_check(path, msg, sizeof msg) != BTDF_OK) {
+        fail(1, "%s: %s", path, msg);
         return 0;
     }
     return 1;
@@ -412,13 +390,28 @@ static int read_row(const char *line, double *v, int want)
             return n;
         if (n == want)
             return -1;
-        char *e;
-        double x = strtod(s, &e);
-        if (e == s || !isfinite(x))
+        size_t len = strcspn(s, " \t,\r\n#");
+        char tok[64];
+        if (len >= sizeof tok)
             return -1;
-        v[n++] = x;
-        s = e;
+        memcpy(tok, s, len);
+        tok[len] = 0;
+        if (num_double(tok, &v[n]) != NULL)
+            return -1;
+        n++;
+        s += len;
     }
+}
+
+/* Everything printed reached standard output (a full disk, a closed pipe are
+   errors): code, or 1 with a message. */
+static int stdout_done(int code)
+{
+    int bad = fflush(stdout) != 0;
+    bad |= ferror(stdout) != 0;
+    if (bad && code == 0)
+        return fail(1, "standard output: %s", errno ? strerror(errno) : "write error");
+    return code;
 }
 
 /* The incidence range a table holds, in degrees: its first and last slices. A
@@ -472,7 +465,8 @@ static int cmd_eval(const cli *c)
     }
     int code = 0;
     double out[BTDF_MAX_CHANNELS];
-    char line[1024];
+    char *line = NULL; /* rows of any length */
+    size_t cap = 0;
     long ln = 0;
     for (;;) {
         double v[3];
@@ -481,7 +475,7 @@ static int cmd_eval(const cli *c)
                 break;
             memcpy(v, pos, sizeof v);
         } else {
-            if (!fgets(line, sizeof line, stdin))
+            if (getline(&line, &cap, stdin) < 0)
                 break;
             ln++;
             int k = read_row(line, v, 3);
@@ -518,11 +512,10 @@ static int cmd_eval(const cli *c)
         }
         print_values(out, p.channels);
     }
+    free(line);
     btdf_table_free(in.table);
     btdf_scatfun_free(in.scatfun);
-    if (fflush(stdout) != 0 && code == 0)
-        code = fail(1, "standard output: %s", strerror(errno));
-    return code;
+    return stdout_done(code);
 }
 
 /* ------------------------------------------------------------------------- */
@@ -543,14 +536,15 @@ static int cmd_albedo(const cli *c)
     if (na == 0)
         for (int k = 0; k <= 8; k++)
             angles[na++] = 10.0 * k;
+    for (int k = 0; k < na; k++)
+        if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
+            return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
     const btdf_params *p = &c->p;
     printf("theta_i_deg");
     for (int ch = 0; ch < p->channels; ch++)
         printf(p->channels == 1 ? ",T,Ft" : ",T_%c,Ft_%c", "rgb"[ch], "rgb"[ch]);
     printf("\n");
     for (int k = 0; k < na; k++) {
-        if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
-            return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
         double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS];
         btdf_transmittance(p, ti, T);
         printf("%.10g", angles[k]);
@@ -558,7 +552,7 @@ static int cmd_albedo(const cli *c)
             printf(",%.9f,%.9f", T[ch], btdf_fresnel_t(p->ior[ch], ti));
         printf("\n");
     }
-    return 0;
+    return stdout_done(0);
 }
 
 /* ------------------------------------------------------------------------- */
@@ -709,6 +703,20 @@ static int cmd_tabulate(cli *c, const char *prov)
     for (int k = 0; k < c->npreview; k++)
         if (!folder_writable(c->previews[k].path))
             return 1;
+    /* Two outputs of one run must be two files. */
+    const char *outs[MAX_PREVIEWS + 3];
+    int nouts = 0;
+    if (out && strcmp(out, "-"))
+        outs[nouts++] = out;
+    if (c->report)
+        outs[nouts++] = c->report;
+    for (int k = 0; k < c->npreview; k++)
+        outs[nouts++] = c->previews[k].path;
+    for (int i = 0; i < nouts; i++)
+        for (int j = 0; j < i; j++)
+            if (btdf_same_file(outs[i], outs[j]))
+                return fail(EXIT_USAGE, "'%s' and '%s' are the same file: each output of a run "
+                                        "needs its own", outs[j], outs[i]);
     o.params = p;
     o.threads = c->threads;
     o.ti_min = c->ti0 * M_PI / 180.0;
@@ -726,7 +734,7 @@ static int cmd_tabulate(cli *c, const char *prov)
     if (st != BTDF_OK && st != BTDF_EBUDGET)
         return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s", msg[0] ? msg : btdf_strerror(st));
     if (!t)
-        return fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
+        return fail(st == BTDF_EBUDGET ? EXIT_BUDGET : 1, "%s", msg[0] ? msg : btdf_strerror(st));
     btdf_report r;
     memset(&r, 0, sizeof r);
     int estimated = o.estimate != BTDF_ESTIMATE_NONE;
@@ -797,6 +805,8 @@ static int cmd_tabulate(cli *c, const char *prov)
         prov = prov2;
     }
     btdf_write_opts w = {estimated ? &r : NULL, prov};
+    /* The table, its pictures and its report appear together or not at all. */
+    btdf_outputs_begin();
     if (code == 0 && out) {
         btdf_output what = {t, NULL, NULL, &w, NULL};
         st = btdf_write(&what, out, msg, sizeof msg);
@@ -818,6 +828,13 @@ static int cmd_tabulate(cli *c, const char *prov)
     }
     if (code == 0 && c->report)
         code = write_report(c->report, &o, btdf_table_get_kind(t), &r, prov);
+    if (code == 0) {
+        st = btdf_outputs_commit(msg, sizeof msg);
+        if (st != BTDF_OK)
+            code = fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
+    } else {
+        btdf_outputs_abort();
+    }
     /* The one-line report, last: the total covers tabulation, estimate and writing. */
     if (!c->quiet && line[0])
         fprintf(stderr, "%s; total %.3f s\n", line, run_now() - t0);
@@ -890,8 +907,8 @@ static int cmd_inspect(const cli *c)
     char msg[512] = "";
     btdf_status st = btdf_inspect(path, stdout, msg, sizeof msg);
     if (st != BTDF_OK)
-        return fail(1, "%s: %s", path, msg);
-    return 0;
+        return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+    return stdout_done(0);
 }
 
 static int cmd_build(const cli *c)
@@ -931,7 +948,7 @@ static int print_version(void)
     printf("btdftab %s (OpenEXR %s, PNG %s)\n", btdf_version_string(),
            btdf_format_available("exr") ? "on" : "off",
            btdf_format_available("png") ? "on" : "off");
-    return 0;
+    return stdout_done(0);
 }
 
 static int short_usage(void)
@@ -955,15 +972,19 @@ int main(int argc, char **argv)
     if (argc < 2)
         return short_usage();
     const char *name = argv[1];
+    int alone = !strcmp(name, "--help") || !strcmp(name, "-h") || !strcmp(name, "--version") ||
+                !strcmp(name, "-V") || !strcmp(name, "--man");
+    if (alone && argc > 2)
+        return fail(EXIT_USAGE, "%s takes nothing after it, not '%s'", name, argv[2]);
     if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
         opt_help(stdout, NULL);
-        return 0;
+        return stdout_done(0);
     }
     if (!strcmp(name, "--version") || !strcmp(name, "-V"))
         return print_version();
     if (!strcmp(name, "--man")) {
         opt_man(stdout, btdf_version_string());
-        return fflush(stdout) == 0 ? 0 : 1;
+        return stdout_done(0);
     }
     if (!strcmp(name, "help")) {
         if (argc > 3)
@@ -972,7 +993,7 @@ int main(int argc, char **argv)
         if (argc == 3 && !cmd)
             return fail(EXIT_USAGE, "help: unknown command '%s'", argv[2]);
         opt_help(stdout, cmd);
-        return 0;
+        return stdout_done(0);
     }
     const cmd_def *cmd = cmd_find(name);
     if (!cmd) {

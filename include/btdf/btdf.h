@@ -226,6 +226,10 @@ typedef struct btdf_table_opts {
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o);
 
+/* The checks btdf_table_build makes of o before any work: BTDF_OK, or BTDF_EINVAL
+   with msg naming the value and what is allowed. */
+BTDF_API btdf_status btdf_table_opts_check(const btdf_table_opts *o, char *msg, size_t msglen);
+
 /* Builds a table. BTDF_OK when the tolerance was met (or for GRID). When the budget
    stops refinement first, *out still holds the best table reached and the status is
    BTDF_EBUDGET. Errors: BTDF_EINVAL (options), BTDF_ENOMEM, BTDF_EOVERFLOW. */
