@@ -700,6 +700,8 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
             free(mt);
             free(at);
             free(cand);
+            free(ecand);
+            free(taken);
             break;
         }
         size_t saved_max = j.max_nodes;
