@@ -29,6 +29,21 @@ n=$(printf '30 150 180\n# comment\n\n0 170 90\n45,140,170\n' | "$B" eval | wc -l
 [ "$n" -eq 3 ] && ok "eval from stdin: one row per input row" || no "eval rows: $n"
 n=$(printf '30 150 180\n' | "$B" eval --ior 1.51,1.52,1.53 | awk '{print NF}')
 [ "$n" -eq 3 ] && ok "eval three channels" || no "eval channels: $n"
+# the reflection of the same surface: rows TI TR PHI; R beside T in albedo
+v=$("$B" eval --part reflection --ior 1.5 -s 3 30 30 180)
+case "$v" in 0.0099096700621*) ok "eval --part reflection" ;; *) no "eval --part reflection: $v" ;; esac
+"$B" albedo --ior 1.5 -s 100 30 | grep -q '^30,0.958[0-9]*,0.958[0-9]*,0.041[0-9]*,1.000' && \
+    ok "albedo: T, Ft, R, R+T" || no "albedo R columns"
+# many rows: the same bytes on one thread and on all, in input order
+awk 'BEGIN { for (i = 0; i < 300000; i++) printf "%g %g %g\n", i % 90, 90 + (i % 91), i % 361 }' > "$W/rows"
+"$B" eval --threads 1 < "$W/rows" > "$W/e1" && "$B" eval --threads 0 < "$W/rows" > "$W/e2" && \
+    [ "$(wc -l < "$W/e1")" -eq 300000 ] && cmp -s "$W/e1" "$W/e2" && \
+    [ "$(sed -n 1000p "$W/e1")" = "$("$B" eval $(sed -n 1000p "$W/rows"))" ] && \
+    ok "eval stream: same bytes on 1 and all threads, row order kept" || no "eval stream threads"
+rm -f "$W/rows" "$W/e1" "$W/e2"
+expect 2 "theta-r 95" "theta-r out of range" -- "$B" eval --part reflection 30 95 180
+expect 2 "line 3: theta-o 45" "bad row deep in a stream" -- sh -c "printf '30 150 180\n\n30 45 180\n' | '$B' eval"
+expect 2 "must be transmission or reflection" "bad --part" -- "$B" eval --part both 30 150 180
 "$B" --version | grep -q '^btdftab [0-9]' && ok "--version" || no "--version"
 "$B" --help | grep -q 'tabulate' && ok "--help" || no "--help"
 "$B" albedo --ior 1.5 -s 100 0 30 | grep -q '^30,0.958' && ok "albedo" || no "albedo"

@@ -13,6 +13,8 @@
 
 #include <btdf/btdf.h>
 
+#include "evalstream.h"
+#include "fastnum.h"
 #include "manifest.h"
 #include "numparse.h"
 #include "options.h"
@@ -169,7 +171,7 @@ static int parse_picture_size(const char *s, int *w, int *h)
 typedef struct cli {
     unsigned char given[OPT_COUNT]; /* how often each option was given */
     btdf_params p;
-    int threads, quiet, force, best_effort, sides;
+    int threads, quiet, force, best_effort, sides, reflection;
     const char *table, *out, *report;
     btdf_table_opts o; /* tolerance, metric, grid, max_samples */
     size_t mib;
@@ -206,6 +208,13 @@ static int apply(cli *c, const opt_hit *h)
     case OPT_SMOOTHNESS: return parse_double("--smoothness", v, &c->p.smoothness);
     case OPT_K0: return parse_double("--k0", v, &c->p.k0);
     case OPT_TABLE: c->table = v; return 1;
+    case OPT_PART:
+        if (!strcmp(v, "transmission") || !strcmp(v, "reflection")) {
+            c->reflection = v[0] == 'r';
+            return 1;
+        }
+        fail(EXIT_USAGE, "--part: '%s': must be transmission or reflection", v);
+        return 0;
     case OPT_OUTPUT: c->out = v; return 1;
     case OPT_REPORT: c->report = v; return 1;
     case OPT_TOLERANCE: return parse_double("--tolerance", v, &c->o.tolerance);
@@ -378,6 +387,23 @@ static int check_angles(double ti, double to, double phi, long line)
     return 1;
 }
 
+/* The reflected side: theta-r in [0, 90] (MODEL.md section 8). */
+static int check_angles_r(double ti, double tr, double phi, long line)
+{
+    char where[48] = "";
+    if (line > 0)
+        snprintf(where, sizeof where, "line %ld: ", line);
+    if (!(ti >= 0.0 && ti <= 90.0))
+        return fail(EXIT_USAGE, "%stheta-i %g: must lie in [0, 90] degrees", where, ti), 0;
+    if (!(tr >= 0.0 && tr <= 90.0))
+        return fail(EXIT_USAGE,
+                    "%stheta-r %g: must lie in [0, 90] degrees (the reflected hemisphere)",
+                    where, tr), 0;
+    if (!isfinite(phi))
+        return fail(EXIT_USAGE, "%sphi %g: must be finite", where, phi), 0;
+    return 1;
+}
+
 /* Reads up to `want` numbers separated by blanks or commas; returns how many, -1 on junk. */
 static int read_row(const char *line, double *v, int want)
 {
@@ -428,11 +454,18 @@ static void table_ti_range(const btdf_table *t, double *range)
     range[1] = last.ti * 180.0 / M_PI;
 }
 
+/* One row of %.17g values (fastnum_g17 gives printf's bytes, faster). */
 static void print_values(const double *v, int n)
 {
-    for (int c = 0; c < n; c++)
-        printf(c ? " %.17g" : "%.17g", v[c]);
-    putchar('\n');
+    char buf[BTDF_MAX_CHANNELS * 32 + 2];
+    int len = 0;
+    for (int c = 0; c < n; c++) {
+        if (c)
+            buf[len++] = ' ';
+        len += fastnum_g17(v[c], buf + len);
+    }
+    buf[len++] = '\n';
+    fwrite(buf, 1, (size_t)len, stdout);
 }
 
 static int cmd_eval(const cli *c)
@@ -448,6 +481,9 @@ static int cmd_eval(const cli *c)
     if (c->table && (GIVEN(c, OPT_IOR) || GIVEN(c, OPT_SMOOTHNESS) || GIVEN(c, OPT_K0)))
         return fail(EXIT_USAGE, "--ior, --smoothness and --k0 do not apply with --table "
                                 "(the table gives the material)");
+    if (c->reflection && c->table)
+        return fail(EXIT_USAGE, "--part reflection: evaluates the model only; tables and "
+                                ".bsdf files hold the transmission");
     btdf_input in = {NULL, NULL};
     double ti_range[2] = {0.0, 90.0}; /* degrees */
     if (c->table) {
@@ -462,6 +498,15 @@ static int cmd_eval(const cli *c)
             p.channels = btdf_scatfun_channels(in.scatfun);
     } else if (!check_params(&p)) {
         return EXIT_USAGE;
+    }
+    if (npos == 0 && !in.table && !in.scatfun) { /* the model on rows from stdin */
+        char err[256];
+        int rc = eval_stream(stdin, stdout, &p, c->reflection, c->threads, err, sizeof err);
+        if (rc)
+            fail(rc, "%s", err);
+        if (fflush(stdout) != 0 && rc == 0)
+            rc = fail(1, "standard output: %s", strerror(errno));
+        return rc;
     }
     int code = 0;
     double out[BTDF_MAX_CHANNELS];
@@ -486,7 +531,8 @@ static int cmd_eval(const cli *c)
                 break;
             }
         }
-        if (!check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
+        if (c->reflection ? !check_angles_r(v[0], v[1], v[2], npos == 3 ? 0 : ln)
+                          : !check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
             code = EXIT_USAGE;
             break;
         }
@@ -501,7 +547,10 @@ static int cmd_eval(const cli *c)
             break;
         }
         double ti = v[0] * M_PI / 180.0, to = v[1] * M_PI / 180.0, phi = v[2] * M_PI / 180.0;
-        if (in.table) {
+        if (c->reflection) {
+            for (int ch = 0; ch < p.channels; ch++)
+                out[ch] = btdf_rho_r_deg(p.ior[ch], p.smoothness, p.k0, v[0], v[1], v[2]);
+        } else if (in.table) {
             btdf_table_eval(in.table, ti, to, phi, out);
         } else if (in.scatfun) {
             /* light entering through the top (index n), as pbrt-v3 would read it */
@@ -541,15 +590,20 @@ static int cmd_albedo(const cli *c)
             return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
     const btdf_params *p = &c->p;
     printf("theta_i_deg");
-    for (int ch = 0; ch < p->channels; ch++)
-        printf(p->channels == 1 ? ",T,Ft" : ",T_%c,Ft_%c", "rgb"[ch], "rgb"[ch]);
+    for (int ch = 0; ch < p->channels; ch++) {
+        char sfx[3] = {'_', "rgb"[ch], 0};
+        const char *x = p->channels == 1 ? "" : sfx;
+        printf(",T%s,Ft%s,R%s,R+T%s", x, x, x, x);
+    }
     printf("\n");
     for (int k = 0; k < na; k++) {
-        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS];
+        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS];
         btdf_transmittance(p, ti, T);
+        btdf_reflectance(p, ti, R);
         printf("%.10g", angles[k]);
         for (int ch = 0; ch < p->channels; ch++)
-            printf(",%.9f,%.9f", T[ch], btdf_fresnel_t(p->ior[ch], ti));
+            printf(",%.9f,%.9f,%.9f,%.9f", T[ch], btdf_fresnel_t(p->ior[ch], ti), R[ch],
+                   R[ch] + T[ch]);
         printf("\n");
     }
     return stdout_done(0);
