@@ -691,6 +691,27 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                 mt[q] = 0.5 * (sl[k].s.ti + sl[k + 1].s.ti);
                 at[q++] = k;
             }
+        /* When the room left cannot hold a slice of the present average size for every
+           candidate, test only as many as it can, the widest intervals first (the others
+           stay open): equal shares too small for any would all stop short and spend the
+           budget on slices that cannot meet their target. */
+        size_t avg = ns ? nodes / ns : 0, left = nodes < node_cap ? node_cap - nodes : 0;
+        if (avg > 0 && nt > 1 && nt * avg > left && left / avg >= 1) {
+            size_t fit = left / avg;
+            for (size_t a2 = 0; a2 < fit; a2++) { /* selection of the fit widest */
+                size_t w = a2;
+                for (size_t b2 = a2 + 1; b2 < nt; b2++)
+                    if (sl[at[b2] + 1].s.ti - sl[at[b2]].s.ti > sl[at[w] + 1].s.ti - sl[at[w]].s.ti)
+                        w = b2;
+                double tm = mt[a2];
+                size_t ta = at[a2];
+                mt[a2] = mt[w];
+                at[a2] = at[w];
+                mt[w] = tm;
+                at[w] = ta;
+            }
+            nt = fit;
+        }
         j.ti = mt;
         j.out = cand;
         /* The candidates are held beside the slices: together they stay in the budget. */
