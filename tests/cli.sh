@@ -291,5 +291,19 @@ rm -f "$W/r60.csv"
 expect 1 "t.csv: cannot open: No such file" "one wording for a missing file (.csv)" -- "$B" inspect "$W/t.csv"
 expect 1 "t.bsdf: cannot open: No such file" "one wording for a missing file (.bsdf)" -- "$B" inspect "$W/t.bsdf"
 
+# --estimate and the report line's total; the limit a budget failure names
+expect 2 "must be full, fast or none" "bad --estimate" -- "$B" tabulate --estimate some -o "$W/t.csv"
+expect 2 "no error to report" "--report with --estimate none" -- "$B" tabulate --estimate none --report "$W/r.json" -o "$W/t.csv"
+"$B" tabulate --tolerance 3e-2 --estimate none -o "$W/none.csv" 2> "$W/none.err" && \
+    grep -q '^# provenance:.*error not estimated' "$W/none.csv" && ! grep -q '^# error:' "$W/none.csv" && \
+    grep -q 'error not estimated.*total [0-9.]* s$' "$W/none.err" && \
+    ok "--estimate none writes 'error not estimated' and no error line" || no "--estimate none"
+"$B" tabulate --tolerance 3e-2 --estimate fast -o "$W/fast.csv" 2> "$W/fast.err" && \
+    grep -q '(fast, [0-9]* angles.*tolerance met; total [0-9.]* s$' "$W/fast.err" && \
+    ok "--estimate fast says so; the line ends with the total time" || no "--estimate fast"
+expect 3 "the sample budget (20000 samples, 256 MiB) stopped refinement: the table holds" \
+    "a budget failure names the limit and how close" -- "$B" tabulate --tolerance 1e-3 --max-samples 20000 -o "$W/t.csv"
+rm -f "$W/none.csv" "$W/none.err" "$W/fast.csv" "$W/fast.err"
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

@@ -261,7 +261,7 @@ static void test_eval_against_rho(void **state)
         btdf_report r;
         memset(&r, 0, sizeof r);
         assert_int_equal(btdf_scatfun_report(fx.f, &fx.p, (btdf_side)s, 0, 0, 1, 2, &r), BTDF_OK);
-        assert_int_equal(r.test_angles, 24);
+        assert_true(r.test_angles >= 24); /* 24 stratified, the ends, refinement */
         assert_true(r.e_l1_max <= TOL);
         assert_true(r.e_l1_mean <= r.e_l1_max && r.e_t_mean <= r.e_t_max);
         assert_int_equal(r.slices, btdf_scatfun_node_count(fx.f));

@@ -55,6 +55,10 @@ const opt_def opt_table[] = {
     {OPT_REPORT, "report", 0, "FILE.json", 0, CMD_TABULATE, "write the error report as JSON"},
     {OPT_BEST_EFFORT, "best-effort", 0, NULL, 0, CMD_TABULATE | CMD_BUILD,
      "write the output even if the budget stopped refinement"},
+    {OPT_ESTIMATE, "estimate", 0, "full|fast|none", 0, CMD_TABULATE,
+     "full (default): check the table against Eq. 25 at every slice interval and\n"
+     "where the error changes fast; fast: fewer points; none: one unchecked pass,\n"
+     "the file says \"error not estimated\""},
     {OPT_PREVIEW, "preview", 0, "[KIND=]F.png", 1, CMD_TABULATE,
      "a picture of the table; KIND is montage (default), render (the paper's\n"
      "Figs. 10-11) or render-analytic (with Eq. 25 and the difference beside it);\n"
