@@ -35,6 +35,14 @@
 #define MAX_ORDER_READ (1u << 20)
 /* Coefficient budget of a build (floats): 2^27 floats is a 512 MiB file. */
 #define MAX_COEFFS_BUILD ((size_t)1 << 27)
+/* The outermost elevation nodes: the largest float below 1 (1 - 2^-24), not 1 itself.
+   pbrt-v3's Sample_f divides sin^2 of the sampled direction by sin^2 of the view; with
+   a view exactly on the normal (cos = 1 in float, any view within 0.014 deg) and a
+   sampled cosine of exactly +-1, that is 0/0 and the path tracer aborts on a NaN. With
+   the nodes ending below 1, a renderer never samples +-1 (a sampled cosine lies between
+   nodes) and a view with cos = +-1 lies outside the nodes, where the renderer returns
+   no sample (pdf 0) instead of NaN. docs/scatfun.md, "Views on the normal". */
+#define POLE_NODE 0.999999940395355224609375
 
 struct btdf_scatfun {
     uint32_t n, ncoeffs, mmax, channels;
@@ -1036,7 +1044,7 @@ static double split_point(const double *P, size_t K, size_t j, double endr)
     /* acos of values in [0, 1] */
     double alo = acos(fmin(1.0, lo)), ahi = acos(fmin(1.0, P[j]));
     if (j == K - 1 && K > 1)
-        return cos(alo * endr);
+        return cos(ahi + (alo - ahi) * endr);
     return cos(0.5 * (alo + ahi));
 }
 
@@ -1107,7 +1115,7 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
     }
     for (size_t j = 0; j < K0; j++)
         P[j] = to_float_node(sin((double)(j + 1) * M_PI / (2.0 * (double)K0)));
-    P[K0 - 1] = 1.0;
+    P[K0 - 1] = POLE_NODE;
     size_t K = K0;
     int tighten = 0;
     st = BTDF_OK;
@@ -1432,6 +1440,11 @@ BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side sid
     double ms, mf;
     int rad;
     side_mus(side, mode, ti, to, &ms, &mf, &rad);
+    /* Within 0.02 deg of the normal (|mu| above the outermost node, 1 - 2^-24 in files
+       this library writes) read the outermost node: a renderer gives 0 there, the model
+       has no such gap (docs/scatfun.md, "Views on the normal"). */
+    ms = fmin(f->xd[f->n - 1], fmax(f->xd[0], ms));
+    mf = fmin(f->xd[f->n - 1], fmax(f->xd[0], mf));
     /* phi = pi is forward, phi_d = 0: cos phi_d = -cos phi */
     return btdf_scatfun_eval_mu(f, ms, mf, -cos(phi), rad, out);
 }
@@ -1776,9 +1789,12 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
         }
         f->nodes[i] = v;
     }
-    if (f->nodes[0] != -1.0f || f->nodes[n - 1] != 1.0f) {
-        st = FMT_FAIL("nodes must span -1 to +1, found %g to %g", (double)f->nodes[0],
-                      (double)f->nodes[n - 1]);
+    /* Files reach the poles: +-1 (older files, layerlab) or within 1e-6 of them (the
+       largest float below 1, which this library writes: see POLE_NODE). */
+    if (!(f->nodes[0] >= -1.0f && f->nodes[0] <= -0.999999f && f->nodes[n - 1] <= 1.0f &&
+          f->nodes[n - 1] >= 0.999999f)) {
+        st = FMT_FAIL("nodes must span -1 to +1 (within 1e-6), found %g to %g",
+                      (double)f->nodes[0], (double)f->nodes[n - 1]);
         goto fail;
     }
     for (size_t i = 0; i < nn; i++, pos += 4) {
@@ -1957,6 +1973,34 @@ BTDF_API btdf_status btdf_scatfun_pair(const btdf_scatfun *f, size_t i, size_t o
     *offset = f->offsets[e];
     *length = f->offsets[e + 1];
     return BTDF_OK;
+}
+
+BTDF_API int btdf_scatfun_sides(const btdf_scatfun *f)
+{
+    if (!f)
+        return 0;
+    int sides = 0;
+    for (uint32_t i = 0; i < f->n; i++)
+        for (uint32_t o = 0; o < f->n; o++) {
+            if (f->offsets[2 * ((size_t)i * f->n + o) + 1] == 0)
+                continue;
+            if (f->nodes[i] > 0.0f && f->nodes[o] > 0.0f)
+                sides |= BTDF_SIDE_ENTER;
+            else if (f->nodes[i] < 0.0f && f->nodes[o] < 0.0f)
+                sides |= BTDF_SIDE_LEAVE;
+        }
+    return sides;
+}
+
+BTDF_API double btdf_scatfun_a0_peak(const btdf_scatfun *f)
+{
+    double peak = 0.0;
+    if (!f)
+        return 0.0;
+    for (size_t e = 0; e < (size_t)f->n * f->n; e++)
+        if (f->offsets[2 * e + 1] > 0)
+            peak = fmax(peak, fabs((double)f->coeffs[f->offsets[2 * e]]));
+    return peak;
 }
 
 BTDF_API void btdf_scatfun_free(btdf_scatfun *f)

@@ -145,6 +145,21 @@ BTDF_API const float *btdf_scatfun_coeffs(const btdf_scatfun *f);
 BTDF_API btdf_status btdf_scatfun_pair(const btdf_scatfun *f, size_t i, size_t o,
                                        size_t *offset, size_t *length);
 
+/* Sides the file holds: a btdf_side mask (ENTER for mu_s, mu_f > 0 pairs, LEAVE for
+   mu_s, mu_f < 0), 0 when neither has a non-empty series. */
+BTDF_API int btdf_scatfun_sides(const btdf_scatfun *f);
+
+/* Largest |a_0| of channel 0 over all pairs: the scale of the values pbrt-v3's
+   elevation sampler (SampleCatmullRom2D) inverts. That sampler stops on an absolute
+   1e-6 tolerance; in single precision its Newton step cannot move t by one unit in
+   the last place once the spline value passes 2^25 * 1e-6 = 33.55, and it can loop
+   forever. Spline and row interpolation can raise a value by at most (3/2)^2 over
+   the stored ones, so files with a peak at most BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 are
+   safe in a single-precision pbrt-v3; larger peaks need pbrt-v3 built with
+   PBRT_FLOAT_AS_DOUBLE (docs/scatfun.md, "pbrt-v3's sampler"). */
+#define BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 14.9
+BTDF_API double btdf_scatfun_a0_peak(const btdf_scatfun *f);
+
 BTDF_API void btdf_scatfun_free(btdf_scatfun *f);
 
 #ifdef __cplusplus

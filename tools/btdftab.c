@@ -316,6 +316,13 @@ static int cmd_eval(int argc, char **argv)
         if (st != BTDF_OK)
             return fail(1, "%s: %s", table_path, msg);
         c.p.channels = btdf_scatfun_channels(sf);
+        if (!(btdf_scatfun_sides(sf) & BTDF_SIDE_ENTER)) {
+            btdf_scatfun_free(sf);
+            /* eval reads light entering through the top (index n); the file has no such
+               block, and a 0 would read as a measured value */
+            return fail(1, "%s: the file holds no 'enter' side (light entering, index n), "
+                           "which eval reads; it was written with --side leave", table_path);
+        }
     } else if (table_path) {
         char msg[512];
         btdf_status st = btdf_table_read(table_path, &t, msg, sizeof msg);
@@ -575,8 +582,83 @@ static int write_text_atomic(const char *path, const btdf_table_opts *o, btdf_ta
     return 0;
 }
 
-int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int threads,
-             int quiet, int best_effort, const char *prov)
+/* One side's report as JSON (the fields of a table's report, docs/tables.md). */
+static void json_side(FILE *f, const char *name, const btdf_report *r, int last)
+{
+    fprintf(f, "    \"%s\": {\"met\": %s, \"e_l1\": {\"max\": %.6g, \"mean\": %.6g}, "
+               "\"e_max\": {\"max\": %.6g, \"mean\": %.6g}, \"e_t\": {\"max\": %.6g, "
+               "\"mean\": %.6g}, \"seconds_estimate\": %.6f, \"test_angles\": %zu, "
+               "\"test_points\": %zu,\n      \"per_theta_i\": [\n",
+            name, r->e_l1_max <= r->tolerance ? "true" : "false", r->e_l1_max, r->e_l1_mean,
+            r->e_max_max, r->e_max_mean, r->e_t_max, r->e_t_mean, r->seconds_estimate,
+            r->test_angles, r->test_points);
+    for (size_t k = 0; k < r->test_angles; k++) {
+        const btdf_ti_error *e = &r->per_ti[k];
+        fprintf(f,
+                "        {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_table\": %.9g, \"e_l1\": %.6g, "
+                "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
+                e->ti * 180 / M_PI, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
+                k + 1 < r->test_angles ? "," : "");
+    }
+    fprintf(f, "      ]}%s\n", last ? "" : ",");
+}
+
+typedef struct bsdf_json {
+    const btdf_params *p;
+    const btdf_scatfun *f;
+    const btdf_report *r; /* [2]: enter, leave; test_angles 0 when not built */
+    double tol, seconds;
+    int met;
+    const char *prov;
+} bsdf_json;
+
+static btdf_status bsdf_json_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
+{
+    const bsdf_json *j = ctx;
+    FILE *f = fopen(tmp, "w");
+    if (!f) {
+        snprintf(msg, msglen, "cannot create: %s", strerror(errno));
+        return BTDF_EIO;
+    }
+    fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
+            BTDF_VERSION_STRING);
+    for (const char *s = j->prov ? j->prov : ""; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            fputc('\\', f);
+        if ((unsigned char)*s >= 0x20)
+            fputc(*s, f);
+    }
+    fprintf(f, "\",\n  \"kind\": \"scatfun\",\n  \"ior\": [");
+    for (int c = 0; c < j->p->channels; c++)
+        fprintf(f, "%s%.17g", c ? ", " : "", j->p->ior[c]);
+    double peak = btdf_scatfun_a0_peak(j->f);
+    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n  \"tolerance\": %.17g,\n"
+               "  \"metric\": \"l1\",\n  \"met\": %s,\n  \"nodes\": %zu,\n  \"coefficients\": %zu,\n"
+               "  \"max_order\": %zu,\n  \"file_bytes\": %zu,\n  \"seconds_build\": %.6f,\n"
+               "  \"a0_peak\": %.6g,\n  \"pbrt_v3_single_precision_safe\": %s,\n  \"sides\": {\n",
+            j->p->smoothness, j->p->k0, j->tol, j->met ? "true" : "false",
+            btdf_scatfun_node_count(j->f), btdf_scatfun_coeff_count(j->f),
+            btdf_scatfun_max_order(j->f), btdf_scatfun_file_size(j->f, NULL), j->seconds, peak,
+            peak <= BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 ? "true" : "false");
+    int last = j->r[1].test_angles ? 1 : 0;
+    if (j->r[0].test_angles)
+        json_side(f, "enter", &j->r[0], !last);
+    if (j->r[1].test_angles)
+        json_side(f, "leave", &j->r[1], 1);
+    fprintf(f, "  }\n}\n");
+    int bad = ferror(f);
+    bad |= fclose(f) != 0;
+    if (bad) {
+        snprintf(msg, msglen, "writing failed: %s", strerror(errno));
+        return BTDF_EIO;
+    }
+    return BTDF_OK;
+}
+
+/* run_bsdf with the JSON report written to report (NULL: none). */
+static int run_bsdf_report(const char *path, const btdf_params *p, double tol, int sides,
+                           int threads, int quiet, int best_effort, const char *prov,
+                           const char *report)
 {
     char msg[512] = "";
     btdf_scatfun *f = NULL;
@@ -593,6 +675,8 @@ int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int 
     char meta[1024];
     int k = snprintf(meta, sizeof meta, "{\"program\": \"btdftab %s\", \"tolerance\": %g",
                      BTDF_VERSION_STRING, tol);
+    btdf_report reps[2];
+    memset(reps, 0, sizeof reps);
     for (int s = BTDF_SIDE_ENTER; s <= BTDF_SIDE_LEAVE; s++) {
         if (!(sides & s))
             continue;
@@ -602,9 +686,11 @@ int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int 
         btdf_status es = btdf_scatfun_report(f, p, (btdf_side)s, 0, 0, REPORT_SEED, threads, &r);
         double e1 = now_seconds();
         if (es != BTDF_OK) {
+            btdf_report_clear(&reps[0]);
             btdf_scatfun_free(f);
             return fail(1, "%s: error estimate: %s", path, btdf_strerror(es));
         }
+        r.tolerance = tol;
         int ok = r.e_l1_max <= tol;
         met = met && ok;
         const char *name = s == BTDF_SIDE_ENTER ? "enter" : "leave";
@@ -620,23 +706,51 @@ int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int 
             k += snprintf(meta + k, sizeof meta - (size_t)k,
                           ", \"%s\": {\"e_l1_max\": %.4g, \"e_max_max\": %.4g, \"e_t_max\": %.4g}",
                           name, r.e_l1_max, r.e_max_max, r.e_t_max);
-        btdf_report_clear(&r);
+        reps[s - 1] = r; /* cleared below */
     }
+    double peak = btdf_scatfun_a0_peak(f);
+    if (!quiet && peak > BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0)
+        fprintf(stderr,
+                "%s: %s: warning: values reach %.4g (a_0 peak) > %g: pbrt-v3 built with "
+                "single-precision floats (its default) can loop forever sampling this file; "
+                "render it with pbrt-v3 built with PBRT_FLOAT_AS_DOUBLE (docs/scatfun.md)\n",
+                prog, path, peak, BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0);
     if (k > 0 && (size_t)k < sizeof meta)
         snprintf(meta + k, sizeof meta - (size_t)k, ", \"command\": \"%s\"}", prov ? prov : "");
     int code = 0;
-    if (!met && !best_effort) {
+    if (report) {
+        bsdf_json j = {p, f, reps, tol, t1 - t0, met, prov};
+        char jm[512] = "";
+        if (btdf_write_file_atomic(report, ".json", bsdf_json_writer, &j, jm, sizeof jm) !=
+            BTDF_OK)
+            code = fail(1, "%s: %s", report, jm);
+    }
+    btdf_report_clear(&reps[0]);
+    btdf_report_clear(&reps[1]);
+    if (code == 0 && !met && !best_effort) {
         fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
                         "to write it anyway)\n",
                 prog, path, tol, msg[0] ? ": " : "", msg);
         code = EXIT_BUDGET;
-    } else {
+    } else if (code == 0) {
         st = btdf_scatfun_write(f, path, meta, msg, sizeof msg);
         if (st != BTDF_OK)
             code = fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+        else if (!met) {
+            /* --best-effort wrote it, but the run did not do what was asked */
+            fprintf(stderr, "%s: %s: tolerance %g not met%s%s; written anyway (--best-effort), "
+                            "exit 3\n", prog, path, tol, msg[0] ? ": " : "", msg);
+            code = EXIT_BUDGET;
+        }
     }
     btdf_scatfun_free(f);
     return code;
+}
+
+int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int threads,
+             int quiet, int best_effort, const char *prov)
+{
+    return run_bsdf_report(path, p, tol, sides, threads, quiet, best_effort, prov, NULL);
 }
 
 /* The options of tabulate that take a value. */
@@ -749,8 +863,8 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         if (theta_given || o.kind == BTDF_TABLE_GRID || npreview)
             return fail(EXIT_USAGE, "%s: --theta-i, --grid and --preview do not apply to .bsdf "
                                     "(the file covers every direction of both hemispheres)", out);
-        return run_bsdf(out, &c.p, o.tolerance, sides ? sides : BTDF_SIDE_BOTH, c.threads,
-                        c.quiet, best_effort, prov);
+        return run_bsdf_report(out, &c.p, o.tolerance, sides ? sides : BTDF_SIDE_BOTH,
+                               c.threads, c.quiet, best_effort, prov, report);
     }
     if (sides && sides != BTDF_SIDE_ENTER && out) {
         /* Tables hold one side: light leaving is the table of index 1/n. */
