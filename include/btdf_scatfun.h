@@ -57,11 +57,24 @@ typedef enum {
    the result is byte-identical for any thread count.
    BTDF_OK when the tolerance was met; BTDF_EBUDGET when the node or series budget
    stopped refinement first: *out then still holds the best file reached and msg
-   says the error reached. Errors: BTDF_EINVAL (parameters, tolerance outside
+   says the error reached; or, with *out NULL, when the lobe is too narrow for the
+   format's node budget to follow at all (btdf_scatfun_build_limits). Errors: BTDF_EINVAL (parameters, tolerance outside
    [1e-6, 0.5], side not 1..3), BTDF_ENOMEM, BTDF_EOVERFLOW. */
 BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                                         btdf_side side, int threads, btdf_scatfun **out,
                                         char *msg, size_t msglen);
+
+/* btdf_scatfun_build with budgets: max_coeffs caps the stored coefficients (0 or more
+   than 2^27: 2^27), max_bytes the builder's working memory in series and pair
+   records (0: no cap; the file's float copy and per-thread scratch come on top).
+   Reaching one returns BTDF_EBUDGET with the best file reached, as above. A request
+   whose transmitted lobe (about (n' - 1) 2/s rad, n' = max(n, 1/n)) is narrower than
+   90 degrees / BTDF_SCATFUN_MAX_HALF_NODES stops before any work: BTDF_EBUDGET,
+   *out left NULL, the reason in msg (btdf_scatfun_build does the same). */
+BTDF_API btdf_status btdf_scatfun_build_limits(const btdf_params *p, double tolerance,
+                                               btdf_side side, int threads, size_t max_coeffs,
+                                               size_t max_bytes, btdf_scatfun **out,
+                                               char *msg, size_t msglen);
 
 /* Writes f to path (exact SCATFUN v1 layout, float32 little-endian) with the given
    metadata text appended (NULL: a short JSON of the build parameters). The file is

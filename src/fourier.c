@@ -1024,9 +1024,37 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
     return r.e_l1_max;
 }
 
+/* Bytes the builder holds in series (pairs and check series, double precision) and
+   pair records, for the memory cap. */
+static size_t state_bytes(const build_ctx *c)
+{
+    size_t KK = c->K * c->K, b = 0;
+    for (int s = 0; s < 2; s++) {
+        if (!c->want[s])
+            continue;
+        const pair *arr[3] = {c->pairs[s], c->pcol[s], c->prow[s]};
+        for (int a = 0; a < 3; a++) {
+            if (!arr[a])
+                continue;
+            b += KK * sizeof(pair);
+            for (size_t i = 0; i < KK; i++)
+                b += (size_t)arr[a][i].m * (size_t)c->nst * sizeof(double);
+        }
+    }
+    return b;
+}
+
 BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                                         btdf_side side, int threads, btdf_scatfun **out,
                                         char *msg, size_t msglen)
+{
+    return btdf_scatfun_build_limits(p, tolerance, side, threads, 0, 0, out, msg, msglen);
+}
+
+BTDF_API btdf_status btdf_scatfun_build_limits(const btdf_params *p, double tolerance,
+                                               btdf_side side, int threads, size_t max_coeffs,
+                                               size_t max_bytes, btdf_scatfun **out,
+                                               char *msg, size_t msglen)
 {
     if (!out)
         return scatfun_say(msg, msglen, BTDF_EINVAL, "output pointer missing");
@@ -1038,6 +1066,30 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
     if (side < BTDF_SIDE_ENTER || side > BTDF_SIDE_BOTH)
         return scatfun_say(msg, msglen, BTDF_EINVAL, "side %d: must be 1 (enter), 2 (leave) or 3 (both)",
                    (int)side);
+    if (max_coeffs == 0 || max_coeffs > MAX_COEFFS_BUILD)
+        max_coeffs = MAX_COEFFS_BUILD;
+    /* A lobe narrower than one elevation interval, even with the whole node budget
+       spread evenly over 90 degrees, cannot be followed by nodes shared by every
+       incident angle: stop before any work. The transmitted lobe is about
+       (n' - 1) 2/s rad wide in outgoing angle, n' = max(n, 1/n) (facet slopes of RMS
+       2/s, MODEL.md 2). */
+    {
+        double nw = HUGE_VAL;
+        for (int k = 0; k < p->channels; k++) {
+            double n1 = p->ior[k] >= 1.0 ? p->ior[k] : 1.0 / p->ior[k]; /* ior > 0 (checked) */
+            nw = fmin(nw, (n1 - 1.0) * 2.0 / p->smoothness);           /* s > 0 (checked) */
+        }
+        double least = (M_PI / 2) / (double)BTDF_SCATFUN_MAX_HALF_NODES;
+        if (nw < least)
+            return scatfun_say(msg, msglen, BTDF_EBUDGET,
+                               "the transmitted lobe is about %.3g deg wide (n = %.9g, s = %g), "
+                               "narrower than one elevation interval (%.3g deg) even with all "
+                               "%d half nodes of the format's budget; nothing built: use a "
+                               "facet-space table (.exr/.csv) for this material",
+                               nw * 180.0 / M_PI, p->ior[p->channels == 3 ? 1 : 0],
+                               p->smoothness, least * 180.0 / M_PI,
+                               BTDF_SCATFUN_MAX_HALF_NODES);
+    }
     double t0 = btdf_now();
     build_ctx c;
     memset(&c, 0, sizeof c);
@@ -1074,6 +1126,7 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
     P[K0 - 1] = POLE_NODE;
     size_t K = K0;
     int tighten = 0;
+    const char *limit = "node"; /* which budget stopped refinement */
     st = BTDF_OK;
     for (int pass = 0;; pass++) {
         if (set_nodes(&c, P, K)) {
@@ -1106,7 +1159,13 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
         for (int s = 0; s < 2; s++)
             for (size_t i = 0; c.want[s] && i < K * K; i++)
                 total += c.pairs[s][i].m * (size_t)c.nst;
-        if (total > MAX_COEFFS_BUILD) {
+        if (total > max_coeffs) {
+            limit = "coefficient";
+            st = BTDF_EBUDGET;
+            break;
+        }
+        if (max_bytes && state_bytes(&c) > max_bytes) {
+            limit = "memory";
             st = BTDF_EBUDGET;
             break;
         }
@@ -1115,6 +1174,11 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
             c.oom) {
             st = BTDF_ENOMEM;
             goto done;
+        }
+        if (max_bytes && state_bytes(&c) > max_bytes) {
+            limit = "memory";
+            st = BTDF_EBUDGET;
+            break;
         }
         /* mark intervals to split */
         unsigned char *split = calloc(K, 1);
@@ -1191,6 +1255,7 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
             continue; /* same nodes, tighter series and checks */
         }
         if (K + nsplit > BTDF_SCATFUN_MAX_HALF_NODES) {
+            limit = "node";
             free(split);
             st = BTDF_EBUDGET;
             break;
@@ -1273,9 +1338,9 @@ done:
     *out = best;
     if (st == BTDF_EBUDGET)
         return scatfun_say(msg, msglen, BTDF_EBUDGET,
-                   "budget reached (%u nodes, %u coefficients, mMax %u) with estimated e_L1 "
-                   "%.3g > tolerance %g",
-                   best->n, best->ncoeffs, best->mmax, best_err, tolerance);
+                   "%s budget reached (%u nodes, %u coefficients, mMax %u) with estimated "
+                   "e_L1 %.3g > tolerance %g",
+                   limit, best->n, best->ncoeffs, best->mmax, best_err, tolerance);
     return BTDF_OK;
 }
 

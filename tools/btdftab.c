@@ -94,8 +94,10 @@ static void usage(FILE *f, int verbose)
             "  --theta-o A:B        --grid only: outgoing range, within 90:180 (default)\n"
             "  --phi A:B            --grid only: azimuth range, within 0:180 (default; rho\n"
             "                       depends on cos phi, so 0:180 holds every azimuth)\n"
-            "  --max-samples N      node budget (default 8000000)\n"
-            "  --max-memory MIB     memory cap for the nodes (default 256)\n"
+            "  --max-samples N      node budget (default 8000000); for .bsdf, when\n"
+            "                       given, the stored coefficients\n"
+            "  --max-memory MIB     memory cap for the nodes (default 256); for .bsdf,\n"
+            "                       when given, the builder's series\n"
             "  --threads N          worker threads, 0 = all cores (default 0)\n"
             "  --report FILE.json   write the error report as JSON\n"
             "  --best-effort        write the table even if the budget stopped refinement\n"
@@ -658,13 +660,16 @@ static btdf_status bsdf_json_writer(void *ctx, const char *tmp, char *msg, size_
 /* run_bsdf with the JSON report written to report (NULL: none). */
 static int run_bsdf_report(const char *path, const btdf_params *p, double tol, int sides,
                            int threads, int quiet, int best_effort, const char *prov,
-                           const char *report)
+                           const char *report, size_t max_coeffs, size_t max_bytes)
 {
     char msg[512] = "";
     btdf_scatfun *f = NULL;
     double t0 = now_seconds();
-    btdf_status st = btdf_scatfun_build(p, tol, (btdf_side)sides, threads, &f, msg, sizeof msg);
+    btdf_status st = btdf_scatfun_build_limits(p, tol, (btdf_side)sides, threads, max_coeffs,
+                                               max_bytes, &f, msg, sizeof msg);
     double t1 = now_seconds();
+    if (st == BTDF_EBUDGET && !f) /* refused before any work: the request cannot be met */
+        return fail(EXIT_BUDGET, "%s: %s", path, msg);
     if (st != BTDF_OK && st != BTDF_EBUDGET)
         return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", path,
                     msg[0] ? msg : btdf_strerror(st));
@@ -750,7 +755,7 @@ static int run_bsdf_report(const char *path, const btdf_params *p, double tol, i
 int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int threads,
              int quiet, int best_effort, const char *prov)
 {
-    return run_bsdf_report(path, p, tol, sides, threads, quiet, best_effort, prov, NULL);
+    return run_bsdf_report(path, p, tol, sides, threads, quiet, best_effort, prov, NULL, 0, 0);
 }
 
 /* The options of tabulate that take a value. */
@@ -776,7 +781,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
     int best_effort = 0, npreview = 0, pic_w = 0, pic_h = 0, sides = 0, theta_given = 0;
     preview_req previews[MAX_PREVIEWS];
     double ti0 = 0.0, ti1 = 90.0, to0 = 90.0, to1 = 180.0, ph0 = 0.0, ph1 = 180.0;
-    int grid_range = 0;
+    int grid_range = 0, samples_given = 0, mem_given = 0;
     size_t mib = 256;
     for (int i = 1; i < argc; i++) {
         int r = common_opt(&c, argc, argv, &i);
@@ -825,9 +830,11 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         } else if (!strcmp(a, "--max-samples")) {
             if (!parse_size(a, argv[++i], 1000, (size_t)1 << 40, &o.max_samples))
                 return EXIT_USAGE;
+            samples_given = 1;
         } else if (!strcmp(a, "--max-memory")) {
             if (!parse_size(a, argv[++i], 1, 1u << 20, &mib))
                 return EXIT_USAGE;
+            mem_given = 1;
         } else if (!strcmp(a, "--report")) {
             report = argv[++i];
         } else if (!strcmp(a, "--best-effort")) {
@@ -863,8 +870,12 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         if (theta_given || o.kind == BTDF_TABLE_GRID || npreview)
             return fail(EXIT_USAGE, "%s: --theta-i, --grid and --preview do not apply to .bsdf "
                                     "(the file covers every direction of both hemispheres)", out);
+        /* --max-samples caps the stored coefficients, --max-memory the builder's
+           series; each only when given (the format has its own budgets otherwise) */
         return run_bsdf_report(out, &c.p, o.tolerance, sides ? sides : BTDF_SIDE_BOTH,
-                               c.threads, c.quiet, best_effort, prov, report);
+                               c.threads, c.quiet, best_effort, prov, report,
+                               samples_given ? o.max_samples : 0,
+                               mem_given ? mib << 20 : 0);
     }
     if (sides && sides != BTDF_SIDE_ENTER && out) {
         /* Tables hold one side: light leaving is the table of index 1/n. */
