@@ -440,6 +440,12 @@ BTDF_API btdf_status btdf_scatfun_info(const btdf_scatfun *f, FILE *out)
         ok &= fprintf(out, "series length     min %u, median %u, max %u\n", len[0], len[nz / 2],
                       len[nz - 1]) > 0;
     ok &= fprintf(out, "file size         %zu bytes\n", btdf_scatfun_file_size(f, NULL)) > 0;
+    double peak = btdf_scatfun_a0_peak(f);
+    ok &= fprintf(out, "a0 peak           %.6g: %s\n", peak,
+                  peak <= BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0
+                      ? "safe for pbrt-v3 in single precision"
+                      : "pbrt-v3 in single precision can loop forever sampling it; build "
+                        "pbrt-v3 with PBRT_FLOAT_AS_DOUBLE") > 0;
     if (f->built)
         ok &= fprintf(out, "build             tolerance %g, %.3f s\n", f->tolerance,
                       f->seconds_build) > 0;
