@@ -1,0 +1,35 @@
+/* SPDX-License-Identifier: MIT */
+/* run.h: work shared by the commands of btdftab (tabulate and build). */
+#ifndef BTDFTAB_RUN_H
+#define BTDFTAB_RUN_H
+
+#include <stddef.h>
+
+#include <btdf/btdf.h>
+
+/* Seed of the reported error estimates; the builders check themselves with others. */
+#define REPORT_SEED 20081231u
+
+/* Seconds on a monotonic clock. */
+double run_now(void);
+
+/* The words the command line and the manifest share: "enter", "leave", "both" as a
+   btdf_side (0 for any other word); "l1", "max" as a metric (0 for any other). */
+int run_parse_side(const char *word);
+int run_parse_metric(const char *word, btdf_metric *metric);
+
+/* Builds a .bsdf from Eq. 25, reports its error per side on standard error (unless
+   quiet) and writes it at path unless the tolerance was missed without best_effort.
+   Returns an exit status: 0, 1 failed run, 2 bad parameters, 3 tolerance not met. */
+int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
+               int threads, int quiet, int best_effort, const char *prov);
+
+/* run_series with a JSON report written at report (NULL: none) and the builder's
+   budgets (btdf_scatfun_build_limits: 0 = the format's own). A run that missed its
+   tolerance returns 3 also when best_effort wrote the file; a request refused
+   before any work (a lobe too narrow for the node budget) returns 3 with no file. */
+int run_series_ex(const char *prog, const char *path, const btdf_params *p, double tol,
+                  int sides, int threads, int quiet, int best_effort, const char *prov,
+                  const char *report, size_t max_coeffs, size_t max_bytes);
+
+#endif
