@@ -92,7 +92,7 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
                                          size_t msglen);
 
 /* Reads and checks a SCATFUN v1 file: magic, version, flags, counts, nBases = 1,
-   no parameters, exact size, nodes ascending from -1 to +1, offsets and lengths
+   no parameters, exact size, nodes ascending from -1 to +1 (the outer ones within 1e-6), offsets and lengths
    inside the coefficients, lengths <= mMax, every float finite. BTDF_EFORMAT with
    the field and value for corrupt, truncated or foreign files; BTDF_EIO when the
    file cannot be read. */
