@@ -1051,13 +1051,9 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
     return btdf_scatfun_build_limits(p, tolerance, side, threads, 0, 0, out, msg, msglen);
 }
 
-BTDF_API btdf_status btdf_scatfun_build_limits(const btdf_params *p, double tolerance,
-                                               btdf_side side, int threads, size_t max_coeffs,
-                                               size_t max_bytes, btdf_scatfun **out,
-                                               char *msg, size_t msglen)
+BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
+                                        btdf_side side, char *msg, size_t msglen)
 {
-    if (!out)
-        return scatfun_say(msg, msglen, BTDF_EINVAL, "output pointer missing");
     btdf_status st = btdf_params_check(p, msg, msglen);
     if (st != BTDF_OK)
         return st;
@@ -1066,6 +1062,19 @@ BTDF_API btdf_status btdf_scatfun_build_limits(const btdf_params *p, double tole
     if (side < BTDF_SIDE_ENTER || side > BTDF_SIDE_BOTH)
         return scatfun_say(msg, msglen, BTDF_EINVAL, "side %d: must be 1 (enter), 2 (leave) or 3 (both)",
                    (int)side);
+    return BTDF_OK;
+}
+
+BTDF_API btdf_status btdf_scatfun_build_limits(const btdf_params *p, double tolerance,
+                                               btdf_side side, int threads, size_t max_coeffs,
+                                               size_t max_bytes, btdf_scatfun **out,
+                                               char *msg, size_t msglen)
+{
+    if (!out)
+        return scatfun_say(msg, msglen, BTDF_EINVAL, "output pointer missing");
+    btdf_status st = btdf_scatfun_check(p, tolerance, side, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
     if (max_coeffs == 0 || max_coeffs > MAX_COEFFS_BUILD)
         max_coeffs = MAX_COEFFS_BUILD;
     /* A lobe narrower than one elevation interval, even with the whole node budget
