@@ -216,6 +216,19 @@ expect 2 "do not apply to .bsdf" "--theta-i with .bsdf" -- "$B" tabulate --theta
 head -c 100 /dev/zero > "$W/z.bsdf"
 expect 1 "z.bsdf" "foreign .bsdf" -- "$B" inspect "$W/z.bsdf"
 rm -f "$W/z.bsdf"
+# .bsdf: a lobe too narrow for the format's node budget stops before any work, exit 3
+expect 3 "narrower than one elevation interval" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
+# .bsdf: --report is written; a file without the enter side is refused by eval
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --side leave --report "$W/l.json" -o "$W/l.bsdf" && \
+    grep -q '"kind": "scatfun"' "$W/l.json" && grep -q '"pbrt_v3_single_precision_safe": true' "$W/l.json" && \
+    grep -q '"leave": {"met": true' "$W/l.json" && ok ".bsdf --report" || no ".bsdf --report"
+expect 1 "holds no 'enter' side" "eval --table of a leave-only .bsdf" -- "$B" eval --table "$W/l.bsdf" 30 150 180
+# .bsdf: --best-effort writes a file that missed the tolerance and still exits 3
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 1e-3 --max-memory 1 --best-effort -o "$W/b.bsdf" --report "$W/b.json"
+rc=$?
+[ "$rc" -eq 3 ] && [ -s "$W/b.bsdf" ] && grep -q '"met": false' "$W/b.json" && \
+    ok ".bsdf --best-effort: written, exit 3" || no ".bsdf --best-effort: status $rc"
+rm -f "$W"/l.* "$W"/b.*
 # the same bytes from one and two threads (the provenance line records the command)
 "$B" tabulate -q --theta-i 0:50 --tolerance 5e-3 --threads 1 -o "$W/a1.csv" &&
 "$B" tabulate -q --theta-i 0:50 --tolerance 5e-3 --threads 2 -o "$W/a2.csv" &&

@@ -519,8 +519,16 @@ static int cmd_eval(const cli *c)
         if (in.table) {
             p = *btdf_table_get_params(in.table);
             table_ti_range(in.table, ti_range);
-        } else
+        } else {
             p.channels = btdf_scatfun_channels(in.scatfun);
+            if (!(btdf_scatfun_sides(in.scatfun) & BTDF_SIDE_ENTER)) {
+                btdf_scatfun_free(in.scatfun);
+                /* eval reads light entering through the top (index n); the file has no
+                   such block, and a 0 would read as a measured value */
+                return fail(1, "%s: the file holds no 'enter' side (light entering, index n), "
+                               "which eval reads; it was written with --side leave", c->table);
+            }
+        }
     } else if (!check_params(&p)) {
         return EXIT_USAGE;
     }
@@ -705,23 +713,28 @@ static int write_report(const char *path, const btdf_table_opts *o, btdf_table_k
 static int tabulate_series(const cli *c, const char *prov)
 {
     static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
-                                        OPT_PHI, OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY,
-                                        OPT_REPORT, OPT_SIZE, OPT_LOG_DECADES,
+                                        OPT_PHI, OPT_METRIC, OPT_SIZE, OPT_LOG_DECADES,
                                         OPT_ZOOM};
     for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
         if (GIVEN(c, table_only[k]))
             return fail(EXIT_USAGE, "%s: --theta-i, --theta-o, --phi, --grid, --metric, "
-                                    "--max-samples, --max-memory, --report, --preview and "
-                                    "--size do not apply to .bsdf (the file covers every "
-                                    "direction of both hemispheres; --%s was given)",
+                                    "--preview, --size, --log-decades and --zoom do not apply "
+                                    "to .bsdf (the file covers every direction of both "
+                                    "hemispheres; --%s was given)",
                         c->out, opt_find(table_only[k])->name);
+    if (c->report && !folder_writable(c->report))
+        return 1;
     if (!check_params(&c->p))
         return EXIT_USAGE;
     if (!folder_writable(c->out))
         return 1;
-    return run_series(prog, c->out, &c->p, c->o.tolerance,
-                      c->sides ? c->sides : BTDF_SIDE_BOTH, c->threads, c->quiet,
-                      c->best_effort, prov);
+    /* --max-samples caps the stored coefficients, --max-memory the builder's series;
+       each only when given (the format has its own budgets otherwise) */
+    return run_series_ex(prog, c->out, &c->p, c->o.tolerance,
+                         c->sides ? c->sides : BTDF_SIDE_BOTH, c->threads, c->quiet,
+                         c->best_effort, prov, c->report,
+                         GIVEN(c, OPT_MAX_SAMPLES) ? c->o.max_samples : 0,
+                         GIVEN(c, OPT_MAX_MEMORY) ? c->mib << 20 : 0);
 }
 
 /* A Radiance .xml is built from Eq. 25 directly, both transmission blocks. */

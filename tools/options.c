@@ -47,9 +47,11 @@ const opt_def opt_table[] = {
     {OPT_PHI, "phi", 0, "A:B", 0, CMD_TABULATE,
      "--grid only: azimuth range, within 0:180 (default; rho depends on cos phi, so\n"
      "0:180 holds every azimuth)"},
-    {OPT_MAX_SAMPLES, "max-samples", 0, "N", 0, CMD_TABULATE, "node budget (default 8000000)"},
+    {OPT_MAX_SAMPLES, "max-samples", 0, "N", 0, CMD_TABULATE,
+     "node budget (default 8000000); for .bsdf, when given, the stored coefficients"},
     {OPT_MAX_MEMORY, "max-memory", 0, "MIB", 0, CMD_TABULATE,
-     "memory cap for the nodes (default 256)"},
+     "memory cap for the nodes (default 256); for .bsdf, when given, the builder's\n"
+     "series"},
     {OPT_THREADS, "threads", 0, "N", 0, CMD_EVAL | CMD_TABULATE | CMD_BUILD,
      "worker threads, 0 = all cores (default 0)"},
     {OPT_REPORT, "report", 0, "FILE.json", 0, CMD_TABULATE, "write the error report as JSON"},

@@ -3,6 +3,8 @@
 #ifndef BTDFTAB_RUN_H
 #define BTDFTAB_RUN_H
 
+#include <stddef.h>
+
 #include <btdf/btdf.h>
 
 /* Seed of the reported error estimates; the builders check themselves with others. */
@@ -21,6 +23,14 @@ int run_parse_metric(const char *word, btdf_metric *metric);
    Returns an exit status: 0, 1 failed run, 2 bad parameters, 3 tolerance not met. */
 int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
                int threads, int quiet, int best_effort, const char *prov);
+
+/* run_series with a JSON report written at report (NULL: none) and the builder's
+   budgets (btdf_scatfun_build_limits: 0 = the format's own). A run that missed its
+   tolerance returns 3 also when best_effort wrote the file; a request refused
+   before any work (a lobe too narrow for the node budget) returns 3 with no file. */
+int run_series_ex(const char *prog, const char *path, const btdf_params *p, double tol,
+                  int sides, int threads, int quiet, int best_effort, const char *prov,
+                  const char *report, size_t max_coeffs, size_t max_bytes);
 
 /* Builds a Radiance BSDF (.xml) from Eq. 25 in the given basis, reports each block's
    error as Radiance reads it on standard error (unless quiet), and writes it (and the
