@@ -5,14 +5,6 @@
 #include "formats.h"
 #include "tmpfile.h"
 
-BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
-                                        btdf_side side, int threads, btdf_scatfun **out,
-                                        char *msg, size_t msglen)
-{
-    return btdf_scatfun_build_progress(p, tolerance, side, threads, NULL, NULL, out, msg,
-                                       msglen);
-}
-
 static btdf_status bsdf_write(const btdf_output_ctx *c, const char *path, char *msg,
                               size_t msglen)
 {

@@ -208,6 +208,37 @@ static btdf_status slice_to_float(const btdf_slice *sl, int channels, float *pla
     return BTDF_OK;
 }
 
+/* OpenEXR's rule for a chunk: stored size equal to the raw size means raw bytes, any
+   smaller size means compressed. The ZIP encoder of the OpenEXR C core (3.1.5 in
+   Debian 12; fixed upstream in 2026 by OpenEXR pull request #2307) falls back to raw
+   bytes only when the zlib stream is strictly longer than the raw data; a stream of exactly the raw length is
+   stored as it is, and every reader then takes the zlib bytes for pixels. This wraps
+   the library's compressor and applies the rule itself, so any library version writes
+   files that read back. The original compressor travels in encoding_user_data, which
+   the library leaves to the caller. */
+typedef exr_result_t (*compress_fn_t)(exr_encode_pipeline_t *);
+
+typedef struct compress_guard {
+    compress_fn_t inner;
+} compress_guard;
+
+static exr_result_t compress_or_store_raw(exr_encode_pipeline_t *enc)
+{
+    const compress_guard *g = enc->encoding_user_data;
+    exr_result_t rc = g->inner(enc);
+    if (rc != EXR_ERR_SUCCESS || enc->compressed_bytes < enc->packed_bytes)
+        return rc;
+    /* Not smaller: store the raw bytes. The compressed buffer is at least as large as
+       what the compressor wrote, so it holds packed_bytes; check rather than trust. */
+    if (enc->compressed_buffer == NULL || enc->packed_buffer == NULL ||
+        enc->compressed_alloc_size < enc->packed_bytes)
+        return EXR_ERR_OUT_OF_MEMORY;
+    if (enc->compressed_buffer != enc->packed_buffer)
+        memcpy(enc->compressed_buffer, enc->packed_buffer, enc->packed_bytes);
+    enc->compressed_bytes = enc->packed_bytes;
+    return EXR_ERR_SUCCESS;
+}
+
 static btdf_status write_part_pixels(exr_context_t ctx, int part, const btdf_slice *sl,
                                      int channels, const float *planes, const exr_err *err,
                                      char *msg, size_t msglen)
@@ -220,6 +251,7 @@ static btdf_status write_part_pixels(exr_context_t ctx, int part, const btdf_sli
     size_t npix = sl->nrows * sl->ncols;
     int32_t width = (int32_t)sl->ncols, height = (int32_t)sl->nrows;
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
+    compress_guard guard = {NULL};
     int started = 0;
     for (int32_t y = 0; y < height && rc == EXR_ERR_SUCCESS; y += lpc) {
         exr_chunk_info_t ci;
@@ -246,8 +278,14 @@ static btdf_status write_part_pixels(exr_context_t ctx, int part, const btdf_sli
             c->encode_from_ptr =
                 (const uint8_t *)(planes + (size_t)ch * npix + (size_t)y * sl->ncols);
         }
-        if (rc == EXR_ERR_SUCCESS && !started)
+        if (rc == EXR_ERR_SUCCESS && !started) {
             rc = exr_encoding_choose_default_routines(ctx, part, &enc);
+            if (rc == EXR_ERR_SUCCESS && enc.compress_fn != NULL) {
+                guard.inner = enc.compress_fn;
+                enc.encoding_user_data = &guard;
+                enc.compress_fn = compress_or_store_raw;
+            }
+        }
         started = 1;
         if (rc == EXR_ERR_SUCCESS)
             rc = exr_encoding_run(ctx, part, &enc);

@@ -1,1528 +1,23 @@
 /* SPDX-License-Identifier: MIT */
-/* scatfun.c: builds, writes, reads and evaluates SCATFUN v1 Fourier-series BSDF files from Eq. 25. */
+/* scatfun.c: the SCATFUN v1 byte layout: writes, reads, checks and describes .bsdf files (the series are built in src/fourier.c). */
 #include <errno.h>
 #include <float.h>
 #include <limits.h>
 #include <math.h>
-#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
 #include "btdf.h"
 #include "btdf_scatfun.h"
-#include "table_impl.h"
+#include "scatfun_impl.h"
 #include "tmpfile.h"
-#include "model_impl.h"
 
 /* Layout constants of SCATFUN v1 (docs/scatfun.md). */
 #define HEADER_BYTES 64u
 #define FLAG_BSDF 1u
-/* Rec. 709 luminance weights used by pbrt-v3 and layerlab, and pbrt's inverse for G. */
-#define LUM_R 0.212671
-#define LUM_G 0.715160
-#define LUM_B 0.072169
-#define INV_GY 1.39829
-#define INV_GB 0.100913
-#define INV_GR 0.297375
-/* The floor MODEL.md section 6 puts under the transmittance in relative errors. */
-#define T_FLOOR 0.01
-/* A series longer than this cannot come out of a build; readers refuse more so a
-   scratch buffer sized by mMax stays small. */
-#define MAX_ORDER_READ (1u << 20)
-/* Coefficient budget of a build (floats): 2^27 floats is a 512 MiB file. */
-#define MAX_COEFFS_BUILD ((size_t)1 << 27)
-
-struct btdf_scatfun {
-    uint32_t n, ncoeffs, mmax, channels;
-    float eta, alpha[2];
-    float *nodes;      /* n */
-    double *xd;        /* the nodes as doubles, for the spline weights */
-    float *cdf;        /* n * n */
-    uint32_t *offsets; /* 2 * n * n: offset, length */
-    float *coeffs;     /* ncoeffs */
-    char *meta;        /* metadata bytes read from a file, or NULL */
-    size_t metalen;
-    int built;         /* 1 when made by btdf_scatfun_build: params and tolerance valid */
-    btdf_params params;
-    double tolerance, seconds_build;
-    int sides;         /* btdf_side mask of the blocks present */
-};
-
-static btdf_status say(char *msg, size_t msglen, btdf_status st, const char *fmt, ...)
-{
-    if (msg && msglen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, msglen, fmt, ap);
-        va_end(ap);
-    }
-    return st;
-}
-
-/* ------------------------------------------------------------------------- */
-/* Catmull-Rom weights as pbrt-v3 computes them                              */
-/* ------------------------------------------------------------------------- */
-
-/* Weights of nodes off..off+3 for the spline through x[] at v. 0 when v lies outside
-   [x[0], x[n-1]] or the interval found has zero width (a malformed node list). */
-static int cr_weights(const double *x, size_t n, double v, long *off, double w[4])
-{
-    if (n < 2 || !(v >= x[0] && v <= x[n - 1]))
-        return 0;
-    size_t lo = 0, hi = n - 1; /* largest i with x[i] <= v */
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo + 1) / 2;
-        if (x[mid] <= v)
-            lo = mid;
-        else
-            hi = mid - 1;
-    }
-    size_t i = lo > n - 2 ? n - 2 : lo;
-    double x0 = x[i], x1 = x[i + 1];
-    if (!(x1 > x0))
-        return 0; /* zero-width interval: t would divide by 0 */
-    double t = (v - x0) / (x1 - x0), t2 = t * t, t3 = t2 * t;
-    *off = (long)i - 1;
-    w[0] = 0.0;
-    w[1] = 2.0 * t3 - 3.0 * t2 + 1.0;
-    w[2] = -2.0 * t3 + 3.0 * t2;
-    w[3] = 0.0;
-    /* x1 - x[i-1] >= x1 - x0 > 0 and x[i+2] - x0 >= x1 - x0 > 0 for sorted nodes. */
-    if (i > 0) {
-        double w0 = (t3 - 2.0 * t2 + t) * (x1 - x0) / (x1 - x[i - 1]);
-        w[0] = -w0;
-        w[2] += w0;
-    } else {
-        double w0 = t3 - 2.0 * t2 + t;
-        w[1] -= w0;
-        w[2] += w0;
-    }
-    if (i + 2 < n) {
-        double w3 = (t3 - t2) * (x1 - x0) / (x[i + 2] - x0);
-        w[1] -= w3;
-        w[3] = w3;
-    } else {
-        double w3 = t3 - t2;
-        w[1] -= w3;
-        w[2] += w3;
-    }
-    return 1;
-}
-
-/* Exact integral of the Catmull-Rom spline through v[] over [x[0], x[n-1]], running
-   sums into cdf (cdf[0] = 0), the rule of the format's cdf rows. */
-static void spline_cdf(const double *x, const double *v, size_t n, double *cdf)
-{
-    cdf[0] = 0.0;
-    for (size_t k = 1; k < n; k++) {
-        double w = x[k] - x[k - 1];
-        double f0 = v[k - 1], f1 = v[k], d0, d1;
-        /* Denominators span at least the interval itself, so they are > 0 when w > 0;
-           a zero-width interval adds nothing. */
-        if (!(w > 0.0)) {
-            cdf[k] = cdf[k - 1];
-            continue;
-        }
-        d0 = k >= 2 ? w * (f1 - v[k - 2]) / (x[k] - x[k - 2]) : f1 - f0;
-        d1 = k + 1 < n ? w * (v[k + 1] - f0) / (x[k + 1] - x[k - 1]) : f1 - f0;
-        cdf[k] = cdf[k - 1] + w * (0.5 * (f0 + f1) + (d0 - d1) / 12.0);
-    }
-}
-
-/* ------------------------------------------------------------------------- */
-/* FFT-based cosine transform on the DCT-I grid phi_j = j pi / N              */
-/* ------------------------------------------------------------------------- */
-
-typedef struct fftbuf {
-    size_t cap;      /* complex capacity */
-    double *re, *im; /* work */
-    size_t twl;      /* length the twiddles are for */
-    double *twr, *twi;
-} fftbuf;
-
-static int fft_reserve(fftbuf *b, size_t L)
-{
-    if (b->cap >= L)
-        return 0;
-    double *re = realloc(b->re, L * sizeof *re);
-    if (!re)
-        return -1;
-    b->re = re;
-    double *im = realloc(b->im, L * sizeof *im);
-    if (!im)
-        return -1;
-    b->im = im;
-    double *tr = realloc(b->twr, L / 2 * sizeof *tr);
-    if (!tr)
-        return -1;
-    b->twr = tr;
-    double *ti = realloc(b->twi, L / 2 * sizeof *ti);
-    if (!ti)
-        return -1;
-    b->twi = ti;
-    b->cap = L;
-    b->twl = 0;
-    return 0;
-}
-
-static void fft_free(fftbuf *b)
-{
-    free(b->re);
-    free(b->im);
-    free(b->twr);
-    free(b->twi);
-    memset(b, 0, sizeof *b);
-}
-
-/* In-place forward complex FFT of length L (a power of two) on b->re, b->im. */
-static void fft(fftbuf *b, size_t L)
-{
-    if (b->twl != L) {
-        for (size_t k = 0; k < L / 2; k++) {
-            double a = -2.0 * M_PI * (double)k / (double)L;
-            b->twr[k] = cos(a);
-            b->twi[k] = sin(a);
-        }
-        b->twl = L;
-    }
-    double *re = b->re, *im = b->im;
-    for (size_t i = 1, j = 0; i < L; i++) {
-        size_t bit = L >> 1;
-        for (; j & bit; bit >>= 1)
-            j ^= bit;
-        j ^= bit;
-        if (i < j) {
-            double t = re[i]; re[i] = re[j]; re[j] = t;
-            t = im[i]; im[i] = im[j]; im[j] = t;
-        }
-    }
-    for (size_t len = 2; len <= L; len <<= 1) {
-        size_t half = len / 2, step = L / len;
-        for (size_t s = 0; s < L; s += len) {
-            for (size_t k = 0; k < half; k++) {
-                double wr = b->twr[k * step], wi = b->twi[k * step];
-                size_t p = s + k, q = p + half;
-                double xr = re[q] * wr - im[q] * wi, xi = re[q] * wi + im[q] * wr;
-                re[q] = re[p] - xr;
-                im[q] = im[p] - xi;
-                re[p] += xr;
-                im[p] += xi;
-            }
-        }
-    }
-}
-
-/* Coefficients a[0..N] with g(phi) = sum a_k cos(k phi) from samples x[0..N] on the
-   DCT-I grid (trapezoid rule, exact for degree < N; higher degrees alias). */
-static int dct_forward(fftbuf *b, const double *x, size_t N, double *a)
-{
-    size_t L = 2 * N;
-    if (fft_reserve(b, L))
-        return -1;
-    for (size_t j = 0; j <= N; j++) {
-        b->re[j] = x[j];
-        b->im[j] = 0.0;
-    }
-    for (size_t j = 1; j < N; j++) {
-        b->re[L - j] = x[j];
-        b->im[L - j] = 0.0;
-    }
-    fft(b, L);
-    a[0] = b->re[0] / (double)L;
-    for (size_t k = 1; k < N; k++)
-        a[k] = b->re[k] / (double)N;
-    a[N] = b->re[N] / (double)L;
-    return 0;
-}
-
-/* Series values y[0..N] at phi_j = j pi / N from coefficients a[0..m-1], m <= N + 1. */
-static int dct_inverse(fftbuf *b, const double *a, size_t m, size_t N, double *y)
-{
-    size_t L = 2 * N;
-    if (fft_reserve(b, L))
-        return -1;
-    for (size_t k = 0; k < L; k++)
-        b->re[k] = b->im[k] = 0.0;
-    for (size_t k = 0; k < m && k <= N; k++) {
-        if (k == 0 || k == N) {
-            b->re[k] = a[k];
-        } else {
-            b->re[k] = 0.5 * a[k];
-            b->re[L - k] = 0.5 * a[k];
-        }
-    }
-    fft(b, L);
-    for (size_t j = 0; j <= N; j++)
-        y[j] = b->re[j];
-    return 0;
-}
-
-/* sum_{k < m} a_k cos(k phi) from cos phi by the Chebyshev recurrence. */
-static double series_at_f(const float *a, size_t m, double c)
-{
-    if (m == 0)
-        return 0.0;
-    double sum = a[0], ck_1 = 1.0, ck = c;
-    for (size_t k = 1; k < m; k++) {
-        sum += (double)a[k] * ck;
-        double nx = 2.0 * c * ck - ck_1;
-        ck_1 = ck;
-        ck = nx;
-    }
-    return sum;
-}
-
-/* ------------------------------------------------------------------------- */
-/* Building: per-pair series and adaptive elevation nodes                    */
-/* ------------------------------------------------------------------------- */
-
-enum { SIDE_ENTER = 0, SIDE_LEAVE = 1 };
-
-typedef struct pair {
-    double *a; /* nst * m coefficients, channel-major (Y, R, B) */
-    uint32_t m;
-    int done;  /* computed in an earlier pass with the same budget */
-} pair;
-
-typedef struct build_ctx {
-    const btdf_params *p;
-    int nc;        /* model channels */
-    int nst;       /* stored channels: 1, or 3 (Y, R, B) */
-    double ior[2][3]; /* per side and channel */
-    size_t nmin, nmax; /* phi sample counts (powers of two) */
-    double budget; /* current target for e_L1 */
-    /* half nodes P[0..K-1] ascending, P[K-1] = 1, and the full node list */
-    size_t K;
-    double *P;
-    double *full; /* 2K + 2 */
-    double (*Tn)[2][4]; /* Tn[r][side][stored channel]: max(T, floor) at node r */
-    int want[2];
-    pair *pairs[2]; /* [side][r * K + c] */
-    /* checks */
-    size_t nint;    /* intervals = K: [0, P0], [P0, P1], ... */
-    double *mid;    /* nint midpoints */
-    double (*Tm)[2][4]; /* norms at midpoints */
-    double *errc[2];    /* [side][r * nint + j]: column check errors (already normalised) */
-    double *errr[2];    /* [side][j]: row check errors (normalised, mu-integrated) */
-    double *gapr[2];    /* [side][j * K + col]: row check gap at one column */
-    unsigned char *okc[2], *okr[2]; /* errc / gapr entries carried from the last pass */
-    pair *pcol[2];      /* [side][r * K + j]: series at (P[r], mid[j]), a future pair */
-    pair *prow[2];      /* [side][j * K + col]: series at (mid[j], P[col]) */
-    unsigned char *hasTn, *hasTm; /* norms carried from the last pass */
-    int oom, capped;    /* flags raised by workers */
-    pthread_mutex_t lock;
-} build_ctx;
-
-typedef struct build_ws {
-    fftbuf fb;
-    double *x, *x2;  /* samples per stored channel: nst * (nmax + 1) */
-    double *a, *a2;  /* coefficients per stored channel */
-    double *y;       /* inverse values */
-    double *ia;      /* interpolated coefficients, nst * (nmax + 1) */
-    double *rho;     /* per model channel scratch */
-    double *cosg, *sing; /* cos and sin of j pi / nmax, j = 0..nmax */
-} build_ws;
-
-static void *build_ws_new(void *vctx)
-{
-    build_ctx *c = vctx;
-    build_ws *w = calloc(1, sizeof *w);
-    if (!w)
-        return NULL;
-    size_t len = (size_t)c->nst * (c->nmax + 1);
-    w->x = malloc(len * sizeof(double));
-    w->x2 = malloc(len * sizeof(double));
-    w->a = malloc(len * sizeof(double));
-    w->a2 = malloc(len * sizeof(double));
-    w->ia = malloc(len * sizeof(double));
-    w->y = malloc((c->nmax + 1) * sizeof(double));
-    w->rho = malloc(4 * sizeof(double));
-    w->cosg = malloc((c->nmax + 1) * sizeof(double));
-    w->sing = malloc((c->nmax + 1) * sizeof(double));
-    if (w->cosg && w->sing) {
-        for (size_t j = 0; j <= c->nmax; j++) {
-            w->cosg[j] = cos(M_PI * (double)j / (double)c->nmax);
-            w->sing[j] = sin(M_PI * (double)j / (double)c->nmax);
-        }
-        /* exact forward, side and backward planes */
-        w->cosg[0] = 1.0, w->sing[0] = 0.0;
-        w->cosg[c->nmax] = -1.0, w->sing[c->nmax] = 0.0;
-        w->cosg[c->nmax / 2] = 0.0, w->sing[c->nmax / 2] = 1.0;
-    }
-    if (!w->cosg || !w->sing || !w->x || !w->x2 || !w->a || !w->a2 || !w->ia || !w->y || !w->rho ||
-        fft_reserve(&w->fb, 2 * c->nmax)) {
-        fft_free(&w->fb);
-        free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
-        free(w->rho);
-        free(w->cosg);
-        free(w->sing);
-        free(w);
-        return NULL;
-    }
-    return w;
-}
-
-static void build_ws_free(void *vw)
-{
-    build_ws *w = vw;
-    if (!w)
-        return;
-    fft_free(&w->fb);
-    free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
-    free(w->rho);
-    free(w->cosg);
-    free(w->sing);
-    free(w);
-}
-
-/* Stored channel values of g = rho * mu_f at one azimuth, from the model channels. */
-static void stored_values(const build_ctx *c, int side, const rho_in *ri, const rho_out *ro,
-                          double mu_f, double cph, double sph, double *out)
-{
-    double v[3];
-    for (int k = 0; k < c->nc; k++)
-        v[k] = rho_kernel(c->ior[side][k], c->p->smoothness, ri, ro, cph, sph) * mu_f;
-    if (c->nst == 1) {
-        out[0] = v[0];
-    } else {
-        out[0] = LUM_R * v[0] + LUM_G * v[1] + LUM_B * v[2];
-        out[1] = v[0];
-        out[2] = v[2];
-    }
-}
-
-/* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
-   j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones). */
-static void sample_grid(const build_ctx *c, const build_ws *w, int side, double mu_s,
-                        double mu_f, size_t N, size_t stride, size_t step, size_t phase,
-                        double *x)
-{
-    rho_in ri;
-    rho_out ro;
-    /* |mu| <= 1 holds for every node and midpoint, so the sqrt arguments are >= 0;
-       fmax guards rounding. */
-    rho_in_init(&ri, sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), mu_s, c->p->smoothness, c->p->k0);
-    rho_out_init(&ro, sqrt(fmax(0.0, 1.0 - mu_f * mu_f)), -mu_f, c->p->smoothness, c->p->k0);
-    double v[3];
-    size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
-    for (size_t j = phase; j <= N; j += step) {
-        /* phi_d = j pi / N; phi = pi - phi_d, so cos phi = -cos phi_d. */
-        stored_values(c, side, &ri, &ro, mu_f, -w->cosg[j * g], w->sing[j * g], v);
-        for (int k = 0; k < c->nst; k++)
-            x[k * stride + j] = v[k];
-    }
-}
-
-/* Converged coefficients of g at (mu_s, mu_f): doubles the azimuth grid until the
-   coefficients move by less than eps_alias (in L1 over the circle, per channel
-   relative to norm[ch]). Leaves w->a with stride nmax + 1 holding N + 1 coefficients
-   per stored channel and w->x the samples on that grid; returns N (0 on failure). */
-static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double mu_f,
-                       const double *norm, double eps_alias)
-{
-    size_t S = c->nmax + 1;
-    size_t N = c->nmin;
-    sample_grid(c, w, side, mu_s, mu_f, N, S, 1, 0, w->x);
-    for (int k = 0; k < c->nst; k++)
-        if (dct_forward(&w->fb, w->x + k * S, N, w->a + k * S))
-            return 0;
-    int zero = 1;
-    for (int k = 0; k < c->nst && zero; k++)
-        for (size_t j = 0; j <= N && zero; j++)
-            zero = w->x[k * S + j] == 0.0;
-    for (;;) {
-        if (2 * N > c->nmax) {
-            pthread_mutex_lock(&c->lock);
-            c->capped = 1;
-            pthread_mutex_unlock(&c->lock);
-            return N;
-        }
-        size_t N2 = 2 * N;
-        /* spread the old samples onto the finer grid from the top down */
-        for (int k = 0; k < c->nst; k++)
-            for (size_t j = N + 1; j-- > 0;)
-                w->x[k * S + 2 * j] = w->x[k * S + j];
-        sample_grid(c, w, side, mu_s, mu_f, N2, S, 2, 1, w->x);
-        if (zero) {
-            /* no transmission on either grid (an unreachable pair): all zero */
-            for (int k = 0; k < c->nst && zero; k++)
-                for (size_t j = 1; j <= N2 && zero; j += 2)
-                    zero = w->x[k * S + j] == 0.0;
-            if (zero) {
-                for (size_t q = 0; q < (size_t)c->nst * S; q++)
-                    w->a[q] = 0.0;
-                return N2;
-            }
-        }
-        double worst = 0.0;
-        for (int k = 0; k < c->nst; k++) {
-            if (dct_forward(&w->fb, w->x + k * S, N2, w->a2 + k * S))
-                return 0;
-            /* |integral over the circle of sum d_k cos k phi| <= 2 pi sum |d_k| */
-            double d = 0.0;
-            for (size_t q = 0; q <= N; q++)
-                d += fabs(w->a2[k * S + q] - w->a[k * S + q]);
-            for (size_t q = N + 1; q <= N2; q++)
-                d += fabs(w->a2[k * S + q]);
-            d = 2.0 * M_PI * d / norm[k]; /* norm >= T_FLOOR > 0 */
-            if (d > worst)
-                worst = d;
-            memcpy(w->a + k * S, w->a2 + k * S, (N2 + 1) * sizeof(double));
-        }
-        N = N2;
-        if (worst <= eps_alias)
-            return N;
-    }
-}
-
-/* Shortest length m whose dropped tail costs at most eps_trunc (L1 over the circle,
-   relative to norm[ch]) in every stored channel. */
-static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t N,
-                           const double *norm, double eps_trunc)
-{
-    size_t m = 0;
-    for (int k = 0; k < c->nst; k++) {
-        const double *ak = a + k * S;
-        /* integral over the circle of |sum_{q>=m} a_q cos q phi| <= 4 sum |a_q| for
-           q >= 1, and 2 pi |a_0| */
-        double tail = 0.0;
-        size_t q = N + 1;
-        while (q > 0) {
-            /* norm >= T_FLOOR > 0 */
-            double add = (q - 1 == 0 ? 2.0 * M_PI : 4.0) * fabs(ak[q - 1]) / norm[k];
-            if (tail + add > eps_trunc)
-                break;
-            tail += add;
-            q--;
-        }
-        if (q > m)
-            m = q;
-    }
-    return m;
-}
-
-static double share_alias(const build_ctx *c) { return 0.05 * c->budget; }
-static double share_trunc(const build_ctx *c) { return 0.10 * c->budget; }
-static double share_col(const build_ctx *c) { return 0.35 * c->budget; }
-static double share_row(const build_ctx *c) { return 0.35 * c->budget; }
-
-/* Keeps the truncated series of the converged coefficients in w->a as pair pr. */
-static int keep_series(build_ctx *c, build_ws *w, size_t N, const double *norm, pair *pr)
-{
-    size_t S = c->nmax + 1;
-    size_t m = truncate_len(c, w->a, S, N, norm, share_trunc(c));
-    free(pr->a);
-    pr->a = NULL;
-    pr->m = (uint32_t)m;
-    pr->done = 0;
-    if (m) {
-        pr->a = malloc((size_t)c->nst * m * sizeof(double));
-        if (!pr->a) {
-            pr->m = 0;
-            return -1;
-        }
-        for (int k = 0; k < c->nst; k++)
-            memcpy(pr->a + (size_t)k * m, w->a + k * S, m * sizeof(double));
-    }
-    pr->done = 1;
-    return 0;
-}
-
-/* One slow row of one side: the series of every pair (r, c). */
-static void job_row(void *vctx, void *vws, size_t idx)
-{
-    build_ctx *c = vctx;
-    build_ws *w = vws;
-    int side = (int)(idx / c->K);
-    size_t r = idx % c->K;
-    if (!c->want[side])
-        return;
-    const double *norm = c->Tn[r][side];
-    for (size_t col = 0; col < c->K; col++) {
-        pair *pr = &c->pairs[side][r * c->K + col];
-        if (pr->done)
-            continue;
-        size_t N = converge(c, w, side, c->P[r], c->P[col], norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, pr))
-            goto oom;
-    }
-    return;
-oom:
-    pthread_mutex_lock(&c->lock);
-    c->oom = 1;
-    pthread_mutex_unlock(&c->lock);
-}
-
-/* Full node index -> half index r, or -1 for the two zero nodes and the other side. */
-static long half_index(const build_ctx *c, long idx, int side)
-{
-    long K = (long)c->K;
-    if (side == SIDE_ENTER)
-        return idx >= K + 2 ? idx - (K + 2) : -1;
-    return idx >= 0 && idx <= K - 1 ? K - 1 - idx : -1;
-}
-
-/* Adds weight * series of pair (r, col) into ia (stride S per channel). */
-static void add_pair(const build_ctx *c, int side, size_t r, size_t col, double wgt,
-                     double *ia, size_t S, size_t *mlen)
-{
-    const pair *pr = &c->pairs[side][r * c->K + col];
-    for (int k = 0; k < c->nst; k++)
-        for (size_t q = 0; q < pr->m; q++)
-            ia[k * S + q] += wgt * pr->a[(size_t)k * pr->m + q];
-    if (pr->m > *mlen)
-        *mlen = pr->m;
-}
-
-/* L1 over the circle, per stored channel relative to norm, of (interpolated series
-   in w->ia, length mlen) minus the truth sampled in w->x on the grid of N. */
-static double l1_gap(build_ctx *c, build_ws *w, size_t N, size_t mlen, const double *norm)
-{
-    size_t S = c->nmax + 1;
-    double worst = 0.0;
-    if (mlen > N + 1)
-        mlen = N + 1; /* higher harmonics alias on this grid; the truth converged on it */
-    for (int k = 0; k < c->nst; k++) {
-        if (dct_inverse(&w->fb, w->ia + k * S, mlen, N, w->y))
-            return HUGE_VAL;
-        double sum = 0.0;
-        for (size_t j = 0; j <= N; j++) {
-            double d = fabs(w->y[j] - w->x[k * S + j]);
-            sum += (j == 0 || j == N) ? 0.5 * d : d;
-        }
-        /* trapezoid over [0, pi] doubled for the circle; N >= 64, norm >= T_FLOOR */
-        double l1 = 2.0 * sum * M_PI / (double)N / norm[k];
-        if (l1 > worst)
-            worst = l1;
-    }
-    return worst;
-}
-
-/* Column check for one (side, slow row r): truth at every interval midpoint of the
-   fast axis against the spline across the columns. */
-static void job_colcheck(void *vctx, void *vws, size_t idx)
-{
-    build_ctx *c = vctx;
-    build_ws *w = vws;
-    int side = (int)(idx / c->K);
-    size_t r = idx % c->K;
-    if (!c->want[side])
-        return;
-    size_t S = c->nmax + 1;
-    size_t nfull = 2 * c->K + 2;
-    const double *norm = c->Tn[r][side];
-    for (size_t j = 0; j < c->nint; j++) {
-        if (c->okc[side][r * c->nint + j])
-            continue; /* same row, same stencil, same budget as last pass */
-        double x = c->mid[j];
-        size_t N = converge(c, w, side, c->P[r], x, norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, &c->pcol[side][r * c->K + j]))
-            goto oom;
-        long off;
-        double wt[4];
-        for (size_t q = 0; q < (size_t)c->nst * S; q++)
-            w->ia[q] = 0.0;
-        size_t mlen = 0;
-        /* the positive-half stencil; the negative half is its mirror image */
-        if (cr_weights(c->full, nfull, x, &off, wt)) {
-            for (int b = 0; b < 4; b++) {
-                long h = half_index(c, off + b, SIDE_ENTER);
-                if (h >= 0 && wt[b] != 0.0)
-                    add_pair(c, side, r, (size_t)h, wt[b], w->ia, S, &mlen);
-            }
-        }
-        c->errc[side][r * c->nint + j] = l1_gap(c, w, N, mlen, norm);
-    }
-    return;
-oom:
-    pthread_mutex_lock(&c->lock);
-    c->oom = 1;
-    pthread_mutex_unlock(&c->lock);
-}
-
-/* Row check for one (side, interval j): truth at the slow midpoint against the
-   spline across the rows, integrated over the fast nodes (trapezoid weights). */
-static void job_rowcheck(void *vctx, void *vws, size_t idx)
-{
-    build_ctx *c = vctx;
-    build_ws *w = vws;
-    int side = (int)(idx / c->nint);
-    size_t j = idx % c->nint;
-    if (!c->want[side])
-        return;
-    size_t S = c->nmax + 1;
-    size_t nfull = 2 * c->K + 2;
-    double x = c->mid[j];
-    const double *norm = c->Tm[j][side];
-    long off;
-    double wt[4];
-    int ok = cr_weights(c->full, nfull, x, &off, wt);
-    double total = 0.0;
-    for (size_t col = 0; col < c->K; col++) {
-        double lo = col == 0 ? 0.0 : c->P[col - 1];
-        double hi = col + 1 < c->K ? c->P[col + 1] : c->P[col];
-        double *gap = &c->gapr[side][j * c->K + col];
-        if (c->okr[side][j * c->K + col]) {
-            total += 0.5 * (hi - lo) * *gap;
-            continue;
-        }
-        size_t N = converge(c, w, side, x, c->P[col], norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, &c->prow[side][j * c->K + col]))
-            goto oom;
-        for (size_t q = 0; q < (size_t)c->nst * S; q++)
-            w->ia[q] = 0.0;
-        size_t mlen = 0;
-        if (ok) {
-            for (int a = 0; a < 4; a++) {
-                long h = half_index(c, off + a, SIDE_ENTER);
-                if (h >= 0 && wt[a] != 0.0)
-                    add_pair(c, side, (size_t)h, col, wt[a], w->ia, S, &mlen);
-            }
-        }
-        *gap = l1_gap(c, w, N, mlen, norm);
-        total += 0.5 * (hi - lo) * *gap;
-    }
-    c->errr[side][j] = total;
-    return;
-oom:
-    pthread_mutex_lock(&c->lock);
-    c->oom = 1;
-    pthread_mutex_unlock(&c->lock);
-}
-
-/* max(T, floor) per stored channel for slow cosine mu on one side. */
-static void norms_at(const build_ctx *c, int side, double mu, double *out)
-{
-    btdf_params q = *c->p;
-    for (int k = 0; k < c->nc; k++)
-        q.ior[k] = c->ior[side][k];
-    double T[3] = {0, 0, 0};
-    /* acos of a value in [0, 1] is in [0, pi/2], the accepted range */
-    if (btdf_transmittance(&q, acos(fmin(1.0, fmax(0.0, mu))), T) != BTDF_OK)
-        T[0] = T[1] = T[2] = 0.0;
-    if (c->nst == 1) {
-        out[0] = fmax(T[0], T_FLOOR);
-    } else {
-        out[0] = fmax(LUM_R * T[0] + LUM_G * T[1] + LUM_B * T[2], T_FLOOR);
-        out[1] = fmax(T[0], T_FLOOR);
-        out[2] = fmax(T[2], T_FLOOR);
-    }
-}
-
-static void free_pair_array(pair **pp, size_t count)
-{
-    if (!*pp)
-        return;
-    for (size_t i = 0; i < count; i++)
-        free((*pp)[i].a);
-    free(*pp);
-    *pp = NULL;
-}
-
-/* Frees everything that belongs to one node set (sizes follow c->K). */
-static void free_state(build_ctx *c)
-{
-    size_t KK = c->K * c->K;
-    for (int s = 0; s < 2; s++) {
-        free_pair_array(&c->pairs[s], KK);
-        free_pair_array(&c->pcol[s], KK);
-        free_pair_array(&c->prow[s], KK);
-        free(c->errc[s]);
-        free(c->errr[s]);
-        free(c->gapr[s]);
-        free(c->okc[s]);
-        free(c->okr[s]);
-        c->errc[s] = c->errr[s] = c->gapr[s] = NULL;
-        c->okc[s] = c->okr[s] = NULL;
-    }
-    free(c->Tn);
-    free(c->Tm);
-    free(c->hasTn);
-    free(c->hasTm);
-    free(c->mid);
-    c->Tn = c->Tm = NULL;
-    c->hasTn = c->hasTm = NULL;
-    c->mid = NULL;
-}
-
-/* Allocates what is missing for the current node set; 0 on success. */
-static int ensure_state(build_ctx *c)
-{
-    size_t K = c->K, KK = K * K;
-    for (int s = 0; s < 2; s++) {
-        if (!c->pairs[s])
-            c->pairs[s] = calloc(KK, sizeof(pair));
-        if (!c->pcol[s])
-            c->pcol[s] = calloc(KK, sizeof(pair));
-        if (!c->prow[s])
-            c->prow[s] = calloc(KK, sizeof(pair));
-        if (!c->errc[s])
-            c->errc[s] = calloc(KK, sizeof(double));
-        if (!c->gapr[s])
-            c->gapr[s] = calloc(KK, sizeof(double));
-        if (!c->okc[s])
-            c->okc[s] = calloc(KK, 1);
-        if (!c->okr[s])
-            c->okr[s] = calloc(KK, 1);
-        free(c->errr[s]);
-        c->errr[s] = calloc(K, sizeof(double));
-        if (!c->pairs[s] || !c->pcol[s] || !c->prow[s] || !c->errc[s] || !c->gapr[s] ||
-            !c->okc[s] || !c->okr[s] || !c->errr[s])
-            return -1;
-    }
-    if (!c->Tn)
-        c->Tn = calloc(K, sizeof *c->Tn);
-    if (!c->Tm)
-        c->Tm = calloc(K, sizeof *c->Tm);
-    if (!c->hasTn)
-        c->hasTn = calloc(K, 1);
-    if (!c->hasTm)
-        c->hasTm = calloc(K, 1);
-    free(c->mid);
-    c->mid = malloc(K * sizeof *c->mid);
-    return c->Tn && c->Tm && c->hasTn && c->hasTm && c->mid ? 0 : -1;
-}
-
-static int set_nodes(build_ctx *c, const double *P, size_t K);
-
-/* Moves everything still valid to the refined node set Q (KQ nodes, a superset of
-   c->P). ins[j] = 1 when old interval j got the node mid[j], whose check series
-   become pairs; 2 when it got another node. Series at unchanged nodes, checks
-   whose stencil is unchanged and norms are kept, so a pass only computes what the
-   new nodes touch. Returns 0 on success; on failure the old state is intact. */
-static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned char *ins)
-{
-    size_t K = c->K, KK2 = KQ * KQ;
-    size_t *map = malloc(K * sizeof *map), *qn = malloc(K * sizeof *qn);
-    unsigned char *same = malloc(K), *sten = malloc(K);
-    pair *np[2][3] = {{NULL}};
-    double *ne[2] = {NULL}, *ng[2] = {NULL};
-    unsigned char *noc[2] = {NULL}, *nor[2] = {NULL};
-    double(*tn)[2][4] = calloc(KQ, sizeof *tn), (*tm)[2][4] = calloc(KQ, sizeof *tm);
-    unsigned char *htn = calloc(KQ, 1), *htm = calloc(KQ, 1);
-    int ok = map && qn && same && sten && tn && tm && htn && htm;
-    for (int s = 0; s < 2 && ok; s++) {
-        for (int k = 0; k < 3; k++)
-            ok &= (np[s][k] = calloc(KK2, sizeof(pair))) != NULL;
-        ok &= (ne[s] = calloc(KK2, sizeof(double))) != NULL;
-        ok &= (ng[s] = calloc(KK2, sizeof(double))) != NULL;
-        ok &= (noc[s] = calloc(KK2, 1)) != NULL;
-        ok &= (nor[s] = calloc(KK2, 1)) != NULL;
-    }
-    if (!ok) {
-        for (int s = 0; s < 2; s++) {
-            for (int k = 0; k < 3; k++)
-                free(np[s][k]);
-            free(ne[s]);
-            free(ng[s]);
-            free(noc[s]);
-            free(nor[s]);
-        }
-        free(map); free(qn); free(same); free(sten); free(tn); free(tm); free(htn); free(htm);
-        return -1;
-    }
-    for (size_t r = 0, q = 0; r < K; r++) {
-        while (Q[q] != c->P[r])
-            q++; /* every old node is in the new list, in order */
-        map[r] = q;
-    }
-    for (size_t j = 0; j < K; j++) {
-        same[j] = !ins[j];
-        qn[j] = ins[j] ? map[j] - 1 : (size_t)-1; /* the new node sits just before P[j] */
-    }
-    for (size_t j = 0; j < K; j++)
-        sten[j] = same[j] && (j == 0 || same[j - 1]) && (j + 1 >= K || same[j + 1]);
-    for (int s = 0; s < 2; s++) {
-        pair *pp = c->pairs[s], *pc = c->pcol[s], *pr = c->prow[s];
-        for (size_t r = 0; r < K; r++)
-            for (size_t col = 0; col < K; col++) {
-                np[s][0][map[r] * KQ + map[col]] = pp[r * K + col];
-                pp[r * K + col].a = NULL;
-            }
-        for (size_t j = 0; j < K; j++) {
-            for (size_t r = 0; r < K; r++) {
-                pair *src = &pc[r * K + j];
-                if (ins[j] == 1)
-                    np[s][0][map[r] * KQ + qn[j]] = *src; /* (P[r], new node) */
-                else if (same[j])
-                    np[s][1][map[r] * KQ + map[j]] = *src;
-                else
-                    free(src->a);
-                src->a = NULL;
-            }
-            for (size_t col = 0; col < K; col++) {
-                pair *src = &pr[j * K + col];
-                if (ins[j] == 1)
-                    np[s][0][qn[j] * KQ + map[col]] = *src; /* (new node, P[col]) */
-                else if (same[j])
-                    np[s][2][map[j] * KQ + map[col]] = *src;
-                else
-                    free(src->a);
-                src->a = NULL;
-            }
-            if (sten[j]) {
-                for (size_t r = 0; r < K; r++) {
-                    ne[s][map[r] * KQ + map[j]] = c->errc[s][r * K + j];
-                    noc[s][map[r] * KQ + map[j]] = 1;
-                }
-                for (size_t col = 0; col < K; col++) {
-                    ng[s][map[j] * KQ + map[col]] = c->gapr[s][j * K + col];
-                    nor[s][map[j] * KQ + map[col]] = 1;
-                }
-            }
-        }
-    }
-    for (size_t r = 0; r < K; r++) {
-        memcpy(tn[map[r]], c->Tn[r], sizeof tn[0]);
-        htn[map[r]] = c->hasTn[r];
-    }
-    for (size_t j = 0; j < K; j++) {
-        if (ins[j] == 1) {
-            memcpy(tn[qn[j]], c->Tm[j], sizeof tn[0]);
-            htn[qn[j]] = c->hasTm[j];
-        }
-        if (same[j]) {
-            memcpy(tm[map[j]], c->Tm[j], sizeof tm[0]);
-            htm[map[j]] = c->hasTm[j];
-        }
-    }
-    free_state(c); /* the moved series were detached above */
-    for (int s = 0; s < 2; s++) {
-        c->pairs[s] = np[s][0];
-        c->pcol[s] = np[s][1];
-        c->prow[s] = np[s][2];
-        c->errc[s] = ne[s];
-        c->gapr[s] = ng[s];
-        c->okc[s] = noc[s];
-        c->okr[s] = nor[s];
-    }
-    c->Tn = tn;
-    c->Tm = tm;
-    c->hasTn = htn;
-    c->hasTm = htm;
-    free(map); free(qn); free(same); free(sten);
-    return set_nodes(c, Q, KQ); /* sets K first, so sizes stay consistent on failure */
-}
-
-static double to_float_node(double v) { return (double)(float)v; }
-
-static int set_nodes(build_ctx *c, const double *P, size_t K)
-{
-    c->K = K; /* first: the per-node-set arrays already have this size */
-    double *np = realloc(c->P, K * sizeof *np);
-    if (!np)
-        return -1;
-    c->P = np;
-    memcpy(c->P, P, K * sizeof *P);
-    double *full = realloc(c->full, (2 * K + 2) * sizeof *full);
-    if (!full)
-        return -1;
-    c->full = full;
-    for (size_t r = 0; r < K; r++) {
-        full[K + 2 + r] = P[r];
-        full[K - 1 - r] = -P[r];
-    }
-    full[K] = full[K + 1] = 0.0;
-    return 0;
-}
-
-static int nodes_d(btdf_scatfun *f);
-
-/* Fills a btdf_scatfun from the pairs of the current pass. */
-static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t msglen)
-{
-    size_t K = c->K, n = 2 * K + 2;
-    size_t total = 0, mmax = 0;
-    for (int s = 0; s < 2; s++) {
-        if (!c->want[s])
-            continue;
-        for (size_t i = 0; i < K * K; i++) {
-            total += (size_t)c->pairs[s][i].m * (size_t)c->nst;
-            if (c->pairs[s][i].m > mmax)
-                mmax = c->pairs[s][i].m;
-        }
-    }
-    if (total > UINT32_MAX)
-        return say(msg, msglen, BTDF_EOVERFLOW, "%zu coefficients exceed the format's 32-bit count",
-                   total);
-    btdf_scatfun *f = calloc(1, sizeof *f);
-    if (!f)
-        return BTDF_ENOMEM;
-    f->n = (uint32_t)n;
-    f->ncoeffs = (uint32_t)total;
-    f->mmax = (uint32_t)mmax;
-    f->channels = (uint32_t)c->nst;
-    f->eta = (float)(c->nc == 3 ? c->p->ior[1] : c->p->ior[0]);
-    /* Beckmann alpha of Eq. 25's facet distribution: RMS slope 2/s (MODEL.md 2);
-       s >= BTDF_S_MIN > 0 was checked */
-    f->alpha[0] = f->alpha[1] = (float)(2.0 / c->p->smoothness);
-    f->nodes = malloc(n * sizeof(float));
-    f->cdf = malloc(n * n * sizeof(float));
-    f->offsets = malloc(2 * n * n * sizeof(uint32_t));
-    f->coeffs = malloc((total ? total : 1) * sizeof(float));
-    double *v = malloc(n * sizeof(double)), *cd = malloc(n * sizeof(double));
-    if (!f->nodes || !f->cdf || !f->offsets || !f->coeffs || !v || !cd) {
-        free(v);
-        free(cd);
-        btdf_scatfun_free(f);
-        return BTDF_ENOMEM;
-    }
-    for (size_t i = 0; i < n; i++)
-        f->nodes[i] = (float)c->full[i];
-    if (nodes_d(f)) {
-        free(v);
-        free(cd);
-        btdf_scatfun_free(f);
-        return BTDF_ENOMEM;
-    }
-    size_t pos = 0;
-    for (size_t i = 0; i < n; i++) {
-        for (size_t o = 0; o < n; o++) {
-            const pair *pr = NULL;
-            for (int s = 0; s < 2 && !pr; s++) {
-                if (!c->want[s])
-                    continue;
-                long hi = half_index(c, (long)i, s), ho = half_index(c, (long)o, s);
-                if (hi >= 0 && ho >= 0)
-                    pr = &c->pairs[s][(size_t)hi * K + (size_t)ho];
-            }
-            size_t m = pr ? pr->m : 0;
-            f->offsets[2 * (i * n + o)] = (uint32_t)pos;
-            f->offsets[2 * (i * n + o) + 1] = (uint32_t)m;
-            for (size_t q = 0; q < m * (size_t)c->nst; q++)
-                f->coeffs[pos + q] = (float)pr->a[q];
-            pos += m * (size_t)c->nst;
-        }
-    }
-    /* cdf rows from the stored (float) a_0 of Y, as a reader recomputes them */
-    for (size_t i = 0; i < n; i++) {
-        for (size_t o = 0; o < n; o++) {
-            uint32_t m = f->offsets[2 * (i * n + o) + 1];
-            v[o] = m ? (double)f->coeffs[f->offsets[2 * (i * n + o)]] : 0.0;
-            cd[o] = (double)f->nodes[o];
-        }
-        double *row = malloc(n * sizeof(double));
-        if (!row) {
-            free(v);
-            free(cd);
-            btdf_scatfun_free(f);
-            return BTDF_ENOMEM;
-        }
-        spline_cdf(cd, v, n, row);
-        for (size_t o = 0; o < n; o++)
-            f->cdf[i * n + o] = (float)row[o];
-        free(row);
-    }
-    free(v);
-    free(cd);
-    f->built = 1;
-    f->params = *c->p;
-    f->sides = (c->want[0] ? BTDF_SIDE_ENTER : 0) | (c->want[1] ? BTDF_SIDE_LEAVE : 0);
-    *out = f;
-    return BTDF_OK;
-}
-
-/* Where interval j of the half nodes is checked and split: the midpoint in angle.
-   The last interval [P[K-2], 1] is cut at a fraction endr of its angle instead: rho
-   moves with sin ti, which is sqrt(1 - mu) near mu = 1, so the spline error there
-   only falls like the interval's angle and bisection would need many passes. */
-static double split_point(const double *P, size_t K, size_t j, double endr)
-{
-    double lo = j == 0 ? 0.0 : P[j - 1];
-    /* acos of values in [0, 1] */
-    double alo = acos(fmin(1.0, lo)), ahi = acos(fmin(1.0, P[j]));
-    if (j == K - 1 && K > 1)
-        return cos(alo * endr);
-    return cos(0.5 * (alo + ahi));
-}
-
-static size_t pow2_at_least(double v)
-{
-    size_t p = 1;
-    while ((double)p < v && p < ((size_t)1 << 30))
-        p <<= 1;
-    return p;
-}
-
-/* Error estimate of one side with a fixed sample (for the build's own loop). */
-static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads)
-{
-    btdf_report r;
-    memset(&r, 0, sizeof r);
-    /* as dense as the default report (narrow lobes need it), on other points */
-    if (btdf_scatfun_report(f, p, side, 24, 8192, 0x5ca7f00dULL, threads, &r) != BTDF_OK)
-        return HUGE_VAL;
-    free(r.per_ti);
-    return r.e_l1_max;
-}
-
-BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
-                                        btdf_side side, char *msg, size_t msglen)
-{
-    btdf_status st = btdf_params_check(p, msg, msglen);
-    if (st != BTDF_OK)
-        return st;
-    if (!(tolerance >= 1e-6 && tolerance <= 0.5))
-        return say(msg, msglen, BTDF_EINVAL, "tolerance %g: must lie in [1e-6, 0.5]", tolerance);
-    if (side < BTDF_SIDE_ENTER || side > BTDF_SIDE_BOTH)
-        return say(msg, msglen, BTDF_EINVAL, "side %d: must be 1 (enter), 2 (leave) or 3 (both)",
-                   (int)side);
-    return BTDF_OK;
-}
-
-BTDF_API btdf_status btdf_scatfun_build_progress(const btdf_params *p, double tolerance,
-                                                 btdf_side side, int threads,
-                                                 btdf_progress_fn progress, void *user,
-                                                 btdf_scatfun **out, char *msg, size_t msglen)
-{
-    if (!out)
-        return say(msg, msglen, BTDF_EINVAL, "output pointer missing");
-    btdf_status st = btdf_scatfun_check(p, tolerance, side, msg, msglen);
-    if (st != BTDF_OK)
-        return st;
-    double t0 = btdf_now();
-    build_ctx c;
-    memset(&c, 0, sizeof c);
-    if (pthread_mutex_init(&c.lock, NULL) != 0)
-        return say(msg, msglen, BTDF_ENOMEM, "cannot create a mutex");
-    c.p = p;
-    c.nc = p->channels;
-    c.nst = p->channels == 3 ? 3 : 1;
-    for (int k = 0; k < c.nc; k++) {
-        c.ior[SIDE_ENTER][k] = p->ior[k];
-        c.ior[SIDE_LEAVE][k] = 1.0 / p->ior[k]; /* ior >= BTDF_IOR_MIN > 0 (checked) */
-    }
-    c.want[SIDE_ENTER] = (side & BTDF_SIDE_ENTER) != 0;
-    c.want[SIDE_LEAVE] = (side & BTDF_SIDE_LEAVE) != 0;
-    /* The lobe spans about 2/s rad of facet tilt; a first azimuth grid of about 8 s
-       points puts several samples across it, so no lobe falls between samples. */
-    c.nmin = pow2_at_least(fmax(64.0, 8.0 * p->smoothness));
-    if (c.nmin > BTDF_SCATFUN_MAX_PHI / 2)
-        c.nmin = BTDF_SCATFUN_MAX_PHI / 2;
-    c.nmax = BTDF_SCATFUN_MAX_PHI;
-    c.budget = tolerance;
-
-    btdf_scatfun *best = NULL;
-    double best_err = HUGE_VAL;
-    /* initial half nodes: mu = sin of equal angle steps, denser towards grazing */
-    size_t K0 = 8;
-    double *P = malloc(BTDF_SCATFUN_MAX_HALF_NODES * 2 * sizeof *P);
-    if (!P) {
-        st = BTDF_ENOMEM;
-        goto done;
-    }
-    for (size_t j = 0; j < K0; j++)
-        P[j] = to_float_node(sin((double)(j + 1) * M_PI / (2.0 * (double)K0)));
-    P[K0 - 1] = 1.0;
-    size_t K = K0;
-    int tighten = 0;
-    st = BTDF_OK;
-    for (int pass = 0;; pass++) {
-        if (set_nodes(&c, P, K)) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        c.nint = K;
-        if (ensure_state(&c)) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        for (size_t j = 0; j < K; j++) {
-            /* checked where a split would put the node, so check series become pairs */
-            c.mid[j] = to_float_node(split_point(P, K, j, 0.5));
-            for (int s = 0; s < 2; s++) {
-                if (!c.want[s])
-                    continue;
-                if (!c.hasTn[j])
-                    norms_at(&c, s, P[j], c.Tn[j][s]);
-                if (!c.hasTm[j])
-                    norms_at(&c, s, c.mid[j], c.Tm[j][s]);
-            }
-            c.hasTn[j] = c.hasTm[j] = 1;
-        }
-        if (btdf_parallel_for_ws(threads, 2 * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        size_t total = 0;
-        for (int s = 0; s < 2; s++)
-            for (size_t i = 0; c.want[s] && i < K * K; i++)
-                total += c.pairs[s][i].m * (size_t)c.nst;
-        if (total > MAX_COEFFS_BUILD) {
-            st = BTDF_EBUDGET;
-            break;
-        }
-        if (btdf_parallel_for_ws(threads, 2 * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
-            btdf_parallel_for_ws(threads, 2 * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
-            c.oom) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        /* mark intervals to split */
-        unsigned char *split = calloc(K, 1);
-        if (!split) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        size_t nsplit = 0;
-        double endr = 1.0;
-        int rowbad = 0; /* once a row fails, also split the ones close to failing */
-        for (int s = 0; s < 2; s++)
-            for (size_t j = 0; c.want[s] && j < K; j++)
-                rowbad |= c.errr[s][j] > share_row(&c);
-        for (int s = 0; s < 2; s++) {
-            if (!c.want[s])
-                continue;
-            for (size_t r = 0; r < K; r++) {
-                double sum = 0.0;
-                for (size_t j = 0; j < K; j++) {
-                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
-                    sum += wid * c.errc[s][r * K + j];
-                }
-                if (sum <= share_col(&c))
-                    continue;
-                for (size_t j = 0; j < K; j++) {
-                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
-                    if (wid * c.errc[s][r * K + j] > share_col(&c) / (double)K)
-                        split[j] = 1;
-                }
-            }
-            for (size_t j = 0; j < K; j++)
-                if (c.errr[s][j] > share_row(&c) && j == K - 1)
-                    /* error ~ the last interval's angle: aim at half the share */
-                    endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / c.errr[s][j]));
-            for (size_t j = 0; j < K; j++)
-                if (c.errr[s][j] > (rowbad ? 0.7 : 1.0) * share_row(&c))
-                    split[j] = 1;
-        }
-        for (size_t j = 0; j < K; j++)
-            nsplit += split[j];
-        if (progress) /* K nodes checked, nsplit intervals to split */
-            progress(user, tighten ? "series (tighter)" : "elevation nodes", K, nsplit);
-        if (nsplit == 0) {
-            /* The node checks pass: measure the file itself and tighten if needed. */
-            btdf_scatfun *f = NULL;
-            st = assemble(&c, &f, msg, msglen);
-            if (st != BTDF_OK) {
-                free(split);
-                goto done;
-            }
-            double e = 0.0;
-            for (int s = 0; s < 2; s++)
-                if (c.want[s])
-                    e = fmax(e, quick_l1(f, p, s == 0 ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE,
-                                         threads));
-            if (e < best_err) {
-                btdf_scatfun_free(best);
-                best = f;
-                best_err = e;
-            } else {
-                btdf_scatfun_free(f);
-            }
-            if (e <= tolerance && !c.capped) {
-                free(split);
-                st = BTDF_OK;
-                break;
-            }
-            if (++tighten > 6 || c.capped) {
-                free(split);
-                st = BTDF_EBUDGET;
-                break;
-            }
-            c.budget *= 0.5;
-            free(split);
-            free_state(&c); /* every series and check depends on the budget */
-            continue; /* same nodes, tighter series and checks */
-        }
-        if (K + nsplit > BTDF_SCATFUN_MAX_HALF_NODES) {
-            free(split);
-            st = BTDF_EBUDGET;
-            break;
-        }
-        /* insert split points (rounded to float, strictly inside their interval) */
-        double *Q = P + BTDF_SCATFUN_MAX_HALF_NODES;
-        unsigned char *ins = calloc(K, 1);
-        if (!ins) {
-            free(split);
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        size_t KQ = 0;
-        if (endr > 0.5)
-            endr = 0.5;
-        for (size_t j = 0; j < K; j++) {
-            double lo = j == 0 ? 0.0 : P[j - 1];
-            double m = to_float_node(split_point(P, K, j, endr));
-            if (split[j] && m > lo && m < P[j]) {
-                Q[KQ++] = m;
-                ins[j] = m == c.mid[j] ? 1 : 2;
-            }
-            Q[KQ++] = P[j];
-        }
-        free(split);
-        if (KQ == K) {
-            free(ins);
-            st = BTDF_EBUDGET; /* float spacing reached: nothing left to split */
-            break;
-        }
-        if (carry_over(&c, Q, KQ, ins)) {
-            free(ins);
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        free(ins);
-        memcpy(P, Q, KQ * sizeof *P);
-        K = KQ;
-        (void)pass;
-    }
-    if (st == BTDF_EBUDGET || !best) {
-        /* keep the finest file reached as the answer, measured honestly */
-        btdf_scatfun *f = NULL;
-        if (c.pairs[0] || c.pairs[1]) {
-            btdf_status a = assemble(&c, &f, msg, msglen);
-            if (a == BTDF_OK) {
-                double e = 0.0;
-                for (int s = 0; s < 2; s++)
-                    if (c.want[s])
-                        e = fmax(e, quick_l1(f, p, s == 0 ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE,
-                                             threads));
-                if (e < best_err || !best) {
-                    btdf_scatfun_free(best);
-                    best = f;
-                    best_err = e;
-                } else {
-                    btdf_scatfun_free(f);
-                }
-            }
-        }
-        if (!best) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        if (best_err <= tolerance)
-            st = BTDF_OK;
-    }
-done:
-    free_state(&c);
-    free(c.P);
-    free(c.full);
-    free(P);
-    pthread_mutex_destroy(&c.lock);
-    if (st != BTDF_OK && st != BTDF_EBUDGET) {
-        btdf_scatfun_free(best);
-        return st;
-    }
-    best->tolerance = tolerance;
-    best->seconds_build = btdf_now() - t0;
-    *out = best;
-    if (st == BTDF_EBUDGET)
-        return say(msg, msglen, BTDF_EBUDGET,
-                   "budget reached (%u nodes, %u coefficients, mMax %u) with estimated e_L1 "
-                   "%.3g > tolerance %g",
-                   best->n, best->ncoeffs, best->mmax, best_err, tolerance);
-    return BTDF_OK;
-}
-
-/* ------------------------------------------------------------------------- */
-/* Evaluation as pbrt-v3 does it                                             */
-/* ------------------------------------------------------------------------- */
-
-/* Fills f->xd from f->nodes; 0 on success. */
-static int nodes_d(btdf_scatfun *f)
-{
-    f->xd = malloc(f->n * sizeof *f->xd);
-    if (!f->xd)
-        return -1;
-    for (uint32_t i = 0; i < f->n; i++)
-        f->xd[i] = (double)f->nodes[i];
-    return 0;
-}
-
-/* Stored-channel series values (Y, R, B or one channel) at (mu_s, mu_f, cos phi_d). */
-static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, double mu_f,
-                       double cphi, double *val)
-{
-    long os, of;
-    double ws[4], wf[4];
-    for (uint32_t k = 0; k < f->channels; k++)
-        val[k] = 0.0;
-    if (!cr_weights(x, f->n, mu_s, &os, ws) || !cr_weights(x, f->n, mu_f, &of, wf))
-        return 0;
-    for (int a = 0; a < 4; a++) {
-        long i = os + a;
-        if (ws[a] == 0.0 || i < 0 || i >= (long)f->n)
-            continue;
-        for (int b = 0; b < 4; b++) {
-            long o = of + b;
-            if (wf[b] == 0.0 || o < 0 || o >= (long)f->n)
-                continue;
-            size_t e = 2 * ((size_t)i * f->n + (size_t)o);
-            uint32_t off = f->offsets[e], m = f->offsets[e + 1];
-            double w = ws[a] * wf[b];
-            for (uint32_t k = 0; k < f->channels; k++)
-                val[k] += w * series_at_f(f->coeffs + off + (size_t)k * m, m, cphi);
-        }
-    }
-    return 1;
-}
-
-/* Stored channels -> output channels with pbrt-v3's clamps and G rebuilt from Y. */
-static void stored_to_out(uint32_t channels, const double *val, double *out)
-{
-    if (channels == 1) {
-        out[0] = fmax(0.0, val[0]);
-        return;
-    }
-    double Y = fmax(0.0, val[0]), R = fmax(0.0, val[1]), B = fmax(0.0, val[2]);
-    out[0] = R;
-    out[1] = fmax(0.0, INV_GY * Y - INV_GB * B - INV_GR * R);
-    out[2] = B;
-}
-
-BTDF_API btdf_status btdf_scatfun_eval_mu(const btdf_scatfun *f, double mu_s, double mu_f,
-                                          double cos_phi_d, int radiance, double *out)
-{
-    if (!f || !out || !isfinite(mu_s) || !isfinite(mu_f) || !isfinite(cos_phi_d))
-        return BTDF_EINVAL;
-    for (uint32_t k = 0; k < f->channels; k++)
-        out[k] = 0.0;
-    double val[3];
-    double cphi = fmin(1.0, fmax(-1.0, cos_phi_d));
-    int ok = eval_stored(f, f->xd, mu_s, mu_f, cphi, val);
-    /* f = value / |mu_f|: at mu_f = 0 (grazing) the stored value is 0 too; return 0. */
-    if (!ok || !(fabs(mu_f) > 0.0))
-        return BTDF_OK;
-    stored_to_out(f->channels, val, out);
-    double scale = 1.0 / fabs(mu_f);
-    if (radiance && mu_s * mu_f > 0.0) {
-        /* pbrt-v3's radiance factor e^2, e = 1/eta for light from below; the reader
-           guarantees eta is finite and > 0 */
-        double e = mu_f > 0.0 ? 1.0 / (double)f->eta : (double)f->eta;
-        scale *= e * e;
-    }
-    for (uint32_t k = 0; k < f->channels; k++) {
-        double v = out[k] * scale;
-        out[k] = isfinite(v) ? v : 0.0;
-    }
-    return BTDF_OK;
-}
-
-/* (mu_s, mu_f, radiance) of a side and mode for angles in MODEL.md's frame. */
-static void side_mus(btdf_side side, btdf_scatfun_mode mode, double ti, double to,
-                     double *mu_s, double *mu_f, int *radiance)
-{
-    double ci = cos(ti), co = -cos(to); /* both >= 0 in range */
-    if (side == BTDF_SIDE_ENTER) {
-        if (mode == BTDF_SCATFUN_DIRECT)
-            *mu_s = ci, *mu_f = co, *radiance = 0;
-        else
-            *mu_s = -co, *mu_f = -ci, *radiance = 1;
-    } else {
-        if (mode == BTDF_SCATFUN_DIRECT)
-            *mu_s = -ci, *mu_f = -co, *radiance = 0;
-        else
-            *mu_s = co, *mu_f = ci, *radiance = 1;
-    }
-}
-
-BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side side,
-                                            btdf_scatfun_mode mode, double ti, double to,
-                                            double phi, double *out)
-{
-    if (!f || !out)
-        return BTDF_EINVAL;
-    if (side != BTDF_SIDE_ENTER && side != BTDF_SIDE_LEAVE)
-        return BTDF_EINVAL;
-    if (mode != BTDF_SCATFUN_DIRECT && mode != BTDF_SCATFUN_ADJOINT)
-        return BTDF_EINVAL;
-    if (!(ti >= 0.0 && ti <= M_PI / 2) || !(to >= M_PI / 2 && to <= M_PI) || !isfinite(phi))
-        return BTDF_EDOMAIN;
-    double ms, mf;
-    int rad;
-    side_mus(side, mode, ti, to, &ms, &mf, &rad);
-    /* phi = pi is forward, phi_d = 0: cos phi_d = -cos phi */
-    return btdf_scatfun_eval_mu(f, ms, mf, -cos(phi), rad, out);
-}
-
-BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double to,
-                                       double phi, double *out)
-{
-    return btdf_scatfun_eval_side(f, BTDF_SIDE_ENTER, BTDF_SCATFUN_DIRECT, ti, to, phi, out);
-}
-
-/* ------------------------------------------------------------------------- */
-/* Error report (MODEL.md section 6)                                         */
-/* ------------------------------------------------------------------------- */
-
-typedef struct mis_obj {
-    const btdf_scatfun *f;
-    btdf_side side;
-} mis_obj;
-
-static void mis_eval(const void *obj, double ti, const double *q, double *out)
-{
-    const mis_obj *m = obj;
-    double phi = atan2(q[5], q[4]);
-    if (btdf_scatfun_eval_side(m->f, m->side, BTDF_SCATFUN_DIRECT, ti, q[7], phi, out) !=
-        BTDF_OK)
-        for (uint32_t k = 0; k < m->f->channels; k++)
-            out[k] = 0.0;
-}
-
-btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
-                               size_t angles, size_t ppa, uint64_t seed, int threads,
-                               btdf_report *r);
-btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
-                               size_t angles, size_t ppa, uint64_t seed, int threads,
-                               btdf_report *r)
-{
-    btdf_params q = *p;
-    if (side == BTDF_SIDE_LEAVE)
-        for (int k = 0; k < q.channels; k++)
-            q.ior[k] = 1.0 / p->ior[k];
-    mis_obj m = {f, side};
-    return btdf_estimate_fn(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, mis_eval, &m, r);
-}
-
-BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_params *p,
-                                         btdf_side side, size_t test_angles,
-                                         size_t points_per_angle, uint64_t seed,
-                                         int threads, btdf_report *r)
-{
-    if (!f || !r || (side != BTDF_SIDE_ENTER && side != BTDF_SIDE_LEAVE))
-        return BTDF_EINVAL;
-    if (btdf_params_check(p, NULL, 0) != BTDF_OK)
-        return BTDF_EINVAL;
-    if ((p->channels == 3) != (f->channels == 3))
-        return BTDF_EINVAL; /* the truth must have the file's channels */
-    if (test_angles == 0)
-        test_angles = 24;
-    if (points_per_angle == 0)
-        points_per_angle = 8192;
-    if (test_angles > 100000 || points_per_angle > ((size_t)1 << 26))
-        return BTDF_EINVAL;
-    /* The estimator tables use (src/estimate.c): facet-space samples that follow the
-       lobe combined with uniform (cos to, phi) samples by the balance heuristic. An
-       earlier sampler of this file, uniform in (mu_f, phi) only, missed the error
-       near grazing incidence (1.9e-3 at ti = 86.7 deg for s = 3, where a
-       1500 x 1500 brute-force integral agrees with this estimator). */
-    btdf_status st = scatfun_report_mis(f, p, side, test_angles, points_per_angle, seed,
-                                        threads, r);
-    if (st != BTDF_OK)
-        return st;
-    r->slices = f->n;
-    r->samples = f->ncoeffs;
-    r->seconds_build = f->built ? f->seconds_build : 0.0;
-    r->tolerance = f->built ? f->tolerance : 0.0;
-    r->metric = BTDF_METRIC_L1;
-    r->peak_bytes = (size_t)f->ncoeffs * 4 + (size_t)f->n * f->n * 12;
-    r->met = r->tolerance > 0.0 ? r->e_l1_max <= r->tolerance : 0;
-    return BTDF_OK;
-}
 
 /* ------------------------------------------------------------------------- */
 /* Bytes: writing and reading                                                */
@@ -1638,17 +133,17 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
                                          size_t msglen)
 {
     if (!f || !buf || !len)
-        return say(msg, msglen, BTDF_EINVAL, "file, buffer or length pointer missing");
+        return scatfun_say(msg, msglen, BTDF_EINVAL, "file, buffer or length pointer missing");
     char mb[512];
     const char *m;
     size_t ml;
     meta_bytes(f, metadata_json, mb, sizeof mb, &m, &ml);
     uint64_t size;
     if (ml > UINT32_MAX || declared_size(f->n, f->ncoeffs, ml, &size) || size > SIZE_MAX)
-        return say(msg, msglen, BTDF_EOVERFLOW, "file would not fit the format's sizes");
+        return scatfun_say(msg, msglen, BTDF_EOVERFLOW, "file would not fit the format's sizes");
     unsigned char *b = malloc((size_t)size);
     if (!b)
-        return say(msg, msglen, BTDF_ENOMEM, "cannot allocate %llu bytes",
+        return scatfun_say(msg, msglen, BTDF_ENOMEM, "cannot allocate %llu bytes",
                    (unsigned long long)size);
     memset(b, 0, HEADER_BYTES);
     memcpy(b, "SCATFUN", 7);
@@ -1681,7 +176,7 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
     pos += ml;
     if (pos != size) { /* cannot happen: the layout above is the size formula */
         free(b);
-        return say(msg, msglen, BTDF_EFORMAT, "internal size mismatch %zu != %llu", pos,
+        return scatfun_say(msg, msglen, BTDF_EFORMAT, "internal size mismatch %zu != %llu", pos,
                    (unsigned long long)size);
     }
     *buf = b;
@@ -1691,14 +186,14 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
 
 /* btdf_scatfun_write is the registry's (formats/registry.c): one atomic write path. */
 
-#define FMT_FAIL(...) say(msg, msglen, BTDF_EFORMAT, __VA_ARGS__)
+#define FMT_FAIL(...) scatfun_say(msg, msglen, BTDF_EFORMAT, __VA_ARGS__)
 
 BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_scatfun **out,
                                            char *msg, size_t msglen)
 {
     const unsigned char *b = vbuf;
     if (!out || (!b && len))
-        return say(msg, msglen, BTDF_EINVAL, "buffer or output pointer missing");
+        return scatfun_say(msg, msglen, BTDF_EINVAL, "buffer or output pointer missing");
     if (len < HEADER_BYTES)
         return FMT_FAIL("file of %zu bytes is shorter than the 64-byte SCATFUN header", len);
     if (memcmp(b, "SCATFUN", 7) != 0)
@@ -1737,7 +232,7 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
     }
     btdf_scatfun *f = calloc(1, sizeof *f);
     if (!f)
-        return say(msg, msglen, BTDF_ENOMEM, "out of memory");
+        return scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
     size_t nn = (size_t)n * n; /* fits: 12 n^2 <= len */
     f->n = n;
     f->ncoeffs = nco;
@@ -1754,7 +249,7 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
     f->meta = malloc((size_t)nmeta + 1);
     btdf_status st = BTDF_OK;
     if (!f->nodes || !f->cdf || !f->offsets || !f->coeffs || !f->meta) {
-        st = say(msg, msglen, BTDF_ENOMEM, "out of memory");
+        st = scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
         goto fail;
     }
     size_t pos = HEADER_BYTES;
@@ -1771,9 +266,12 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
         }
         f->nodes[i] = v;
     }
-    if (f->nodes[0] != -1.0f || f->nodes[n - 1] != 1.0f) {
-        st = FMT_FAIL("nodes must span -1 to +1, found %g to %g", (double)f->nodes[0],
-                      (double)f->nodes[n - 1]);
+    /* Files reach the poles: +-1 (older files, layerlab) or within 1e-6 of them (the
+       largest float below 1, which this library writes: see POLE_NODE). */
+    if (!(f->nodes[0] >= -1.0f && f->nodes[0] <= -0.999999f && f->nodes[n - 1] <= 1.0f &&
+          f->nodes[n - 1] >= 0.999999f)) {
+        st = FMT_FAIL("nodes must span -1 to +1 (within 1e-6), found %g to %g",
+                      (double)f->nodes[0], (double)f->nodes[n - 1]);
         goto fail;
     }
     for (size_t i = 0; i < nn; i++, pos += 4) {
@@ -1809,8 +307,8 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
         }
         f->coeffs[i] = v;
     }
-    if (nodes_d(f)) {
-        st = say(msg, msglen, BTDF_ENOMEM, "out of memory");
+    if (scatfun_nodes_d(f)) {
+        st = scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
         goto fail;
     }
     memcpy(f->meta, b + pos, nmeta);
@@ -1836,26 +334,26 @@ BTDF_API btdf_status btdf_scatfun_read(const char *path, btdf_scatfun **out, cha
                                        size_t msglen)
 {
     if (!path || !out)
-        return say(msg, msglen, BTDF_EINVAL, "path or output pointer missing");
+        return scatfun_say(msg, msglen, BTDF_EINVAL, "path or output pointer missing");
     FILE *fp = fopen(path, "rb");
     if (!fp)
-        return say(msg, msglen, BTDF_EIO, "%s: %s", path, strerror(errno));
+        return scatfun_say(msg, msglen, BTDF_EIO, "%s: %s", path, strerror(errno));
     size_t cap = 1 << 16, len = 0;
     unsigned char *b = malloc(cap);
     btdf_status st = BTDF_OK;
     if (!b) {
         fclose(fp);
-        return say(msg, msglen, BTDF_ENOMEM, "out of memory");
+        return scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
     }
     for (;;) {
         if (len == cap) {
             if (cap > SIZE_MAX / 2) {
-                st = say(msg, msglen, BTDF_EOVERFLOW, "%s: file too large", path);
+                st = scatfun_say(msg, msglen, BTDF_EOVERFLOW, "%s: file too large", path);
                 break;
             }
             unsigned char *nb = realloc(b, cap * 2);
             if (!nb) {
-                st = say(msg, msglen, BTDF_ENOMEM, "%s: out of memory", path);
+                st = scatfun_say(msg, msglen, BTDF_ENOMEM, "%s: out of memory", path);
                 break;
             }
             b = nb;
@@ -1865,7 +363,7 @@ BTDF_API btdf_status btdf_scatfun_read(const char *path, btdf_scatfun **out, cha
         len += got;
         if (got == 0) {
             if (ferror(fp))
-                st = say(msg, msglen, BTDF_EIO, "%s: read failed", path);
+                st = scatfun_say(msg, msglen, BTDF_EIO, "%s: read failed", path);
             break;
         }
     }
@@ -1925,6 +423,12 @@ BTDF_API btdf_status btdf_scatfun_info(const btdf_scatfun *f, FILE *out)
         ok &= fprintf(out, "series length     min %u, median %u, max %u\n", len[0], len[nz / 2],
                       len[nz - 1]) > 0;
     ok &= fprintf(out, "file size         %zu bytes\n", btdf_scatfun_file_size(f, NULL)) > 0;
+    double peak = btdf_scatfun_a0_peak(f);
+    ok &= fprintf(out, "a0 peak           %.6g: %s\n", peak,
+                  peak <= BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0
+                      ? "safe for pbrt-v3 in single precision"
+                      : "pbrt-v3 in single precision can loop forever sampling it; build "
+                        "pbrt-v3 with PBRT_FLOAT_AS_DOUBLE") > 0;
     if (f->built)
         ok &= fprintf(out, "build             tolerance %g, %.3f s\n", f->tolerance,
                       f->seconds_build) > 0;
@@ -1952,6 +456,34 @@ BTDF_API btdf_status btdf_scatfun_pair(const btdf_scatfun *f, size_t i, size_t o
     *offset = f->offsets[e];
     *length = f->offsets[e + 1];
     return BTDF_OK;
+}
+
+BTDF_API int btdf_scatfun_sides(const btdf_scatfun *f)
+{
+    if (!f)
+        return 0;
+    int sides = 0;
+    for (uint32_t i = 0; i < f->n; i++)
+        for (uint32_t o = 0; o < f->n; o++) {
+            if (f->offsets[2 * ((size_t)i * f->n + o) + 1] == 0)
+                continue;
+            if (f->nodes[i] > 0.0f && f->nodes[o] > 0.0f)
+                sides |= BTDF_SIDE_ENTER;
+            else if (f->nodes[i] < 0.0f && f->nodes[o] < 0.0f)
+                sides |= BTDF_SIDE_LEAVE;
+        }
+    return sides;
+}
+
+BTDF_API double btdf_scatfun_a0_peak(const btdf_scatfun *f)
+{
+    double peak = 0.0;
+    if (!f)
+        return 0.0;
+    for (size_t e = 0; e < (size_t)f->n * f->n; e++)
+        if (f->offsets[2 * e + 1] > 0)
+            peak = fmax(peak, fabs((double)f->coeffs[f->offsets[2 * e]]));
+    return peak;
 }
 
 BTDF_API void btdf_scatfun_free(btdf_scatfun *f)

@@ -31,6 +31,10 @@ BTDF_API void btdf_table_opts_default(btdf_table_opts *o)
 }
 
 #define DEFAULT_MAX_SAMPLES ((size_t)8000000)
+/* Which limit stopped refinement (bits of budget_hit). */
+#define BUDGET_SAMPLES 1 /* the table's node budget */
+#define BUDGET_MEMORY 2  /* the memory cap */
+#define BUDGET_SLICE 4   /* one slice reached its share, an eighth of the smaller of the two */
 #define DEFAULT_MAX_BYTES ((size_t)256 << 20)
 
 static btdf_status bad(char *msg, size_t msglen, const char *fmt, double v)
@@ -73,6 +77,10 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
     } else if (o->kind == BTDF_TABLE_FACET || o->kind == BTDF_TABLE_FACET_RECIPROCAL) {
         if (!(o->tolerance >= 1e-7 && o->tolerance <= 1.0))
             return bad(msg, msglen, "tolerance %g: must lie in [1e-7, 1]", o->tolerance);
+        if (o->estimate != BTDF_ESTIMATE_FULL && o->estimate != BTDF_ESTIMATE_FAST &&
+            o->estimate != BTDF_ESTIMATE_NONE)
+            return bad(msg, msglen, "estimate mode %g: must be full (0), fast (1) or none (2)",
+                       (double)o->estimate);
     } else {
         return bad(msg, msglen, "table kind %g: must be facet (0) or grid (1)",
                    (double)o->kind);
@@ -425,8 +433,10 @@ static void build_slice(const slice_target *tg, slice_out *o)
                 mc[j] = 1;
                 add_c++;
             }
-        if (add_r + add_c == 0 || (nr + add_r) * (nc + add_c) > tg->max_nodes) {
-            o->budget_hit = 1; /* cannot refine further within the budget */
+        if (add_r + add_c == 0)
+            break; /* intervals at 1e-12 rad: finer nodes cannot be told apart */
+        if ((nr + add_r) * (nc + add_c) > tg->max_nodes) {
+            o->budget_hit = BUDGET_SLICE; /* cannot refine further within the budget */
             break;
         }
         /* The new grid reuses every value already computed: old nodes, and the
@@ -588,6 +598,13 @@ static size_t facet_node_cap(const btdf_table_opts *o)
     return cap < max_samples ? cap : max_samples;
 }
 
+/* Which limit facet_node_cap is: the memory cap or the sample budget. */
+static int facet_limit(const btdf_table_opts *o)
+{
+    size_t max_samples = o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES;
+    return facet_node_cap(o) < max_samples ? BUDGET_MEMORY : BUDGET_SAMPLES;
+}
+
 /* Incidence slices of the first pass, at most 5 degrees apart. */
 static size_t facet_first_slices(const btdf_table_opts *o)
 {
@@ -630,15 +647,14 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         for (size_t k = 0; k < ns; k++)
             free_slice_out(&sl[k]);
         j.max_nodes = node_cap / n0;
-        *budget_hit = 1;
+        *budget_hit |= facet_limit(o);
         btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
     }
     nodes = 0;
     for (size_t k = 0; k < ns; k++) {
         if (sl[k].nomem)
             st = BTDF_ENOMEM;
-        if (sl[k].budget_hit)
-            *budget_hit = 1;
+        *budget_hit |= sl[k].budget_hit;
         nodes += sl[k].s.nr * sl[k].s.nc;
     }
     /* Incidence refinement in rounds: test the midpoint of every open interval. */
@@ -647,7 +663,9 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         st = BTDF_ENOMEM;
     for (size_t k = 0; k + 1 < ns && open; k++)
         open[k] = 1;
-    double min_gap = 1e-4; /* rad: finer incidence steps buy nothing a renderer can see */
+    /* rad: finer incidence steps buy nothing a renderer can see, except where V(ti)
+       falls from 1 to 0 before grazing, over a width of order 1/s rad */
+    double min_gap = fmin(1e-4, 1e-2 / o->params.smoothness);
     while (st == BTDF_OK) {
         size_t nt = 0;
         for (size_t k = 0; k + 1 < ns; k++)
@@ -660,10 +678,14 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         double *mt = malloc(nt * sizeof(double));
         size_t *at = malloc(nt * sizeof(size_t));
         slice_out *cand = calloc(nt, sizeof *cand);
-        if (!mt || !at || !cand) {
+        double *ecand = calloc(nt, sizeof *ecand);
+        unsigned char *taken = calloc(nt, 1);
+        if (!mt || !at || !cand || !ecand || !taken) {
             free(mt);
             free(at);
             free(cand);
+            free(ecand);
+            free(taken);
             st = BTDF_ENOMEM;
             break;
         }
@@ -673,15 +695,38 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                 mt[q] = 0.5 * (sl[k].s.ti + sl[k + 1].s.ti);
                 at[q++] = k;
             }
+        /* When the room left cannot hold a slice of the present average size for every
+           candidate, test only as many as it can, the widest intervals first (the others
+           stay open): equal shares too small for any would all stop short and spend the
+           budget on slices that cannot meet their target. */
+        size_t avg = ns ? nodes / ns : 0, left = nodes < node_cap ? node_cap - nodes : 0;
+        if (avg > 0 && nt > 1 && nt * avg > left && left / avg >= 1) {
+            size_t fit = left / avg;
+            for (size_t a2 = 0; a2 < fit; a2++) { /* selection of the fit widest */
+                size_t w = a2;
+                for (size_t b2 = a2 + 1; b2 < nt; b2++)
+                    if (sl[at[b2] + 1].s.ti - sl[at[b2]].s.ti > sl[at[w] + 1].s.ti - sl[at[w]].s.ti)
+                        w = b2;
+                double tm = mt[a2];
+                size_t ta = at[a2];
+                mt[a2] = mt[w];
+                at[a2] = at[w];
+                mt[w] = tm;
+                at[w] = ta;
+            }
+            nt = fit;
+        }
         j.ti = mt;
         j.out = cand;
         /* The candidates are held beside the slices: together they stay in the budget. */
         size_t room = nodes < node_cap ? (node_cap - nodes) / nt : 0;
         if (room < SLICE_MIN_NODES) {
-            *budget_hit = 1;
+            *budget_hit |= facet_limit(o);
             free(mt);
             free(at);
             free(cand);
+            free(ecand);
+            free(taken);
             break;
         }
         size_t saved_max = j.max_nodes;
@@ -697,6 +742,29 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
             }
             size_t k = at[q];
             double e = blend_error(o, &sl[k], &sl[k + 1], &cand[q]);
+            /* Where the floor max(T, 0.01) changes by more than a factor 1.5 over an
+               interval (the last degrees before grazing, past a critical angle), the
+               error relative to it is far from symmetric about the midpoint, and the
+               midpoint test misses the peak: such intervals are split regardless. */
+            if (o->metric == BTDF_METRIC_L1) {
+                double fa = t_floor(&o->params, sl[k].s.ti), fb = t_floor(&o->params, sl[k + 1].s.ti);
+                if (fmax(fa, fb) > 1.5 * fmin(fa, fb))
+                    e = fmax(e, 2.0 * o->tolerance * frac_ti);
+            }
+            /* Next to a slice whose incident factor is 0 (ti = 90 deg) the table holds the
+               other end's reduced value (table.c, blend_ti); that is off by up to the
+               whole of T there, and the error peaks well before the midpoint. Bound it
+               by T at the other end over the floor (L1), or by whether e_max is defined
+               there at all (max), and split until the bound is met. */
+            int za = !(incident_factor(&o->params, sl[k].s.ti) > 0.0);
+            int zb = !(incident_factor(&o->params, sl[k + 1].s.ti) > 0.0);
+            if (za != zb) {
+                double tother = btdf_transmittance_coarse(&o->params, sl[za ? k + 1 : k].s.ti);
+                double bound = o->metric == BTDF_METRIC_L1 ? tother / 0.01
+                                                             : (tother >= 0.01 ? 1.0 : 0.0);
+                e = fmax(e, bound);
+            }
+            ecand[q] = e;
             if (e > o->tolerance * frac_ti)
                 keep++;
             else {
@@ -709,8 +777,29 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
             for (q = 0; q < nt; q++)
                 add_nodes += cand[q].s.nr * cand[q].s.nc;
             if (nodes + add_nodes > node_cap) {
-                *budget_hit = 1;
+                /* Not all fit: add the worst intervals' slices while they fit, so the
+                   budget goes where the error is, and close the others. */
+                *budget_hit |= facet_limit(o);
+                size_t room = nodes < node_cap ? node_cap - nodes : 0;
                 keep = 0;
+                for (;;) {
+                    size_t best = nt;
+                    for (q = 0; q < nt; q++)
+                        if (cand[q].s.vals && !taken[q] &&
+                            (best == nt || ecand[q] > ecand[best]))
+                            best = q;
+                    if (best == nt)
+                        break;
+                    taken[best] = 1;
+                    size_t m = cand[best].s.nr * cand[best].s.nc;
+                    if (m <= room) {
+                        room -= m;
+                        keep++;
+                    } else {
+                        open[at[best]] = 0;
+                        free_slice_out(&cand[best]);
+                    }
+                }
             }
         }
         if (st == BTDF_OK && keep) {
@@ -726,8 +815,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                 for (q = 0; q < nt; q++) {
                     if (cand[q].s.vals) {
                         sl[ns] = cand[q];
-                        if (cand[q].budget_hit)
-                            *budget_hit = 1;
+                        *budget_hit |= cand[q].budget_hit;
                         nodes += cand[q].s.nr * cand[q].s.nc;
                         memset(&cand[q], 0, sizeof cand[q]);
                         ns++;
@@ -760,6 +848,8 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         for (q = 0; q < nt; q++)
             free_slice_out(&cand[q]);
         free(cand);
+        free(ecand);
+        free(taken);
         free(mt);
         free(at);
     }
@@ -791,8 +881,32 @@ static void table_clear(btdf_table *t)
     t->ns = 0;
 }
 
-/* Seed of the estimate the builder checks itself with; reports use another. */
-#define BUILD_CHECK_SEED 0x5eedb0f1u
+/* The builder checks itself with the estimate btdftab reports (its seed, the default
+   angles and points): the check sees every slice interval and refines where the error
+   changes fast (estimate.c), so tuning to its points cannot hide an error between
+   them, and a table the builder calls met is reported met, bit for bit. An independent
+   dense scan (tools/densescan.c) checks both against the truth. */
+#define BUILD_CHECK_SEED 20081231u
+
+static void budget_text(char *msg, size_t msglen, int which, const btdf_table_opts *o,
+                        size_t samples, double e, double tol)
+{
+    size_t ms = o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES;
+    size_t mb = o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES;
+    const char *what = (which & BUDGET_MEMORY) ? "the memory cap"
+                       : (which & BUDGET_SAMPLES) ? "the sample budget"
+                                                  : "the per-slice share of the sample budget";
+    if (!msg || !msglen)
+        return;
+    int w = snprintf(msg, msglen,
+                     "%s (%zu samples, %zu MiB) stopped refinement: the table holds %zu "
+                     "samples (%.0f%% of the budget)",
+                     what, ms, mb >> 20, samples,
+                     100.0 * (double)samples / (double)facet_node_cap(o));
+    if (w > 0 && (size_t)w < msglen && isfinite(e)) /* e is NaN when not estimated */
+        snprintf(msg + w, msglen - (size_t)w, " and reached %.3g, %.2f times the tolerance %g",
+                 e, e / tol, tol);
+}
 
 BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out, char *msg,
                                       size_t msglen)
@@ -841,12 +955,15 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         return BTDF_EBUDGET;
     }
     /* Split the tolerance between slice interpolation and incidence blending, check
-       the result with an independent estimate, and tighten while it falls short. */
+       the result with the estimate, and tighten while it falls short; keep the best
+       table of the passes (a pass the budget stops can be worse than the one before). */
     double fs = 0.8, ft = 0.6;
-    int budget_hit = 0, met = 0;
-    for (int pass = 0; pass < 5; pass++) {
-        if (pass > 0 && o->progress) /* the check fell short: a tighter pass, at most 5 */
-            o->progress(o->progress_user, "tighter pass", (size_t)pass, (size_t)(5 - pass));
+    int budget_hit = 0, best_budget = 0;
+    double best_e = INFINITY;
+    btdf_table *best = NULL;
+    for (int pass = 0; pass < 6; pass++) {
+        if (pass > 0 && o->progress) /* the check fell short: a tighter pass, at most 6 */
+            o->progress(o->progress_user, "tighter pass", (size_t)pass, (size_t)(6 - pass));
         table_clear(t);
         t->kind = BTDF_TABLE_FACET;
         t->p = ob.params;
@@ -856,32 +973,72 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         t->p = o->params;
         if (st != BTDF_OK)
             break;
+        if (o->estimate == BTDF_ESTIMATE_NONE) { /* one pass, unchecked */
+            best = t;
+            t = NULL;
+            best_e = 0.0;
+            best_budget = budget_hit;
+            break;
+        }
+        size_t angles = o->estimate == BTDF_ESTIMATE_FAST ? 16 : 0;
+        size_t ppa = o->estimate == BTDF_ESTIMATE_FAST ? 2048 : 0;
         btdf_report r;
         memset(&r, 0, sizeof r);
-        st = btdf_table_estimate(t, o->ti_min, o->ti_max, 24, 4096, BUILD_CHECK_SEED,
+        st = btdf_table_estimate(t, o->ti_min, o->ti_max, angles, ppa, BUILD_CHECK_SEED,
                                  o->threads, &r);
         double e = o->metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max;
-        btdf_report_clear(&r);
         if (st != BTDF_OK)
             break;
-        met = e <= o->tolerance;
+        btdf_report_clear(&t->check);
+        t->check = r; /* kept for the caller's estimate of the same request */
+        t->check_valid = 1;
+        t->check_ti0 = o->ti_min;
+        t->check_ti1 = o->ti_max;
+        t->check_angles = angles;
+        t->check_ppa = ppa;
+        t->check_seed = BUILD_CHECK_SEED;
+        if (e < best_e) {
+            btdf_table *fresh = NULL;
+            st = btdf_table_new(o->kind, &o->params, &fresh, msg, msglen);
+            if (st != BTDF_OK)
+                break;
+            btdf_table_free(best);
+            best = t;
+            t = fresh;
+            best_e = e;
+            best_budget = budget_hit;
+        }
+        /* A margin below the tolerance: the estimate samples, the truth is a supremum. */
         if (e <= 0.8 * o->tolerance || budget_hit)
             break;
-        double f = fmax(0.2, fmin(0.7, 0.7 * o->tolerance / e));
+        /* Tighten by what the error asks for, gently: each pass costs a whole build. */
+        double f = fmax(0.2, fmin(0.85, 0.75 * o->tolerance / e));
         fs *= f;
         ft *= f;
     }
+    btdf_table_free(t); /* NULL or the last pass that was not the best */
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
-        btdf_table_free(t);
+        btdf_table_free(best);
         return st;
     }
-    *out = t;
-    if (budget_hit && !met) {
+    if (!best)
+        return BTDF_ENOMEM;
+    *out = best;
+    if (o->estimate == BTDF_ESTIMATE_NONE) {
+        if (best_budget && msg && msglen)
+            budget_text(msg, msglen, best_budget, o, btdf_table_node_count(best), NAN,
+                        o->tolerance);
+        return BTDF_OK; /* not checked: the caller says so */
+    }
+    if (best_e > o->tolerance) {
+        if (best_budget) {
+            budget_text(msg, msglen, best_budget, o, btdf_table_node_count(best), best_e,
+                        o->tolerance);
+            return BTDF_EBUDGET;
+        }
         if (msg && msglen)
-            snprintf(msg, msglen, "the sample budget (%zu samples, %zu bytes) stopped "
-                                  "refinement before the tolerance %g was met",
-                     o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES,
-                     o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES, o->tolerance);
+            snprintf(msg, msglen, "refinement ended at %.3g, %.2f times the tolerance %g, "
+                     "without reaching the budget", best_e, best_e / o->tolerance, o->tolerance);
         return BTDF_EBUDGET;
     }
     return BTDF_OK;

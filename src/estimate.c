@@ -26,8 +26,8 @@ typedef struct est_job {
     const btdf_params *p; /* the truth: Eq. 25 with these parameters */
     est_eval_fn fn;       /* the evaluation under test */
     const void *obj;
-    double ti_min, span;
-    size_t angles, nu, npsi, nmu, nphi;
+    const double *ti;     /* the test angles */
+    size_t nu, npsi, nmu, nphi;
     uint64_t seed;
     btdf_ti_error *res;
     size_t *points;
@@ -71,10 +71,12 @@ static void est_angle(void *arg, size_t k)
 {
     est_job *j = arg;
     const btdf_params *p = j->p;
-    uint64_t rng = j->seed ^ (0xa0761d6478bd642full * (uint64_t)(k + 1));
-    double ti = j->ti_min + j->span * ((double)k + unif(&rng)) / (double)j->angles;
-    if (ti > M_PI / 2)
-        ti = M_PI / 2;
+    double ti = j->ti[k];
+    /* The stream depends on the angle, not on k: an angle gets the same points whatever
+       the order in which the rounds below add angles. */
+    uint64_t bits;
+    memcpy(&bits, &ti, sizeof bits);
+    uint64_t rng = j->seed ^ (0xa0761d6478bd642full * (bits | 1u));
     double sti = sin(ti), cti = cos(ti), s = p->smoothness;
     rho_in a;
     rho_in_init(&a, sti, cti, s, p->k0);
@@ -155,9 +157,64 @@ static void table_fn(const void *obj, double ti, const double *q, double *out)
     table_eval_sc(obj, ti, q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], out);
 }
 
-btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
-                             size_t test_angles, size_t points_per_angle, uint64_t seed,
-                             int threads, est_eval_fn fn, const void *obj, btdf_report *r)
+/* ------------------------------------------------------------------------- */
+/* Which incident angles: stratified, every knot interval, and refinement      */
+/* ------------------------------------------------------------------------- */
+
+/*
+ * A table's error as a function of ti is a row of bumps, one per interval between
+ * slices (zero at the slices, largest near the middle), and it can change fast where
+ * T does (near grazing incidence, near the critical angle). Stratified angles alone
+ * step over narrow bumps, so the test angles are:
+ *  1. test_angles stratified angles (one random angle per equal stratum); the means
+ *     of the report are over these only, so they stay unbiased;
+ *  2. the ends of the range and the midpoint of every interval between adjacent
+ *     knots (the table's slice angles) inside the range;
+ *  3. rounds of refinement: between neighbours (in ti) whose errors differ by more
+ *     than a factor 1.5 (for either metric), where the larger is within a factor 3 of
+ *     the worst so far, the midpoint is added; so are the two midpoints on either
+ *     side of the worst angle, and the midpoint between neighbours whose T differ by
+ *     more than a factor 1.5 (T floored at 1e-3). Rounds stop when nothing is added, after REFINE_ROUNDS,
+ *     or when the gap falls below REFINE_MIN_GAP.
+ */
+#define REFINE_ROUNDS 6
+#define REFINE_MIN_GAP 2e-4 /* rad, 0.01 deg; 2e-2/s where the shadowing edge is narrower */
+#define REFINE_MAX_ADD 96   /* angles per round */
+
+static int cmp_err_ti(const void *a, const void *b)
+{
+    double x = ((const btdf_ti_error *)a)->ti, y = ((const btdf_ti_error *)b)->ti;
+    return (x > y) - (x < y);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Runs the estimate at n angles ti[], appending results to res (which has room). */
+static void run_angles(est_job *j, int threads, const double *ti, size_t n, btdf_ti_error *res,
+                       size_t *points)
+{
+    j->ti = ti;
+    j->res = res;
+    j->points = points;
+    btdf_parallel_for(threads, n, est_angle, j);
+}
+
+/* Largest ratio of two errors, with a floor so that noise near 0 does not count. */
+static double ratio(double a, double b, double fl)
+{
+    a = fmax(a, fl);
+    b = fmax(b, fl);
+    return a > b ? a / b : b / a;
+}
+
+btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_max,
+                                size_t test_angles, size_t points_per_angle, uint64_t seed,
+                                int threads, const double *knots, size_t nknots,
+                                est_eval_fn fn, const void *obj, btdf_report *r)
 {
     if (!p || !fn || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
         return BTDF_EINVAL;
@@ -165,49 +222,147 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
         test_angles = 48;
     if (points_per_angle == 0)
         points_per_angle = 8192;
-    if (test_angles > 100000 || points_per_angle > 100000000)
+    if (test_angles > 100000 || points_per_angle > 100000000 || nknots > 1000000)
         return BTDF_EINVAL;
     double t0 = btdf_now();
     est_job j;
+    memset(&j, 0, sizeof j);
     j.p = p;
     j.fn = fn;
     j.obj = obj;
-    j.ti_min = ti_min;
-    j.span = ti_max - ti_min;
-    j.angles = test_angles;
     j.npsi = 32;
     j.nu = (points_per_angle + 31) / 32;
     j.nmu = 64;
     j.nphi = 64;
     j.seed = seed;
-    j.res = calloc(test_angles, sizeof *j.res);
-    j.points = calloc(test_angles, sizeof *j.points);
-    if (!j.res || !j.points) {
-        free(j.res);
-        free(j.points);
+    double span = ti_max - ti_min;
+    /* V(ti) falls to 0 before grazing over about 1/s rad (smoothness >= 1e-3 checked) */
+    double min_gap = fmin(REFINE_MIN_GAP, 2e-2 / p->smoothness);
+    /* capacity: stratified + 2 ends + knot midpoints + refinement rounds */
+    size_t cap = test_angles + 2 + (nknots + 1) + REFINE_ROUNDS * REFINE_MAX_ADD;
+    double *ti = malloc(cap * sizeof *ti);
+    btdf_ti_error *res = calloc(cap, sizeof *res);
+    size_t *points = calloc(cap, sizeof *points);
+    if (!ti || !res || !points) {
+        free(ti);
+        free(res);
+        free(points);
         return BTDF_ENOMEM;
     }
-    btdf_parallel_for(threads, test_angles, est_angle, &j);
-    memset(r, 0, sizeof *r);
-    r->test_angles = test_angles;
-    r->per_ti = j.res;
+    uint64_t rng = seed ^ 0x243f6a8885a308d3ull;
+    size_t n = 0;
     for (size_t k = 0; k < test_angles; k++) {
-        const btdf_ti_error *e = &j.res[k];
-        r->test_points += j.points[k];
+        double x = ti_min + span * ((double)k + unif(&rng)) / (double)test_angles;
+        ti[n++] = fmin(x, ti_max);
+    }
+    size_t nstrat = n;
+    /* ends and knot midpoints; a zero-width range has one angle only */
+    size_t extra0 = n;
+    if (span > 0.0) {
+        ti[n++] = ti_min;
+        ti[n++] = ti_max;
+        for (size_t k = 0; k + 1 < nknots; k++) {
+            double a = fmax(knots[k], ti_min), b = fmin(knots[k + 1], ti_max);
+            if (b > a && b - a > min_gap)
+                ti[n++] = 0.5 * (a + b);
+        }
+    }
+    run_angles(&j, threads, ti, nstrat, res, points);
+    if (n > extra0)
+        run_angles(&j, threads, ti + extra0, n - extra0, res + extra0, points + extra0);
+    for (int round = 0; round < REFINE_ROUNDS && span > 0.0; round++) {
+        /* sorted copy of what we have */
+        btdf_ti_error *srt = malloc(n * sizeof *srt);
+        double *add = malloc((2 * n + 2) * sizeof *add);
+        if (!srt || !add) {
+            free(srt);
+            free(add);
+            break; /* the estimate so far stands; refinement is an improvement */
+        }
+        memcpy(srt, res, n * sizeof *srt);
+        qsort(srt, n, sizeof *srt, cmp_err_ti);
+        double wl1 = 0.0, wmx = 0.0;
+        size_t worst = 0;
+        for (size_t k = 0; k < n; k++) {
+            if (srt[k].e_l1 > wl1) {
+                wl1 = srt[k].e_l1;
+                worst = k;
+            }
+            wmx = fmax(wmx, srt[k].e_max);
+        }
+        size_t na = 0;
+        for (size_t k = 0; k + 1 < n; k++) {
+            const btdf_ti_error *a = &srt[k], *b = &srt[k + 1];
+            if (!(b->ti - a->ti > min_gap))
+                continue;
+            int l1 = fmax(a->e_l1, b->e_l1) >= wl1 / 3.0 && wl1 > 0.0 &&
+                     ratio(a->e_l1, b->e_l1, 0.01 * wl1) > 1.5;
+            int mx = fmax(a->e_max, b->e_max) >= wmx / 3.0 && wmx > 0.0 &&
+                     ratio(a->e_max, b->e_max, 0.01 * wmx) > 1.5;
+            /* T changing fast: the error's floor max(T, 0.01) and the lobe with it */
+            int tf = ratio(a->T, b->T, 1e-3) > 1.5;
+            int near_worst = (wl1 > 0.0 && (k + 1 == worst || k == worst)) ||
+                             (wmx > 0.0 && (a->e_max == wmx || b->e_max == wmx));
+            if (l1 || mx || tf || near_worst)
+                add[na++] = 0.5 * (a->ti + b->ti);
+        }
+        free(srt);
+        if (na > REFINE_MAX_ADD) {
+            /* keep the ones nearest the worst angles: sort by nothing fancier than
+               taking every other one, evenly over ti */
+            qsort(add, na, sizeof *add, cmp_double);
+            double step = (double)na / REFINE_MAX_ADD;
+            for (size_t k = 0; k < REFINE_MAX_ADD; k++)
+                add[k] = add[(size_t)((double)k * step)];
+            na = REFINE_MAX_ADD;
+        }
+        if (na == 0 || n + na > cap) {
+            free(add);
+            break;
+        }
+        memcpy(ti + n, add, na * sizeof *add);
+        free(add);
+        run_angles(&j, threads, ti + n, na, res + n, points + n);
+        n += na;
+    }
+    free(ti);
+    memset(r, 0, sizeof *r);
+    /* Means over the stratified angles only, the first nstrat (the others crowd where
+       errors are large); then every angle, sorted by ti, for the maxima and the list. */
+    size_t nmean_max = 0;
+    for (size_t k = 0; k < nstrat; k++) {
+        r->e_l1_mean += res[k].e_l1 / (double)nstrat;
+        r->e_t_mean += res[k].e_t / (double)nstrat;
+        if (res[k].T >= 0.01) {
+            nmean_max++;
+            r->e_max_mean += res[k].e_max;
+        }
+    }
+    if (nmean_max)
+        r->e_max_mean /= (double)nmean_max;
+    qsort(res, n, sizeof *res, cmp_err_ti);
+    r->test_angles = n;
+    r->per_ti = res;
+    for (size_t k = 0; k < n; k++) {
+        const btdf_ti_error *e = &res[k];
+        r->test_points += points[k];
         r->e_l1_max = fmax(r->e_l1_max, e->e_l1);
         r->e_t_max = fmax(r->e_t_max, e->e_t);
         r->e_max_max = fmax(r->e_max_max, e->e_max);
-        r->e_l1_mean += e->e_l1 / (double)test_angles;
-        r->e_t_mean += e->e_t / (double)test_angles;
         if (e->T >= 0.01)
             r->e_max_angles++;
     }
-    for (size_t k = 0; k < test_angles; k++) /* e_max's mean is over the angles it has */
-        if (j.res[k].T >= 0.01)
-            r->e_max_mean += j.res[k].e_max / (double)r->e_max_angles;
-    free(j.points);
+    free(points);
     r->seconds_estimate = btdf_now() - t0;
     return BTDF_OK;
+}
+
+btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
+                             size_t test_angles, size_t points_per_angle, uint64_t seed,
+                             int threads, est_eval_fn fn, const void *obj, btdf_report *r)
+{
+    return btdf_estimate_knots(p, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                               NULL, 0, fn, obj, r);
 }
 
 BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
@@ -216,8 +371,33 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
 {
     if (!t)
         return BTDF_EINVAL;
-    btdf_status st = btdf_estimate_fn(&t->p, ti_min, ti_max, test_angles, points_per_angle,
-                                      seed, threads, table_fn, t, r);
+    if (t->check_valid && t->check_ti0 == ti_min && t->check_ti1 == ti_max &&
+        t->check_angles == test_angles && t->check_ppa == points_per_angle &&
+        t->check_seed == seed) {
+        *r = t->check;
+        r->per_ti = malloc(t->check.test_angles * sizeof *r->per_ti);
+        if (!r->per_ti)
+            return BTDF_ENOMEM;
+        memcpy(r->per_ti, t->check.per_ti, t->check.test_angles * sizeof *r->per_ti);
+        r->slices = t->ns;
+        r->samples = btdf_table_node_count(t);
+        return BTDF_OK;
+    }
+    /* The knots are the slice angles, in the table's own ti: for the reciprocal kind
+       those are outgoing angles and say nothing about the incidence, so none. */
+    double *knots = NULL;
+    size_t nk = 0;
+    if (t->kind != BTDF_TABLE_FACET_RECIPROCAL && t->ns > 1) {
+        knots = malloc(t->ns * sizeof *knots);
+        if (!knots)
+            return BTDF_ENOMEM;
+        for (size_t k = 0; k < t->ns; k++)
+            knots[k] = t->s[k].ti;
+        nk = t->ns;
+    }
+    btdf_status st = btdf_estimate_knots(&t->p, ti_min, ti_max, test_angles, points_per_angle,
+                                         seed, threads, knots, nk, table_fn, t, r);
+    free(knots);
     if (st == BTDF_OK) {
         r->slices = t->ns;
         r->samples = btdf_table_node_count(t);

@@ -196,9 +196,16 @@ double incident_factor(const btdf_params *p, double ti)
 
 double blend_ti(double v0, double v1, double w, double g, double g0, double g1)
 {
-    /* A slice whose incident factor is 0 (ti = 90 deg) holds only zeros: its reduced
-       value is 0, which the factor g of the query multiplies anyway. */
+    /* A slice whose incident factor is 0 (ti = 90 deg) holds only zeros and says
+       nothing about the reduced value rho/g, which stays finite and nonzero as ti -> 90
+       deg (Eq. 25 is g times a bounded factor). Reading it as 0 made the blend fall
+       linearly to 0 over the last interval and the table lose most of T near grazing;
+       the neighbour's reduced value is held instead, and the query's g takes rho to 0. */
     double r0 = g0 > 0.0 ? v0 / g0 : 0.0, r1 = g1 > 0.0 ? v1 / g1 : 0.0;
+    if (!(g1 > 0.0))
+        r1 = r0;
+    else if (!(g0 > 0.0))
+        r0 = r1;
     return g * ((1.0 - w) * r0 + w * r1);
 }
 
@@ -267,6 +274,7 @@ BTDF_API void btdf_table_free(btdf_table *t)
         free(t->s[k].vals);
     }
     free(t->s);
+    btdf_report_clear(&t->check);
     free(t);
 }
 
@@ -284,6 +292,7 @@ btdf_status table_push_slice(btdf_table *t, tslice *s)
     }
     s->g = incident_factor(&t->p, s->ti);
     t->s[t->ns++] = *s;
+    t->check_valid = 0; /* the check was of the table without this slice */
     return BTDF_OK;
 }
 

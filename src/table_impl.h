@@ -20,6 +20,13 @@ struct btdf_table {
     btdf_params p;
     size_t ns, cap;
     tslice *s;
+    /* The builder's last check, which btdf_table_estimate returns for the same request
+       (the estimate is deterministic); cleared when a slice is added. */
+    btdf_report check;
+    int check_valid;
+    double check_ti0, check_ti1;
+    size_t check_angles, check_ppa;
+    uint64_t check_seed;
 };
 
 /* Refraction of e_i(ti) through the facet of tilt tn and azimuth psi (psi = 0 leans

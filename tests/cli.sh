@@ -218,6 +218,19 @@ expect 2 "do not apply to .bsdf" "--theta-i with .bsdf" -- "$B" tabulate --theta
 head -c 100 /dev/zero > "$W/z.bsdf"
 expect 1 "z.bsdf" "foreign .bsdf" -- "$B" inspect "$W/z.bsdf"
 rm -f "$W/z.bsdf"
+# .bsdf: a lobe too narrow for the format's node budget stops before any work, exit 3
+expect 3 "narrower than one elevation interval" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
+# .bsdf: --report is written; a file without the enter side is refused by eval
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --side leave --report "$W/l.json" -o "$W/l.bsdf" && \
+    grep -q '"kind": "scatfun"' "$W/l.json" && grep -q '"pbrt_v3_single_precision_safe": true' "$W/l.json" && \
+    grep -q '"leave": {"met": true' "$W/l.json" && ok ".bsdf --report" || no ".bsdf --report"
+expect 1 "holds no 'enter' side" "eval --table of a leave-only .bsdf" -- "$B" eval --table "$W/l.bsdf" 30 150 180
+# .bsdf: --best-effort writes a file that missed the tolerance and still exits 3
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 1e-3 --max-memory 1 --best-effort -o "$W/b.bsdf" --report "$W/b.json"
+rc=$?
+[ "$rc" -eq 3 ] && [ -s "$W/b.bsdf" ] && grep -q '"met": false' "$W/b.json" && \
+    ok ".bsdf --best-effort: written, exit 3" || no ".bsdf --best-effort: status $rc"
+rm -f "$W"/l.* "$W"/b.*
 # the same bytes from one and two threads (the provenance line records the command)
 "$B" tabulate -q --theta-i 0:50 --tolerance 5e-3 --threads 1 -o "$W/a1.csv" &&
 "$B" tabulate -q --theta-i 0:50 --tolerance 5e-3 --threads 2 -o "$W/a2.csv" &&
@@ -369,6 +382,20 @@ bash -n "$(dirname "$B")/completion/btdftab" 2>/dev/null && grep -q -- '--dry-ru
 "$(dirname "$B")/btdf-bench" --help | grep -q '^usage: btdf-bench' && \
     ok "btdf-bench --help" || no "btdf-bench --help"
 expect 2 "unknown section 'frob'" "btdf-bench: an unknown section" -- "$(dirname "$B")/btdf-bench" frob
+
+# --estimate and the report line's total; the limit a budget failure names
+expect 2 "must be full, fast or none" "bad --estimate" -- "$B" tabulate --estimate some -o "$W/t.csv"
+expect 2 "no error to report" "--report with --estimate none" -- "$B" tabulate --estimate none --report "$W/r.json" -o "$W/t.csv"
+"$B" tabulate --tolerance 3e-2 --estimate none -o "$W/none.csv" 2> "$W/none.err" && \
+    grep -q '^# provenance:.*error not estimated' "$W/none.csv" && ! grep -q '^# error:' "$W/none.csv" && \
+    grep -q 'error not estimated.*total [0-9.]* s$' "$W/none.err" && \
+    ok "--estimate none writes 'error not estimated' and no error line" || no "--estimate none"
+"$B" tabulate --tolerance 3e-2 --estimate fast -o "$W/fast.csv" 2> "$W/fast.err" && \
+    grep -q '(fast, [0-9]* angles.*tolerance met; total [0-9.]* s$' "$W/fast.err" && \
+    ok "--estimate fast says so; the line ends with the total time" || no "--estimate fast"
+expect 3 "the sample budget (20000 samples, 256 MiB) stopped refinement: the table holds" \
+    "a budget failure names the limit and how close" -- "$B" tabulate --tolerance 1e-3 --max-samples 20000 -o "$W/t.csv"
+rm -f "$W/none.csv" "$W/none.err" "$W/fast.csv" "$W/fast.err"
 
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

@@ -485,6 +485,39 @@ int main(int argc, char **argv)
             }
         }
     }
+    if (!strcmp(what, "all") || !strcmp(what, "tolerances")) {
+        /* The full range 0:90 at tolerances 1e-1 to 1e-4 with the default budget, and
+           1e-4 again with a larger one; then the other materials over 0:90. */
+        printf("%s", header);
+        const double tols[] = {1e-1, 3e-2, 2e-2, 1e-2, 5e-3, 3e-3, 1e-3, 3e-4, 1e-4};
+        btdf_table_opts o;
+        btdf_table_opts_default(&o);
+        for (int k = 0; k < 9; k++) {
+            o.tolerance = tols[k];
+            run(stdout, "adaptive", "1.5/3", &o, reps);
+        }
+        o.max_samples = 40000000;
+        o.max_bytes = (size_t)1536 << 20;
+        run(stdout, "adaptive-40M", "1.5/3", &o, reps);
+    }
+    if (!strcmp(what, "all") || !strcmp(what, "fullrange")) {
+        printf("%s", header);
+        btdf_table_opts o;
+        const struct {
+            const char *label;
+            double n, s;
+        } more[] = {{"1.5/100", 1.5, 100}, {"1/1.5/6", 1 / 1.5, 6}, {"1.31/20", 1.31, 20},
+                    {"3/1000", 3, 1000}};
+        btdf_table_opts_default(&o);
+        for (int c = 0; c < 4; c++) {
+            o.params.ior[0] = more[c].n;
+            o.params.smoothness = more[c].s;
+            for (int k = 0; k < 2; k++) {
+                o.tolerance = k ? 1e-3 : 1e-2;
+                run(stdout, "adaptive", more[c].label, &o, reps);
+            }
+        }
+    }
     if (!strcmp(what, "all") || !strcmp(what, "scaling")) {
         /* Work follows what is asked: the full range, half of it, three channels. */
         printf("%s", header);

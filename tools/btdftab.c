@@ -330,6 +330,18 @@ static int apply(cli *c, const opt_hit *h)
         return 1;
     }
     case OPT_BEST_EFFORT: c->best_effort = 1; return 1;
+    case OPT_ESTIMATE:
+        if (!strcmp(v, "full"))
+            c->o.estimate = BTDF_ESTIMATE_FULL;
+        else if (!strcmp(v, "fast"))
+            c->o.estimate = BTDF_ESTIMATE_FAST;
+        else if (!strcmp(v, "none"))
+            c->o.estimate = BTDF_ESTIMATE_NONE;
+        else {
+            fail(EXIT_USAGE, "--estimate: '%s': must be full, fast or none", v);
+            return 0;
+        }
+        return 1;
     case OPT_QUIET: c->quiet = 1; return 1;
     case OPT_HELP:
     case OPT_END: break;
@@ -529,8 +541,16 @@ static int cmd_eval(const cli *c)
         if (in.table) {
             p = *btdf_table_get_params(in.table);
             table_ti_range(in.table, ti_range);
-        } else
+        } else {
             p.channels = btdf_scatfun_channels(in.scatfun);
+            if (!(btdf_scatfun_sides(in.scatfun) & BTDF_SIDE_ENTER)) {
+                btdf_scatfun_free(in.scatfun);
+                /* eval reads light entering through the top (index n); the file has no
+                   such block, and a 0 would read as a measured value */
+                return fail(1, "%s: the file holds no 'enter' side (light entering, index n), "
+                               "which eval reads; it was written with --side leave", c->table);
+            }
+        }
     } else if (!check_params(&p)) {
         return EXIT_USAGE;
     }
@@ -717,25 +737,30 @@ static int write_report(const char *path, const btdf_table_opts *o, btdf_table_k
 static int tabulate_series(const cli *c, const char *prov)
 {
     static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
-                                        OPT_PHI, OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY,
-                                        OPT_REPORT, OPT_SIZE, OPT_LOG_DECADES,
+                                        OPT_PHI, OPT_METRIC, OPT_SIZE, OPT_LOG_DECADES,
                                         OPT_ZOOM};
     for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
         if (GIVEN(c, table_only[k]))
             return fail(EXIT_USAGE, "%s: --theta-i, --theta-o, --phi, --grid, --metric, "
-                                    "--max-samples, --max-memory, --report, --preview and "
-                                    "--size do not apply to .bsdf (the file covers every "
-                                    "direction of both hemispheres; --%s was given)",
+                                    "--preview, --size, --log-decades and --zoom do not apply "
+                                    "to .bsdf (the file covers every direction of both "
+                                    "hemispheres; --%s was given)",
                         c->out, opt_find(table_only[k])->name);
+    if (c->report && !folder_writable(c->report))
+        return 1;
     if (!check_params(&c->p))
         return EXIT_USAGE;
     if (!folder_writable(c->out))
         return 1;
     run_progress pr;
     run_progress_start(&pr, !c->quiet && isatty(2), c->out);
-    return run_series(prog, c->out, &c->p, c->o.tolerance,
-                      c->sides ? c->sides : BTDF_SIDE_BOTH, c->threads, c->quiet,
-                      c->best_effort, prov, &pr);
+    /* --max-samples caps the stored coefficients, --max-memory the builder's series;
+       each only when given (the format has its own budgets otherwise) */
+    return run_series_ex(prog, c->out, &c->p, c->o.tolerance,
+                         c->sides ? c->sides : BTDF_SIDE_BOTH, c->threads, c->quiet,
+                         c->best_effort, prov, c->report,
+                         GIVEN(c, OPT_MAX_SAMPLES) ? c->o.max_samples : 0,
+                         GIVEN(c, OPT_MAX_MEMORY) ? c->mib << 20 : 0, &pr);
 }
 
 /* A Radiance .xml is built from Eq. 25 directly, both transmission blocks. */
@@ -812,6 +837,8 @@ static int cmd_tabulate(cli *c, const char *prov)
     if ((GIVEN(c, OPT_TOLERANCE) || GIVEN(c, OPT_METRIC)) && o.kind == BTDF_TABLE_GRID)
         return fail(EXIT_USAGE, "--tolerance and --metric apply to adaptive tables and .bsdf, "
                                 "not to --grid (a grid has the spacing it is given)");
+    if (o.estimate == BTDF_ESTIMATE_NONE && c->report)
+        return fail(EXIT_USAGE, "--report with --estimate none: there is no error to report");
     if (GIVEN(c, OPT_SIZE) && c->npreview == 0)
         return fail(EXIT_USAGE, "--size applies to pictures: give --preview F.png or -o F.png");
     int renders = 0;
@@ -873,44 +900,76 @@ static int cmd_tabulate(cli *c, const char *prov)
     }
     btdf_report r;
     memset(&r, 0, sizeof r);
-    btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);
-    run_progress_end(&pr); /* the report line below replaces the bar */
-    if (es != BTDF_OK) {
-        btdf_table_free(t);
-        return fail(1, "error estimate: %s", btdf_strerror(es));
+    int estimated = o.estimate != BTDF_ESTIMATE_NONE;
+    if (estimated) {
+        /* For an adaptive table this is the builder's own check (the same request
+           returns it): the report and the builder's verdict cannot differ. */
+        int fast = o.estimate == BTDF_ESTIMATE_FAST;
+        btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, fast ? 16 : 0,
+                                             fast ? 2048 : 0, REPORT_SEED, o.threads, &r);
+        if (es != BTDF_OK) {
+            run_progress_end(&pr);
+            btdf_table_free(t);
+            return fail(1, "error estimate: %s", btdf_strerror(es));
+        }
+    } else {
+        r.slices = btdf_table_slice_count(t);
+        r.samples = btdf_table_node_count(t);
     }
+    run_progress_end(&pr); /* the report line below replaces the bar */
     r.seconds_build = t1 - t0;
     r.peak_bytes = peak_rss();
     r.tolerance = o.kind == BTDF_TABLE_GRID ? 0.0 : o.tolerance;
     r.metric = o.metric;
     double e = o.metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max;
-    r.met = o.kind == BTDF_TABLE_GRID ? 1 : e <= o.tolerance;
-    char emax[96];
-    if (r.e_max_angles)
-        snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", r.e_max_max, r.e_max_mean);
-    else
-        snprintf(emax, sizeof emax, "e_max n/a (T < 0.01 at every test angle)");
-    if (!c->quiet)
-        fprintf(stderr,
-                "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
-                "(%zu angles, %zu points); e_L1 max %.3g mean %.3g; %s; "
-                "e_T max %.3g mean %.3g; peak memory %.1f MiB%s\n",
-                prog, r.slices, r.samples, r.seconds_build, r.seconds_estimate, r.test_angles,
-                r.test_points, r.e_l1_max, r.e_l1_mean, emax, r.e_t_max,
-                r.e_t_mean, (double)r.peak_bytes / 1048576.0,
-                o.kind == BTDF_TABLE_GRID ? "" : (r.met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+    r.met = o.kind == BTDF_TABLE_GRID || !estimated ? 1 : e <= o.tolerance;
+    char line[640];
+    if (estimated) {
+        char emax[96];
+        if (r.e_max_angles)
+            snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", r.e_max_max, r.e_max_mean);
+        else
+            snprintf(emax, sizeof emax, "e_max n/a (T < 0.01 at every test angle)");
+        snprintf(line, sizeof line,
+                 "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
+                 "(%s, %zu angles, %zu points); e_L1 max %.3g mean %.3g; %s; "
+                 "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
+                 prog, r.slices, r.samples, r.seconds_build, r.seconds_estimate,
+                 o.estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", r.test_angles,
+                 r.test_points, r.e_l1_max, r.e_l1_mean, emax, r.e_t_max, r.e_t_mean,
+                 (double)r.peak_bytes / 1048576.0,
+                 o.kind == BTDF_TABLE_GRID ? "" : (r.met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+    } else {
+        snprintf(line, sizeof line,
+                 "%s: table: %zu slices, %zu samples; tabulation %.3f s; error not estimated "
+                 "(--estimate none); peak memory %.1f MiB",
+                 prog, r.slices, r.samples, r.seconds_build, (double)r.peak_bytes / 1048576.0);
+    }
     int code = 0;
+    if (!estimated && msg[0])
+        fprintf(stderr, "%s: %s\n", prog, msg); /* the budget stopped the unchecked pass */
     if (o.kind != BTDF_TABLE_GRID && !r.met) {
+        if (!c->quiet)
+            fprintf(stderr, "%s; total %.3f s\n", line, run_now() - t0);
+        line[0] = '\0'; /* printed */
         fprintf(stderr, "%s: %s: the table reached %s error %.3g, above the tolerance %g%s%s\n",
-                prog, out, o.metric == BTDF_METRIC_MAX ? "max" : "L1", e, o.tolerance,
-                st == BTDF_EBUDGET ? ": " : "", st == BTDF_EBUDGET ? msg : "");
+                prog, out ? out : "table", o.metric == BTDF_METRIC_MAX ? "max" : "L1", e,
+                o.tolerance, msg[0] ? ": " : "", msg);
         if (!c->best_effort) {
-            fprintf(stderr, "%s: nothing written; raise --max-samples/--max-memory, loosen "
-                            "--tolerance, or pass --best-effort\n", prog);
+            fprintf(stderr, "%s: nothing written; %s, loosen --tolerance, or pass "
+                            "--best-effort\n", prog,
+                    strstr(msg, "memory") ? "raise --max-memory"
+                    : strstr(msg, "budget") ? "raise --max-samples (and --max-memory)"
+                                             : "try again with --estimate full");
             code = EXIT_BUDGET;
         }
     }
-    btdf_write_opts w = {&r, prov};
+    char prov2[1200];
+    if (!estimated) {
+        snprintf(prov2, sizeof prov2, "%s; error not estimated", prov ? prov : "btdftab");
+        prov = prov2;
+    }
+    btdf_write_opts w = {estimated ? &r : NULL, prov};
     /* The table, its pictures and its report appear together or not at all. */
     btdf_outputs_begin();
     if (code == 0 && out) {
@@ -946,6 +1005,9 @@ static int cmd_tabulate(cli *c, const char *prov)
     } else {
         btdf_outputs_abort();
     }
+    /* The one-line report, last: the total covers tabulation, estimate and writing. */
+    if (!c->quiet && line[0])
+        fprintf(stderr, "%s; total %.3f s\n", line, run_now() - t0);
     btdf_report_clear(&r);
     btdf_table_free(t);
     return code;

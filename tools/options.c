@@ -47,14 +47,20 @@ const opt_def opt_table[] = {
     {OPT_PHI, "phi", 0, "A:B", 0, CMD_TABULATE,
      "--grid only: azimuth range, within 0:180 (default; rho depends on cos phi, so\n"
      "0:180 holds every azimuth)"},
-    {OPT_MAX_SAMPLES, "max-samples", 0, "N", 0, CMD_TABULATE, "node budget (default 8000000)"},
+    {OPT_MAX_SAMPLES, "max-samples", 0, "N", 0, CMD_TABULATE,
+     "node budget (default 8000000); for .bsdf, when given, the stored coefficients"},
     {OPT_MAX_MEMORY, "max-memory", 0, "MIB", 0, CMD_TABULATE,
-     "memory cap for the nodes (default 256)"},
+     "memory cap for the nodes (default 256); for .bsdf, when given, the builder's\n"
+     "series"},
     {OPT_THREADS, "threads", 0, "N", 0, CMD_EVAL | CMD_TABULATE | CMD_BUILD,
      "worker threads, 0 = all cores (default 0)"},
     {OPT_REPORT, "report", 0, "FILE.json", 0, CMD_TABULATE, "write the error report as JSON"},
     {OPT_BEST_EFFORT, "best-effort", 0, NULL, 0, CMD_TABULATE | CMD_BUILD,
      "write the output even if the budget stopped refinement"},
+    {OPT_ESTIMATE, "estimate", 0, "full|fast|none", 0, CMD_TABULATE,
+     "full (default): check the table against Eq. 25 at every slice interval and\n"
+     "where the error changes fast; fast: fewer points; none: one unchecked pass,\n"
+     "the file says \"error not estimated\""},
     {OPT_PREVIEW, "preview", 0, "[KIND=]F.png", 1, CMD_TABULATE,
      "a picture of the table; KIND is montage (default), render (the paper's\n"
      "Figs. 10-11) or render-analytic (with Eq. 25 and the difference beside it);\n"

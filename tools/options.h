@@ -38,6 +38,7 @@ typedef enum {
     OPT_THREADS,
     OPT_REPORT,
     OPT_BEST_EFFORT,
+    OPT_ESTIMATE,
     OPT_PREVIEW,
     OPT_SIZE,
     OPT_MATERIAL,

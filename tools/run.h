@@ -4,6 +4,7 @@
 #define BTDFTAB_RUN_H
 
 #include <pthread.h>
+#include <stddef.h>
 
 #include <btdf/btdf.h>
 
@@ -44,6 +45,14 @@ void run_progress_end(run_progress *pr);
    Returns an exit status: 0, 1 failed run, 2 bad parameters, 3 tolerance not met. */
 int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
                int threads, int quiet, int best_effort, const char *prov, run_progress *pr);
+
+/* run_series with a JSON report written at report (NULL: none) and the builder's
+   budgets (btdf_scatfun_build_limits: 0 = the format's own). A run that missed its
+   tolerance returns 3 also when best_effort wrote the file; a request refused
+   before any work (a lobe too narrow for the node budget) returns 3 with no file. */
+int run_series_ex(const char *prog, const char *path, const btdf_params *p, double tol,
+                  int sides, int threads, int quiet, int best_effort, const char *prov,
+                  const char *report, size_t max_coeffs, size_t max_bytes, run_progress *pr);
 
 /* Builds a Radiance BSDF (.xml) from Eq. 25 in the given basis, reports each block's
    error as Radiance reads it on standard error (unless quiet), and writes it (and the

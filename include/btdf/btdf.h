@@ -220,8 +220,9 @@ BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *o
  *    |cos to|/chi diverges there); facet space of 1/n > 1 is not.
  *
  * The blend in ti divides both slice values by Eq. 25's incident factor V(ti)/cos ti
- * and multiplies the result by the query's. Outside the slices' ti range the table
- * gives 0.
+ * and multiplies the result by the query's; a slice where that factor is 0 (ti = 90
+ * deg) holds zeros, and its neighbour's divided value stands in for it. Outside the
+ * slices' ti range the table gives 0.
  */
 typedef enum {
     BTDF_TABLE_FACET = 0,
@@ -249,6 +250,16 @@ typedef enum { BTDF_METRIC_L1 = 0, BTDF_METRIC_MAX = 1 } btdf_metric;
    not call back into the build. NULL: no calls. */
 typedef void (*btdf_progress_fn)(void *user, const char *stage, size_t done, size_t todo);
 
+/* How the builder checks a FACET table against the tolerance: FULL (the default) is
+   the estimate btdf_table_estimate makes with its defaults; FAST uses 16 stratified
+   angles of 2048 points (plus every slice interval); NONE builds one pass without a
+   check, so whether the tolerance is met is not known. */
+typedef enum {
+    BTDF_ESTIMATE_FULL = 0,
+    BTDF_ESTIMATE_FAST = 1,
+    BTDF_ESTIMATE_NONE = 2
+} btdf_estimate_mode;
+
 /* How to build a table. Fill with btdf_table_opts_default, then change fields. */
 typedef struct btdf_table_opts {
     btdf_params params;
@@ -265,6 +276,7 @@ typedef struct btdf_table_opts {
                                on cos phi only, so [0, pi] holds every azimuth) */
     btdf_progress_fn progress; /* may be NULL (the default) */
     void *progress_user;       /* passed to progress */
+    btdf_estimate_mode estimate; /* FACET: the builder's check (default FULL) */
 } btdf_table_opts;
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o);
@@ -331,7 +343,11 @@ typedef struct btdf_report {
 
 /* Estimates the errors of t over [ti_min, ti_max] at test_angles stratified incident
    angles (0 = default 48) with about points_per_angle stratified outgoing points
-   each (0 = default 8192), from the given seed. Frees nothing in *r first: pass a
+   each (0 = default 8192), from the given seed; also at the ends of the range, the
+   midpoint of every interval between adjacent slices, and midpoints added in rounds
+   where the per-angle error or T changes fast (per_ti lists them all, by ti; the means
+   are over the stratified angles). A table the builder checked with the same request
+   returns that check. Frees nothing in *r first: pass a
    zeroed report and call btdf_report_clear after. */
 BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
                                          size_t test_angles, size_t points_per_angle,

@@ -57,18 +57,33 @@ typedef enum {
    the result is byte-identical for any thread count.
    BTDF_OK when the tolerance was met; BTDF_EBUDGET when the node or series budget
    stopped refinement first: *out then still holds the best file reached and msg
-   says the error reached. Errors: BTDF_EINVAL (parameters, tolerance outside
+   says the error reached; or, with *out NULL, when the lobe is too narrow for the
+   format's node budget to follow at all (btdf_scatfun_build_limits). Errors: BTDF_EINVAL (parameters, tolerance outside
    [1e-6, 0.5], side not 1..3), BTDF_ENOMEM, BTDF_EOVERFLOW. */
 BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                                         btdf_side side, int threads, btdf_scatfun **out,
                                         char *msg, size_t msglen);
 
-/* btdf_scatfun_build with a progress callback (btdf.h, btdf_progress_fn): stages
-   "elevation nodes" (nodes checked, intervals to split) and "series (tighter)". */
+/* btdf_scatfun_build_limits (below) with a progress callback (btdf.h,
+   btdf_progress_fn): stages "elevation nodes" (nodes checked, intervals to split) and
+   "series (tighter)"; progress may be NULL. */
 BTDF_API btdf_status btdf_scatfun_build_progress(const btdf_params *p, double tolerance,
-                                                 btdf_side side, int threads,
-                                                 btdf_progress_fn progress, void *user,
-                                                 btdf_scatfun **out, char *msg, size_t msglen);
+                                                 btdf_side side, int threads, size_t max_coeffs,
+                                                 size_t max_bytes, btdf_progress_fn progress,
+                                                 void *user, btdf_scatfun **out, char *msg,
+                                                 size_t msglen);
+
+/* btdf_scatfun_build with budgets: max_coeffs caps the stored coefficients (0 or more
+   than 2^27: 2^27), max_bytes the builder's working memory in series and pair
+   records (0: no cap; the file's float copy and per-thread scratch come on top).
+   Reaching one returns BTDF_EBUDGET with the best file reached, as above. A request
+   whose transmitted lobe (about (n' - 1) 2/s rad, n' = max(n, 1/n)) is narrower than
+   90 degrees / BTDF_SCATFUN_MAX_HALF_NODES stops before any work: BTDF_EBUDGET,
+   *out left NULL, the reason in msg (btdf_scatfun_build does the same). */
+BTDF_API btdf_status btdf_scatfun_build_limits(const btdf_params *p, double tolerance,
+                                               btdf_side side, int threads, size_t max_coeffs,
+                                               size_t max_bytes, btdf_scatfun **out,
+                                               char *msg, size_t msglen);
 
 /* The checks btdf_scatfun_build makes of its arguments before any work: BTDF_OK, or
    BTDF_EINVAL with msg naming the value and what is allowed. */
@@ -91,7 +106,7 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
                                          size_t msglen);
 
 /* Reads and checks a SCATFUN v1 file: magic, version, flags, counts, nBases = 1,
-   no parameters, exact size, nodes ascending from -1 to +1, offsets and lengths
+   no parameters, exact size, nodes ascending from -1 to +1 (the outer ones within 1e-6), offsets and lengths
    inside the coefficients, lengths <= mMax, every float finite. BTDF_EFORMAT with
    the field and value for corrupt, truncated or foreign files; BTDF_EIO when the
    file cannot be read. */
@@ -156,6 +171,21 @@ BTDF_API const float *btdf_scatfun_cdf(const btdf_scatfun *f);
 BTDF_API const float *btdf_scatfun_coeffs(const btdf_scatfun *f);
 BTDF_API btdf_status btdf_scatfun_pair(const btdf_scatfun *f, size_t i, size_t o,
                                        size_t *offset, size_t *length);
+
+/* Sides the file holds: a btdf_side mask (ENTER for mu_s, mu_f > 0 pairs, LEAVE for
+   mu_s, mu_f < 0), 0 when neither has a non-empty series. */
+BTDF_API int btdf_scatfun_sides(const btdf_scatfun *f);
+
+/* Largest |a_0| of channel 0 over all pairs: the scale of the values pbrt-v3's
+   elevation sampler (SampleCatmullRom2D) inverts. That sampler stops on an absolute
+   1e-6 tolerance; in single precision its Newton step cannot move t by one unit in
+   the last place once the spline value passes 2^25 * 1e-6 = 33.55, and it can loop
+   forever. Spline and row interpolation can raise a value by at most (3/2)^2 over
+   the stored ones, so files with a peak at most BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 are
+   safe in a single-precision pbrt-v3; larger peaks need pbrt-v3 built with
+   PBRT_FLOAT_AS_DOUBLE (docs/scatfun.md, "pbrt-v3's sampler"). */
+#define BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 14.9
+BTDF_API double btdf_scatfun_a0_peak(const btdf_scatfun *f);
 
 BTDF_API void btdf_scatfun_free(btdf_scatfun *f);
 

@@ -1,0 +1,56 @@
+/* SPDX-License-Identifier: MIT */
+/* scatfun_impl.h: the in-memory SCATFUN v1 file shared by the builder (src/fourier.c) and the byte layout (formats/scatfun.c). */
+#ifndef BTDF_SCATFUN_IMPL_H
+#define BTDF_SCATFUN_IMPL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "btdf.h"
+#include "btdf_scatfun.h"
+
+/* Rec. 709 luminance weights used by pbrt-v3 and layerlab, and pbrt's inverse for G. */
+#define LUM_R 0.212671
+#define LUM_G 0.715160
+#define LUM_B 0.072169
+#define INV_GY 1.39829
+#define INV_GB 0.100913
+#define INV_GR 0.297375
+/* The floor MODEL.md section 6 puts under the transmittance in relative errors. */
+#define T_FLOOR 0.01
+/* A series longer than this cannot come out of a build; readers refuse more so a
+   scratch buffer sized by mMax stays small. */
+#define MAX_ORDER_READ (1u << 20)
+/* Coefficient budget of a build (floats): 2^27 floats is a 512 MiB file. */
+#define MAX_COEFFS_BUILD ((size_t)1 << 27)
+/* The outermost elevation nodes: the largest float below 1 (1 - 2^-24), not 1 itself.
+   pbrt-v3's Sample_f divides sin^2 of the sampled direction by sin^2 of the view; with
+   a view exactly on the normal (cos = 1 in float, any view within 0.014 deg) and a
+   sampled cosine of exactly +-1, that is 0/0 and the path tracer aborts on a NaN. With
+   the nodes ending below 1, a renderer never samples +-1 (a sampled cosine lies between
+   nodes) and a view with cos = +-1 lies outside the nodes, where the renderer returns
+   no sample (pdf 0) instead of NaN. docs/scatfun.md, "Views on the normal". */
+#define POLE_NODE 0.999999940395355224609375
+
+struct btdf_scatfun {
+    uint32_t n, ncoeffs, mmax, channels;
+    float eta, alpha[2];
+    float *nodes;      /* n */
+    double *xd;        /* the nodes as doubles, for the spline weights */
+    float *cdf;        /* n * n */
+    uint32_t *offsets; /* 2 * n * n: offset, length */
+    float *coeffs;     /* ncoeffs */
+    char *meta;        /* metadata bytes read from a file, or NULL */
+    size_t metalen;
+    int built;         /* 1 when made by btdf_scatfun_build: params and tolerance valid */
+    btdf_params params;
+    double tolerance, seconds_build;
+    int sides;         /* btdf_side mask of the blocks present */
+};
+
+/* msg <- the formatted text (when msg and msglen); returns st. */
+btdf_status scatfun_say(char *msg, size_t msglen, btdf_status st, const char *fmt, ...);
+/* Fills f->xd from f->nodes; 0 on success, -1 when out of memory. */
+int scatfun_nodes_d(btdf_scatfun *f);
+
+#endif /* BTDF_SCATFUN_IMPL_H */

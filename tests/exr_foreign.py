@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+# SPDX-License-Identifier: MIT
+"""Reads the tool's .exr tables with the OpenEXR Python bindings (their own copy of the
+OpenEXR library, not the one btdftab links) and checks every pixel against the CSV the
+tool writes for the same options, rounded to binary32. A writer bug and a matching bug
+in our reader cannot hide each other here.
+
+Usage: exr_foreign.py BTDFTAB [WORKDIR]   (needs: pip install OpenEXR numpy)
+Ends with "N passed, N failed"."""
+import os
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+import OpenEXR
+
+CASES = [
+    # the tolerance sweep of glass (n 1.5, s 3), the default range 0:90 down to 1e-3;
+    # 3e-4 and 1e-4 over narrower ranges (over 0:90 their CSVs are 0.6 to 1.2 GB)
+    *[["--ior", "1.5", "-s", "3", "--tolerance", t] for t in
+      ("1e-1", "3e-2", "2e-2", "1e-2", "3e-3", "1e-3")],
+    ["--ior", "1.5", "-s", "3", "--tolerance", "3e-4", "--theta-i", "0:45"],
+    ["--ior", "1.5", "-s", "3", "--tolerance", "1e-4", "--theta-i", "20:30"],
+    ["--ior", "1.5", "-s", "12", "--tolerance", "1e-1"],
+    ["--ior", "1.5", "-s", "12", "--tolerance", "3e-4", "--theta-i", "60:90"],
+    ["--ior", "1.31", "-s", "20"],  # the README's ice
+    ["--ior", "1.5,1.51,1.52", "-s", "3", "--tolerance", "1e-2"],  # three channels
+    ["--ior", "0.6666667", "-s", "6", "--theta-i", "0:60"],  # reciprocal kind
+    ["--ior", "1.5", "-s", "3", "--grid", "7,46,37"],  # grid: 46 rows, 37 columns
+    ["--ior", "1.5", "-s", "3", "--grid", "3,17,5", "--theta-o", "95:170"],
+]
+
+
+def read_csv(path):
+    """Slices in file order: (ti, rows, cols, values[nrows, ncols, channels])."""
+    slices = {}
+    order = []
+    nch = None
+    with open(path) as f:
+        for line in f:
+            if line.startswith("#"):
+                continue
+            if line.startswith("theta_i_deg"):
+                nch = 3 if "rho_r" in line else 1
+                continue
+            c = line.rstrip("\n").split(",")
+            ti, row, col = float(c[-3]), float(c[-2]), float(c[-1])
+            vals = [float(v) for v in c[3:3 + nch]]
+            if ti not in slices:
+                slices[ti] = {}
+                order.append(ti)
+            slices[ti][(row, col)] = vals
+    out = []
+    for ti in order:
+        nodes = slices[ti]
+        rows = sorted({r for r, _ in nodes})
+        cols = sorted({c for _, c in nodes})
+        v = np.array([[nodes[(r, c)] for c in cols] for r in rows], dtype=np.float64)
+        out.append((ti, rows, cols, v))
+    return out, nch
+
+
+def check(tool, args, work):
+    csv = os.path.join(work, "t.csv")
+    exr = os.path.join(work, "t.exr")
+    for out in (csv, exr):
+        r = subprocess.run([tool, "tabulate", *args, "--best-effort", "-q", "-o", out],
+                           capture_output=True, text=True)
+        if r.returncode not in (0, 3):
+            return "tabulate %s failed: %s" % (out, r.stderr.strip())
+    slices, nch = read_csv(csv)
+    f = OpenEXR.File(exr, separate_channels=True)
+    if len(f.parts) != len(slices):
+        return "%d parts, %d slices in the CSV" % (len(f.parts), len(slices))
+    names = ["Y"] if nch == 1 else ["R", "G", "B"]
+    for k, (part, (ti, rows, cols, v)) in enumerate(zip(f.parts, slices)):
+        h = part.header
+        if float(np.asarray(h["btdf.ti"]).ravel()[0]) != ti:
+            return "part %d: btdf.ti differs from the CSV" % k
+        if [float(x) for x in h["btdf.rows"].split()] != rows or \
+                [float(x) for x in h["btdf.cols"].split()] != cols:
+            return "part %d: node coordinates differ from the CSV" % k
+        if set(part.channels) != set(names):
+            return "part %d: channels %s" % (k, sorted(part.channels))
+        for ch, name in enumerate(names):
+            px = part.channels[name].pixels
+            if px.dtype != np.float32 or px.shape != (len(rows), len(cols)):
+                return "part %d %s: %s %s" % (k, name, px.dtype, px.shape)
+            want = v[:, :, ch].astype(np.float32)
+            bad = np.argwhere(px != want)
+            if bad.size:
+                r, c = bad[0]
+                return ("part %d (%d x %d) channel %s node (%d, %d): file %.9g, table %.9g; "
+                        "%d nodes differ" % (k, len(rows), len(cols), name, r, c, px[r, c],
+                                             want[r, c], len(bad)))
+    return None
+
+
+def main():
+    tool = sys.argv[1]
+    work = sys.argv[2] if len(sys.argv) > 2 else tempfile.mkdtemp(prefix="btdf-foreign-")
+    passed = failed = 0
+    for args in CASES:
+        why = check(tool, args, work)
+        label = " ".join(args)
+        if why is None:
+            passed += 1
+            print("ok   %s" % label)
+        else:
+            failed += 1
+            print("FAIL %s: %s" % (label, why))
+    print("%d passed, %d failed" % (passed, failed))
+    return 0 if failed == 0 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
