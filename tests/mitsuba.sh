@@ -11,6 +11,7 @@
 set -u
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${1:-$ROOT/build}
+BUILD=$(cd "$BUILD" 2>/dev/null && pwd) || { echo "no build folder ${1:-build}"; echo "0 passed, 1 failed"; exit 1; }
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 VENV=${MITSUBA_VENV:-$W/venv}
