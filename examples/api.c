@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* api.c: evaluate the model, build, query and write a table through the installed library. */
-#include <btdf.h>
+#include <btdf/btdf.h>
 #include <stdio.h>
 
 int main(void)

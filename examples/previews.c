@@ -5,8 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "btdf.h"
-#include "btdf_preview.h"
+#include <btdf/btdf.h>
 
 #define PI 3.14159265358979323846
 

@@ -304,4 +304,11 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     return BTDF_OK;
 }
 
-const btdf_format_ops btdf_format_csv = {"CSV", ".csv", NULL, 1, csv_write, NULL, csv_read};
+const btdf_format_ops btdf_format_csv = {
+    .name = "CSV",
+    .ext = ".csv",
+    .available = 1,
+    .needs = BTDF_NEEDS_TABLE,
+    .write_stream = csv_write,
+    .read_path = csv_read,
+};

@@ -655,5 +655,11 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
 }
 
 const btdf_format_ops btdf_format_exr = {
-    "OpenEXR", ".exr", "openexr", 1, NULL, exr_write, exr_read,
+    .name = "OpenEXR",
+    .ext = ".exr",
+    .feature = "openexr",
+    .available = 1,
+    .needs = BTDF_NEEDS_TABLE,
+    .write_path = exr_write,
+    .read_path = exr_read,
 };

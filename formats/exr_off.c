@@ -2,4 +2,5 @@
 /* exr_off.c: the OpenEXR entry of a build without OpenEXR, so errors can name the switch. */
 #include "formats.h"
 
-const btdf_format_ops btdf_format_exr = {"OpenEXR", ".exr", "openexr", 0, NULL, NULL, NULL};
+const btdf_format_ops btdf_format_exr = {
+    .name = "OpenEXR", .ext = ".exr", .feature = "openexr", .needs = BTDF_NEEDS_TABLE};

@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* formats.h: the table of file formats; one writer or reader per file in formats/. */
+/* formats.h: one ops table per file format, all registered in registry.c. */
 #ifndef BTDF_FORMATS_H
 #define BTDF_FORMATS_H
 
@@ -7,24 +7,35 @@
 
 #include "btdf.h"
 
-/* What a writer gets: the table and what to record beside it. */
+/* What a writer gets: the object its format needs and what to record beside it. */
 typedef struct btdf_output_ctx {
-    const btdf_table *table;
+    const btdf_table *table;     /* BTDF_NEEDS_TABLE */
     const btdf_write_opts *opts; /* never NULL inside a writer */
+    const btdf_scatfun *scatfun; /* BTDF_NEEDS_SERIES */
+    const char *metadata_json;   /* BTDF_NEEDS_SERIES, may be NULL */
+    /* BTDF_NEEDS_PICTURE: the picture, drawn by the registry before the write. */
+    const unsigned char *rgb;    /* width x height 8-bit RGB, rows from the top */
+    int width, height;
+    const char *description;     /* stored in the file, may be NULL */
 } btdf_output_ctx;
 
 typedef struct btdf_format_ops {
-    const char *name;    /* "csv" */
+    const char *name;    /* "CSV" */
     const char *ext;     /* ".csv" */
     const char *feature; /* the Meson feature that provides it, NULL if always built */
     int available;       /* 0 when its feature was switched off at build time */
+    btdf_needs needs;    /* what the writer is made from */
     /* Writes to a stream (formats that can go to standard output), or NULL. */
     btdf_status (*write_stream)(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen);
     /* Writes to a file path (the caller passes a temporary name and renames). */
     btdf_status (*write_path)(const btdf_output_ctx *c, const char *path, char *msg,
                               size_t msglen);
-    /* Reads a table back, or NULL. */
+    /* Reads a table back (BTDF_NEEDS_TABLE), or NULL. */
     btdf_status (*read_path)(const char *path, btdf_table **out, char *msg, size_t msglen);
+    /* Reads a series back (BTDF_NEEDS_SERIES), or NULL. */
+    btdf_status (*read_series)(const char *path, btdf_scatfun **out, char *msg, size_t msglen);
+    /* Prints what was read; NULL: the registry's table summary. */
+    btdf_status (*inspect)(const btdf_input *in, FILE *out);
 } btdf_format_ops;
 
 /* The format a path's extension names (case-insensitive), or NULL if none. */
@@ -35,8 +46,10 @@ const btdf_format_ops *btdf_format_for_path(const char *path);
 btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c,
                               const char *path, char *msg, size_t msglen);
 
-/* Format entries defined in their own files. */
+/* Format entries, each defined in its own file. */
 extern const btdf_format_ops btdf_format_csv;
 extern const btdf_format_ops btdf_format_exr;
+extern const btdf_format_ops btdf_format_bsdf;
+extern const btdf_format_ops btdf_format_png;
 
 #endif

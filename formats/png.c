@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
-/* png.c: 8-bit RGB pictures to PNG through libpng; its setjmp error handling stays here. */
+/* png.c: the PNG entry of the format registry: 8-bit RGB pictures through libpng, whose
+   setjmp error handling stays here. */
 #include <errno.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -8,7 +9,7 @@
 
 #include <png.h>
 
-#include "png_impl.h"
+#include "formats.h"
 
 /* Where libpng's messages go: the first error, for the caller's buffer. */
 typedef struct png_err {
@@ -70,10 +71,13 @@ static int encode(FILE *f, const unsigned char *rgb, int width, int height,
     return 0;
 }
 
-btdf_status btdf_png_write_rgb(const char *path, const unsigned char *rgb, int width,
-                               int height, const char *description, char *msg,
-                               size_t msglen)
+/* Writes the picture of c (drawn by the registry) to path. */
+static btdf_status png_write(const btdf_output_ctx *c, const char *path, char *msg,
+                             size_t msglen)
 {
+    const unsigned char *rgb = c->rgb;
+    int width = c->width, height = c->height;
+    const char *description = c->description;
     if (width <= 0 || height <= 0 || !rgb) {
         if (msg && msglen)
             snprintf(msg, msglen, "empty picture (%d x %d)", width, height);
@@ -99,3 +103,12 @@ btdf_status btdf_png_write_rgb(const char *path, const unsigned char *rgb, int w
     }
     return BTDF_OK;
 }
+
+const btdf_format_ops btdf_format_png = {
+    .name = "PNG",
+    .ext = ".png",
+    .feature = "png",
+    .available = 1,
+    .needs = BTDF_NEEDS_PICTURE,
+    .write_path = png_write,
+};

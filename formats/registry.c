@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* registry.c: finds a format by extension and writes files atomically. */
+/* registry.c: the one list of formats, and the one write, read and inspect path. */
 #include <ctype.h>
 #include <errno.h>
 #include <stdio.h>
@@ -9,7 +9,21 @@
 #include "formats.h"
 #include "tmpfile.h"
 
-static const btdf_format_ops *const all_formats[] = {&btdf_format_csv, &btdf_format_exr};
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
+static const btdf_format_ops *const all_formats[] = {&btdf_format_csv, &btdf_format_exr,
+                                                     &btdf_format_bsdf, &btdf_format_png};
+#define NFORMATS (sizeof all_formats / sizeof all_formats[0])
+
+static btdf_status say(char *msg, size_t msglen, btdf_status st, const char *fmt,
+                       const char *a, const char *b)
+{
+    if (msg && msglen)
+        snprintf(msg, msglen, fmt, a, b);
+    return st;
+}
 
 static int ext_is(const char *path, const char *ext)
 {
@@ -26,10 +40,32 @@ const btdf_format_ops *btdf_format_for_path(const char *path)
 {
     if (!path)
         return NULL;
-    for (size_t i = 0; i < sizeof all_formats / sizeof all_formats[0]; i++)
+    for (size_t i = 0; i < NFORMATS; i++)
         if (ext_is(path, all_formats[i]->ext))
             return all_formats[i];
     return NULL;
+}
+
+BTDF_API int btdf_format_find(const char *path, btdf_format_info *info)
+{
+    const btdf_format_ops *f = btdf_format_for_path(path);
+    if (!f)
+        return 0;
+    if (info) {
+        info->name = f->name;
+        info->ext = f->ext;
+        info->feature = f->feature;
+        info->available = f->available;
+        info->needs = f->needs;
+        info->can_stream = f->write_stream != NULL;
+        info->can_read = f->read_path != NULL || f->read_series != NULL;
+    }
+    return 1;
+}
+
+BTDF_API const char *btdf_format_list(void)
+{
+    return ".csv .exr .bsdf .png"; /* the order of all_formats */
 }
 
 BTDF_API int btdf_format_available(const char *ext)
@@ -42,6 +78,17 @@ BTDF_API int btdf_format_available(const char *ext)
     return f && f->available;
 }
 
+static btdf_status switched_off(const btdf_format_ops *f, char *msg, size_t msglen)
+{
+    return say(msg, msglen, BTDF_ENOTSUP,
+               "%s support was switched off at build time (-D%s=disabled)", f->name,
+               f->feature ? f->feature : f->name);
+}
+
+/* ------------------------------------------------------------------------- */
+/* Writing                                                                   */
+/* ------------------------------------------------------------------------- */
+
 typedef struct reg_ctx {
     const btdf_format_ops *f;
     const btdf_output_ctx *c;
@@ -53,33 +100,87 @@ static btdf_status reg_write(void *ctx, const char *tmp, char *msg, size_t msgle
     if (r->f->write_path)
         return r->f->write_path(r->c, tmp, msg, msglen);
     FILE *fp = fopen(tmp, "wb");
-    if (!fp) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "cannot create %s: %s", tmp, strerror(errno));
-        return BTDF_EIO;
-    }
+    if (!fp)
+        return say(msg, msglen, BTDF_EIO, "cannot create %s: %s", tmp, strerror(errno));
     btdf_status st = r->f->write_stream(r->c, fp, msg, msglen);
     int bad = fflush(fp) != 0 || ferror(fp);
     bad |= fclose(fp) != 0;
-    if (st == BTDF_OK && bad) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "writing %s failed: %s", tmp, strerror(errno));
-        st = BTDF_EIO;
-    }
+    if (st == BTDF_OK && bad)
+        st = say(msg, msglen, BTDF_EIO, "writing %s failed: %s", tmp, strerror(errno));
     return st;
 }
 
 btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c,
                               const char *path, char *msg, size_t msglen)
 {
-    if (!f->available) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "%s support was switched off at build time (-D%s=disabled)",
-                     f->name, f->feature ? f->feature : f->name);
-        return BTDF_ENOTSUP;
-    }
+    if (!f->available)
+        return switched_off(f, msg, msglen);
     reg_ctx r = {f, c};
     return btdf_write_file_atomic(path, f->ext, reg_write, &r, msg, msglen);
+}
+
+/* The text each picture kind stores in its PNG (indexed by btdf_preview_kind). */
+static const char *picture_description(btdf_preview_kind kind)
+{
+    static const char *const what[3] = {"btdftab polar plot of rho |cos to|",
+                                        "btdftab montage of table slices",
+                                        "btdftab render of a rough face"};
+    return kind >= 0 && kind < 3 ? what[kind] : NULL;
+}
+
+/* Draws the picture, then writes it like any other output. */
+static btdf_status write_picture(const btdf_format_ops *f, btdf_output_ctx *c,
+                                 const btdf_preview_opts *po, const char *path, char *msg,
+                                 size_t msglen)
+{
+    unsigned char *rgb = NULL;
+    btdf_status st = btdf_preview_render(po, &rgb, &c->width, &c->height, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    c->rgb = rgb;
+    c->description = picture_description(po->kind);
+    st = btdf_write_atomic(f, c, path, msg, msglen);
+    btdf_preview_free(rgb);
+    return st;
+}
+
+BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char *msg,
+                                size_t msglen)
+{
+    if (!what || !path || !*path)
+        return say(msg, msglen, BTDF_EINVAL, "no object or no file name%s%s", "", "");
+    int to_stdout = !strcmp(path, "-");
+    const btdf_format_ops *f = to_stdout ? &btdf_format_csv : btdf_format_for_path(path);
+    if (!f)
+        return say(msg, msglen, BTDF_EINVAL, "unknown format of '%s': use %s", path,
+                   btdf_format_list());
+    if (!f->available)
+        return switched_off(f, msg, msglen);
+    btdf_write_opts none = {NULL, NULL};
+    btdf_output_ctx c;
+    memset(&c, 0, sizeof c);
+    c.opts = what->opts ? what->opts : &none;
+    switch (f->needs) {
+    case BTDF_NEEDS_TABLE: c.table = what->table; break;
+    case BTDF_NEEDS_SERIES:
+        c.scatfun = what->scatfun;
+        c.metadata_json = what->metadata_json;
+        break;
+    case BTDF_NEEDS_PICTURE:
+        if (!what->picture)
+            break;
+        return write_picture(f, &c, what->picture, path, msg, msglen);
+    default: break;
+    }
+    if (!c.table && !c.scatfun)
+        return say(msg, msglen, BTDF_EINVAL, "%s: nothing to write as %s", path, f->name);
+    if (to_stdout) {
+        btdf_status st = f->write_stream(&c, stdout, msg, msglen);
+        if (st == BTDF_OK && fflush(stdout) != 0)
+            st = say(msg, msglen, BTDF_EIO, "standard output: %s%s", strerror(errno), "");
+        return st;
+    }
+    return btdf_write_atomic(f, &c, path, msg, msglen);
 }
 
 BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
@@ -88,14 +189,87 @@ BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
     if (!t || !path)
         return BTDF_EINVAL;
     const btdf_format_ops *f = btdf_format_for_path(path);
-    if (!f || (!f->write_path && !f->write_stream)) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "unknown table format of '%s': use .csv or .exr", path);
-        return BTDF_EINVAL;
-    }
+    if (!f || f->needs != BTDF_NEEDS_TABLE)
+        return say(msg, msglen, BTDF_EINVAL, "unknown table format of '%s': use .csv or .exr%s",
+                   path, "");
+    btdf_output what = {t, NULL, NULL, w, NULL};
+    return btdf_write(&what, path, msg, msglen);
+}
+
+BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *path,
+                                        char *msg, size_t msglen)
+{
+    if (!path || !*path)
+        return say(msg, msglen, BTDF_EINVAL, "no file name%s%s", "", "");
+    if (!btdf_format_png.available)
+        return switched_off(&btdf_format_png, msg, msglen);
+    btdf_output_ctx c;
+    memset(&c, 0, sizeof c);
     btdf_write_opts none = {NULL, NULL};
-    btdf_output_ctx c = {t, w ? w : &none};
-    return btdf_write_atomic(f, &c, path, msg, msglen);
+    c.opts = &none;
+    return write_picture(&btdf_format_png, &c, o, path, msg, msglen);
+}
+
+BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
+                                        const char *metadata_json, char *msg, size_t msglen)
+{
+    if (!f || !path || !*path)
+        return say(msg, msglen, BTDF_EINVAL, "file or path missing%s%s", "", "");
+    btdf_output_ctx c;
+    memset(&c, 0, sizeof c);
+    btdf_write_opts none = {NULL, NULL};
+    c.opts = &none;
+    c.scatfun = f;
+    c.metadata_json = metadata_json;
+    char why[256] = "";
+    btdf_status st = btdf_write_atomic(&btdf_format_bsdf, &c, path, why, sizeof why);
+    if (st != BTDF_OK)
+        say(msg, msglen, st, "%s: %s", path, why);
+    return st;
+}
+
+static btdf_status buffer_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
+{
+    return btdf_write_bytes(ctx, tmp, msg, msglen);
+}
+
+BTDF_API btdf_status btdf_write_buffer(const char *path, const char *ext, const void *data,
+                                       size_t len, char *msg, size_t msglen)
+{
+    if (!path || !*path || (!data && len))
+        return say(msg, msglen, BTDF_EINVAL, "no file name or no data%s%s", "", "");
+    btdf_bytes b = {data, len};
+    return btdf_write_file_atomic(path, ext, buffer_writer, &b, msg, msglen);
+}
+
+BTDF_API void btdf_remove_partial_files(void)
+{
+    btdf_tmp_remove_all();
+}
+
+/* ------------------------------------------------------------------------- */
+/* Reading                                                                   */
+/* ------------------------------------------------------------------------- */
+
+BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size_t msglen)
+{
+    if (!path || !in)
+        return BTDF_EINVAL;
+    memset(in, 0, sizeof *in);
+    const btdf_format_ops *f = btdf_format_for_path(path);
+    if (!f || (!f->read_path && !f->read_series))
+        return say(msg, msglen, BTDF_EINVAL, "not a file format btdf reads: use .csv, .exr or "
+                   ".bsdf%s%s", "", "");
+    if (!f->available)
+        return switched_off(f, msg, msglen);
+    /* One wording for a file that cannot be opened, whatever its format. */
+    FILE *probe = fopen(path, "rb");
+    if (!probe)
+        return say(msg, msglen, BTDF_EIO, "cannot open: %s%s", strerror(errno), "");
+    fclose(probe);
+    if (f->read_series)
+        return f->read_series(path, &in->scatfun, msg, msglen);
+    return f->read_path(path, &in->table, msg, msglen);
 }
 
 BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *msg,
@@ -104,16 +278,51 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
     if (!path || !out)
         return BTDF_EINVAL;
     const btdf_format_ops *f = btdf_format_for_path(path);
-    if (!f || !f->read_path) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "unknown table format of '%s': use .csv or .exr", path);
+    if (!f || !f->read_path)
+        return say(msg, msglen, BTDF_EINVAL, "unknown table format of '%s': use .csv or .exr%s",
+                   path, "");
+    btdf_input in;
+    btdf_status st = btdf_read(path, &in, msg, msglen);
+    if (st == BTDF_OK)
+        *out = in.table;
+    return st;
+}
+
+/* The summary of a table file: its header, then one line per slice. */
+static btdf_status table_inspect(const btdf_input *in, FILE *out)
+{
+    const btdf_table *t = in->table;
+    const btdf_params *p = btdf_table_get_params(t);
+    fprintf(out, "kind: %s\nchannels: %d\nior:", btdf_table_kind_name(btdf_table_get_kind(t)),
+            p->channels);
+    for (int ch = 0; ch < p->channels; ch++)
+        fprintf(out, " %.17g", p->ior[ch]);
+    fprintf(out, "\nsmoothness: %.17g\nk0: %.17g\nslices: %zu\nnodes: %zu\n", p->smoothness,
+            p->k0, btdf_table_slice_count(t), btdf_table_node_count(t));
+    for (size_t k = 0; k < btdf_table_slice_count(t); k++) {
+        btdf_slice s;
+        btdf_table_slice(t, k, &s);
+        fprintf(out, "slice %zu: index %.6f deg, %zu x %zu\n", k, s.ti * 180.0 / M_PI, s.nrows,
+                s.ncols);
+    }
+    return ferror(out) ? BTDF_EIO : BTDF_OK;
+}
+
+BTDF_API btdf_status btdf_inspect(const char *path, FILE *out, char *msg, size_t msglen)
+{
+    if (!out)
         return BTDF_EINVAL;
-    }
-    if (!f->available) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "%s support was switched off at build time (-D%s=disabled)",
-                     f->name, f->feature ? f->feature : f->name);
-        return BTDF_ENOTSUP;
-    }
-    return f->read_path(path, out, msg, msglen);
+    btdf_input in;
+    btdf_status st = btdf_read(path, &in, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    const btdf_format_ops *f = btdf_format_for_path(path);
+    st = f->inspect ? f->inspect(&in, out) : table_inspect(&in, out);
+    if (st == BTDF_OK && fflush(out) != 0)
+        st = BTDF_EIO;
+    if (st != BTDF_OK)
+        say(msg, msglen, st, "%s: printing failed: %s", path, strerror(errno));
+    btdf_table_free(in.table);
+    btdf_scatfun_free(in.scatfun);
+    return st;
 }

@@ -1677,24 +1677,7 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
     return BTDF_OK;
 }
 
-BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
-                                        const char *metadata_json, char *msg, size_t msglen)
-{
-    if (!f || !path || !*path)
-        return say(msg, msglen, BTDF_EINVAL, "file or path missing");
-    unsigned char *b = NULL;
-    size_t len = 0;
-    btdf_status st = btdf_scatfun_to_mem(f, metadata_json, &b, &len, msg, msglen);
-    if (st != BTDF_OK)
-        return st;
-    btdf_bytes bytes = {b, len};
-    char why[256] = "";
-    st = btdf_write_file_atomic(path, ".bsdf", btdf_write_bytes, &bytes, why, sizeof why);
-    if (st != BTDF_OK)
-        say(msg, msglen, st, "%s: %s", path, why);
-    free(b);
-    return st;
-}
+/* btdf_scatfun_write is the registry's (formats/registry.c): one atomic write path. */
 
 #define FMT_FAIL(...) say(msg, msglen, BTDF_EFORMAT, __VA_ARGS__)
 

@@ -10,9 +10,7 @@
 #include "btdf_preview.h"
 #include "model_impl.h"
 #include "table_impl.h"
-#include "tmpfile.h"
 #include "plot.h"
-#include "png_impl.h"
 
 #define DEG (180.0 / M_PI)
 
@@ -602,43 +600,4 @@ BTDF_API btdf_status btdf_preview_render(const btdf_preview_opts *o, unsigned ch
 BTDF_API void btdf_preview_free(unsigned char *rgb)
 {
     free(rgb);
-}
-
-#if BTDF_HAVE_PNG
-typedef struct png_job {
-    const unsigned char *rgb;
-    int w, h;
-    const char *what;
-} png_job;
-
-static btdf_status png_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
-{
-    const png_job *j = ctx;
-    return btdf_png_write_rgb(tmp, j->rgb, j->w, j->h, j->what, msg, msglen);
-}
-#endif
-
-BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *path,
-                                        char *msg, size_t msglen)
-{
-    if (!path || !*path)
-        return say(BTDF_EINVAL, msg, msglen, "no file name");
-#if !BTDF_HAVE_PNG
-    (void)o;
-    return say(BTDF_ENOTSUP, msg, msglen,
-               "PNG support was switched off at build time (-Dpng=disabled)");
-#else
-    unsigned char *rgb = NULL;
-    int w = 0, h = 0;
-    btdf_status st = btdf_preview_render(o, &rgb, &w, &h, msg, msglen);
-    if (st != BTDF_OK)
-        return st;
-    static const char *const what[3] = {"btdftab polar plot of rho |cos to|",
-                                        "btdftab montage of table slices",
-                                        "btdftab render of a rough face"};
-    png_job job = {rgb, w, h, what[o->kind]};
-    st = btdf_write_file_atomic(path, ".png", png_writer, &job, msg, msglen);
-    btdf_preview_free(rgb);
-    return st;
-#endif
 }

@@ -208,6 +208,11 @@ const char *table_kind_name(btdf_table_kind k)
                                 : (k == BTDF_TABLE_FACET_RECIPROCAL ? "facet-reciprocal" : "facet");
 }
 
+BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind)
+{
+    return table_kind_name(kind);
+}
+
 int table_kind_parse(const char *name, btdf_table_kind *k)
 {
     const btdf_table_kind all[3] = {BTDF_TABLE_FACET, BTDF_TABLE_GRID,

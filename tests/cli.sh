@@ -148,5 +148,39 @@ else
     expect 1 "switched off at build time (-Dpng=disabled)" "no PNG" -- "$B" tabulate -o "$W/t.png"
 fi
 
+# the command line: one option table behind getopt_long, --help and the manual page
+[ "$("$B" eval --ior=1.4 --smoothness=3 30 150 180)" = "$("$B" eval --ior 1.4 -s 3 30 150 180)" ] && \
+    ok "--opt=value reads as --opt value" || no "--opt=value"
+[ "$("$B" eval 30 150 -180 --ior 1.4)" = "$("$B" eval --ior 1.4 -- 30 150 180)" ] && \
+    ok "a negative angle is an argument, not an option; '--' ends the options" || no "negative angle, --"
+"$B" -V | grep -q '^btdftab [0-9]' && ok "-V" || no "-V"
+"$B" help tabulate | grep -q -- '--tolerance' && ! "$B" help tabulate | grep -q -- '--table' && \
+    "$B" eval --help | grep -q -- '--table' && ! "$B" eval --help | grep -q -- '--tolerance' && \
+    ok "each command's help lists its own options" || no "per-command help"
+"$B" --man > "$W/man.1" && head -n 3 "$W/man.1" | grep -q '^\.TH BTDFTAB 1' && ok "--man writes a manual page" || no "--man"
+sed 's/\\-/-/g' "$W/man.1" > "$W/man.txt" # troff's \- is a plain dash
+missing=""
+for c in eval tabulate albedo polar build inspect; do
+    for o in $("$B" help "$c" | sed -n 's/^ *\(-., \)\{0,1\}--\([a-z0-9-]*\).*/\2/p'); do
+        grep -q -- "--$o" "$W/man.txt" || missing="$missing $c:--$o"
+    done
+done
+rm -f "$W/man.1" "$W/man.txt"
+[ -z "$missing" ] && ok "the manual page has every option of every --help" || no "manual lacks:$missing"
+expect 2 "did you mean '--tolerance'" "unknown option suggests the nearest" -- "$B" tabulate --tolerence 1e-3 -o "$W/t.csv"
+expect 2 "did you mean '--ior'" "-ior suggests --ior" -- "$B" eval -ior 1.3 30 150 180
+expect 2 "is an option of build" "an option of another command says whose" -- "$B" eval --force 30 150 180
+expect 2 "given twice" "a second -o" -- "$B" tabulate -o "$W/t.csv" -o "$W/t.exr"
+expect 2 "do not apply with --table" "--ior with --table" -- "$B" eval --table "$W/t.csv" --ior 1.3 30 150 180
+expect 2 "not to --grid" "--tolerance with --grid" -- "$B" tabulate --grid 3,3,3 --tolerance 1e-2 -o "$W/t.csv"
+expect 2 "applies to pictures" "--size without a picture" -- "$B" tabulate --size 640x480 -o "$W/t.csv"
+expect 1 "cannot write in the folder" "a missing output folder, before the work" -- "$B" tabulate -o "$W/nodir/t.csv"
+"$B" tabulate -q --theta-i 0:60 --tolerance 1e-2 -o "$W/r60.csv" && \
+    echo "60 150 180" | "$B" eval --table "$W/r60.csv" >/dev/null && ok "eval --table at the end of its range" || no "eval at range end"
+expect 2 "outside the incidence range of .*0:60" "eval --table outside the table's range" -- "$B" eval --table "$W/r60.csv" 70 150 180
+rm -f "$W/r60.csv"
+expect 1 "t.csv: cannot open: No such file" "one wording for a missing file (.csv)" -- "$B" inspect "$W/t.csv"
+expect 1 "t.bsdf: cannot open: No such file" "one wording for a missing file (.bsdf)" -- "$B" inspect "$W/t.bsdf"
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

@@ -14,7 +14,8 @@ if meson setup "$W/build" "$ROOT" --prefix="$W/stage" --libdir=lib -Dtests=false
    meson install -C "$W/build" >>"$W/log" 2>&1; then ok "meson install into a staging prefix"
 else no "meson install"; cat "$W/log"; fi
 missing=""
-for f in include/btdf.h include/btdf_config.h include/btdf_preview.h include/btdf_scatfun.h \
+for f in include/btdf/btdf.h include/btdf/btdf_config.h include/btdf/btdf_preview.h \
+         include/btdf/btdf_scatfun.h include/btdf/btdf_io.h share/man/man1/btdftab.1 \
          lib/libbtdf.so lib/libbtdf.a lib/pkgconfig/btdf.pc bin/btdftab; do
     [ -e "$W/stage/$f" ] || missing="$missing $f"
 done

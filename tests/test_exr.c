@@ -74,7 +74,7 @@ static btdf_status write_exr(const btdf_table *t, const char *path, const btdf_w
                              char *msg, size_t msglen)
 {
     btdf_write_opts none = {NULL, NULL};
-    btdf_output_ctx c = {t, w ? w : &none};
+    btdf_output_ctx c = {.table = t, .opts = w ? w : &none};
     return btdf_format_exr.write_path(&c, path, msg, msglen);
 }
 

@@ -1,21 +1,21 @@
 /* SPDX-License-Identifier: MIT */
-/* btdftab.c: the command-line tool; parses arguments and calls libbtdf. */
+/* btdftab.c: the command-line tool: reads its options through the one table of
+   options.c and calls libbtdf through its installed headers only. */
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <signal.h>
 #include <string.h>
 #include <sys/resource.h>
-#include <time.h>
 #include <unistd.h>
 
-#include "btdf.h"
-#include "formats.h"
+#include <btdf/btdf.h>
+
 #include "manifest.h"
-#include "table_impl.h"
-#include "tmpfile.h"
+#include "options.h"
+#include "run.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -25,13 +25,6 @@
 enum { EXIT_USAGE = 2, EXIT_BUDGET = 3 };
 
 static const char *prog = "btdftab";
-
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 /* Peak resident memory of this process so far, in bytes (Linux reports KiB). */
 static size_t peak_rss(void)
@@ -57,67 +50,8 @@ static int ends_with(const char *s, const char *suffix)
     return ls >= lx && strcmp(s + ls - lx, suffix) == 0;
 }
 
-static void usage(FILE *f, int verbose)
-{
-    fprintf(f,
-            "usage: btdftab eval [options] [TI TO PHI]     rho at angles (degrees), or rows on stdin\n"
-            "       btdftab tabulate [options] -o FILE      write a table (.csv%s)\n"
-            "       btdftab albedo [options] [TI ...]       T(ti) and the flat Ft(ti)\n"
-            "       btdftab polar [options] -o FILE.png     lobes in the plane of incidence\n"
-            "       btdftab build [--force] SCENE.ini       the outputs a scene manifest lists\n"
-            "       btdftab inspect FILE                    header and statistics of a file\n"
-            "       btdftab --help | --version\n",
-            btdf_format_available("exr") ? ", .exr" : "");
-    if (!verbose) {
-        fprintf(f, "Try 'btdftab --help' for more.\n");
-        return;
-    }
-    fprintf(f,
-            "\nModel: Xu & Sun (2008), Eq. 25, the single-scattering BTDF of a Gaussian rough\n"
-            "interface; rho in 1/sr without a cosine factor. Angles in degrees: theta_i in\n"
-            "[0, 90], theta_o in [90, 180] (transmitted side), phi = 180 the forward plane.\n"
-            "\nMaterial options (all commands):\n"
-            "  --ior N | R,G,B      relative index n = n_lower / n_upper (default 1.5); n != 1\n"
-            "  -s, --smoothness S   s = correlation length / RMS height (default 3)\n"
-            "  --k0 K               shadowing constant (default 0.7)\n"
-            "\neval:\n"
-            "  --table FILE         evaluate a written table (.csv%s, .bsdf) instead of Eq. 25\n"
-            "\ntabulate:\n"
-            "  -o, --output FILE    .csv, .exr, .png, or .bsdf (pbrt-v3/Mitsuba tabulated,\n"
-            "                       built from Eq. 25 directly); '-' writes CSV to stdout\n"
-            "  --tolerance E        target error of the adaptive table (default 1e-3)\n"
-            "  --metric l1|max      which error must meet E (default l1)\n"
-            "  --grid NI,NO,NPHI    a plain regular grid in (theta_i, theta_o, phi) instead\n"
-            "  --side S             enter (index n, default), leave (index 1/n); for .bsdf\n"
-            "                       also both (the default there)\n"
-            "  --theta-i A:B        incidence range in degrees (default 0:90)\n"
-            "  --theta-o A:B        --grid only: outgoing range, within 90:180 (default)\n"
-            "  --phi A:B            --grid only: azimuth range, within 0:180 (default; rho\n"
-            "                       depends on cos phi, so 0:180 holds every azimuth)\n"
-            "  --max-samples N      node budget (default 8000000)\n"
-            "  --max-memory MIB     memory cap for the nodes (default 256)\n"
-            "  --threads N          worker threads, 0 = all cores (default 0)\n"
-            "  --report FILE.json   write the error report as JSON\n"
-            "  --best-effort        write the table even if the budget stopped refinement\n"
-            "  --preview [KIND=]F.png  a picture of the table; KIND is montage (default),\n"
-            "                       render (the paper's Figs. 10-11) or render-analytic\n"
-            "                       (with Eq. 25 and the difference beside it); repeatable;\n"
-            "                       -o F.png is the same as --preview F.png\n"
-            "  --size WxH           picture size in pixels (default: per kind)\n"
-            "\nbuild:\n"
-            "  --force              redo outputs that are up to date\n"
-            "  (also --threads, --quiet, --best-effort; docs/pipelines.md has the manifest)\n"
-            "\npolar:\n"
-            "  --material N:S       one material (repeatable, at most 8 curves in all);\n"
-            "                       default: --ior and --smoothness\n"
-            "  --angles A,B,...     incident angles in degrees (default 30)\n"
-            "  -q, --quiet          no report line on standard error\n"
-            "\nExit status: 0 success, 1 failed run, 2 usage error, 3 tolerance not met.\n",
-            btdf_format_available("exr") ? ", .exr" : "");
-}
-
 /* ------------------------------------------------------------------------- */
-/* Argument helpers                                                          */
+/* Values                                                                    */
 /* ------------------------------------------------------------------------- */
 
 static int parse_double(const char *flag, const char *s, double *out)
@@ -150,325 +84,27 @@ static int parse_size(const char *flag, const char *s, size_t lo, size_t hi, siz
     return 1;
 }
 
-typedef struct common {
-    btdf_params p;
-    int threads;
-    int quiet;
-} common;
-
-/* Consumes a material or common option at argv[*i]; 1 if taken, 0 if not ours, -1 on error. */
-static int common_opt(common *c, int argc, char **argv, int *i)
+/* N or R,G,B */
+static int parse_ior(const char *val, btdf_params *p)
 {
-    const char *a = argv[*i];
-    const char *val = NULL;
-#define NEED_VAL()                                                                         \
-    do {                                                                                   \
-        if (*i + 1 >= argc) {                                                              \
-            fail(EXIT_USAGE, "%s: missing value", a);                                      \
-            return -1;                                                                     \
-        }                                                                                  \
-        val = argv[++*i];                                                                  \
-    } while (0)
-    if (!strcmp(a, "--ior") || !strcmp(a, "-n")) {
-        NEED_VAL();
-        char buf[256];
-        snprintf(buf, sizeof buf, "%s", val);
-        int k = 0;
-        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-            if (k == 3) {
-                fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
-                return -1;
-            }
-            if (!parse_double("--ior", tok, &c->p.ior[k++]))
-                return -1;
-        }
-        if (k != 1 && k != 3) {
+    char buf[256];
+    snprintf(buf, sizeof buf, "%s", val);
+    int k = 0;
+    for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+        if (k == 3) {
             fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
-            return -1;
+            return 0;
         }
-        c->p.channels = k;
-        return 1;
+        if (!parse_double("--ior", tok, &p->ior[k++]))
+            return 0;
     }
-    if (!strcmp(a, "--smoothness") || !strcmp(a, "-s")) {
-        NEED_VAL();
-        return parse_double("--smoothness", val, &c->p.smoothness) ? 1 : -1;
-    }
-    if (!strcmp(a, "--k0")) {
-        NEED_VAL();
-        return parse_double("--k0", val, &c->p.k0) ? 1 : -1;
-    }
-    if (!strcmp(a, "--threads")) {
-        NEED_VAL();
-        size_t v;
-        if (!parse_size("--threads", val, 0, 256, &v))
-            return -1;
-        c->threads = (int)v;
-        return 1;
-    }
-    if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
-        c->quiet = 1;
-        return 1;
-    }
-    return 0;
-#undef NEED_VAL
-}
-
-static int check_params(const btdf_params *p)
-{
-    char msg[256];
-    if (btdf_params_check(p, msg, sizeof msg) != BTDF_OK) {
-        fail(EXIT_USAGE, "%s", msg);
+    if (k != 1 && k != 3) {
+        fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
         return 0;
     }
+    p->channels = k;
     return 1;
 }
-
-static int check_angles(double ti, double to, double phi, long line)
-{
-    char where[48] = "";
-    if (line > 0)
-        snprintf(where, sizeof where, "line %ld: ", line);
-    if (!(ti >= 0.0 && ti <= 90.0)) {
-        fail(EXIT_USAGE, "%stheta-i %g: must lie in [0, 90] degrees", where, ti);
-        return 0;
-    }
-    if (!(to >= 90.0 && to <= 180.0)) {
-        fail(EXIT_USAGE,
-             "%stheta-o %g: must lie in [90, 180] degrees (the transmitted hemisphere)", where,
-             to);
-        return 0;
-    }
-    if (!isfinite(phi)) {
-        fail(EXIT_USAGE, "%sphi %g: must be finite", where, phi);
-        return 0;
-    }
-    return 1;
-}
-
-/* Reads up to `want` numbers separated by blanks or commas; returns how many, -1 on junk. */
-static int read_row(const char *line, double *v, int want)
-{
-    int n = 0;
-    const char *s = line;
-    for (;;) {
-        while (*s == ' ' || *s == '\t' || *s == ',' || *s == '\r' || *s == '\n')
-            s++;
-        if (!*s || *s == '#')
-            return n;
-        if (n == want)
-            return -1;
-        char *e;
-        double x = strtod(s, &e);
-        if (e == s || !isfinite(x))
-            return -1;
-        v[n++] = x;
-        s = e;
-    }
-}
-
-/* ------------------------------------------------------------------------- */
-/* eval                                                                      */
-/* ------------------------------------------------------------------------- */
-
-static void print_values(const double *v, int n)
-{
-    for (int c = 0; c < n; c++)
-        printf(c ? " %.17g" : "%.17g", v[c]);
-    putchar('\n');
-}
-
-static int cmd_eval(int argc, char **argv)
-{
-    common c = {0};
-    btdf_params_default(&c.p);
-    const char *table_path = NULL;
-    double pos[3];
-    int npos = 0;
-    for (int i = 1; i < argc; i++) {
-        int r = common_opt(&c, argc, argv, &i);
-        if (r < 0)
-            return EXIT_USAGE;
-        if (r)
-            continue;
-        if (!strcmp(argv[i], "--table")) {
-            if (i + 1 >= argc)
-                return fail(EXIT_USAGE, "--table: missing value");
-            table_path = argv[++i];
-        } else if (argv[i][0] == '-' && argv[i][1] && !(argv[i][1] >= '0' && argv[i][1] <= '9') &&
-                   argv[i][1] != '.') {
-            fail(EXIT_USAGE, "eval: unknown option '%s'", argv[i]);
-            usage(stderr, 0);
-            return EXIT_USAGE;
-        } else {
-            if (npos == 3)
-                return fail(EXIT_USAGE, "eval: give exactly three angles TI TO PHI");
-            if (!parse_double("angle", argv[i], &pos[npos++]))
-                return EXIT_USAGE;
-        }
-    }
-    if (npos != 0 && npos != 3)
-        return fail(EXIT_USAGE, "eval: give exactly three angles TI TO PHI, or none to read rows");
-    btdf_table *t = NULL;
-    btdf_scatfun *sf = NULL;
-    if (table_path && ends_with(table_path, ".bsdf")) {
-        char msg[512];
-        btdf_status st = btdf_scatfun_read(table_path, &sf, msg, sizeof msg);
-        if (st != BTDF_OK)
-            return fail(1, "%s: %s", table_path, msg);
-        c.p.channels = btdf_scatfun_channels(sf);
-    } else if (table_path) {
-        char msg[512];
-        btdf_status st = btdf_table_read(table_path, &t, msg, sizeof msg);
-        if (st != BTDF_OK)
-            return fail(1, "%s: %s", table_path, msg);
-        c.p = *btdf_table_get_params(t);
-    } else if (!check_params(&c.p)) {
-        return EXIT_USAGE;
-    }
-    int code = 0;
-    double out[BTDF_MAX_CHANNELS];
-    char line[1024];
-    long ln = 0;
-    for (;;) {
-        double v[3];
-        if (npos == 3) {
-            if (ln++ > 0)
-                break;
-            memcpy(v, pos, sizeof v);
-        } else {
-            if (!fgets(line, sizeof line, stdin))
-                break;
-            ln++;
-            int k = read_row(line, v, 3);
-            if (k == 0)
-                continue; /* blank or comment line */
-            if (k != 3) {
-                code = fail(EXIT_USAGE, "line %ld: expected three angles 'TI TO PHI'", ln);
-                break;
-            }
-        }
-        if (!check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
-            code = EXIT_USAGE;
-            break;
-        }
-        if (t) {
-            btdf_table_eval(t, v[0] * M_PI / 180.0, v[1] * M_PI / 180.0, v[2] * M_PI / 180.0, out);
-        } else if (sf) {
-            /* light entering through the top (index n), as pbrt-v3 would read it */
-            btdf_scatfun_eval(sf, v[0] * M_PI / 180.0, v[1] * M_PI / 180.0, v[2] * M_PI / 180.0,
-                              out);
-        } else {
-            for (int ch = 0; ch < c.p.channels; ch++)
-                out[ch] = btdf_rho_deg(c.p.ior[ch], c.p.smoothness, c.p.k0, v[0], v[1], v[2]);
-        }
-        print_values(out, c.p.channels);
-    }
-    btdf_table_free(t);
-    btdf_scatfun_free(sf);
-    if (fflush(stdout) != 0 && code == 0)
-        code = fail(1, "standard output: %s", strerror(errno));
-    return code;
-}
-
-/* ------------------------------------------------------------------------- */
-/* albedo                                                                    */
-/* ------------------------------------------------------------------------- */
-
-static int cmd_albedo(int argc, char **argv)
-{
-    common c = {0};
-    btdf_params_default(&c.p);
-    double angles[256];
-    int na = 0;
-    for (int i = 1; i < argc; i++) {
-        int r = common_opt(&c, argc, argv, &i);
-        if (r < 0)
-            return EXIT_USAGE;
-        if (r)
-            continue;
-        if (argv[i][0] == '-' && argv[i][1] && !(argv[i][1] >= '0' && argv[i][1] <= '9')) {
-            fail(EXIT_USAGE, "albedo: unknown option '%s'", argv[i]);
-            usage(stderr, 0);
-            return EXIT_USAGE;
-        }
-        if (na == 256)
-            return fail(EXIT_USAGE, "albedo: at most 256 angles");
-        if (!parse_double("theta-i", argv[i], &angles[na]))
-            return EXIT_USAGE;
-        na++;
-    }
-    if (!check_params(&c.p))
-        return EXIT_USAGE;
-    if (na == 0)
-        for (int k = 0; k <= 8; k++)
-            angles[na++] = 10.0 * k;
-    printf("theta_i_deg");
-    for (int ch = 0; ch < c.p.channels; ch++)
-        printf(c.p.channels == 1 ? ",T,Ft" : ",T_%c,Ft_%c", "rgb"[ch], "rgb"[ch]);
-    printf("\n");
-    for (int k = 0; k < na; k++) {
-        if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
-            return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
-        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS];
-        btdf_transmittance(&c.p, ti, T);
-        printf("%.10g", angles[k]);
-        for (int ch = 0; ch < c.p.channels; ch++)
-            printf(",%.9f,%.9f", T[ch], btdf_fresnel_t(c.p.ior[ch], ti));
-        printf("\n");
-    }
-    return 0;
-}
-
-/* ------------------------------------------------------------------------- */
-/* tabulate                                                                  */
-/* ------------------------------------------------------------------------- */
-
-static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
-                        const btdf_report *r, const char *provenance)
-{
-    fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n", BTDF_VERSION_STRING);
-    fprintf(f, "  \"command\": \"");
-    for (const char *s = provenance; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            fputc('\\', f);
-        if ((unsigned char)*s >= 0x20)
-            fputc(*s, f);
-    }
-    fprintf(f, "\",\n  \"kind\": \"%s\",\n", table_kind_name(kind));
-    fprintf(f, "  \"ior\": [");
-    for (int c = 0; c < o->params.channels; c++)
-        fprintf(f, "%s%.17g", c ? ", " : "", o->params.ior[c]);
-    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", o->params.smoothness,
-            o->params.k0);
-    fprintf(f, "  \"theta_i_deg\": [%.17g, %.17g],\n", o->ti_min * 180 / M_PI,
-            o->ti_max * 180 / M_PI);
-    fprintf(f, "  \"tolerance\": %.17g,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
-            r->tolerance, r->metric == BTDF_METRIC_MAX ? "max" : "l1",
-            r->met ? "true" : "false");
-    fprintf(f, "  \"slices\": %zu,\n  \"samples\": %zu,\n", r->slices, r->samples);
-    fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"seconds_estimate\": %.6f,\n",
-            r->seconds_build, r->seconds_estimate);
-    fprintf(f, "  \"test_angles\": %zu,\n  \"test_points\": %zu,\n", r->test_angles,
-            r->test_points);
-    fprintf(f, "  \"peak_bytes\": %zu,\n", r->peak_bytes);
-    fprintf(f, "  \"e_l1\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_l1_max, r->e_l1_mean);
-    fprintf(f, "  \"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n", r->e_max_max,
-            r->e_max_mean, r->e_max_angles);
-    fprintf(f, "  \"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_t_max, r->e_t_mean);
-    fprintf(f, "  \"per_theta_i\": [\n");
-    for (size_t k = 0; k < r->test_angles; k++) {
-        const btdf_ti_error *e = &r->per_ti[k];
-        fprintf(f,
-                "    {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_table\": %.9g, \"e_l1\": %.6g, "
-                "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
-                e->ti * 180 / M_PI, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
-                k + 1 < r->test_angles ? "," : "");
-    }
-    fprintf(f, "  ]\n}\n");
-}
-
-/* Seed of the reported estimate; the builder checks itself with a different one. */
-#define REPORT_SEED 20081231u
 
 /* A:B in degrees within [lo, hi], A <= B (A < B when strict). */
 static int parse_range(const char *flag, const char *s, double lo, double hi, int strict,
@@ -540,267 +176,539 @@ static int parse_picture_size(const char *s, int *w, int *h)
     return 1;
 }
 
-typedef struct json_job {
-    const btdf_table_opts *o;
-    btdf_table_kind kind;
-    const btdf_report *r;
-    const char *prov;
-} json_job;
+/* ------------------------------------------------------------------------- */
+/* The options of every command, parsed once                                 */
+/* ------------------------------------------------------------------------- */
 
-static btdf_status json_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
+typedef struct cli {
+    unsigned char given[OPT_COUNT]; /* how often each option was given */
+    btdf_params p;
+    int threads, quiet, force, best_effort, sides;
+    const char *table, *out, *report;
+    btdf_table_opts o; /* tolerance, metric, grid, max_samples */
+    size_t mib;
+    double ti0, ti1, to0, to1, ph0, ph1;
+    preview_req previews[MAX_PREVIEWS + 1]; /* + 1: -o F.png */
+    int npreview, pic_w, pic_h;
+    double mat_n[BTDF_PREVIEW_MAX_CURVES], mat_s[BTDF_PREVIEW_MAX_CURVES];
+    double angles[BTDF_PREVIEW_MAX_CURVES];
+    size_t nm, na;
+    const char *pos[512]; /* positional arguments */
+    int npos;
+} cli;
+
+#define GIVEN(c, id) ((c)->given[(id)-OPT_HELP])
+
+static void cli_defaults(cli *c)
 {
-    const json_job *j = ctx;
-    FILE *f = fopen(tmp, "w");
-    if (!f) {
-        snprintf(msg, msglen, "cannot create: %s", strerror(errno));
-        return BTDF_EIO;
-    }
-    json_report(f, j->o, j->kind, j->r, j->prov);
-    int bad = ferror(f);
-    bad |= fclose(f) != 0;
-    if (bad) {
-        snprintf(msg, msglen, "writing failed: %s", strerror(errno));
-        return BTDF_EIO;
-    }
-    return BTDF_OK;
+    memset(c, 0, sizeof *c);
+    btdf_params_default(&c->p);
+    btdf_table_opts_default(&c->o);
+    c->mib = 256;
+    c->ti1 = 90.0;
+    c->to0 = 90.0;
+    c->to1 = 180.0;
+    c->ph1 = 180.0;
 }
 
-static int write_text_atomic(const char *path, const btdf_table_opts *o, btdf_table_kind kind,
-                             const btdf_report *r, const char *prov)
+/* Takes one option's value into c; 0 after a usage error. */
+static int apply(cli *c, const opt_hit *h)
 {
-    json_job j = {o, kind, r, prov};
-    char msg[512] = "";
-    if (btdf_write_file_atomic(path, ".json", json_writer, &j, msg, sizeof msg) != BTDF_OK)
-        return fail(1, "%s: %s", path, msg);
-    return 0;
-}
-
-int run_bsdf(const char *path, const btdf_params *p, double tol, int sides, int threads,
-             int quiet, int best_effort, const char *prov)
-{
-    char msg[512] = "";
-    btdf_scatfun *f = NULL;
-    double t0 = now_seconds();
-    btdf_status st = btdf_scatfun_build(p, tol, (btdf_side)sides, threads, &f, msg, sizeof msg);
-    double t1 = now_seconds();
-    if (st != BTDF_OK && st != BTDF_EBUDGET)
-        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", path,
-                    msg[0] ? msg : btdf_strerror(st));
-    if (!f)
-        return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
-    /* The error a renderer will see: the format's own evaluation, per side. */
-    int met = 1;
-    char meta[1024];
-    int k = snprintf(meta, sizeof meta, "{\"program\": \"btdftab %s\", \"tolerance\": %g",
-                     BTDF_VERSION_STRING, tol);
-    for (int s = BTDF_SIDE_ENTER; s <= BTDF_SIDE_LEAVE; s++) {
-        if (!(sides & s))
-            continue;
-        btdf_report r;
-        memset(&r, 0, sizeof r);
-        double e0 = now_seconds();
-        btdf_status es = btdf_scatfun_report(f, p, (btdf_side)s, 0, 0, REPORT_SEED, threads, &r);
-        double e1 = now_seconds();
-        if (es != BTDF_OK) {
-            btdf_scatfun_free(f);
-            return fail(1, "%s: error estimate: %s", path, btdf_strerror(es));
+    const char *v = h->value;
+    switch (h->id) {
+    case OPT_IOR: return parse_ior(v, &c->p);
+    case OPT_SMOOTHNESS: return parse_double("--smoothness", v, &c->p.smoothness);
+    case OPT_K0: return parse_double("--k0", v, &c->p.k0);
+    case OPT_TABLE: c->table = v; return 1;
+    case OPT_OUTPUT: c->out = v; return 1;
+    case OPT_REPORT: c->report = v; return 1;
+    case OPT_TOLERANCE: return parse_double("--tolerance", v, &c->o.tolerance);
+    case OPT_METRIC:
+        if (run_parse_metric(v, &c->o.metric))
+            return 1;
+        fail(EXIT_USAGE, "--metric: '%s': must be l1 or max", v);
+        return 0;
+    case OPT_GRID: {
+        unsigned long x, y, z;
+        char tail;
+        if (sscanf(v, "%lu,%lu,%lu%c", &x, &y, &z, &tail) != 3 || strchr(v, '-')) {
+            fail(EXIT_USAGE, "--grid: '%s': expected three counts NI,NO,NPHI", v);
+            return 0;
         }
-        int ok = r.e_l1_max <= tol;
-        met = met && ok;
-        const char *name = s == BTDF_SIDE_ENTER ? "enter" : "leave";
-        if (!quiet)
-            fprintf(stderr,
-                    "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients; "
-                    "build %.3f s, estimate %.3f s (%zu angles, %zu points); e_L1 max %.3g "
-                    "mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
-                    prog, path, name, btdf_scatfun_node_count(f), btdf_scatfun_coeff_count(f),
-                    t1 - t0, e1 - e0, r.test_angles, r.test_points, r.e_l1_max, r.e_l1_mean,
-                    r.e_max_max, r.e_t_max, ok ? "; tolerance met" : "; TOLERANCE NOT MET");
-        if (k > 0 && (size_t)k < sizeof meta)
-            k += snprintf(meta + k, sizeof meta - (size_t)k,
-                          ", \"%s\": {\"e_l1_max\": %.4g, \"e_max_max\": %.4g, \"e_t_max\": %.4g}",
-                          name, r.e_l1_max, r.e_max_max, r.e_t_max);
-        btdf_report_clear(&r);
+        c->o.kind = BTDF_TABLE_GRID;
+        c->o.grid_ti = x;
+        c->o.grid_to = y;
+        c->o.grid_phi = z;
+        return 1;
     }
-    if (k > 0 && (size_t)k < sizeof meta)
-        snprintf(meta + k, sizeof meta - (size_t)k, ", \"command\": \"%s\"}", prov ? prov : "");
-    int code = 0;
-    if (!met && !best_effort) {
-        fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
-                        "to write it anyway)\n",
-                prog, path, tol, msg[0] ? ": " : "", msg);
-        code = EXIT_BUDGET;
-    } else {
-        st = btdf_scatfun_write(f, path, meta, msg, sizeof msg);
+    case OPT_SIDE:
+        if ((c->sides = run_parse_side(v)) != 0)
+            return 1;
+        fail(EXIT_USAGE, "--side: '%s': must be enter, leave or both", v);
+        return 0;
+    case OPT_THETA_I: return parse_range("--theta-i", v, 0.0, 90.0, 0, &c->ti0, &c->ti1);
+    case OPT_THETA_O: return parse_range("--theta-o", v, 90.0, 180.0, 1, &c->to0, &c->to1);
+    case OPT_PHI: return parse_range("--phi", v, 0.0, 180.0, 1, &c->ph0, &c->ph1);
+    case OPT_MAX_SAMPLES:
+        return parse_size("--max-samples", v, 1000, (size_t)1 << 40, &c->o.max_samples);
+    case OPT_MAX_MEMORY: return parse_size("--max-memory", v, 1, 1u << 20, &c->mib);
+    case OPT_THREADS: {
+        size_t n;
+        if (!parse_size("--threads", v, 0, 256, &n))
+            return 0;
+        c->threads = (int)n;
+        return 1;
+    }
+    case OPT_PREVIEW:
+        if (c->npreview == MAX_PREVIEWS) {
+            fail(EXIT_USAGE, "--preview: at most %d pictures", MAX_PREVIEWS);
+            return 0;
+        }
+        return parse_preview(v, &c->previews[c->npreview++]);
+    case OPT_SIZE: return parse_picture_size(v, &c->pic_w, &c->pic_h);
+    case OPT_MATERIAL: {
+        const char *colon = strchr(v, ':');
+        char buf[64];
+        if (!colon || c->nm == BTDF_PREVIEW_MAX_CURVES) {
+            fail(EXIT_USAGE, "--material: '%s': expected N:S (at most %d)", v,
+                 BTDF_PREVIEW_MAX_CURVES);
+            return 0;
+        }
+        snprintf(buf, sizeof buf, "%.*s", (int)(colon - v), v);
+        if (!parse_double("--material", buf, &c->mat_n[c->nm]) ||
+            !parse_double("--material", colon + 1, &c->mat_s[c->nm]))
+            return 0;
+        c->nm++;
+        return 1;
+    }
+    case OPT_ANGLES: {
+        char buf[256];
+        snprintf(buf, sizeof buf, "%s", v);
+        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
+            if (c->na == BTDF_PREVIEW_MAX_CURVES) {
+                fail(EXIT_USAGE, "--angles: at most %d", BTDF_PREVIEW_MAX_CURVES);
+                return 0;
+            }
+            if (!parse_double("--angles", tok, &c->angles[c->na]))
+                return 0;
+            if (!(c->angles[c->na] >= 0.0 && c->angles[c->na] < 90.0)) {
+                fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees", c->angles[c->na]);
+                return 0;
+            }
+            c->na++;
+        }
+        return 1;
+    }
+    case OPT_FORCE: c->force = 1; return 1;
+    case OPT_BEST_EFFORT: c->best_effort = 1; return 1;
+    case OPT_QUIET: c->quiet = 1; return 1;
+    case OPT_HELP:
+    case OPT_END: break;
+    }
+    return 1;
+}
+
+/* Parses the command's arguments into c. Returns -1 to go on, or an exit status
+   (0 after --help). */
+static int parse_command(const cmd_def *cmd, int argc, char **argv, cli *c)
+{
+    cli_defaults(c);
+    opt_hit hits[512];
+    if ((size_t)argc > sizeof c->pos / sizeof c->pos[0])
+        return fail(EXIT_USAGE, "%s: at most %zu arguments", cmd->name,
+                    sizeof c->pos / sizeof c->pos[0]);
+    int nh = opt_parse(prog, cmd, argc, argv, hits, (int)(sizeof hits / sizeof hits[0]),
+                       c->pos, &c->npos);
+    if (nh < 0)
+        return EXIT_USAGE;
+    for (int k = 0; k < nh; k++)
+        if (hits[k].id == OPT_HELP) {
+            opt_help(stdout, cmd);
+            return fflush(stdout) == 0 ? 0 : 1;
+        }
+    for (int k = 0; k < nh; k++) {
+        GIVEN(c, hits[k].id)++;
+        if (!apply(c, &hits[k]))
+            return EXIT_USAGE;
+    }
+    return -1;
+}
+
+static int check_params(const btdf_params *p)
+{
+    char msg[256];
+    if (btdf_params_check(p, msg, sizeof msg) != BTDF_OK) {
+        fail(EXIT_USAGE, "%s", msg);
+        return 0;
+    }
+    return 1;
+}
+
+/* The folder of path exists and can take a new file: checked before the work. */
+static int folder_writable(const char *path)
+{
+    char dir[4096];
+    const char *slash = strrchr(path, '/');
+    if (!slash)
+        snprintf(dir, sizeof dir, ".");
+    else if (slash == path)
+        snprintf(dir, sizeof dir, "/");
+    else
+        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
+    if (access(dir, W_OK | X_OK) != 0) {
+        fail(1, "%s: cannot write in the folder '%s': %s", path, dir, strerror(errno));
+        return 0;
+    }
+    return 1;
+}
+
+/* ------------------------------------------------------------------------- */
+/* eval                                                                      */
+/* ------------------------------------------------------------------------- */
+
+static int check_angles(double ti, double to, double phi, long line)
+{
+    char where[48] = "";
+    if (line > 0)
+        snprintf(where, sizeof where, "line %ld: ", line);
+    if (!(ti >= 0.0 && ti <= 90.0)) {
+        fail(EXIT_USAGE, "%stheta-i %g: must lie in [0, 90] degrees", where, ti);
+        return 0;
+    }
+    if (!(to >= 90.0 && to <= 180.0)) {
+        fail(EXIT_USAGE,
+             "%stheta-o %g: must lie in [90, 180] degrees (the transmitted hemisphere)", where,
+             to);
+        return 0;
+    }
+    if (!isfinite(phi)) {
+        fail(EXIT_USAGE, "%sphi %g: must be finite", where, phi);
+        return 0;
+    }
+    return 1;
+}
+
+/* Reads up to `want` numbers separated by blanks or commas; returns how many, -1 on junk. */
+static int read_row(const char *line, double *v, int want)
+{
+    int n = 0;
+    const char *s = line;
+    for (;;) {
+        while (*s == ' ' || *s == '\t' || *s == ',' || *s == '\r' || *s == '\n')
+            s++;
+        if (!*s || *s == '#')
+            return n;
+        if (n == want)
+            return -1;
+        char *e;
+        double x = strtod(s, &e);
+        if (e == s || !isfinite(x))
+            return -1;
+        v[n++] = x;
+        s = e;
+    }
+}
+
+/* The incidence range a table holds, in degrees: its first and last slices. A
+   facet-reciprocal table (n < 1) is sliced by the outgoing direction instead, so its
+   slices do not bound theta-i: the whole range is left open there. */
+static void table_ti_range(const btdf_table *t, double *range)
+{
+    size_t ns = btdf_table_slice_count(t);
+    btdf_slice first, last;
+    if (ns == 0 || btdf_table_get_kind(t) == BTDF_TABLE_FACET_RECIPROCAL ||
+        btdf_table_slice(t, 0, &first) != BTDF_OK || btdf_table_slice(t, ns - 1, &last) != BTDF_OK)
+        return;
+    range[0] = first.ti * 180.0 / M_PI;
+    range[1] = last.ti * 180.0 / M_PI;
+}
+
+static void print_values(const double *v, int n)
+{
+    for (int c = 0; c < n; c++)
+        printf(c ? " %.17g" : "%.17g", v[c]);
+    putchar('\n');
+}
+
+static int cmd_eval(const cli *c)
+{
+    btdf_params p = c->p;
+    double pos[3];
+    int npos = c->npos;
+    if (npos != 0 && npos != 3)
+        return fail(EXIT_USAGE, "eval: give exactly three angles TI TO PHI, or none to read rows");
+    for (int k = 0; k < npos; k++)
+        if (!parse_double("angle", c->pos[k], &pos[k]))
+            return EXIT_USAGE;
+    if (c->table && (GIVEN(c, OPT_IOR) || GIVEN(c, OPT_SMOOTHNESS) || GIVEN(c, OPT_K0)))
+        return fail(EXIT_USAGE, "--ior, --smoothness and --k0 do not apply with --table "
+                                "(the table gives the material)");
+    btdf_input in = {NULL, NULL};
+    double ti_range[2] = {0.0, 90.0}; /* degrees */
+    if (c->table) {
+        char msg[512];
+        btdf_status st = btdf_read(c->table, &in, msg, sizeof msg);
         if (st != BTDF_OK)
-            code = fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+            return fail(1, "%s: %s", c->table, msg);
+        if (in.table) {
+            p = *btdf_table_get_params(in.table);
+            table_ti_range(in.table, ti_range);
+        } else
+            p.channels = btdf_scatfun_channels(in.scatfun);
+    } else if (!check_params(&p)) {
+        return EXIT_USAGE;
     }
-    btdf_scatfun_free(f);
+    int code = 0;
+    double out[BTDF_MAX_CHANNELS];
+    char line[1024];
+    long ln = 0;
+    for (;;) {
+        double v[3];
+        if (npos == 3) {
+            if (ln++ > 0)
+                break;
+            memcpy(v, pos, sizeof v);
+        } else {
+            if (!fgets(line, sizeof line, stdin))
+                break;
+            ln++;
+            int k = read_row(line, v, 3);
+            if (k == 0)
+                continue; /* blank or comment line */
+            if (k != 3) {
+                code = fail(EXIT_USAGE, "line %ld: expected three angles 'TI TO PHI'", ln);
+                break;
+            }
+        }
+        if (!check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
+            code = EXIT_USAGE;
+            break;
+        }
+        /* the slices' angles are radians turned into degrees: the rounding of that
+           must not reject the range's own ends, so the ends get 1e-9 degrees */
+        if (!(v[0] >= ti_range[0] - 1e-9 && v[0] <= ti_range[1] + 1e-9)) {
+            char where[48] = "";
+            if (npos != 3)
+                snprintf(where, sizeof where, "line %ld: ", ln);
+            code = fail(EXIT_USAGE, "%stheta-i %g: outside the incidence range of %s, %.6g:%.6g "
+                        "degrees", where, v[0], c->table, ti_range[0], ti_range[1]);
+            break;
+        }
+        double ti = v[0] * M_PI / 180.0, to = v[1] * M_PI / 180.0, phi = v[2] * M_PI / 180.0;
+        if (in.table) {
+            btdf_table_eval(in.table, ti, to, phi, out);
+        } else if (in.scatfun) {
+            /* light entering through the top (index n), as pbrt-v3 would read it */
+            btdf_scatfun_eval(in.scatfun, ti, to, phi, out);
+        } else {
+            for (int ch = 0; ch < p.channels; ch++)
+                out[ch] = btdf_rho_deg(p.ior[ch], p.smoothness, p.k0, v[0], v[1], v[2]);
+        }
+        print_values(out, p.channels);
+    }
+    btdf_table_free(in.table);
+    btdf_scatfun_free(in.scatfun);
+    if (fflush(stdout) != 0 && code == 0)
+        code = fail(1, "standard output: %s", strerror(errno));
     return code;
 }
 
-/* The options of tabulate that take a value. */
-static int takes_value(const char *a)
+/* ------------------------------------------------------------------------- */
+/* albedo                                                                    */
+/* ------------------------------------------------------------------------- */
+
+static int cmd_albedo(const cli *c)
 {
-    static const char *const with[] = {"-o", "--output", "--tolerance", "--metric", "--grid",
-                                       "--theta-i", "--theta-o", "--phi", "--max-samples",
-                                       "--max-memory", "--report", "--side", "--preview",
-                                       "--size"};
-    for (size_t k = 0; k < sizeof with / sizeof with[0]; k++)
-        if (!strcmp(a, with[k]))
-            return 1;
+    double angles[256];
+    int na = 0;
+    if (c->npos > 256)
+        return fail(EXIT_USAGE, "albedo: at most 256 angles");
+    for (int k = 0; k < c->npos; k++)
+        if (!parse_double("theta-i", c->pos[k], &angles[na++]))
+            return EXIT_USAGE;
+    if (!check_params(&c->p))
+        return EXIT_USAGE;
+    if (na == 0)
+        for (int k = 0; k <= 8; k++)
+            angles[na++] = 10.0 * k;
+    const btdf_params *p = &c->p;
+    printf("theta_i_deg");
+    for (int ch = 0; ch < p->channels; ch++)
+        printf(p->channels == 1 ? ",T,Ft" : ",T_%c,Ft_%c", "rgb"[ch], "rgb"[ch]);
+    printf("\n");
+    for (int k = 0; k < na; k++) {
+        if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
+            return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
+        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS];
+        btdf_transmittance(p, ti, T);
+        printf("%.10g", angles[k]);
+        for (int ch = 0; ch < p->channels; ch++)
+            printf(",%.9f,%.9f", T[ch], btdf_fresnel_t(p->ior[ch], ti));
+        printf("\n");
+    }
     return 0;
 }
 
-static int cmd_tabulate(int argc, char **argv, const char *prov)
+/* ------------------------------------------------------------------------- */
+/* tabulate                                                                  */
+/* ------------------------------------------------------------------------- */
+
+static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
+                        const btdf_report *r, const char *provenance)
 {
-    common c = {0};
-    btdf_params_default(&c.p);
-    btdf_table_opts o;
-    btdf_table_opts_default(&o);
-    const char *out = NULL, *report = NULL;
-    int best_effort = 0, npreview = 0, pic_w = 0, pic_h = 0, sides = 0, theta_given = 0;
-    preview_req previews[MAX_PREVIEWS];
-    double ti0 = 0.0, ti1 = 90.0, to0 = 90.0, to1 = 180.0, ph0 = 0.0, ph1 = 180.0;
-    int grid_range = 0;
-    size_t mib = 256;
-    for (int i = 1; i < argc; i++) {
-        int r = common_opt(&c, argc, argv, &i);
-        if (r < 0)
-            return EXIT_USAGE;
-        if (r)
-            continue;
-        const char *a = argv[i];
-        if (takes_value(a) && i + 1 >= argc)
-            return fail(EXIT_USAGE, "%s: missing value", a);
-        if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            out = argv[++i];
-        } else if (!strcmp(a, "--tolerance")) {
-            if (!parse_double(a, argv[++i], &o.tolerance))
-                return EXIT_USAGE;
-        } else if (!strcmp(a, "--metric")) {
-            const char *m = argv[++i];
-            if (!strcmp(m, "l1"))
-                o.metric = BTDF_METRIC_L1;
-            else if (!strcmp(m, "max"))
-                o.metric = BTDF_METRIC_MAX;
-            else
-                return fail(EXIT_USAGE, "--metric: '%s': must be l1 or max", m);
-        } else if (!strcmp(a, "--grid")) {
-            const char *g = argv[++i];
-            unsigned long x, y, z;
-            char tail;
-            if (sscanf(g, "%lu,%lu,%lu%c", &x, &y, &z, &tail) != 3 || strchr(g, '-'))
-                return fail(EXIT_USAGE, "--grid: '%s': expected three counts NI,NO,NPHI", g);
-            o.kind = BTDF_TABLE_GRID;
-            o.grid_ti = x;
-            o.grid_to = y;
-            o.grid_phi = z;
-        } else if (!strcmp(a, "--theta-i")) {
-            if (!parse_range(a, argv[++i], 0.0, 90.0, 0, &ti0, &ti1))
-                return EXIT_USAGE;
-            theta_given = 1;
-        } else if (!strcmp(a, "--theta-o")) {
-            if (!parse_range(a, argv[++i], 90.0, 180.0, 1, &to0, &to1))
-                return EXIT_USAGE;
-            grid_range = 1;
-        } else if (!strcmp(a, "--phi")) {
-            if (!parse_range(a, argv[++i], 0.0, 180.0, 1, &ph0, &ph1))
-                return EXIT_USAGE;
-            grid_range = 1;
-        } else if (!strcmp(a, "--max-samples")) {
-            if (!parse_size(a, argv[++i], 1000, (size_t)1 << 40, &o.max_samples))
-                return EXIT_USAGE;
-        } else if (!strcmp(a, "--max-memory")) {
-            if (!parse_size(a, argv[++i], 1, 1u << 20, &mib))
-                return EXIT_USAGE;
-        } else if (!strcmp(a, "--report")) {
-            report = argv[++i];
-        } else if (!strcmp(a, "--best-effort")) {
-            best_effort = 1;
-        } else if (!strcmp(a, "--side")) {
-            const char *v = argv[++i];
-            if (!strcmp(v, "enter"))
-                sides = BTDF_SIDE_ENTER;
-            else if (!strcmp(v, "leave"))
-                sides = BTDF_SIDE_LEAVE;
-            else if (!strcmp(v, "both"))
-                sides = BTDF_SIDE_BOTH;
-            else
-                return fail(EXIT_USAGE, "--side: '%s': must be enter, leave or both", v);
-        } else if (!strcmp(a, "--preview")) {
-            if (npreview == MAX_PREVIEWS)
-                return fail(EXIT_USAGE, "--preview: at most %d pictures", MAX_PREVIEWS);
-            if (!parse_preview(argv[++i], &previews[npreview++]))
-                return EXIT_USAGE;
-        } else if (!strcmp(a, "--size")) {
-            if (!parse_picture_size(argv[++i], &pic_w, &pic_h))
-                return EXIT_USAGE;
-        } else {
-            fail(EXIT_USAGE, "tabulate: unknown option '%s'", a);
-            usage(stderr, 0);
-            return EXIT_USAGE;
-        }
+    fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n", BTDF_VERSION_STRING);
+    fprintf(f, "  \"command\": \"");
+    for (const char *s = provenance; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            fputc('\\', f);
+        if ((unsigned char)*s >= 0x20)
+            fputc(*s, f);
     }
-    if (out && ends_with(out, ".bsdf")) {
-        /* A renderer file is built from Eq. 25 directly: no table is needed. */
-        if (!check_params(&c.p))
-            return EXIT_USAGE;
-        if (theta_given || o.kind == BTDF_TABLE_GRID || npreview)
-            return fail(EXIT_USAGE, "%s: --theta-i, --grid and --preview do not apply to .bsdf "
-                                    "(the file covers every direction of both hemispheres)", out);
-        return run_bsdf(out, &c.p, o.tolerance, sides ? sides : BTDF_SIDE_BOTH, c.threads,
-                        c.quiet, best_effort, prov);
+    fprintf(f, "\",\n  \"kind\": \"%s\",\n", btdf_table_kind_name(kind));
+    fprintf(f, "  \"ior\": [");
+    for (int c = 0; c < o->params.channels; c++)
+        fprintf(f, "%s%.17g", c ? ", " : "", o->params.ior[c]);
+    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", o->params.smoothness,
+            o->params.k0);
+    fprintf(f, "  \"theta_i_deg\": [%.17g, %.17g],\n", o->ti_min * 180 / M_PI,
+            o->ti_max * 180 / M_PI);
+    fprintf(f, "  \"tolerance\": %.17g,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
+            r->tolerance, r->metric == BTDF_METRIC_MAX ? "max" : "l1",
+            r->met ? "true" : "false");
+    fprintf(f, "  \"slices\": %zu,\n  \"samples\": %zu,\n", r->slices, r->samples);
+    fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"seconds_estimate\": %.6f,\n",
+            r->seconds_build, r->seconds_estimate);
+    fprintf(f, "  \"test_angles\": %zu,\n  \"test_points\": %zu,\n", r->test_angles,
+            r->test_points);
+    fprintf(f, "  \"peak_bytes\": %zu,\n", r->peak_bytes);
+    fprintf(f, "  \"e_l1\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_l1_max, r->e_l1_mean);
+    fprintf(f, "  \"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n", r->e_max_max,
+            r->e_max_mean, r->e_max_angles);
+    fprintf(f, "  \"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_t_max, r->e_t_mean);
+    fprintf(f, "  \"per_theta_i\": [\n");
+    for (size_t k = 0; k < r->test_angles; k++) {
+        const btdf_ti_error *e = &r->per_ti[k];
+        fprintf(f,
+                "    {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_table\": %.9g, \"e_l1\": %.6g, "
+                "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
+                e->ti * 180 / M_PI, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
+                k + 1 < r->test_angles ? "," : "");
     }
-    if (sides && sides != BTDF_SIDE_ENTER && out) {
+    fprintf(f, "  ]\n}\n");
+}
+
+/* The JSON report, written like every output: atomically. */
+static int write_report(const char *path, const btdf_table_opts *o, btdf_table_kind kind,
+                        const btdf_report *r, const char *prov)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    if (!f)
+        return fail(1, "%s: out of memory", path);
+    json_report(f, o, kind, r, prov);
+    int bad = fclose(f) != 0;
+    char msg[512] = "";
+    btdf_status st = bad ? BTDF_ENOMEM : btdf_write_buffer(path, ".json", buf, len, msg, sizeof msg);
+    free(buf);
+    if (st != BTDF_OK)
+        return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+    return 0;
+}
+
+/* A .bsdf is built from Eq. 25 directly: the table's options do not apply. */
+static int tabulate_series(const cli *c, const char *prov)
+{
+    static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
+                                        OPT_PHI, OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY,
+                                        OPT_REPORT, OPT_SIZE};
+    for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
+        if (GIVEN(c, table_only[k]))
+            return fail(EXIT_USAGE, "%s: --theta-i, --theta-o, --phi, --grid, --metric, "
+                                    "--max-samples, --max-memory, --report, --preview and "
+                                    "--size do not apply to .bsdf (the file covers every "
+                                    "direction of both hemispheres; --%s was given)",
+                        c->out, opt_find(table_only[k])->name);
+    if (!check_params(&c->p))
+        return EXIT_USAGE;
+    if (!folder_writable(c->out))
+        return 1;
+    return run_series(prog, c->out, &c->p, c->o.tolerance,
+                      c->sides ? c->sides : BTDF_SIDE_BOTH, c->threads, c->quiet,
+                      c->best_effort, prov);
+}
+
+static int cmd_tabulate(cli *c, const char *prov)
+{
+    if (c->npos)
+        return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
+                    c->pos[0]);
+    btdf_format_info fi = {0};
+    const char *out = c->out;
+    if (out && strcmp(out, "-")) {
+        if (!btdf_format_find(out, &fi))
+            return fail(EXIT_USAGE, "%s: unknown output format: use .csv, .exr, .png or .bsdf",
+                        out);
+        if (fi.needs == BTDF_NEEDS_SERIES)
+            return tabulate_series(c, prov);
+    }
+    btdf_table_opts o = c->o;
+    btdf_params p = c->p;
+    if (c->sides && c->sides != BTDF_SIDE_ENTER && out) {
         /* Tables hold one side: light leaving is the table of index 1/n. */
-        if (sides == BTDF_SIDE_BOTH)
+        if (c->sides == BTDF_SIDE_BOTH)
             return fail(EXIT_USAGE, "--side both: a table holds one side; write two tables, "
                                     "or a .bsdf, which holds both");
-        for (int ch = 0; ch < c.p.channels; ch++)
-            c.p.ior[ch] = 1.0 / c.p.ior[ch];
+        for (int ch = 0; ch < p.channels; ch++)
+            p.ior[ch] = 1.0 / p.ior[ch];
     }
-    if (out && ends_with(out, ".png")) { /* -o F.png is a montage preview */
-        if (npreview == MAX_PREVIEWS)
-            return fail(EXIT_USAGE, "--preview: at most %d pictures", MAX_PREVIEWS);
-        previews[npreview].kind = BTDF_PREVIEW_MONTAGE;
-        previews[npreview].analytic = 0;
-        previews[npreview++].path = out;
+    if (out && fi.needs == BTDF_NEEDS_PICTURE) { /* -o F.png is a montage preview */
+        preview_req *r = &c->previews[c->npreview++];
+        r->kind = BTDF_PREVIEW_MONTAGE;
+        r->analytic = 0;
+        r->path = out;
         out = NULL;
     }
-    if (!out && npreview == 0)
+    if (!out && c->npreview == 0)
         return fail(EXIT_USAGE, "tabulate: no output: give -o FILE (or -o - for CSV on stdout)");
-    if (!check_params(&c.p))
+    if (!check_params(&p))
         return EXIT_USAGE;
-    const btdf_format_ops *fmt = NULL;
-    if (out) {
-        fmt = strcmp(out, "-") ? btdf_format_for_path(out) : &btdf_format_csv;
-        if (!fmt)
-            return fail(EXIT_USAGE, "%s: unknown output format: use .csv, .exr, .png or .bsdf", out);
-        if (!fmt->available)
-            return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
-                        fmt->name, fmt->feature);
-    }
-    if (npreview > 0 && !BTDF_HAVE_PNG)
+    if (out && strcmp(out, "-") && !fi.available)
+        return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
+                    fi.name, fi.feature);
+    if (c->npreview > 0 && !btdf_format_available("png"))
         return fail(1, "%s: PNG support was switched off at build time (-Dpng=disabled)",
-                    previews[0].path);
-    if (grid_range && o.kind != BTDF_TABLE_GRID)
+                    c->previews[0].path);
+    if ((GIVEN(c, OPT_THETA_O) || GIVEN(c, OPT_PHI)) && o.kind != BTDF_TABLE_GRID)
         return fail(EXIT_USAGE, "--theta-o and --phi apply to --grid tables (an adaptive table "
                                 "covers every outgoing direction)");
-    o.params = c.p;
-    o.threads = c.threads;
-    o.ti_min = ti0 * M_PI / 180.0;
-    o.ti_max = ti1 * M_PI / 180.0;
-    o.to_min = to0 * M_PI / 180.0;
-    o.to_max = to1 * M_PI / 180.0;
-    o.phi_min = ph0 * M_PI / 180.0;
-    o.phi_max = ph1 * M_PI / 180.0;
-    o.max_bytes = mib << 20;
+    if ((GIVEN(c, OPT_TOLERANCE) || GIVEN(c, OPT_METRIC)) && o.kind == BTDF_TABLE_GRID)
+        return fail(EXIT_USAGE, "--tolerance and --metric apply to adaptive tables and .bsdf, "
+                                "not to --grid (a grid has the spacing it is given)");
+    if (GIVEN(c, OPT_SIZE) && c->npreview == 0)
+        return fail(EXIT_USAGE, "--size applies to pictures: give --preview F.png or -o F.png");
+    /* Fail before the work: every output's folder must take a new file. */
+    if (out && strcmp(out, "-") && !folder_writable(out))
+        return 1;
+    if (c->report && !folder_writable(c->report))
+        return 1;
+    for (int k = 0; k < c->npreview; k++)
+        if (!folder_writable(c->previews[k].path))
+            return 1;
+    o.params = p;
+    o.threads = c->threads;
+    o.ti_min = c->ti0 * M_PI / 180.0;
+    o.ti_max = c->ti1 * M_PI / 180.0;
+    o.to_min = c->to0 * M_PI / 180.0;
+    o.to_max = c->to1 * M_PI / 180.0;
+    o.phi_min = c->ph0 * M_PI / 180.0;
+    o.phi_max = c->ph1 * M_PI / 180.0;
+    o.max_bytes = c->mib << 20;
     char msg[512] = "";
     btdf_table *t = NULL;
-    double t0 = now_seconds();
+    double t0 = run_now();
     btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    double t1 = now_seconds();
+    double t1 = run_now();
     if (st != BTDF_OK && st != BTDF_EBUDGET)
         return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s", msg[0] ? msg : btdf_strerror(st));
     if (!t)
@@ -823,7 +731,7 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", r.e_max_max, r.e_max_mean);
     else
         snprintf(emax, sizeof emax, "e_max n/a (T < 0.01 at every test angle)");
-    if (!c.quiet)
+    if (!c->quiet)
         fprintf(stderr,
                 "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
                 "(%zu angles, %zu points); e_L1 max %.3g mean %.3g; %s; "
@@ -837,120 +745,77 @@ static int cmd_tabulate(int argc, char **argv, const char *prov)
         fprintf(stderr, "%s: %s: the table reached %s error %.3g, above the tolerance %g%s%s\n",
                 prog, out, o.metric == BTDF_METRIC_MAX ? "max" : "L1", e, o.tolerance,
                 st == BTDF_EBUDGET ? ": " : "", st == BTDF_EBUDGET ? msg : "");
-        if (!best_effort) {
+        if (!c->best_effort) {
             fprintf(stderr, "%s: nothing written; raise --max-samples/--max-memory, loosen "
                             "--tolerance, or pass --best-effort\n", prog);
             code = EXIT_BUDGET;
         }
     }
+    btdf_write_opts w = {&r, prov};
     if (code == 0 && out) {
-        btdf_write_opts w = {&r, prov};
-        btdf_output_ctx ctx = {t, &w};
-        if (!strcmp(out, "-")) {
-            st = btdf_format_csv.write_stream(&ctx, stdout, msg, sizeof msg);
-            if (st == BTDF_OK && fflush(stdout) != 0)
-                st = BTDF_EIO;
-        } else {
-            st = btdf_write_atomic(fmt, &ctx, out, msg, sizeof msg);
-        }
+        btdf_output what = {t, NULL, NULL, &w, NULL};
+        st = btdf_write(&what, out, msg, sizeof msg);
         if (st != BTDF_OK)
             code = fail(1, "%s: %s", out, msg[0] ? msg : btdf_strerror(st));
     }
-    for (int k = 0; k < npreview && code == 0; k++) {
+    for (int k = 0; k < c->npreview && code == 0; k++) {
         btdf_preview_opts po;
         btdf_preview_opts_default(&po);
-        po.kind = previews[k].kind;
-        po.analytic = previews[k].analytic;
+        po.kind = c->previews[k].kind;
+        po.analytic = c->previews[k].analytic;
         po.table = t;
-        po.width = pic_w;
-        po.height = pic_h;
-        st = btdf_preview_write(&po, previews[k].path, msg, sizeof msg);
+        po.width = c->pic_w;
+        po.height = c->pic_h;
+        btdf_output what = {NULL, NULL, &po, &w, NULL};
+        st = btdf_write(&what, c->previews[k].path, msg, sizeof msg);
         if (st != BTDF_OK)
-            code = fail(1, "%s: %s", previews[k].path, msg[0] ? msg : btdf_strerror(st));
+            code = fail(1, "%s: %s", c->previews[k].path, msg[0] ? msg : btdf_strerror(st));
     }
-    if (code == 0 && report)
-        code = write_text_atomic(report, &o, btdf_table_get_kind(t), &r, prov);
+    if (code == 0 && c->report)
+        code = write_report(c->report, &o, btdf_table_get_kind(t), &r, prov);
     btdf_report_clear(&r);
     btdf_table_free(t);
     return code;
 }
 
 /* ------------------------------------------------------------------------- */
-/* polar                                                                     */
+/* polar, inspect, build                                                     */
 /* ------------------------------------------------------------------------- */
 
-static int cmd_polar(int argc, char **argv)
+static int cmd_polar(const cli *c)
 {
-    common c = {0};
-    btdf_params_default(&c.p);
+    if (c->npos)
+        return fail(EXIT_USAGE, "polar: unexpected argument '%s' (the picture is -o FILE.png)",
+                    c->pos[0]);
+    if (c->nm && (GIVEN(c, OPT_IOR) || GIVEN(c, OPT_SMOOTHNESS)))
+        return fail(EXIT_USAGE, "polar: --ior and --smoothness do not apply with --material "
+                                "(give each material as N:S)");
     btdf_params mats[BTDF_PREVIEW_MAX_CURVES];
     double angles[BTDF_PREVIEW_MAX_CURVES];
-    size_t nm = 0, na = 0;
-    const char *out = NULL;
-    int w = 0, h = 0;
-    for (int i = 1; i < argc; i++) {
-        int r = common_opt(&c, argc, argv, &i);
-        if (r < 0)
-            return EXIT_USAGE;
-        if (r)
-            continue;
-        const char *a = argv[i];
-        if (i + 1 >= argc && (!strcmp(a, "-o") || !strcmp(a, "--material") ||
-                              !strcmp(a, "--angles") || !strcmp(a, "--size")))
-            return fail(EXIT_USAGE, "%s: missing value", a);
-        if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
-            out = argv[++i];
-        } else if (!strcmp(a, "--material")) {
-            const char *v = argv[++i];
-            const char *colon = strchr(v, ':');
-            char buf[64];
-            if (!colon || nm == BTDF_PREVIEW_MAX_CURVES)
-                return fail(EXIT_USAGE, "--material: '%s': expected N:S (at most %d)", v,
-                            BTDF_PREVIEW_MAX_CURVES);
-            btdf_params_default(&mats[nm]);
-            snprintf(buf, sizeof buf, "%.*s", (int)(colon - v), v);
-            if (!parse_double("--material", buf, &mats[nm].ior[0]) ||
-                !parse_double("--material", colon + 1, &mats[nm].smoothness))
-                return EXIT_USAGE;
-            mats[nm].k0 = c.p.k0;
-            if (!check_params(&mats[nm]))
-                return EXIT_USAGE;
-            nm++;
-        } else if (!strcmp(a, "--angles")) {
-            char buf[256];
-            snprintf(buf, sizeof buf, "%s", argv[++i]);
-            na = 0;
-            for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-                if (na == BTDF_PREVIEW_MAX_CURVES)
-                    return fail(EXIT_USAGE, "--angles: at most %d", BTDF_PREVIEW_MAX_CURVES);
-                if (!parse_double("--angles", tok, &angles[na]))
-                    return EXIT_USAGE;
-                if (!(angles[na] >= 0.0 && angles[na] < 90.0))
-                    return fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees",
-                                angles[na]);
-                na++;
-            }
-        } else if (!strcmp(a, "--size")) {
-            if (!parse_picture_size(argv[++i], &w, &h))
-                return EXIT_USAGE;
-        } else {
-            fail(EXIT_USAGE, "polar: unknown option '%s'", a);
-            usage(stderr, 0);
-            return EXIT_USAGE;
-        }
-    }
-    if (!out || !ends_with(out, ".png"))
+    size_t nm = 0, na = c->na;
+    if (!c->out || !ends_with(c->out, ".png"))
         return fail(EXIT_USAGE, "polar: give -o FILE.png");
-    if (nm == 0) {
-        if (!check_params(&c.p))
+    for (; nm < c->nm; nm++) {
+        btdf_params_default(&mats[nm]);
+        mats[nm].ior[0] = c->mat_n[nm];
+        mats[nm].smoothness = c->mat_s[nm];
+        mats[nm].k0 = c->p.k0;
+        if (!check_params(&mats[nm]))
             return EXIT_USAGE;
-        mats[nm++] = c.p;
     }
+    if (nm == 0) {
+        if (!check_params(&c->p))
+            return EXIT_USAGE;
+        mats[nm++] = c->p;
+    }
+    memcpy(angles, c->angles, sizeof angles);
     if (na == 0)
         angles[na++] = 30.0;
     if (nm * na > BTDF_PREVIEW_MAX_CURVES)
         return fail(EXIT_USAGE, "polar: %zu materials x %zu angles: at most %d curves", nm, na,
                     BTDF_PREVIEW_MAX_CURVES);
+    if (!folder_writable(c->out))
+        return 1;
     btdf_preview_opts po;
     btdf_preview_opts_default(&po);
     po.kind = BTDF_PREVIEW_POLAR;
@@ -958,93 +823,76 @@ static int cmd_polar(int argc, char **argv)
     po.nmaterials = nm;
     po.ti_deg = angles;
     po.nti = na;
-    po.width = w;
-    po.height = h;
+    po.width = c->pic_w;
+    po.height = c->pic_h;
     char msg[512] = "";
-    btdf_status st = btdf_preview_write(&po, out, msg, sizeof msg);
+    btdf_output what = {NULL, NULL, &po, NULL, NULL};
+    btdf_status st = btdf_write(&what, c->out, msg, sizeof msg);
     if (st != BTDF_OK)
-        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", out,
+        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", c->out,
                     msg[0] ? msg : btdf_strerror(st));
     return 0;
 }
 
-static int cmd_inspect(int argc, char **argv)
+static int cmd_inspect(const cli *c)
 {
-    if (argc != 2 || argv[1][0] == '-')
+    if (c->npos != 1)
         return fail(EXIT_USAGE, "inspect: give one file, e.g. btdftab inspect glass.bsdf");
-    const char *path = argv[1];
+    const char *path = c->pos[0];
     char msg[512] = "";
-    if (ends_with(path, ".bsdf")) {
-        btdf_scatfun *f = NULL;
-        btdf_status st = btdf_scatfun_read(path, &f, msg, sizeof msg);
-        if (st != BTDF_OK)
-            return fail(1, "%s: %s", path, msg);
-        st = btdf_scatfun_info(f, stdout);
-        btdf_scatfun_free(f);
-        return st == BTDF_OK ? 0 : fail(1, "standard output: %s", strerror(errno));
-    }
-    btdf_table *t = NULL;
-    btdf_status st = btdf_table_read(path, &t, msg, sizeof msg);
+    btdf_status st = btdf_inspect(path, stdout, msg, sizeof msg);
     if (st != BTDF_OK)
         return fail(1, "%s: %s", path, msg);
-    const btdf_params *p = btdf_table_get_params(t);
-    printf("kind: %s\nchannels: %d\nior:", table_kind_name(btdf_table_get_kind(t)), p->channels);
-    for (int ch = 0; ch < p->channels; ch++)
-        printf(" %.17g", p->ior[ch]);
-    printf("\nsmoothness: %.17g\nk0: %.17g\nslices: %zu\nnodes: %zu\n", p->smoothness, p->k0,
-           btdf_table_slice_count(t), btdf_table_node_count(t));
-    for (size_t k = 0; k < btdf_table_slice_count(t); k++) {
-        btdf_slice s;
-        btdf_table_slice(t, k, &s);
-        printf("slice %zu: index %.6f deg, %zu x %zu\n", k, s.ti * 180.0 / M_PI, s.nrows,
-               s.ncols);
-    }
-    btdf_table_free(t);
     return 0;
 }
 
-static int cmd_build(int argc, char **argv)
+static int cmd_build(const cli *c)
 {
+    if (c->npos == 0)
+        return fail(EXIT_USAGE, "build: give a manifest, e.g. btdftab build scene.ini");
+    if (c->npos > 1)
+        return fail(EXIT_USAGE, "build: give one manifest, not '%s' and '%s'", c->pos[0],
+                    c->pos[1]);
     manifest_opts mo;
     memset(&mo, 0, sizeof mo);
     mo.prog = prog;
-    common c = {0};
-    btdf_params_default(&c.p);
-    for (int i = 1; i < argc; i++) {
-        int r = common_opt(&c, argc, argv, &i);
-        if (r < 0)
-            return EXIT_USAGE;
-        if (r)
-            continue;
-        if (!strcmp(argv[i], "--force")) {
-            mo.force = 1;
-        } else if (!strcmp(argv[i], "--best-effort")) {
-            mo.best_effort = 1;
-        } else if (argv[i][0] == '-' && argv[i][1]) {
-            fail(EXIT_USAGE, "build: unknown option '%s'", argv[i]);
-            usage(stderr, 0);
-            return EXIT_USAGE;
-        } else if (mo.path) {
-            return fail(EXIT_USAGE, "build: give one manifest, not '%s' and '%s'", mo.path, argv[i]);
-        } else {
-            mo.path = argv[i];
-        }
-    }
-    if (!mo.path)
-        return fail(EXIT_USAGE, "build: give a manifest, e.g. btdftab build scene.ini");
-    mo.quiet = c.quiet;
-    mo.threads = c.threads;
-    mo.progress = !c.quiet && isatty(2); /* progress lines only for a person watching */
+    mo.path = c->pos[0];
+    mo.force = c->force;
+    mo.best_effort = c->best_effort;
+    mo.quiet = c->quiet;
+    mo.threads = c->threads;
+    mo.progress = !c->quiet && isatty(2); /* progress lines only for a person watching */
     return manifest_run(&mo);
 }
+
+/* ------------------------------------------------------------------------- */
+/* main                                                                      */
+/* ------------------------------------------------------------------------- */
 
 /* SIGINT, SIGTERM, SIGHUP: remove the files being written, then die of the signal, so
    an interrupted run leaves no partial output (make and shells see the signal). */
 static void on_signal(int sig)
 {
-    btdf_tmp_remove_all(); /* async-signal-safe: flags and unlink */
+    btdf_remove_partial_files(); /* async-signal-safe: flags and unlink */
     signal(sig, SIG_DFL);
     raise(sig);
+}
+
+static int print_version(void)
+{
+    printf("btdftab %s (OpenEXR %s, PNG %s)\n", btdf_version_string(),
+           btdf_format_available("exr") ? "on" : "off",
+           btdf_format_available("png") ? "on" : "off");
+    return 0;
+}
+
+static int short_usage(void)
+{
+    for (const cmd_def *c = cmd_table; c->name; c++)
+        fprintf(stderr, "%s btdftab %s %s\n", c == cmd_table ? "usage:" : "      ", c->name,
+                c->synopsis);
+    fprintf(stderr, "Try 'btdftab --help' for more.\n");
+    return EXIT_USAGE;
 }
 
 int main(int argc, char **argv)
@@ -1056,19 +904,32 @@ int main(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGHUP, &sa, NULL);
-    if (argc < 2) {
-        usage(stderr, 0);
-        return EXIT_USAGE;
-    }
-    const char *cmd = argv[1];
-    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h")) {
-        usage(stdout, 1);
+    if (argc < 2)
+        return short_usage();
+    const char *name = argv[1];
+    if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
+        opt_help(stdout, NULL);
         return 0;
     }
-    if (!strcmp(cmd, "--version")) {
-        printf("btdftab %s (OpenEXR %s, PNG %s)\n", btdf_version_string(),
-               btdf_format_available("exr") ? "on" : "off", BTDF_HAVE_PNG ? "on" : "off");
+    if (!strcmp(name, "--version") || !strcmp(name, "-V"))
+        return print_version();
+    if (!strcmp(name, "--man")) {
+        opt_man(stdout, btdf_version_string());
+        return fflush(stdout) == 0 ? 0 : 1;
+    }
+    if (!strcmp(name, "help")) {
+        if (argc > 3)
+            return fail(EXIT_USAGE, "help: give one command at most");
+        const cmd_def *cmd = argc == 3 ? cmd_find(argv[2]) : NULL;
+        if (argc == 3 && !cmd)
+            return fail(EXIT_USAGE, "help: unknown command '%s'", argv[2]);
+        opt_help(stdout, cmd);
         return 0;
+    }
+    const cmd_def *cmd = cmd_find(name);
+    if (!cmd) {
+        fail(EXIT_USAGE, "unknown command '%s'", name);
+        return short_usage();
     }
     /* The command line, recorded in outputs as their provenance. */
     char prov[2048] = "btdftab";
@@ -1076,25 +937,16 @@ int main(int argc, char **argv)
         size_t l = strlen(prov);
         snprintf(prov + l, sizeof prov - l, " %s", argv[i]);
     }
-    for (int i = 2; i < argc; i++) {
-        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            usage(stdout, 1);
-            return 0;
-        }
+    static cli c; /* large: off the stack */
+    int code = parse_command(cmd, argc - 1, argv + 1, &c);
+    if (code >= 0)
+        return code;
+    switch (cmd->bit) {
+    case CMD_EVAL: return cmd_eval(&c);
+    case CMD_TABULATE: return cmd_tabulate(&c, prov);
+    case CMD_ALBEDO: return cmd_albedo(&c);
+    case CMD_POLAR: return cmd_polar(&c);
+    case CMD_BUILD: return cmd_build(&c);
+    default: return cmd_inspect(&c);
     }
-    if (!strcmp(cmd, "eval"))
-        return cmd_eval(argc - 1, argv + 1);
-    if (!strcmp(cmd, "tabulate"))
-        return cmd_tabulate(argc - 1, argv + 1, prov);
-    if (!strcmp(cmd, "albedo"))
-        return cmd_albedo(argc - 1, argv + 1);
-    if (!strcmp(cmd, "polar"))
-        return cmd_polar(argc - 1, argv + 1);
-    if (!strcmp(cmd, "build"))
-        return cmd_build(argc - 1, argv + 1);
-    if (!strcmp(cmd, "inspect"))
-        return cmd_inspect(argc - 1, argv + 1);
-    fail(EXIT_USAGE, "unknown command '%s'", cmd);
-    usage(stderr, 0);
-    return EXIT_USAGE;
 }

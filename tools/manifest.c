@@ -9,10 +9,10 @@
 
 #include <ini.h>
 
-#include "btdf.h"
-#include "formats.h"
+#include <btdf/btdf.h>
+
 #include "manifest.h"
-#include "tmpfile.h"
+#include "run.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -146,11 +146,7 @@ static int on_entry(void *user, const char *section, const char *key, const char
         if (!num(value, &m->tol) || !(m->tol >= 1e-7 && m->tol <= 1.0))
             return set_why(mf, "tolerance '%s': must be a number in [1e-7, 1]%s", value, "");
     } else if (!strcmp(key, "metric")) {
-        if (!strcmp(value, "l1"))
-            m->metric = BTDF_METRIC_L1;
-        else if (!strcmp(value, "max"))
-            m->metric = BTDF_METRIC_MAX;
-        else
+        if (!run_parse_metric(value, &m->metric))
             return set_why(mf, "metric '%s': must be l1 or max%s", value, "");
     } else if (!strcmp(key, "theta_i")) {
         char a[64], b[64];
@@ -162,13 +158,7 @@ static int on_entry(void *user, const char *section, const char *key, const char
         if (!num(a, &m->ti0) || !num(b, &m->ti1) || !(m->ti0 >= 0 && m->ti0 <= m->ti1 && m->ti1 <= 90))
             return set_why(mf, "theta_i '%s': need 0 <= A <= B <= 90 degrees%s", value, "");
     } else if (!strcmp(key, "sides")) {
-        if (!strcmp(value, "enter"))
-            m->sides = BTDF_SIDE_ENTER;
-        else if (!strcmp(value, "leave"))
-            m->sides = BTDF_SIDE_LEAVE;
-        else if (!strcmp(value, "both"))
-            m->sides = BTDF_SIDE_BOTH;
-        else
+        if (!(m->sides = run_parse_side(value)))
             return set_why(mf, "sides '%s': must be enter, leave or both%s", value, "");
     } else if (!strcmp(key, "enter") || !strcmp(key, "leave")) {
         char **list = key[0] == 'e' ? m->enter : m->leave;
@@ -248,8 +238,7 @@ static int write_stamp(const char *out, const char *stamp)
 {
     char sp[4200];
     stamp_path(sp, sizeof sp, out);
-    btdf_bytes b = {stamp, strlen(stamp)};
-    return btdf_write_file_atomic(sp, NULL, btdf_write_bytes, &b, NULL, 0) == BTDF_OK;
+    return btdf_write_buffer(sp, NULL, stamp, strlen(stamp), NULL, 0) == BTDF_OK;
 }
 
 static int fail(const char *prog, const char *fmt, const char *a, const char *b)
@@ -304,7 +293,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     }
     btdf_report r;
     memset(&r, 0, sizeof r);
-    btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, 20081231u, o.threads, &r);
+    btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);
     r.tolerance = o.tolerance;
     r.metric = o.metric;
     r.met = (o.metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max) <= o.tolerance;
@@ -326,16 +315,14 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         (*done)++;
         if (!mo->force && up_to_date(outs[k], stamp))
             continue;
-        if (ends_with(outs[k], ".png")) {
-            btdf_preview_opts po;
-            btdf_preview_opts_default(&po);
-            po.kind = BTDF_PREVIEW_MONTAGE;
-            po.table = t;
-            st = btdf_preview_write(&po, outs[k], msg, sizeof msg);
-        } else {
-            btdf_write_opts w = {&r, prov};
-            st = btdf_table_write(t, outs[k], &w, msg, sizeof msg);
-        }
+        /* A table file, or a .png montage of the table: the registry picks by extension. */
+        btdf_preview_opts po;
+        btdf_preview_opts_default(&po);
+        po.kind = BTDF_PREVIEW_MONTAGE;
+        po.table = t;
+        btdf_write_opts w = {&r, prov};
+        btdf_output what = {t, NULL, &po, &w, NULL};
+        st = btdf_write(&what, outs[k], msg, sizeof msg);
         if (st != BTDF_OK) {
             fprintf(stderr, "%s: %s: %s\n", mo->prog, outs[k], msg[0] ? msg : btdf_strerror(st));
             code = 1;
@@ -350,8 +337,9 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     return code;
 }
 
-int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_params *p, double tol,
-                  int sides, char **outs, int nouts, int *done, int total)
+/* Writes the stale .bsdf outputs of one material. */
+static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_params *p,
+                         double tol, int sides, char **outs, int nouts, int *done, int total)
 {
     /* The stamp: everything the file depends on (theta_i does not apply). */
     material m;
@@ -370,7 +358,8 @@ int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_params *
         }
         if (mo->progress)
             fprintf(stderr, "%s: [%d/%d] %s: %s...\n", mo->prog, *done, total, name, outs[k]);
-        int code = run_bsdf(outs[k], p, tol, sides, mo->threads, mo->quiet, mo->best_effort, prov);
+        int code = run_series(mo->prog, outs[k], p, tol, sides, mo->threads, mo->quiet,
+                              mo->best_effort, prov);
         if (code != 0)
             return code;
         if (!write_stamp(outs[k], stamp)) {
@@ -422,11 +411,11 @@ int manifest_run(const manifest_opts *mo)
         }
         for (int k = 0; k < m->nenter + m->nleave; k++) {
             const char *o = k < m->nenter ? m->enter[k] : m->leave[k - m->nenter];
-            if ((ends_with(o, ".exr") && !btdf_format_available("exr")) ||
-                (ends_with(o, ".png") && !BTDF_HAVE_PNG)) {
+            btdf_format_info fi;
+            if (btdf_format_find(o, &fi) && !fi.available) {
                 fprintf(stderr, "%s: %s: material [%s]: %s: %s support was switched off at "
                                 "build time\n",
-                        mo->prog, mo->path, m->name, o, ends_with(o, ".exr") ? "OpenEXR" : "PNG");
+                        mo->prog, mo->path, m->name, o, fi.name);
                 free_manifest(mf);
                 free(mf);
                 return 1;

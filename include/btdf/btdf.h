@@ -307,11 +307,15 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
 /* 1 if files of this extension (".exr", "exr") can be written by this build. */
 BTDF_API int btdf_format_available(const char *ext);
 
+/* The name of a table kind as files record it: "facet", "facet-reciprocal", "grid". */
+BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind);
+
 #ifdef __cplusplus
 }
 #endif
 
 #include "btdf_preview.h"
 #include "btdf_scatfun.h"
+#include "btdf_io.h"
 
 #endif /* BTDF_H */

@@ -1,0 +1,96 @@
+/* SPDX-License-Identifier: MIT */
+/* btdf_io.h: every file format through one write and one read path, by extension. */
+#ifndef BTDF_IO_H
+#define BTDF_IO_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "btdf.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/*
+ * Each file format is named by its extension and made from one kind of object:
+ *   .csv .exr   a table (btdf_table_build)
+ *   .bsdf       a Fourier series built from Eq. 25 (btdf_scatfun_build)
+ *   .png        a picture (btdf_preview_opts: a polar plot, or a montage or render
+ *               of a table)
+ * btdf_write writes any of them the same way: under a temporary name beside the
+ * output, renamed at the end; on any error nothing is left at the path. The
+ * temporary files of writes in progress can be removed from a signal handler with
+ * btdf_remove_partial_files.
+ */
+
+/* What a format is made from. */
+typedef enum {
+    BTDF_NEEDS_NONE = 0,    /* no format has this extension */
+    BTDF_NEEDS_TABLE = 1,   /* a btdf_table */
+    BTDF_NEEDS_SERIES = 2,  /* a btdf_scatfun */
+    BTDF_NEEDS_PICTURE = 3  /* btdf_preview_opts, drawn when written */
+} btdf_needs;
+
+typedef struct btdf_format_info {
+    const char *name;    /* "CSV", "OpenEXR", "SCATFUN", "PNG" */
+    const char *ext;     /* ".csv" */
+    const char *feature; /* the Meson feature that provides it, NULL if always built */
+    int available;       /* 0 when that feature was switched off at build time */
+    btdf_needs needs;
+    int can_stream;      /* 1 if it can be written to standard output (path "-") */
+    int can_read;        /* 1 if btdf_read reads it back */
+} btdf_format_info;
+
+/* The format the extension of path names (case-insensitive): 1 and *info filled, or 0
+   when no format has that extension (info may be NULL). */
+BTDF_API int btdf_format_find(const char *path, btdf_format_info *info);
+
+/* The known extensions, space-separated (".csv .exr .bsdf .png"), for messages. */
+BTDF_API const char *btdf_format_list(void);
+
+/* What to write: the member the format needs must be set, the others are ignored. */
+typedef struct btdf_output {
+    const btdf_table *table;                 /* BTDF_NEEDS_TABLE */
+    const struct btdf_scatfun *scatfun;      /* BTDF_NEEDS_SERIES */
+    const struct btdf_preview_opts *picture; /* BTDF_NEEDS_PICTURE */
+    const btdf_write_opts *opts;             /* tables: report and provenance, may be NULL */
+    const char *metadata_json; /* .bsdf: the text stored in the file; NULL: the parameters */
+} btdf_output;
+
+/* Writes what to path in the format its extension names; path "-" is standard output
+   for formats that can stream (CSV). BTDF_EINVAL for an unknown extension or a missing
+   object, BTDF_ENOTSUP when the format was switched off at build time (the message
+   names the feature), BTDF_EIO when writing fails, or the format's own errors. */
+BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char *msg,
+                                size_t msglen);
+
+/* What was read: exactly one member is set; free it with its own *_free. */
+typedef struct btdf_input {
+    btdf_table *table;
+    struct btdf_scatfun *scatfun;
+} btdf_input;
+
+/* Reads a file written by btdf_write (.csv, .exr, .bsdf) into *in (zeroed first).
+   BTDF_EINVAL for an unknown extension or one that cannot be read back (.png),
+   BTDF_ENOTSUP when switched off, BTDF_EFORMAT or BTDF_EIO from the reader. */
+BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size_t msglen);
+
+/* Reads path and prints its header and statistics to out. Errors as btdf_read, and
+   BTDF_EIO when printing fails. */
+BTDF_API btdf_status btdf_inspect(const char *path, FILE *out, char *msg, size_t msglen);
+
+/* Writes len bytes to path the same atomic way (a temporary name ending in ext, which
+   may be NULL, then a rename): for files that go beside the outputs (reports, stamps). */
+BTDF_API btdf_status btdf_write_buffer(const char *path, const char *ext, const void *data,
+                                       size_t len, char *msg, size_t msglen);
+
+/* Removes the temporary files of the writes in progress; async-signal-safe, for a
+   signal handler that then ends the process. */
+BTDF_API void btdf_remove_partial_files(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* BTDF_IO_H */
