@@ -11,7 +11,8 @@
 set -u
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 BUILD=${1:-$ROOT/build}
-BUILD=$(cd "$BUILD" 2>/dev/null && pwd) || { echo "no build folder ${1:-build}"; echo "0 passed, 1 failed"; exit 1; }
+BUILD=$(cd "$BUILD" 2>/dev/null && pwd) ||
+    { echo "no build folder ${1:-build}"; echo "0 passed, 1 failed"; exit 1; }
 W=$(mktemp -d)
 trap 'rm -rf "$W"' EXIT
 VENV=${MITSUBA_VENV:-$W/venv}
@@ -29,7 +30,8 @@ if "$VENV/bin/pip" install -q $PIP_PKGS >"$W/pip.log" 2>&1; then ok "pip install
 else no "pip install $PIP_PKGS"; tail -n 20 "$W/pip.log"; finish; fi
 
 BT=$BUILD/tools/btdftab
-[ -x "$BT" ] && [ -e "$BUILD/libbtdf.so" ] || { no "no $BT or $BUILD/libbtdf.so: build first"; finish; }
+[ -x "$BT" ] && [ -e "$BUILD/libbtdf.so" ] ||
+    { no "no $BT or $BUILD/libbtdf.so: build first"; finish; }
 export BTDFTAB_LIBRARY="$BUILD/libbtdf.so"
 
 # The tables every kind btdftab writes: facet, grid, facet-reciprocal, 3 channels, a back

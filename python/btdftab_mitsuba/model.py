@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Eq. 25 and the table interpolation rule of btdf.h, written with Dr.Jit operations.
+"""Eq. 25 and the table interpolation rule of btdf/btdf.h, in Dr.Jit operations.
 
 Every function takes the two directions of one query as sines and cosines in the
 model's frame (z into the medium the light comes from):
@@ -48,7 +48,7 @@ def incident_factor(sti, cti, s, k0):
 
 
 def facet_of(n, sti, cti, sto, cto, cph, sph):
-    """(valid, tn, |psi|) of the facet refracting e_i into e_o for index n (btdf.h)."""
+    """(valid, tn, |psi|) of the facet refracting e_i into e_o for index n (btdf/btdf.h)."""
     vx = sti + n * sto * cph
     vy = n * sto * sph
     vz = cti + n * cto
@@ -95,7 +95,7 @@ def rho_eq25(n, s, k0, sti, cti, sto, cto, cph, sph):
 
 
 class TableRule:
-    """The slices of a table (read by libbtdf) on the device, and the rule of btdf.h."""
+    """The slices of a table (read by libbtdf) on the device, and the rule of btdf/btdf.h."""
 
     def __init__(self, table):
         self.kind = table.kind
@@ -172,7 +172,7 @@ class TableRule:
         return dr.select(inside, val, 0.0)
 
     def eval(self, sti, cti, sto, cto, cph, sph, active=True):
-        """rho~ per channel (a list) for the query, by the rule of btdf.h."""
+        """rho~ per channel (a list) for the query, by the rule of btdf/btdf.h."""
         recip = self.kind == libbtdf.KIND_FACET_RECIPROCAL
         grid = self.kind == libbtdf.KIND_GRID
         if grid:
