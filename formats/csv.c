@@ -19,6 +19,8 @@
  * printed with 17 significant digits so that they and rho read back bit for bit.
  * theta_o_deg and phi_deg give the node's outgoing direction for people (for facet
  * tables that of channel 0; empty where no facet refracts into the lower hemisphere).
+ * A comment line "# rows: N" before the header row gives the number of node rows, and
+ * the last line is "# end: N rows": a file cut anywhere, or missing rows, is refused.
  */
 
 static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
@@ -54,6 +56,11 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                 "%.4g; %zu test angles, %zu test points\n",
                 r->e_l1_max, r->e_l1_mean, r->e_max_max, r->e_max_mean, r->e_t_max,
                 r->e_t_mean, r->test_angles, r->test_points);
+    /* The row count here and the end line make a cut or a lost row detectable. */
+    size_t nrows = 0;
+    for (size_t k = 0; k < t->ns; k++)
+        nrows += t->s[k].nr * t->s[k].nc;
+    fprintf(f, "# rows: %zu\n", nrows);
     fprintf(f, "theta_i_deg,theta_o_deg,phi_deg,%s,ti_rad,row_rad,col_rad\n",
             nch == 1 ? "rho" : "rho_r,rho_g,rho_b");
     for (size_t k = 0; k < t->ns; k++) {
@@ -91,6 +98,7 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
             }
         }
     }
+    fprintf(f, "# end: %zu rows\n", nrows);
     return BTDF_OK;
 }
 
@@ -206,6 +214,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     btdf_params p;
     btdf_params_default(&p);
     int have_kind = 0, have_ch = 0, have_ior = 0, have_s = 0, have_k0 = 0, header = 0;
+    int have_rows = 0, have_end = 0;
+    size_t declared = 0, ended = 0, seen = 0;
     btdf_table_kind kind = BTDF_TABLE_FACET;
     btdf_table *t = NULL;
     dvec rr = {0}, cc = {0}, vv = {0};
@@ -219,9 +229,26 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
             st = ferr(msg, msglen, path, ln, "line longer than 4095 bytes");
             break;
         }
+        if (have_end) {
+            if (strspn(line, " \t\r\n") != strlen(line))
+                st = ferr(msg, msglen, path, ln, "text after the '# end' line");
+            continue;
+        }
         if (line[0] == '#') {
             char word[64];
-            if (sscanf(line, "# kind: %63s", word) == 1) {
+            if (header && !strncmp(line, "# end:", 6)) {
+                char tail;
+                if (sscanf(line, "# end: %zu rows%c", &ended, &tail) != 2 || tail != '\n' ||
+                    line[7] < '0' || line[7] > '9')
+                    st = ferr(msg, msglen, path, ln, "malformed '# end: N rows' line");
+                have_end = 1;
+            } else if (!header && !strncmp(line, "# rows:", 7)) {
+                char tail;
+                if (sscanf(line, "# rows: %zu%c", &declared, &tail) != 2 || tail != '\n' ||
+                    line[8] < '0' || line[8] > '9')
+                    st = ferr(msg, msglen, path, ln, "malformed '# rows: N' line");
+                have_rows = 1;
+            } else if (sscanf(line, "# kind: %63s", word) == 1) {
                 have_kind = 1;
                 if (!table_kind_parse(word, &kind))
                     st = ferr(msg, msglen, path, ln,
@@ -243,10 +270,11 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                           "not a btdftab table CSV (expected the header row theta_i_deg,...)");
                 break;
             }
-            if (!have_kind || !have_ch || !have_s || !have_k0 || have_ior != p.channels) {
+            if (!have_kind || !have_ch || !have_s || !have_k0 || have_ior != p.channels ||
+                !have_rows) {
                 st = ferr(msg, msglen, path, ln,
-                          "missing '# kind', '# channels', '# ior', '# smoothness' or '# k0' "
-                          "comment before the header row");
+                          "missing '# kind', '# channels', '# ior', '# smoothness', '# k0' or "
+                          "'# rows' comment before the header row");
                 break;
             }
             char why[200];
@@ -274,6 +302,10 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
             st = ferr(msg, msglen, path, ln, "a number is malformed or not finite");
             break;
         }
+        if (++seen > declared) {
+            st = ferr(msg, msglen, path, ln, "more node rows than '# rows' declares");
+            break;
+        }
         if (ti != cur_ti) {
             st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
             cur_ti = ti;
@@ -288,6 +320,19 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
         st = ferr(msg, msglen, path, ln, "read error");
     if (st == BTDF_OK && !header)
         st = ferr(msg, msglen, path, ln, "no header row: empty or foreign file");
+    if (st == BTDF_OK && !have_end) {
+        char why[160];
+        snprintf(why, sizeof why,
+                 "the file is cut short: no '# end' line (%zu of the %zu declared rows read)",
+                 seen, declared);
+        st = ferr(msg, msglen, path, ln, why);
+    }
+    if (st == BTDF_OK && (ended != declared || seen != declared)) {
+        char why[160];
+        snprintf(why, sizeof why, "'# rows: %zu' and '# end: %zu rows' but %zu node rows",
+                 declared, ended, seen);
+        st = ferr(msg, msglen, path, ln, why);
+    }
     if (st == BTDF_OK)
         st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
     if (st == BTDF_OK && t->ns == 0)

@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <openexr.h>
 
@@ -363,6 +364,7 @@ typedef struct reader {
     const char *path;
     char *msg;
     size_t msglen;
+    uint64_t file_size; /* bytes, for checking declared sizes before allocating */
 } reader;
 
 /* A string attribute as a NUL-terminated copy (caller frees), or NULL with a message. */
@@ -551,10 +553,92 @@ static btdf_status read_part_pixels(reader *r, int part, const exr_attr_box2i_t 
     return BTDF_OK;
 }
 
+/* The largest ratio of decoded to stored bytes a compression can reach: deflate's
+   limit is 1032:1 (ZIP, ZIPS; PXR24 stores 3 of a float's 4 bytes, so 4/3 of it); an
+   OpenEXR RLE pair of 2 bytes gives at most 128 bytes; PIZ's Huffman run codes stay
+   below deflate's; B44 and B44A store 32-bit float channels as they are. DWA and
+   anything newer: an RLE pass under deflate, 64 x 1032. */
+static uint64_t max_ratio(exr_compression_t c)
+{
+    switch (c) {
+    case EXR_COMPRESSION_NONE:
+    case EXR_COMPRESSION_B44:
+    case EXR_COMPRESSION_B44A:
+        return 1;
+    case EXR_COMPRESSION_RLE:
+        return 64;
+    case EXR_COMPRESSION_ZIPS:
+    case EXR_COMPRESSION_ZIP:
+    case EXR_COMPRESSION_PIZ:
+        return 1032;
+    case EXR_COMPRESSION_PXR24:
+        return 1376;
+    default:
+        return 64 * 1032;
+    }
+}
+
+/* Before anything is allocated for a part: its declared sizes must fit in the file.
+   Each of the width numbers of btdf.cols (and height of btdf.rows) takes at least a
+   digit and a separator; each chunk has an 8-byte entry in the offset table; the
+   chunks lie inside the file without overlapping, and none decodes to more than its
+   compression allows. */
+static btdf_status check_sizes(reader *r, int part, const exr_attr_box2i_t *dw, int channels)
+{
+    uint64_t width = (uint64_t)((int64_t)dw->max.x - dw->min.x + 1);
+    uint64_t height = (uint64_t)((int64_t)dw->max.y - dw->min.y + 1);
+    uint64_t fs = r->file_size;
+    if (width > fs / 2 + 1 || height > fs / 2 + 1)
+        return say(BTDF_EFORMAT, r->msg, r->msglen,
+                   "part %d declares %llu x %llu pixels, more than a %llu-byte file can hold",
+                   part, (unsigned long long)height, (unsigned long long)width,
+                   (unsigned long long)fs);
+    int32_t lpc = 1;
+    exr_compression_t comp = EXR_COMPRESSION_LAST_TYPE;
+    if (exr_get_scanlines_per_chunk(r->ctx, part, &lpc) != EXR_ERR_SUCCESS || lpc < 1 ||
+        exr_get_compression(r->ctx, part, &comp) != EXR_ERR_SUCCESS)
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d: no chunk layout", part);
+    uint64_t chunks = (height + (uint64_t)lpc - 1) / (uint64_t)lpc;
+    if (chunks > fs / 8)
+        return say(BTDF_EFORMAT, r->msg, r->msglen,
+                   "part %d declares %llu chunks, more than a %llu-byte file can index", part,
+                   (unsigned long long)chunks, (unsigned long long)fs);
+    uint64_t packed = 0, unpacked = 0;
+    for (int64_t y = dw->min.y; y <= dw->max.y; y += lpc) {
+        exr_chunk_info_t ci;
+        exr_result_t rc = exr_read_scanline_chunk_info(r->ctx, part, (int)y, &ci);
+        if (rc != EXR_ERR_SUCCESS)
+            return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d: chunk table unreadable: %s",
+                       part, exr_text(&r->err, rc));
+        if (ci.data_offset > fs || ci.packed_size > fs - ci.data_offset ||
+            (ci.unpacked_size - 1) / max_ratio(comp) >= ci.packed_size)
+            return say(BTDF_EFORMAT, r->msg, r->msglen,
+                       "part %d: chunk at line %lld declares %llu bytes stored and %llu "
+                       "decoded, beyond a %llu-byte file",
+                       part, (long long)y, (unsigned long long)ci.packed_size,
+                       (unsigned long long)ci.unpacked_size, (unsigned long long)fs);
+        packed += ci.packed_size; /* checked at each step: the sums cannot overflow */
+        unpacked += ci.unpacked_size;
+        if (packed > fs)
+            break;
+    }
+    uint64_t px = (uint64_t)channels * sizeof(float); /* bytes per pixel, all channels */
+    if (packed > fs || unpacked % px != 0 || unpacked / px != width * height)
+        return say(BTDF_EFORMAT, r->msg, r->msglen,
+                   "part %d: its chunks hold %llu bytes stored and %llu decoded, not a "
+                   "%llu x %llu image in a %llu-byte file",
+                   part, (unsigned long long)packed, (unsigned long long)unpacked,
+                   (unsigned long long)height, (unsigned long long)width,
+                   (unsigned long long)fs);
+    return BTDF_OK;
+}
+
 static btdf_status read_slice(reader *r, btdf_table *t, int part, int channels)
 {
     exr_attr_box2i_t dw;
     btdf_status st = check_part(r, part, channels, &dw);
+    if (st == BTDF_OK)
+        st = check_sizes(r, part, &dw, channels);
     if (st != BTDF_OK)
         return st;
     size_t width = (size_t)((int64_t)dw.max.x - dw.min.x + 1);
@@ -607,12 +691,18 @@ static btdf_status read_slice(reader *r, btdf_table *t, int part, int channels)
 
 static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_t msglen)
 {
-    reader r = {NULL, {0, {0}}, path, msg, msglen};
+    reader r = {NULL, {0, {0}}, path, msg, msglen, 0};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_exr_error;
     init.user_data = &r.err;
     /* A truncated file must fail, not be patched up by guessing the chunk table. */
     init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
+    struct stat fst;
+    if (stat(path, &fst) != 0)
+        return say(BTDF_EIO, msg, msglen, "cannot open: %s", strerror(errno));
+    if (!S_ISREG(fst.st_mode)) /* its size is what every declared size is checked against */
+        return say(BTDF_EFORMAT, msg, msglen, "not a regular file");
+    r.file_size = (uint64_t)fst.st_size;
     exr_result_t rc = exr_start_read(&r.ctx, path, &init);
     if (rc != EXR_ERR_SUCCESS) {
         btdf_status st = rc == EXR_ERR_FILE_ACCESS ? BTDF_EIO : BTDF_EFORMAT;

@@ -1060,12 +1060,9 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
     return r.e_l1_max;
 }
 
-BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
-                                        btdf_side side, int threads, btdf_scatfun **out,
-                                        char *msg, size_t msglen)
+BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
+                                        btdf_side side, char *msg, size_t msglen)
 {
-    if (!out)
-        return say(msg, msglen, BTDF_EINVAL, "output pointer missing");
     btdf_status st = btdf_params_check(p, msg, msglen);
     if (st != BTDF_OK)
         return st;
@@ -1074,6 +1071,18 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
     if (side < BTDF_SIDE_ENTER || side > BTDF_SIDE_BOTH)
         return say(msg, msglen, BTDF_EINVAL, "side %d: must be 1 (enter), 2 (leave) or 3 (both)",
                    (int)side);
+    return BTDF_OK;
+}
+
+BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
+                                        btdf_side side, int threads, btdf_scatfun **out,
+                                        char *msg, size_t msglen)
+{
+    if (!out)
+        return say(msg, msglen, BTDF_EINVAL, "output pointer missing");
+    btdf_status st = btdf_scatfun_check(p, tolerance, side, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
     double t0 = btdf_now();
     build_ctx c;
     memset(&c, 0, sizeof c);

@@ -82,6 +82,11 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
     return BTDF_OK;
 }
 
+BTDF_API btdf_status btdf_table_opts_check(const btdf_table_opts *o, char *msg, size_t msglen)
+{
+    return o ? check_opts(o, msg, msglen) : BTDF_EINVAL;
+}
+
 /* ------------------------------------------------------------------------- */
 /* Uniform grid                                                              */
 /* ------------------------------------------------------------------------- */
@@ -569,22 +574,39 @@ static int cmp_ti(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* build_slice's first grid: no slice has fewer nodes. */
+#define SLICE_MIN_NODES ((size_t)17 * 13)
+
+/* The node budget of an adaptive build, a bound at every moment of it: max_samples
+   nodes, and max_bytes at (channels + 1) doubles a node (the values and the measure
+   weight held while building). */
+static size_t facet_node_cap(const btdf_table_opts *o)
+{
+    size_t max_samples = o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES;
+    size_t max_bytes = o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES;
+    size_t cap = max_bytes / (((size_t)o->params.channels + 1) * sizeof(double));
+    return cap < max_samples ? cap : max_samples;
+}
+
+/* Incidence slices of the first pass, at most 5 degrees apart. */
+static size_t facet_first_slices(const btdf_table_opts *o)
+{
+    double span = o->ti_max - o->ti_min;
+    return span > 0.0 ? (size_t)ceil(span / (5.0 * M_PI / 180.0)) + 1 : 1;
+}
+
 /* One adaptive build with the given shares of the tolerance. */
 static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                                     double frac_ti, btdf_table *t, int *budget_hit)
 {
-    size_t max_samples = o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES;
-    size_t max_bytes = o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES;
-    size_t nch = (size_t)o->params.channels;
-    size_t node_cap = max_bytes / (nch * sizeof(double) + sizeof(double));
-    if (node_cap > max_samples)
-        node_cap = max_samples;
+    size_t node_cap = facet_node_cap(o);
     /* Tail: facets with u > U carry a fraction exp(-U^2) of the facet distribution; U
        puts that below a tenth of the tolerance. */
     double U = sqrt(log(10.0 / o->tolerance)) + 1.0;
-    facet_job j = {o, frac_slice, U, node_cap / 8 > 1000 ? node_cap / 8 : 1000, NULL, NULL};
+    size_t per_slice = node_cap / 8 > 1000 ? node_cap / 8 : 1000;
+    facet_job j = {o, frac_slice, U, per_slice < node_cap ? per_slice : node_cap, NULL, NULL};
     double span = o->ti_max - o->ti_min;
-    size_t n0 = span > 0.0 ? (size_t)ceil(span / (5.0 * M_PI / 180.0)) + 1 : 1;
+    size_t n0 = facet_first_slices(o); /* btdf_table_build checked n0 slices fit */
     size_t cap = n0, ns = n0;
     slice_out *sl = calloc(cap, sizeof *sl);
     double *tis = malloc(cap * sizeof(double));
@@ -600,6 +622,16 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
     btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
     btdf_status st = BTDF_OK;
     size_t nodes = 0;
+    for (size_t k = 0; k < ns; k++)
+        nodes += sl[k].s.nr * sl[k].s.nc;
+    if (nodes > node_cap) { /* the first slices alone overran: again, each a share */
+        for (size_t k = 0; k < ns; k++)
+            free_slice_out(&sl[k]);
+        j.max_nodes = node_cap / n0;
+        *budget_hit = 1;
+        btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
+    }
+    nodes = 0;
     for (size_t k = 0; k < ns; k++) {
         if (sl[k].nomem)
             st = BTDF_ENOMEM;
@@ -639,7 +671,20 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
             }
         j.ti = mt;
         j.out = cand;
+        /* The candidates are held beside the slices: together they stay in the budget. */
+        size_t room = nodes < node_cap ? (node_cap - nodes) / nt : 0;
+        if (room < SLICE_MIN_NODES) {
+            *budget_hit = 1;
+            free(mt);
+            free(at);
+            free(cand);
+            break;
+        }
+        size_t saved_max = j.max_nodes;
+        if (room < j.max_nodes)
+            j.max_nodes = room;
         btdf_parallel_for(o->threads, nt, facet_slice_job, &j);
+        j.max_nodes = saved_max;
         size_t keep = 0;
         for (q = 0; q < nt; q++) {
             if (cand[q].nomem) {
@@ -659,8 +704,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
             size_t add_nodes = 0;
             for (q = 0; q < nt; q++)
                 add_nodes += cand[q].s.nr * cand[q].s.nc;
-            if (nodes + add_nodes > max_samples ||
-                (nodes + add_nodes) * (nch + 1) * sizeof(double) > max_bytes) {
+            if (nodes + add_nodes > node_cap) {
                 *budget_hit = 1;
                 keep = 0;
             }
@@ -779,6 +823,18 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
             ob.params.ior[c] = 1.0 / o->params.ior[c];
         ob.ti_min = 0.0;
         ob.ti_max = M_PI / 2;
+    }
+    /* A budget below the first pass's coarsest slices cannot hold any table. */
+    size_t first = facet_first_slices(&ob) * SLICE_MIN_NODES;
+    if (first > facet_node_cap(&ob)) {
+        btdf_table_free(t);
+        if (msg && msglen)
+            snprintf(msg, msglen, "the budget (%zu samples, %zu bytes at %d channel%s) is below "
+                                  "the %zu nodes of the coarsest table: nothing was built",
+                     o->max_samples ? o->max_samples : DEFAULT_MAX_SAMPLES,
+                     o->max_bytes ? o->max_bytes : DEFAULT_MAX_BYTES, o->params.channels,
+                     o->params.channels == 1 ? "" : "s", first);
+        return BTDF_EBUDGET;
     }
     /* Split the tolerance between slice interpolation and incidence blending, check
        the result with an independent estimate, and tighten while it falls short. */

@@ -2,12 +2,14 @@
 /* model.c: Eq. 25 of Xu & Sun (2008), its validation, and the hemispherical transmittance. */
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "btdf.h"
 #include "model_impl.h"
+#include "table_impl.h"
 
 BTDF_API const char *btdf_version_string(void) { return BTDF_VERSION_STRING; }
 
@@ -101,74 +103,79 @@ void btdf_sincos_deg(double deg, double *s, double *c)
     }
 }
 
-/* pi to 64 bits and beyond, for the long double paths below. */
-#define PI_L 3.141592653589793238462643383279502884L
-
-/* sin and cos of degrees in long double, exact at multiples of 90 degrees. */
-static void sincos_deg_l(double deg, long double *s, long double *c)
+/* Parameters rho accepts; anything else gives 0 (btdf_rho validates nothing else). */
+static int params_ok(double n, double s, double k0)
 {
-    double q = nearbyint(deg / 90.0);
-    long double r = ((long double)deg - 90.0L * (long double)q) * (PI_L / 180.0L);
-    long double sr = sinl(r), cr = cosl(r);
-    long double k = fmodl((long double)q, 4.0L);
-    if (k < 0)
-        k += 4;
-    switch ((int)k) {
-    case 0: *s = sr; *c = cr; break;
-    case 1: *s = cr; *c = -sr; break;
-    case 2: *s = -sr; *c = -cr; break;
-    default: *s = -cr; *c = sr; break;
-    }
+    return n > 0.0 && fabs(n - 1.0) >= BTDF_IOR_ONE_EPS && n >= BTDF_IOR_MIN &&
+           n <= BTDF_IOR_MAX && s >= BTDF_S_MIN && s <= BTDF_S_MAX && k0 >= 0.0 &&
+           k0 <= BTDF_K0_MAX;
 }
 
-/* rho from sines and cosines given in long double; a bad parameter or angle gives 0.
-   v = e_i + n e_o and its two dot products are formed in long double: near the
-   straight-through direction with n near 1, v is a difference of nearly equal
-   terms (1e-6 of them at n = 1.0001), and the Beckmann exponent, hundreds of units
-   in the tail, multiplies its relative error. In double this cost 4e-8 relative at
-   n = 1.0001, s = 1e4 (tests/mp_reference.py); in long double (64-bit mantissa on
-   x86-64) it stays below 1e-10. Where long double is double, it is as before. */
-static double rho_scl(double n, double s, double k0, long double sti, long double cti,
-                      long double sto, long double cto, long double cph, long double sph)
+/* One evaluation: the shadowing only where some facet connects the directions. */
+BT_INLINE double rho_point(double n, double s, double k0, bt_io *io, const bt_az *az)
 {
-    if (!(n > 0.0) || !(fabs(n - 1.0) >= BTDF_IOR_ONE_EPS) || !isfinite(n) ||
-        !(s >= BTDF_S_MIN && s <= BTDF_S_MAX) || !(k0 >= 0.0 && k0 <= BTDF_K0_MAX))
-        return 0.0;
-    if (!(cti >= 0.0L && sti >= 0.0L && cto <= 0.0L && sto >= 0.0L) || !isfinite((double)cph) ||
-        !isfinite((double)sph))
-        return 0.0;
-    rho_in a;
-    rho_out b;
-    rho_in_init(&a, (double)sti, (double)cti, s, k0);
-    rho_out_init(&b, (double)sto, (double)cto, s, k0);
-    long double nl = n;
-    long double vx = sti + nl * sto * cph, vy = nl * sto * sph, vz = cti + nl * cto;
-    long double ei_v = sti * vx + cti * vz;
-    long double eo_v = sto * (cph * vx + sph * vy) + cto * vz;
-    return rho_kernel_v(n, s, &a, &b, (double)vx, (double)vy, (double)vz, (double)ei_v,
-                        (double)eo_v);
+    return bt_rho_one(n, n - 1.0, s, k0, io, az->h2, az->sphi);
 }
 
-BTDF_API double btdf_rho(double n, double s, double k0, double ti, double to, double phi)
+BT_CLONES BTDF_API double btdf_rho(double n, double s, double k0, double ti, double to,
+                                   double phi)
 {
-    if (!(ti >= 0.0 && ti <= M_PI / 2 + 1e-15 && to >= M_PI / 2 - 1e-15 &&
-          to <= M_PI + 1e-15 && isfinite(phi)))
+    if (!params_ok(n, s, k0) || !(ti >= 0.0 && ti <= M_PI / 2 + 1e-15 &&
+                                  to >= M_PI / 2 - 1e-15 && to <= M_PI + 1e-15 &&
+                                  isfinite(phi)))
         return 0.0;
-    long double tl = ti, ol = to, pl = phi;
-    return rho_scl(n, s, k0, sinl(tl), cosl(tl), fabsl(sinl(ol)), fminl(cosl(ol), 0.0L),
-                   cosl(pl), sinl(pl));
+    bt_io io;
+    bt_az az;
+    bt_io_geom_rad(&io, ti, to);
+    bt_az_rad(&az, bt_fold_rad(phi));
+    return rho_point(n, s, k0, &io, &az);
 }
 
-BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti, double to,
-                             double phi)
+BT_CLONES BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti,
+                                       double to, double phi)
 {
-    if (!(ti >= 0.0 && ti <= 90.0 && to >= 90.0 && to <= 180.0 && isfinite(phi)))
+    if (!params_ok(n, s, k0) ||
+        !(ti >= 0.0 && ti <= 90.0 && to >= 90.0 && to <= 180.0 && isfinite(phi)))
         return 0.0;
-    long double sti, cti, sto, cto, sph, cph;
-    sincos_deg_l(ti, &sti, &cti);
-    sincos_deg_l(to, &sto, &cto);
-    sincos_deg_l(phi, &sph, &cph);
-    return rho_scl(n, s, k0, sti, cti, sto, cto, cph, sph);
+    bt_io io;
+    bt_az az;
+    bt_io_geom_deg(&io, ti, to);
+    bt_az_deg(&az, bt_fold_deg(phi));
+    return rho_point(n, s, k0, &io, &az);
+}
+
+BT_CLONES BTDF_API double btdf_rho_r(double n, double s, double k0, double ti, double tr,
+                                     double phi)
+{
+    if (!params_ok(n, s, k0) || !(ti >= 0.0 && ti <= M_PI / 2 + 1e-15 && tr >= 0.0 &&
+                                  tr <= M_PI / 2 + 1e-15 && isfinite(phi)))
+        return 0.0;
+    bt_ir ir;
+    bt_az az;
+    bt_ir_rad(&ir, ti, tr, s, k0);
+    bt_az_rad(&az, bt_fold_rad(phi));
+    return bt_rho_r(n, n - 1.0, s, &ir, az.h2, az.sphi);
+}
+
+BT_CLONES BTDF_API double btdf_rho_r_deg(double n, double s, double k0, double ti,
+                                         double tr, double phi)
+{
+    if (!params_ok(n, s, k0) ||
+        !(ti >= 0.0 && ti <= 90.0 && tr >= 0.0 && tr <= 90.0 && isfinite(phi)))
+        return 0.0;
+    bt_ir ir;
+    bt_az az;
+    bt_ir_deg(&ir, ti, tr, s, k0);
+    bt_az_deg(&az, bt_fold_deg(phi));
+    return bt_rho_r(n, n - 1.0, s, &ir, az.h2, az.sphi);
+}
+
+BTDF_API double btdf_fresnel_r(double n, double ti)
+{
+    if (!(n > 0.0) || !isfinite(n) || !(ti >= 0.0 && ti <= M_PI / 2))
+        return 0.0;
+    double c = cos(ti);
+    return bt_fresnel_r(n, n - 1.0, c > 0.0 ? c : 0.0);
 }
 
 BTDF_API double btdf_fresnel_t(double n, double ti)
@@ -189,19 +196,46 @@ static int angles_ok(double ti, double to, double phi)
     return ti >= 0.0 && ti <= M_PI / 2 && to >= M_PI / 2 && to <= M_PI && isfinite(phi);
 }
 
-BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double to, double phi,
-                               double *out)
+/* btdf_params_check's verdict without its messages: the per-call check of btdf_eval. */
+static int params_valid(const btdf_params *p)
 {
-    if (btdf_params_check(p, NULL, 0) != BTDF_OK || !out)
+    if (!p || !(p->channels == 1 || p->channels == 3))
+        return 0;
+    for (int c = 0; c < p->channels; c++)
+        if (!params_ok(p->ior[c], p->smoothness, p->k0))
+            return 0;
+    return 1;
+}
+
+BT_CLONES BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double to,
+                                         double phi, double *out)
+{
+    if (!params_valid(p) || !out)
         return BTDF_EINVAL;
     if (!angles_ok(ti, to, phi))
         return BTDF_EDOMAIN;
-    long double tl = ti, ol = to, pl = phi;
-    long double sti = sinl(tl), cti = cosl(tl), sto = sinl(ol), cto = cosl(ol);
-    long double cph = cosl(pl), sph = sinl(pl);
+    bt_io io;
+    bt_az az;
+    bt_io_geom_rad(&io, ti, to);
+    bt_az_rad(&az, bt_fold_rad(phi));
     for (int c = 0; c < p->channels; c++)
-        out[c] = rho_scl(p->ior[c], p->smoothness, p->k0, sti, fmaxl(cti, 0.0L), fabsl(sto),
-                         fminl(cto, 0.0L), cph, sph);
+        out[c] = rho_point(p->ior[c], p->smoothness, p->k0, &io, &az);
+    return BTDF_OK;
+}
+
+BTDF_API btdf_status btdf_eval_r(const btdf_params *p, double ti, double tr, double phi,
+                                 double *out)
+{
+    if (btdf_params_check(p, NULL, 0) != BTDF_OK || !out)
+        return BTDF_EINVAL;
+    if (!(ti >= 0.0 && ti <= M_PI / 2 && tr >= 0.0 && tr <= M_PI / 2 && isfinite(phi)))
+        return BTDF_EDOMAIN;
+    bt_ir ir;
+    bt_az az;
+    bt_ir_rad(&ir, ti, tr, p->smoothness, p->k0);
+    bt_az_rad(&az, bt_fold_rad(phi));
+    for (int c = 0; c < p->channels; c++)
+        out[c] = bt_rho_r(p->ior[c], p->ior[c] - 1.0, p->smoothness, &ir, az.h2, az.sphi);
     return BTDF_OK;
 }
 
@@ -217,21 +251,64 @@ BTDF_API btdf_status btdf_eval_dir(const btdf_params *p, const double wi[3],
     double lo = wo[0] * wo[0] + wo[1] * wo[1] + wo[2] * wo[2];
     if (fabs(li - 1.0) > 2e-6 || fabs(lo - 1.0) > 2e-6 || wi[2] < 0.0)
         return BTDF_EDOMAIN;
+    double s = p->smoothness, k0 = p->k0;
+    double ri = hypot(wi[0], wi[1]), ro = hypot(wo[0], wo[1]);
     if (wo[2] >= 0.0) {
         for (int c = 0; c < p->channels; c++)
-            out[c] = 0.0; /* reflection side: this model transmits only */
+            out[c] = 0.0; /* reflection side: btdf_rho_r holds that lobe */
         return BTDF_OK;
     }
-    /* Rotate the azimuths so that e_i lies at azimuth 0; phi = po - pi. */
-    double ri = hypot(wi[0], wi[1]), ro = hypot(wo[0], wo[1]);
-    double cph = 1.0, sph = 0.0;
-    if (ri > 0.0 && ro > 0.0) { /* otherwise phi is undefined and irrelevant */
-        cph = (wi[0] * wo[0] + wi[1] * wo[1]) / (ri * ro);
-        sph = (wi[0] * wo[1] - wi[1] * wo[0]) / (ri * ro);
+    /* v = (wi + wo) + d wo: each sum of the first vector is rounded once, so v keeps
+       the accuracy near n = 1 that the angle forms get from their half-angle products. */
+    rho_in a;
+    rho_out b;
+    rho_in_init(&a, ri, wi[2], s, k0);
+    rho_out_init(&b, ro, wo[2], s, k0);
+    for (int c = 0; c < p->channels; c++) {
+        double n = p->ior[c], d = n - 1.0;
+        double vx = (wi[0] + wo[0]) + d * wo[0], vy = (wi[1] + wo[1]) + d * wo[1];
+        double vz = (wi[2] + wo[2]) + d * wo[2];
+        double ei_v = wi[0] * vx + wi[1] * vy + wi[2] * vz;
+        double eo_v = wo[0] * vx + wo[1] * vy + wo[2] * vz;
+        /* the kernel's frame has e_i at azimuth 0; v's horizontal part enters through
+           vx^2 + vy^2 only, so any rotation of the frame gives the same value */
+        out[c] = rho_kernel_v(n, s, &a, &b, vx, vy, vz, ei_v, eo_v);
     }
-    for (int c = 0; c < p->channels; c++)
-        out[c] = rho_scl(p->ior[c], p->smoothness, p->k0, ri, wi[2], ro, wo[2], cph, sph);
     return BTDF_OK;
+}
+
+/* Evaluations are done in blocks: a scalar pass folds the azimuths (fmod for the
+   rare azimuth beyond one turn), then a branch-free loop the compiler vectorises. */
+#define BT_BLOCK 256
+
+BT_CLONES static void batch_block(const btdf_params *p, size_t count, const double *ti,
+                        const double *to, const double *phi, double *out)
+{
+    double c[BT_BLOCK];
+    const double s = p->smoothness, k0 = p->k0;
+    const int nc = p->channels;
+    for (size_t i = 0; i < count; i++)
+        c[i] = bt_fold_rad(phi[i]);
+    if (nc == 1) {
+        const double n = p->ior[0], d = n - 1.0;
+        for (size_t i = 0; i < count; i++) {
+            bt_io io;
+            bt_az az;
+            bt_io_rad(&io, ti[i], to[i], s, k0);
+            bt_az_rad(&az, c[i]);
+            out[i] = bt_rho(n, d, s, &io, az.h2, az.sphi);
+        }
+        return;
+    }
+    for (size_t i = 0; i < count; i++) {
+        bt_io io;
+        bt_az az;
+        bt_io_rad(&io, ti[i], to[i], s, k0);
+        bt_az_rad(&az, c[i]);
+        for (int k = 0; k < nc; k++)
+            out[i * (size_t)nc + (size_t)k] =
+                bt_rho(p->ior[k], p->ior[k] - 1.0, s, &io, az.h2, az.sphi);
+    }
 }
 
 BTDF_API btdf_status btdf_eval_batch(const btdf_params *p, size_t count, const double *ti,
@@ -240,14 +317,88 @@ BTDF_API btdf_status btdf_eval_batch(const btdf_params *p, size_t count, const d
 {
     if (btdf_params_check(p, NULL, 0) != BTDF_OK || (count && (!ti || !to || !phi || !out)))
         return BTDF_EINVAL;
-    for (size_t i = 0; i < count; i++) {
-        btdf_status st = btdf_eval(p, ti[i], to[i], phi[i], out + i * (size_t)p->channels);
-        if (st != BTDF_OK) {
+    for (size_t i = 0; i < count; i++)
+        if (!angles_ok(ti[i], to[i], phi[i])) {
             if (bad_index)
                 *bad_index = i;
-            return st;
+            return BTDF_EDOMAIN;
         }
+    for (size_t i = 0; i < count; i += BT_BLOCK) {
+        size_t m = count - i < BT_BLOCK ? count - i : BT_BLOCK;
+        batch_block(p, m, ti + i, to + i, phi + i, out + i * (size_t)p->channels);
     }
+    return BTDF_OK;
+}
+
+typedef struct grid_job {
+    const btdf_params *p;
+    size_t nto, nphi;
+    const double *ti, *to, *h2, *sphi;
+    double *out;
+} grid_job;
+
+/* The loop over phi of one (ti, to) row: branch-free and vectorised. */
+BT_CLONES static void grid_line(const btdf_params *p, const bt_io *io, size_t nphi,
+                                const double *h2, const double *sp, double *o)
+{
+    const int nc = p->channels;
+    const double s = p->smoothness;
+    if (nc == 1) {
+        const double n = p->ior[0], d = n - 1.0;
+        for (size_t k = 0; k < nphi; k++)
+            o[k] = bt_rho(n, d, s, io, h2[k], sp[k]);
+        return;
+    }
+    for (int c = 0; c < nc; c++) {
+        const double n = p->ior[c], d = n - 1.0;
+        for (size_t k = 0; k < nphi; k++)
+            o[k * (size_t)nc + (size_t)c] = bt_rho(n, d, s, io, h2[k], sp[k]);
+    }
+}
+
+static void grid_row(void *arg, size_t r)
+{
+    const grid_job *g = arg;
+    const btdf_params *p = g->p;
+    size_t i = r / g->nto, j = r % g->nto;
+    bt_io io;
+    bt_io_rad(&io, g->ti[i], g->to[j], p->smoothness, p->k0);
+    grid_line(p, &io, g->nphi, g->h2, g->sphi, g->out + r * g->nphi * (size_t)p->channels);
+}
+
+BTDF_API btdf_status btdf_eval_grid(const btdf_params *p, size_t nti, const double *ti,
+                                    size_t nto, const double *to, size_t nphi,
+                                    const double *phi, int threads, double *out)
+{
+    if (btdf_params_check(p, NULL, 0) != BTDF_OK || threads < 0 ||
+        ((nti && nto && nphi) && (!ti || !to || !phi || !out)))
+        return BTDF_EINVAL;
+    if (!nti || !nto || !nphi)
+        return BTDF_OK;
+    if (nto > SIZE_MAX / nti || nphi > SIZE_MAX / BTDF_MAX_CHANNELS / sizeof(double) ||
+        nti * nto > SIZE_MAX / BTDF_MAX_CHANNELS / sizeof(double) / nphi)
+        return BTDF_EOVERFLOW;
+    for (size_t i = 0; i < nti; i++)
+        if (!(ti[i] >= 0.0 && ti[i] <= M_PI / 2))
+            return BTDF_EDOMAIN;
+    for (size_t j = 0; j < nto; j++)
+        if (!(to[j] >= M_PI / 2 && to[j] <= M_PI))
+            return BTDF_EDOMAIN;
+    for (size_t k = 0; k < nphi; k++)
+        if (!isfinite(phi[k]))
+            return BTDF_EDOMAIN;
+    double *az = malloc(2 * nphi * sizeof *az);
+    if (!az)
+        return BTDF_ENOMEM;
+    for (size_t k = 0; k < nphi; k++) {
+        bt_az a;
+        bt_az_rad(&a, bt_fold_rad(phi[k]));
+        az[k] = a.h2;
+        az[nphi + k] = a.sphi;
+    }
+    grid_job g = {p, nto, nphi, ti, to, az, az + nphi, out};
+    btdf_parallel_for(threads, nti * nto, grid_row, &g);
+    free(az);
     return BTDF_OK;
 }
 
@@ -406,4 +557,120 @@ double btdf_transmittance_coarse(const btdf_params *p, double ti)
     for (int c = 0; c < p->channels; c++)
         m = fmin(m, transmittance_one(p->ior[c], p->smoothness, p->k0, ti, 4, 3));
     return m;
+}
+
+/* ------------------------------------------------------------------------- */
+/* Hemispherical reflectance                                                 */
+/* ------------------------------------------------------------------------- */
+
+/* R(ti) in facet-slope space, like T: with h the facet normal, e_r = 2 (e_i.h) h - e_i
+   and d w_r = 4 (e_i.h) d w_h, so
+     R = (V(ti)/cos ti) (2/pi) int u e^{-u^2} int_0^pi ca Fr(ca) V(tr) / cos tn dpsi du,
+   u = (s/2) tan tn, over the facets that face e_i and send e_r into the upper medium
+   (e_r,z = 2 ca cos tn - cos ti > 0, which implies ca > 0). */
+static double refl_term(double n, double s, double k0, double cti, double ctn, double ca)
+{
+    double rz = 2.0 * ca * ctn - cti; /* > 0 inside the interval the caller integrates */
+    double st2 = 1.0 - rz * rz;
+    double tan_tr = rz > 0.0 && st2 > 0.0 ? sqrt(st2) / rz : 0.0;
+    return ca * bt_fresnel_r(n, n - 1.0, ca) * shadow_v(tan_tr, s, k0) / ctn;
+}
+
+/* Gauss-Legendre over [lo, hi] in psi, graded at both ends (x^2 (3 - 2x)): the ends
+   are the edge e_r,z = 0 and the critical angle, where the integrand has a kink. */
+static double refl_psi_piece(double n, double s, double k0, double cti, double A, double B,
+                             double ctn, double lo, double hi, int panels)
+{
+    double sum = 0.0;
+    for (int k = 0; k < panels; k++)
+        for (int j = 0; j < 8; j++) {
+            double x = (k + GL_X[j]) / panels;
+            double psi = lo + (hi - lo) * x * x * (3.0 - 2.0 * x);
+            double w = GL_W[j] / panels * (hi - lo) * 6.0 * x * (1.0 - x);
+            sum += w * refl_term(n, s, k0, cti, ctn, A * cos(psi) + B);
+        }
+    return sum;
+}
+
+/* psi where ca(psi) = A cos psi + B equals c (ca falls with psi): 0 if even psi = 0
+   is below c, pi if even psi = pi is above. */
+static double psi_at(double A, double B, double c)
+{
+    if (!(A > 0.0))
+        return B > c ? M_PI : 0.0;
+    double x = (c - B) / A;
+    return x >= 1.0 ? 0.0 : x <= -1.0 ? M_PI : acos(x);
+}
+
+static double reflectance_one(double n, double s, double k0, double ti, int u_panels,
+                              int psi_panels)
+{
+    double sti = sin(ti), cti = cos(ti);
+    if (!(cti > 0.0))
+        return 0.0; /* grazing incidence: V(ti)/cos ti -> 0 (MODEL.md 3.5) */
+    const double U = 6.5; /* e^{-U^2} = 4e-19: the neglected tail */
+    /* Tilts where the valid azimuths change shape: (90 - ti)/2 (every facet sends e_r
+       up below it), (90 + ti)/2 (none does above it), and for n < 1 the tilts where
+       the critical angle enters at psi = 0 or pi: theta_c - ti, theta_c + ti, ti - theta_c. */
+    double tcs[5] = {(M_PI / 2 - ti) / 2, (M_PI / 2 + ti) / 2, -1.0, -1.0, -1.0};
+    double ccrit = -1.0; /* cos theta_c */
+    if (n < 1.0) {
+        double tc = asin(n);
+        ccrit = sqrt((1.0 - n) * (1.0 + n));
+        tcs[2] = tc - ti;
+        tcs[3] = tc + ti;
+        tcs[4] = ti - tc;
+    }
+    double br[8];
+    int nb = 0;
+    br[nb++] = 0.0;
+    br[nb++] = U;
+    for (int k = 0; k < 5; k++)
+        if (tcs[k] > 0.0 && tcs[k] < M_PI / 2) {
+            double u = 0.5 * s * tan(tcs[k]);
+            if (u > 0.0 && u < U)
+                br[nb++] = u;
+        }
+    qsort(br, (size_t)nb, sizeof br[0], cmp_double);
+    double sum = 0.0;
+    for (int b = 0; b + 1 < nb; b++) {
+        double a0 = br[b], a1 = br[b + 1];
+        if (!(a1 > a0))
+            continue;
+        for (int k = 0; k < u_panels; k++)
+            for (int j = 0; j < 8; j++) {
+                double x = (k + GL_X[j]) / u_panels;
+                double u = a0 + (a1 - a0) * x * x * (3.0 - 2.0 * x);
+                double w = GL_W[j] / u_panels * (a1 - a0) * 6.0 * x * (1.0 - x);
+                double r = 2.0 * u / s; /* tan tn */
+                double ctn = 1.0 / sqrt(1.0 + r * r), stn = r * ctn;
+                double A = stn * sti, B = ctn * cti; /* ca = A cos psi + B */
+                /* e_r,z > 0 <=> ca > cos ti / (2 cos tn) */
+                double hi = psi_at(A, B, cti / (2.0 * ctn));
+                if (!(hi > 0.0))
+                    continue;
+                double in = 0.0;
+                double pc = ccrit > 0.0 ? psi_at(A, B, ccrit) : 0.0;
+                if (pc > 0.0 && pc < hi) { /* Fr = 1 beyond the critical angle */
+                    in = refl_psi_piece(n, s, k0, cti, A, B, ctn, 0.0, pc, psi_panels) +
+                         refl_psi_piece(n, s, k0, cti, A, B, ctn, pc, hi, psi_panels);
+                } else {
+                    in = refl_psi_piece(n, s, k0, cti, A, B, ctn, 0.0, hi, psi_panels);
+                }
+                sum += w * u * exp(-u * u) * in;
+            }
+    }
+    double vi = shadow_v(sti / cti, s, k0);
+    return vi / cti * (2.0 / M_PI) * sum;
+}
+
+BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *out)
+{
+    if (btdf_params_check(p, NULL, 0) != BTDF_OK || !out)
+        return BTDF_EINVAL;
+    if (!(ti >= 0.0 && ti <= M_PI / 2))
+        return BTDF_EDOMAIN;
+    for (int c = 0; c < p->channels; c++)
+        out[c] = reflectance_one(p->ior[c], p->smoothness, p->k0, ti, 16, 12);
+    return BTDF_OK;
 }

@@ -24,9 +24,29 @@ typedef btdf_status (*btdf_file_writer)(void *ctx, const char *tmp, char *msg, s
 
 /* Writes path through writer under a recorded temporary name ending in ext and
    renames it into place; on any error the temporary file is removed and nothing is
-   left at path. */
+   left at path. Refuses (BTDF_EINVAL) to replace what is not a regular file. */
 btdf_status btdf_write_file_atomic(const char *path, const char *ext, btdf_file_writer writer,
                                    void *ctx, char *msg, size_t msglen);
+
+/* Removes, from the folder of path, temporary files of this scheme
+   (`.NAME.tmpPID-K.EXT`) whose process no longer exists (killed outright while
+   writing); returns how many. btdf_write_file_atomic calls it before each write. */
+size_t btdf_tmp_sweep(const char *path);
+
+/* The PID in a temporary name of this scheme, or 0 if name is not one. */
+long btdf_tmp_name_pid(const char *name);
+
+/* btdf_output_check and btdf_same_file are public: btdf_io.h. */
+
+/* Outputs of one run that appear together or not at all. Between group_begin and
+   group_commit, every btdf_write_file_atomic of this process leaves its finished file
+   under its temporary name; commit renames them all into place (if one rename fails,
+   those already renamed are undone and the earlier files put back), and fails without
+   renaming anything if any write of the group failed. abort removes them. One group at
+   a time, from one thread. */
+void btdf_tmp_group_begin(void);
+btdf_status btdf_tmp_group_commit(char *msg, size_t msglen);
+void btdf_tmp_group_abort(void);
 
 /* A writer for bytes in memory: ctx is a btdf_bytes. */
 typedef struct btdf_bytes {

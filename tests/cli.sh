@@ -29,6 +29,21 @@ n=$(printf '30 150 180\n# comment\n\n0 170 90\n45,140,170\n' | "$B" eval | wc -l
 [ "$n" -eq 3 ] && ok "eval from stdin: one row per input row" || no "eval rows: $n"
 n=$(printf '30 150 180\n' | "$B" eval --ior 1.51,1.52,1.53 | awk '{print NF}')
 [ "$n" -eq 3 ] && ok "eval three channels" || no "eval channels: $n"
+# the reflection of the same surface: rows TI TR PHI; R beside T in albedo
+v=$("$B" eval --part reflection --ior 1.5 -s 3 30 30 180)
+case "$v" in 0.0099096700621*) ok "eval --part reflection" ;; *) no "eval --part reflection: $v" ;; esac
+"$B" albedo --ior 1.5 -s 100 30 | grep -q '^30,0.958[0-9]*,0.958[0-9]*,0.041[0-9]*,1.000' && \
+    ok "albedo: T, Ft, R, R+T" || no "albedo R columns"
+# many rows: the same bytes on one thread and on all, in input order
+awk 'BEGIN { for (i = 0; i < 300000; i++) printf "%g %g %g\n", i % 90, 90 + (i % 91), i % 361 }' > "$W/rows"
+"$B" eval --threads 1 < "$W/rows" > "$W/e1" && "$B" eval --threads 0 < "$W/rows" > "$W/e2" && \
+    [ "$(wc -l < "$W/e1")" -eq 300000 ] && cmp -s "$W/e1" "$W/e2" && \
+    [ "$(sed -n 1000p "$W/e1")" = "$("$B" eval $(sed -n 1000p "$W/rows"))" ] && \
+    ok "eval stream: same bytes on 1 and all threads, row order kept" || no "eval stream threads"
+rm -f "$W/rows" "$W/e1" "$W/e2"
+expect 2 "theta-r 95" "theta-r out of range" -- "$B" eval --part reflection 30 95 180
+expect 2 "line 3: theta-o 45" "bad row deep in a stream" -- sh -c "printf '30 150 180\n\n30 45 180\n' | '$B' eval"
+expect 2 "must be transmission or reflection" "bad --part" -- "$B" eval --part both 30 150 180
 "$B" --version | grep -q '^btdftab [0-9]' && ok "--version" || no "--version"
 "$B" --help | grep -q 'tabulate' && ok "--help" || no "--help"
 "$B" albedo --ior 1.5 -s 100 0 30 | grep -q '^30,0.958' && ok "albedo" || no "albedo"
@@ -54,8 +69,8 @@ rm -f "$W"/a.* "$W"/g.*
 expect 2 "unknown option" "unknown flag" -- "$B" tabulate --frobnicate -o "$W/t.csv"
 expect 2 "n = 1 has no BTDF" "n = 1" -- "$B" tabulate --ior 1 -o "$W/t.csv"
 expect 2 "not a number" "n = NaN text" -- "$B" tabulate --ior abc -o "$W/t.csv"
-expect 2 "finite" "n = nan" -- "$B" tabulate --ior nan -o "$W/t.csv"
-expect 2 "finite" "n = inf" -- "$B" tabulate --ior inf -o "$W/t.csv"
+expect 2 "not a number" "n = nan" -- "$B" tabulate --ior nan -o "$W/t.csv"
+expect 2 "not a number" "n = inf" -- "$B" tabulate --ior inf -o "$W/t.csv"
 expect 2 "must be > 0" "n <= 0" -- "$B" tabulate --ior -1.5 -o "$W/t.csv"
 expect 2 "smoothness 0" "s = 0" -- "$B" tabulate -s 0 -o "$W/t.csv"
 expect 2 "smoothness -3" "s < 0" -- "$B" tabulate -s -3 -o "$W/t.csv"
@@ -105,6 +120,90 @@ expect 2 "tables are .csv, .exr or .png" "manifest: bad output" -- "$B" build "$
 printf 'ior 1.5\n' > "$W/m/bad.ini"
 expect 2 "bad.ini:1:" "manifest: syntax error" -- "$B" build "$W/m/bad.ini"
 rm -rf "$W/m"
+
+# manifests are checked whole before any work; damaged outputs are rebuilt
+mkdir -p "$W/m"
+mat() { printf '[%s]\nior = 1.5\nsmoothness = 3\ntheta_i = 0:10\ntolerance = %s\n' "$1" "${2:-5e-2}"; }
+{ mat a; echo "enter = $W/t.csv"; mat b 0.9; echo "bsdf = $W/t.bsdf"; } > "$W/m/v.ini"
+expect 2 "v.ini:11: material \[b\]: tolerance 0.9: must lie in \[1e-6, 0.5\]" \
+    "manifest: every value checked before any work" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/nowhere/t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:6: output '$W/nowhere/t.csv': cannot write in the folder" "manifest: output under a missing folder" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/t.csv"; mat b; echo "leave = $W/m/../t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:12: output .* is also written by \[a\] at line 6" "manifest: two materials, one file" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/t.csv $W/t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:6: .*also written by \[a\]" "manifest: one output twice in a material" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "smoothness = 4"; echo "enter = $W/t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:6: 'smoothness' given twice in \[a\] (first at line 3)" "manifest: duplicate key" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/t.csv"; printf '[a]\nk0 = 0.6\n'; } > "$W/m/v.ini"
+expect 2 "v.ini:7: material \[a\] appears twice (first at line 1)" "manifest: repeated section" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/t.csv"; echo "[typo]"; } > "$W/m/v.ini"
+expect 2 "v.ini:7: material \[typo\] is empty" "manifest: empty section" -- "$B" build "$W/m/v.ini"
+expect 1 "is a directory" "build of a folder" -- "$B" build "$W/m"
+{ mat a; echo "enter = $W/m/self.csv"; } > "$W/m/self.csv"
+cp "$W/m/self.csv" "$W/m/self.bak"
+expect 2 "is the manifest itself" "manifest: an output that is the manifest" -- "$B" build "$W/m/self.csv"
+cmp -s "$W/m/self.csv" "$W/m/self.bak" && ok "the manifest is left as it was" || no "manifest overwritten"
+long=$(printf 'x%.0s' $(seq 1 240)) # with .csv: a 244-byte name, legal (255 is the limit)
+{ printf '; %s\n' "$long$long"; mat a; echo "enter = $W/m/$long.csv   ; a comment after a long value $long"; } > "$W/m/v.ini"
+"$B" build -q "$W/m/v.ini" && [ -s "$W/m/$long.csv" ] && ok "manifest lines longer than 199 characters, a 244-byte output name" || no "long lines"
+ls -a "$W/m" | grep -q '\.tmp' && no "long name left a temporary" || ok "no temporary left beside it"
+{ mat a; echo "enter = $W/m/d.csv"; } > "$W/m/v.ini"
+"$B" build -q "$W/m/v.ini" && cp "$W/m/d.csv" "$W/m/d.good"
+head -c 300 "$W/m/d.good" > "$W/m/d.csv"
+"$B" build -q "$W/m/v.ini" && cmp -s "$W/m/d.csv" "$W/m/d.good" && ok "build redoes an output cut to 300 bytes" || no "cut output kept"
+: > "$W/m/d.csv"
+"$B" build -q "$W/m/v.ini" && cmp -s "$W/m/d.csv" "$W/m/d.good" && ok "build redoes an emptied output" || no "empty output kept"
+sed -i 's/^0,/1,/' "$W/m/d.csv"
+"$B" build -q "$W/m/v.ini" && cmp -s "$W/m/d.csv" "$W/m/d.good" && ok "build redoes an output changed in place" || no "changed output kept"
+rm -f "$W/m/d.csv"; mkdir "$W/m/d.csv"
+"$B" build -q "$W/m/v.ini" 2>"$W/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "is a folder" "$W/err" && ok "build refuses an output replaced by a folder" || no "folder output: $rc $(cat "$W/err")"
+"$B" build "$W/m/v.ini" 2>&1 | grep -q "up to date" && no "folder output counted as up to date" || ok "a folder is never up to date"
+rm -rf "$W/m"
+
+# files the tool must never destroy or accept; outputs of one run appear together
+mkfifo "$W/t.json"
+expect 1 "not a regular file" "--report onto a pipe" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/t.json"
+[ -p "$W/t.json" ] && ok "the pipe is still a pipe" || no "the pipe was replaced"
+rm -f "$W/t.json"
+expect 2 "are the same file" "--report and -o naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/./t.csv"
+expect 1 "nowhere" "--report into a missing folder: no table either" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/nowhere/r.json"
+if "$B" --version | grep -q 'PNG on'; then
+    expect 1 "nowhere" "--preview into a missing folder: no table either" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --preview "$W/nowhere/p.png"
+    expect 2 "are the same file" "-o and --preview naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.png" --preview "$W/t.png"
+fi
+"$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" > /dev/null
+expect 1 "printing failed\|standard output" "inspect into a full disk" -- sh -c "'$B' inspect '$W/t.csv' > /dev/full; s=\$?; rm -f '$W/t.csv'; exit \$s"
+expect 1 "standard output" "albedo into a full disk" -- sh -c "'$B' albedo > /dev/full"
+expect 1 "standard output" "eval into a full disk" -- sh -c "'$B' eval 30 150 180 > /dev/full"
+expect 1 "standard output" "--version into a full disk" -- sh -c "'$B' --version > /dev/full"
+expect 2 "takes nothing after it" "--version extra" -- "$B" --version extra
+gone=$(sh -c 'echo $$') # a process that has ended: its temporary is stale
+echo half > "$W/.k.csv.tmp$gone-0.csv"
+"$B" tabulate -q --grid 2,3,3 -o "$W/k.csv" && [ ! -e "$W/.k.csv.tmp$gone-0.csv" ] && \
+    ok "a killed run's temporary is removed by the next write into its folder" || no "stale temporary kept"
+rm -f "$W/k.csv"
+pad=$(printf ' %.0s' $(seq 1 2000))
+n=$(printf '%s30 150 180\n' "$pad" | "$B" eval | wc -l)
+[ "$n" -eq 1 ] && ok "eval: a 2010-character input line is one row" || no "eval long line: $n rows"
+
+# one number rule for every option
+expect 2 "out of range" "-s 1e-320 is out of range" -- "$B" tabulate -s 1e-320 -o "$W/t.csv"
+expect 2 "not a number" "--ior in hexadecimal" -- "$B" tabulate --ior 0x1.8p0 -o "$W/t.csv"
+expect 2 "--grid" "--grid with blanks" -- "$B" tabulate --grid ' 3, 5, 5' -o "$W/t.csv"
+expect 2 "--grid" "--grid in hexadecimal" -- "$B" tabulate --grid 0x3,5,5 -o "$W/t.csv"
+expect 2 "line 1: expected three angles" "eval input in hexadecimal" -- sh -c "echo '0x1e 150 180' | '$B' eval"
+
+# budgets are bounds
+expect 3 "below the 4199 nodes" "--max-samples below the coarsest table" -- "$B" tabulate -q --max-samples 1000 --best-effort -o "$W/t.csv"
+"$B" tabulate -q --tolerance 1e-5 --max-samples 20000 --best-effort -o "$W/b.csv" --report "$W/b.json"
+s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
+[ -n "$s" ] && [ "$s" -le 20000 ] && ok "--max-samples 20000 builds $s nodes" || no "--max-samples 20000: $s nodes"
+"$B" tabulate -q --ior 1.5,1.45,1.4 --tolerance 1e-5 --max-memory 1 --best-effort -o "$W/b.csv" --report "$W/b.json"
+s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
+[ -n "$s" ] && [ $((s * 32)) -le 1048576 ] && ok "3 channels at --max-memory 1: $s nodes, $((s * 32)) bytes" || no "--max-memory 1: $s nodes"
+rm -f "$W"/b.*
 
 # .bsdf: built, inspected, evaluated; --theta-i does not apply
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 -o "$W/g.bsdf" && "$B" inspect "$W/g.bsdf" | grep -q 'SCATFUN v1' && \

@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 # SPDX-License-Identifier: MIT
-# mp_reference.py BTDFTAB: Eq. 25 transcribed directly from its vector definitions in
-# 50-digit arithmetic (mpmath), on random and extreme inputs that are not in
-# tests/data, compared with `btdftab eval` to relative 1e-9 (MODEL.md section 4:
-# where the reference is below 1e-290 the tool must give 0 or less than 1e-280).
+# mp_reference.py BTDFTAB: Eq. 25 and the reflection of the same surface (MODEL.md
+# section 8), transcribed directly from their vector definitions in 50-digit
+# arithmetic (mpmath), on random and extreme inputs that are not in tests/data,
+# compared with `btdftab eval` (--part reflection) to relative 1e-9 (MODEL.md section
+# 4: where the reference is below 1e-290 the tool must give 0 or less than 1e-280).
 import random
 import subprocess
 import sys
@@ -48,6 +49,58 @@ def rho(n, s, k0, ti, to, ph):
     return ca * ft * D * chi * V(ti) * V(to) / (mp.cos(ti) * abs(mp.cos(to)))
 
 
+def rho_r(n, s, k0, ti, tr, ph):
+    """MODEL.md section 8 as written: h = (e_i + e_r)/|e_i + e_r|, Fr = (Rs + Rp)/2,
+    1 under total internal reflection."""
+    n, s, k0 = mp.mpf(n), mp.mpf(s), mp.mpf(k0)
+    d = mp.pi / 180
+    ti, tr, ph = mp.mpf(ti) * d, mp.mpf(tr) * d, mp.mpf(ph) * d
+    if mp.cos(ti) <= 0 or mp.cos(tr) <= 0:
+        return mp.mpf(0)
+    ei = [mp.sin(ti), 0, mp.cos(ti)]
+    er = [mp.sin(tr) * mp.cos(ph), mp.sin(tr) * mp.sin(ph), mp.cos(tr)]
+    u = [ei[k] + er[k] for k in range(3)]
+    ln = mp.sqrt(sum(x * x for x in u))
+    h = [x / ln for x in u]
+    ca = sum(ei[k] * h[k] for k in range(3))
+    if not (ca > 0 and h[2] > 0):
+        return mp.mpf(0)
+    sb2 = (1 - ca * ca) / (n * n)
+    if sb2 >= 1:
+        fr = mp.mpf(1)
+    else:
+        cb = mp.sqrt(1 - sb2)
+        fr = (((ca - n * cb) / (ca + n * cb)) ** 2 + ((n * ca - cb) / (n * ca + cb)) ** 2) / 2
+    ctn = h[2]
+    tan2 = (1 - ctn * ctn) / (ctn * ctn)
+    D = s * s * mp.exp(-s * s * tan2 / 4) / (4 * mp.pi * ctn ** 4)
+
+    def V(t):
+        tt = abs(mp.tan(t))
+        if tt == 0:
+            return mp.mpf(1)
+        return mp.exp(-(k0 * tt / s) * mp.exp(-s * s / (4 * tt * tt)))
+
+    return fr * D * V(ti) * V(tr) / (4 * mp.cos(ti) * mp.cos(tr))
+
+
+def cases_r():
+    """Reflection: random, half near the specular direction, n on both sides of 1."""
+    rng = random.Random(20140101)
+    ns = [1.5, 1.33, 2.4, 1.0001, 0.9999, 1 / 1.5, 1 / 2.4, 1.05]
+    ss = [0.05, 0.3, 1, 3, 10, 100, 1000, 10000]
+    out = []
+    for _ in range(300):
+        n, s = rng.choice(ns), rng.choice(ss)
+        ti = rng.uniform(0, 89.9)
+        if rng.random() < 0.6:
+            tr = min(max(ti + rng.gauss(0, 60 / s), 0.0), 90.0)
+            out.append((n, s, 0.7, ti, tr, 180 + rng.gauss(0, 60 / s)))
+        else:
+            out.append((n, s, 0.7, ti, rng.uniform(0, 90), rng.uniform(0, 360)))
+    return out
+
+
 def cases():
     rng = random.Random(20081231)
     ns = [1.5, 1.33, 2.4, 1.0001, 1.001, 0.9999, 1 / 1.5, 1 / 2.4, 4.0, 1.05]
@@ -75,24 +128,22 @@ def cases():
     return out
 
 
-def main():
-    tool = sys.argv[1]
-    cs = cases()
+def compare(tool, cs, model, part):
+    """Runs `btdftab eval --part part` per material; returns (checked, worst, bad)."""
     bad = checked = 0
     worst = 0.0
-    # one btdftab run per material, the rows of that material on stdin
     groups = {}
     for i, c in enumerate(cs):
         groups.setdefault((c[0], c[1]), []).append(i)
     got = [None] * len(cs)
     for (n, s), idx in groups.items():
         rows = "".join("%.17g %.17g %.17g\n" % (cs[i][3], cs[i][4], cs[i][5]) for i in idx)
-        r = subprocess.run([tool, "eval", "--ior", "%.17g" % n, "-s", "%.17g" % s],
+        r = subprocess.run([tool, "eval", "--part", part, "--ior", "%.17g" % n, "-s", "%.17g" % s],
                            input=rows, capture_output=True, text=True, check=True)
         for i, line in zip(idx, r.stdout.split("\n")):
             got[i] = float(line)
     for c, g in zip(cs, got):
-        ref = rho(*c)
+        ref = model(*c)
         if ref < mp.mpf("1e-290"):
             ok = g == 0.0 or g < 1e-280
         else:
@@ -102,12 +153,23 @@ def main():
             ok = rel <= 1e-9
         if not ok:
             bad += 1
-            print("not ok - n %g s %g ti %g to %g phi %g: tool %.17g, reference %s"
-                  % (c[0], c[1], c[3], c[4], c[5], g, mp.nstr(ref, 20)))
+            print("not ok - %s n %g s %g ti %g t %g phi %g: tool %.17g, reference %s"
+                  % (part, c[0], c[1], c[3], c[4], c[5], g, mp.nstr(ref, 20)))
+    return checked, worst, bad
+
+
+def main():
+    tool = sys.argv[1]
+    cr = cases_r()
+    checked_r, worst_r, bad_r = compare(tool, cr, rho_r, "reflection")
+    print("reflection: %d cases, %d above 1e-290 compared, worst relative error %.2g"
+          % (len(cr), checked_r, worst_r))
+    cs = cases()
+    checked, worst, bad = compare(tool, cs, rho, "transmission")
     print("%d cases, %d above 1e-290 compared, worst relative error %.2g"
           % (len(cs), checked, worst))
-    print("%d passed, %d failed" % (len(cs) - bad, bad))
-    return 1 if bad else 0
+    print("%d passed, %d failed" % (len(cs) + len(cr) - bad - bad_r, bad + bad_r))
+    return 1 if bad or bad_r else 0
 
 
 if __name__ == "__main__":

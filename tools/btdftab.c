@@ -13,7 +13,10 @@
 
 #include <btdf/btdf.h>
 
+#include "evalstream.h"
+#include "fastnum.h"
 #include "manifest.h"
+#include "numparse.h"
 #include "options.h"
 #include "run.h"
 
@@ -54,52 +57,30 @@ static int ends_with(const char *s, const char *suffix)
 /* Values                                                                    */
 /* ------------------------------------------------------------------------- */
 
+/* Every number of the command line goes through tools/numparse.c. */
 static int parse_double(const char *flag, const char *s, double *out)
 {
-    char *e;
-    errno = 0;
-    double v = strtod(s, &e);
-    if (e == s || *e || errno == ERANGE) {
-        fail(EXIT_USAGE, "%s: '%s' is not a number", flag, s);
-        return 0;
-    }
-    if (!isfinite(v)) {
-        fail(EXIT_USAGE, "%s: '%s': must be a finite number", flag, s);
-        return 0;
-    }
-    *out = v;
-    return 1;
+    const char *why = num_double(s, out);
+    if (why)
+        fail(EXIT_USAGE, "%s: '%s' %s", flag, s, why);
+    return !why;
 }
 
 static int parse_size(const char *flag, const char *s, size_t lo, size_t hi, size_t *out)
 {
-    char *e;
-    errno = 0;
-    unsigned long long v = strtoull(s, &e, 10);
-    if (e == s || *e || errno == ERANGE || s[0] == '-' || v < lo || v > hi) {
-        fail(EXIT_USAGE, "%s: '%s': must be an integer in [%zu, %zu]", flag, s, lo, hi);
-        return 0;
-    }
-    *out = (size_t)v;
-    return 1;
+    const char *why = num_size(s, lo, hi, out);
+    if (why)
+        fail(EXIT_USAGE, "%s: '%s': %s", flag, s, why);
+    return !why;
 }
 
 /* N or R,G,B */
 static int parse_ior(const char *val, btdf_params *p)
 {
-    char buf[256];
-    snprintf(buf, sizeof buf, "%s", val);
     int k = 0;
-    for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-        if (k == 3) {
-            fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
-            return 0;
-        }
-        if (!parse_double("--ior", tok, &p->ior[k++]))
-            return 0;
-    }
-    if (k != 1 && k != 3) {
-        fail(EXIT_USAGE, "--ior: '%s': give 1 value or 3 (R,G,B)", val);
+    const char *why = num_double_list(val, p->ior, 1, 3, &k);
+    if (why || k == 2) {
+        fail(EXIT_USAGE, "--ior: '%s': %s", val, why ? why : "give 1 value or 3 (R,G,B)");
         return 0;
     }
     p->channels = k;
@@ -166,13 +147,20 @@ static int parse_preview(const char *s, preview_req *r)
 
 static int parse_picture_size(const char *s, int *w, int *h)
 {
-    char tail;
-    if (sscanf(s, "%dx%d%c", w, h, &tail) != 2 || *w < 64 || *h < 64 ||
-        *w > BTDF_PREVIEW_MAX_SIDE || *h > BTDF_PREVIEW_MAX_SIDE) {
+    const char *x = strchr(s, 'x');
+    char buf[32];
+    size_t W = 0, H = 0;
+    if (x && (size_t)(x - s) < sizeof buf)
+        snprintf(buf, sizeof buf, "%.*s", (int)(x - s), s);
+    if (!x || (size_t)(x - s) >= sizeof buf ||
+        num_size(buf, 64, BTDF_PREVIEW_MAX_SIDE, &W) ||
+        num_size(x + 1, 64, BTDF_PREVIEW_MAX_SIDE, &H)) {
         fail(EXIT_USAGE, "--size: '%s': expected WxH, each in [64, %d] pixels", s,
              BTDF_PREVIEW_MAX_SIDE);
         return 0;
     }
+    *w = (int)W;
+    *h = (int)H;
     return 1;
 }
 
@@ -183,7 +171,7 @@ static int parse_picture_size(const char *s, int *w, int *h)
 typedef struct cli {
     unsigned char given[OPT_COUNT]; /* how often each option was given */
     btdf_params p;
-    int threads, quiet, force, best_effort, sides;
+    int threads, quiet, force, best_effort, sides, reflection;
     const char *table, *out, *report;
     btdf_table_opts o; /* tolerance, metric, grid, max_samples */
     size_t mib;
@@ -220,6 +208,13 @@ static int apply(cli *c, const opt_hit *h)
     case OPT_SMOOTHNESS: return parse_double("--smoothness", v, &c->p.smoothness);
     case OPT_K0: return parse_double("--k0", v, &c->p.k0);
     case OPT_TABLE: c->table = v; return 1;
+    case OPT_PART:
+        if (!strcmp(v, "transmission") || !strcmp(v, "reflection")) {
+            c->reflection = v[0] == 'r';
+            return 1;
+        }
+        fail(EXIT_USAGE, "--part: '%s': must be transmission or reflection", v);
+        return 0;
     case OPT_OUTPUT: c->out = v; return 1;
     case OPT_REPORT: c->report = v; return 1;
     case OPT_TOLERANCE: return parse_double("--tolerance", v, &c->o.tolerance);
@@ -229,16 +224,16 @@ static int apply(cli *c, const opt_hit *h)
         fail(EXIT_USAGE, "--metric: '%s': must be l1 or max", v);
         return 0;
     case OPT_GRID: {
-        unsigned long x, y, z;
-        char tail;
-        if (sscanf(v, "%lu,%lu,%lu%c", &x, &y, &z, &tail) != 3 || strchr(v, '-')) {
-            fail(EXIT_USAGE, "--grid: '%s': expected three counts NI,NO,NPHI", v);
+        size_t n3[3];
+        const char *why = num_size_list(v, 1, 100000, n3, 3);
+        if (why) {
+            fail(EXIT_USAGE, "--grid: '%s': %s (NI,NO,NPHI)", v, why);
             return 0;
         }
         c->o.kind = BTDF_TABLE_GRID;
-        c->o.grid_ti = x;
-        c->o.grid_to = y;
-        c->o.grid_phi = z;
+        c->o.grid_ti = n3[0];
+        c->o.grid_to = n3[1];
+        c->o.grid_phi = n3[2];
         return 1;
     }
     case OPT_SIDE:
@@ -282,21 +277,18 @@ static int apply(cli *c, const opt_hit *h)
         return 1;
     }
     case OPT_ANGLES: {
-        char buf[256];
-        snprintf(buf, sizeof buf, "%s", v);
-        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-            if (c->na == BTDF_PREVIEW_MAX_CURVES) {
-                fail(EXIT_USAGE, "--angles: at most %d", BTDF_PREVIEW_MAX_CURVES);
-                return 0;
-            }
-            if (!parse_double("--angles", tok, &c->angles[c->na]))
-                return 0;
-            if (!(c->angles[c->na] >= 0.0 && c->angles[c->na] < 90.0)) {
-                fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees", c->angles[c->na]);
-                return 0;
-            }
-            c->na++;
+        int k = 0;
+        const char *why = num_double_list(v, c->angles, 1, BTDF_PREVIEW_MAX_CURVES, &k);
+        if (why) {
+            fail(EXIT_USAGE, "--angles: '%s': %s", v, why);
+            return 0;
         }
+        for (int i = 0; i < k; i++)
+            if (!(c->angles[i] >= 0.0 && c->angles[i] < 90.0)) {
+                fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees", c->angles[i]);
+                return 0;
+            }
+        c->na = (size_t)k;
         return 1;
     }
     case OPT_FORCE: c->force = 1; return 1;
@@ -345,18 +337,13 @@ static int check_params(const btdf_params *p)
 }
 
 /* The folder of path exists and can take a new file: checked before the work. */
+/* An output may be written (btdf_output_check: its folder takes a new file, and what
+   is there now is a regular file), checked before the work. */
 static int folder_writable(const char *path)
 {
-    char dir[4096];
-    const char *slash = strrchr(path, '/');
-    if (!slash)
-        snprintf(dir, sizeof dir, ".");
-    else if (slash == path)
-        snprintf(dir, sizeof dir, "/");
-    else
-        snprintf(dir, sizeof dir, "%.*s", (int)(slash - path), path);
-    if (access(dir, W_OK | X_OK) != 0) {
-        fail(1, "%s: cannot write in the folder '%s': %s", path, dir, strerror(errno));
+    char msg[512];
+    if (btdf_output_check(path, msg, sizeof msg) != BTDF_OK) {
+        fail(1, "%s: %s", path, msg);
         return 0;
     }
     return 1;
@@ -388,6 +375,23 @@ static int check_angles(double ti, double to, double phi, long line)
     return 1;
 }
 
+/* The reflected side: theta-r in [0, 90] (MODEL.md section 8). */
+static int check_angles_r(double ti, double tr, double phi, long line)
+{
+    char where[48] = "";
+    if (line > 0)
+        snprintf(where, sizeof where, "line %ld: ", line);
+    if (!(ti >= 0.0 && ti <= 90.0))
+        return fail(EXIT_USAGE, "%stheta-i %g: must lie in [0, 90] degrees", where, ti), 0;
+    if (!(tr >= 0.0 && tr <= 90.0))
+        return fail(EXIT_USAGE,
+                    "%stheta-r %g: must lie in [0, 90] degrees (the reflected hemisphere)",
+                    where, tr), 0;
+    if (!isfinite(phi))
+        return fail(EXIT_USAGE, "%sphi %g: must be finite", where, phi), 0;
+    return 1;
+}
+
 /* Reads up to `want` numbers separated by blanks or commas; returns how many, -1 on junk. */
 static int read_row(const char *line, double *v, int want)
 {
@@ -400,13 +404,28 @@ static int read_row(const char *line, double *v, int want)
             return n;
         if (n == want)
             return -1;
-        char *e;
-        double x = strtod(s, &e);
-        if (e == s || !isfinite(x))
+        size_t len = strcspn(s, " \t,\r\n#");
+        char tok[64];
+        if (len >= sizeof tok)
             return -1;
-        v[n++] = x;
-        s = e;
+        memcpy(tok, s, len);
+        tok[len] = 0;
+        if (num_double(tok, &v[n]) != NULL)
+            return -1;
+        n++;
+        s += len;
     }
+}
+
+/* Everything printed reached standard output (a full disk, a closed pipe are
+   errors): code, or 1 with a message. */
+static int stdout_done(int code)
+{
+    int bad = fflush(stdout) != 0;
+    bad |= ferror(stdout) != 0;
+    if (bad && code == 0)
+        return fail(1, "standard output: %s", errno ? strerror(errno) : "write error");
+    return code;
 }
 
 /* The incidence range a table holds, in degrees: its first and last slices. A
@@ -423,11 +442,18 @@ static void table_ti_range(const btdf_table *t, double *range)
     range[1] = last.ti * 180.0 / M_PI;
 }
 
+/* One row of %.17g values (fastnum_g17 gives printf's bytes, faster). */
 static void print_values(const double *v, int n)
 {
-    for (int c = 0; c < n; c++)
-        printf(c ? " %.17g" : "%.17g", v[c]);
-    putchar('\n');
+    char buf[BTDF_MAX_CHANNELS * 32 + 2];
+    int len = 0;
+    for (int c = 0; c < n; c++) {
+        if (c)
+            buf[len++] = ' ';
+        len += fastnum_g17(v[c], buf + len);
+    }
+    buf[len++] = '\n';
+    fwrite(buf, 1, (size_t)len, stdout);
 }
 
 static int cmd_eval(const cli *c)
@@ -443,6 +469,9 @@ static int cmd_eval(const cli *c)
     if (c->table && (GIVEN(c, OPT_IOR) || GIVEN(c, OPT_SMOOTHNESS) || GIVEN(c, OPT_K0)))
         return fail(EXIT_USAGE, "--ior, --smoothness and --k0 do not apply with --table "
                                 "(the table gives the material)");
+    if (c->reflection && c->table)
+        return fail(EXIT_USAGE, "--part reflection: evaluates the model only; tables and "
+                                ".bsdf files hold the transmission");
     btdf_input in = {NULL, NULL};
     double ti_range[2] = {0.0, 90.0}; /* degrees */
     if (c->table) {
@@ -458,9 +487,19 @@ static int cmd_eval(const cli *c)
     } else if (!check_params(&p)) {
         return EXIT_USAGE;
     }
+    if (npos == 0 && !in.table && !in.scatfun) { /* the model on rows from stdin */
+        char err[256];
+        int rc = eval_stream(stdin, stdout, &p, c->reflection, c->threads, err, sizeof err);
+        if (rc)
+            fail(rc, "%s", err);
+        if (fflush(stdout) != 0 && rc == 0)
+            rc = fail(1, "standard output: %s", strerror(errno));
+        return rc;
+    }
     int code = 0;
     double out[BTDF_MAX_CHANNELS];
-    char line[1024];
+    char *line = NULL; /* rows of any length */
+    size_t cap = 0;
     long ln = 0;
     for (;;) {
         double v[3];
@@ -469,7 +508,7 @@ static int cmd_eval(const cli *c)
                 break;
             memcpy(v, pos, sizeof v);
         } else {
-            if (!fgets(line, sizeof line, stdin))
+            if (getline(&line, &cap, stdin) < 0)
                 break;
             ln++;
             int k = read_row(line, v, 3);
@@ -480,7 +519,8 @@ static int cmd_eval(const cli *c)
                 break;
             }
         }
-        if (!check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
+        if (c->reflection ? !check_angles_r(v[0], v[1], v[2], npos == 3 ? 0 : ln)
+                          : !check_angles(v[0], v[1], v[2], npos == 3 ? 0 : ln)) {
             code = EXIT_USAGE;
             break;
         }
@@ -495,7 +535,10 @@ static int cmd_eval(const cli *c)
             break;
         }
         double ti = v[0] * M_PI / 180.0, to = v[1] * M_PI / 180.0, phi = v[2] * M_PI / 180.0;
-        if (in.table) {
+        if (c->reflection) {
+            for (int ch = 0; ch < p.channels; ch++)
+                out[ch] = btdf_rho_r_deg(p.ior[ch], p.smoothness, p.k0, v[0], v[1], v[2]);
+        } else if (in.table) {
             btdf_table_eval(in.table, ti, to, phi, out);
         } else if (in.scatfun) {
             /* light entering through the top (index n), as pbrt-v3 would read it */
@@ -506,11 +549,10 @@ static int cmd_eval(const cli *c)
         }
         print_values(out, p.channels);
     }
+    free(line);
     btdf_table_free(in.table);
     btdf_scatfun_free(in.scatfun);
-    if (fflush(stdout) != 0 && code == 0)
-        code = fail(1, "standard output: %s", strerror(errno));
-    return code;
+    return stdout_done(code);
 }
 
 /* ------------------------------------------------------------------------- */
@@ -531,22 +573,28 @@ static int cmd_albedo(const cli *c)
     if (na == 0)
         for (int k = 0; k <= 8; k++)
             angles[na++] = 10.0 * k;
-    const btdf_params *p = &c->p;
-    printf("theta_i_deg");
-    for (int ch = 0; ch < p->channels; ch++)
-        printf(p->channels == 1 ? ",T,Ft" : ",T_%c,Ft_%c", "rgb"[ch], "rgb"[ch]);
-    printf("\n");
-    for (int k = 0; k < na; k++) {
+    for (int k = 0; k < na; k++)
         if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
             return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
-        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS];
+    const btdf_params *p = &c->p;
+    printf("theta_i_deg");
+    for (int ch = 0; ch < p->channels; ch++) {
+        char sfx[3] = {'_', "rgb"[ch], 0};
+        const char *x = p->channels == 1 ? "" : sfx;
+        printf(",T%s,Ft%s,R%s,R+T%s", x, x, x, x);
+    }
+    printf("\n");
+    for (int k = 0; k < na; k++) {
+        double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS];
         btdf_transmittance(p, ti, T);
+        btdf_reflectance(p, ti, R);
         printf("%.10g", angles[k]);
         for (int ch = 0; ch < p->channels; ch++)
-            printf(",%.9f,%.9f", T[ch], btdf_fresnel_t(p->ior[ch], ti));
+            printf(",%.9f,%.9f,%.9f,%.9f", T[ch], btdf_fresnel_t(p->ior[ch], ti), R[ch],
+                   R[ch] + T[ch]);
         printf("\n");
     }
-    return 0;
+    return stdout_done(0);
 }
 
 /* ------------------------------------------------------------------------- */
@@ -695,6 +743,20 @@ static int cmd_tabulate(cli *c, const char *prov)
     for (int k = 0; k < c->npreview; k++)
         if (!folder_writable(c->previews[k].path))
             return 1;
+    /* Two outputs of one run must be two files. */
+    const char *outs[MAX_PREVIEWS + 3];
+    int nouts = 0;
+    if (out && strcmp(out, "-"))
+        outs[nouts++] = out;
+    if (c->report)
+        outs[nouts++] = c->report;
+    for (int k = 0; k < c->npreview; k++)
+        outs[nouts++] = c->previews[k].path;
+    for (int i = 0; i < nouts; i++)
+        for (int j = 0; j < i; j++)
+            if (btdf_same_file(outs[i], outs[j]))
+                return fail(EXIT_USAGE, "'%s' and '%s' are the same file: each output of a run "
+                                        "needs its own", outs[j], outs[i]);
     o.params = p;
     o.threads = c->threads;
     o.ti_min = c->ti0 * M_PI / 180.0;
@@ -712,7 +774,7 @@ static int cmd_tabulate(cli *c, const char *prov)
     if (st != BTDF_OK && st != BTDF_EBUDGET)
         return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s", msg[0] ? msg : btdf_strerror(st));
     if (!t)
-        return fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
+        return fail(st == BTDF_EBUDGET ? EXIT_BUDGET : 1, "%s", msg[0] ? msg : btdf_strerror(st));
     btdf_report r;
     memset(&r, 0, sizeof r);
     btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);
@@ -752,6 +814,8 @@ static int cmd_tabulate(cli *c, const char *prov)
         }
     }
     btdf_write_opts w = {&r, prov};
+    /* The table, its pictures and its report appear together or not at all. */
+    btdf_outputs_begin();
     if (code == 0 && out) {
         btdf_output what = {t, NULL, NULL, &w, NULL};
         st = btdf_write(&what, out, msg, sizeof msg);
@@ -773,6 +837,13 @@ static int cmd_tabulate(cli *c, const char *prov)
     }
     if (code == 0 && c->report)
         code = write_report(c->report, &o, btdf_table_get_kind(t), &r, prov);
+    if (code == 0) {
+        st = btdf_outputs_commit(msg, sizeof msg);
+        if (st != BTDF_OK)
+            code = fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
+    } else {
+        btdf_outputs_abort();
+    }
     btdf_report_clear(&r);
     btdf_table_free(t);
     return code;
@@ -842,8 +913,8 @@ static int cmd_inspect(const cli *c)
     char msg[512] = "";
     btdf_status st = btdf_inspect(path, stdout, msg, sizeof msg);
     if (st != BTDF_OK)
-        return fail(1, "%s: %s", path, msg);
-    return 0;
+        return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+    return stdout_done(0);
 }
 
 static int cmd_build(const cli *c)
@@ -883,7 +954,7 @@ static int print_version(void)
     printf("btdftab %s (OpenEXR %s, PNG %s)\n", btdf_version_string(),
            btdf_format_available("exr") ? "on" : "off",
            btdf_format_available("png") ? "on" : "off");
-    return 0;
+    return stdout_done(0);
 }
 
 static int short_usage(void)
@@ -907,15 +978,19 @@ int main(int argc, char **argv)
     if (argc < 2)
         return short_usage();
     const char *name = argv[1];
+    int alone = !strcmp(name, "--help") || !strcmp(name, "-h") || !strcmp(name, "--version") ||
+                !strcmp(name, "-V") || !strcmp(name, "--man");
+    if (alone && argc > 2)
+        return fail(EXIT_USAGE, "%s takes nothing after it, not '%s'", name, argv[2]);
     if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
         opt_help(stdout, NULL);
-        return 0;
+        return stdout_done(0);
     }
     if (!strcmp(name, "--version") || !strcmp(name, "-V"))
         return print_version();
     if (!strcmp(name, "--man")) {
         opt_man(stdout, btdf_version_string());
-        return fflush(stdout) == 0 ? 0 : 1;
+        return stdout_done(0);
     }
     if (!strcmp(name, "help")) {
         if (argc > 3)
@@ -924,7 +999,7 @@ int main(int argc, char **argv)
         if (argc == 3 && !cmd)
             return fail(EXIT_USAGE, "help: unknown command '%s'", argv[2]);
         opt_help(stdout, cmd);
-        return 0;
+        return stdout_done(0);
     }
     const cmd_def *cmd = cmd_find(name);
     if (!cmd) {

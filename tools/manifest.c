@@ -5,9 +5,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
-#include <ini.h>
+#include "inifile.h"
+#include "numparse.h"
 
 #include <btdf/btdf.h>
 
@@ -19,7 +21,7 @@
 #endif
 
 /*
- * A manifest is an INI file (read with inih): one section per material.
+ * A manifest is an INI file (read by inifile.c): one section per material.
  *
  *   [frosted]                  ; the material's name
  *   ior = 1.5                  ; n, or R,G,B
@@ -50,47 +52,62 @@ typedef struct material {
     int has_ior, has_s;
     char *enter[MAX_OUTPUTS], *leave[MAX_OUTPUTS], *bsdf[MAX_OUTPUTS];
     int nenter, nleave, nbsdf;
+    int line;          /* of the [name] header */
+    int key_line[10];  /* of each key (KEYS order), 0 if not given */
 } material;
+
+/* The keys of a section, in the order of material.key_line. */
+static const char *const KEYS[10] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
+                                     "metric",  "sides",      "enter", "leave",   "bsdf"};
+enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF };
 
 typedef struct manifest {
     material m[MAX_MATERIALS];
     int n;
-    char why[256]; /* reason for the first error */
+    char why[512]; /* reason for the first error */
+    int why_line;  /* its line when not the line being read */
 } manifest;
 
 static int set_why(manifest *mf, const char *fmt, const char *a, const char *b)
 {
     if (!mf->why[0])
         snprintf(mf->why, sizeof mf->why, fmt, a, b);
-    return 0; /* inih: an error at this line */
+    return 0; /* the reader: an error at this line */
 }
 
-static int num(const char *s, double *out)
+/* A number by the tool's one rule (numparse.h), or an error naming key and value. */
+static int num(manifest *mf, const char *key, const char *s, double *out)
 {
-    char *e;
-    errno = 0;
-    double v = strtod(s, &e);
-    while (*e == ' ' || *e == '\t')
-        e++;
-    if (e == s || *e || errno == ERANGE || !isfinite(v))
-        return 0;
-    *out = v;
-    return 1;
+    const char *r = num_double(s, out);
+    if (!r)
+        return 1;
+    snprintf(mf->why, sizeof mf->why, "%s '%.200s' %s", key, s, r);
+    return 0;
 }
 
 static int split_outputs(manifest *mf, const char *key, const char *value, char **list, int *n)
 {
-    char buf[2048];
-    snprintf(buf, sizeof buf, "%s", value);
-    for (char *tok = strtok(buf, " \t,"); tok; tok = strtok(NULL, " \t,")) {
-        if (*n == MAX_OUTPUTS)
-            return set_why(mf, "'%s': at most 8 outputs%s", key, "");
+    char *buf = malloc(strlen(value) + 1);
+    if (!buf)
+        return set_why(mf, "out of memory%s%s", "", "");
+    strcpy(buf, value);
+    int ok = 1;
+    for (char *tok = strtok(buf, " \t,"); tok && ok; tok = strtok(NULL, " \t,")) {
+        if (*n == MAX_OUTPUTS) {
+            ok = set_why(mf, "'%s': at most 8 outputs%s", key, "");
+            break;
+        }
         list[*n] = malloc(strlen(tok) + 1);
-        if (!list[*n])
-            return set_why(mf, "out of memory%s%s", "", "");
+        if (!list[*n]) {
+            ok = set_why(mf, "out of memory%s%s", "", "");
+            break;
+        }
         strcpy(list[(*n)++], tok);
     }
-    return 1;
+    free(buf);
+    if (ok && *n == 0)
+        return set_why(mf, "'%s' names no file%s", key, "");
+    return ok;
 }
 
 static int ends_with(const char *s, const char *x)
@@ -99,21 +116,39 @@ static int ends_with(const char *s, const char *x)
     return ls >= lx && strcmp(s + ls - lx, x) == 0;
 }
 
-static int on_entry(void *user, const char *section, const char *key, const char *value)
+/* A section that sets nothing is a mistake (a misspelt name, a lost block). */
+static int check_not_empty(manifest *mf)
+{
+    if (mf->n == 0)
+        return 1;
+    material *m = &mf->m[mf->n - 1];
+    for (int k = 0; k < 10; k++)
+        if (m->key_line[k])
+            return 1;
+    snprintf(mf->why, sizeof mf->why, "material [%s] is empty (no keys)", m->name);
+    mf->why_line = m->line;
+    return 0;
+}
+
+static int on_entry(void *user, const char *section, const char *key, const char *value,
+                    int line)
 {
     manifest *mf = user;
-    if (!section[0])
-        return set_why(mf, "'%s' before any [material] section%s", key, "");
-    material *m = mf->n > 0 ? &mf->m[mf->n - 1] : NULL;
-    if (!m || strcmp(m->name, section) != 0) {
+    if (!key) { /* a section header */
+        if (!check_not_empty(mf))
+            return 0;
         for (int i = 0; i < mf->n; i++)
-            if (!strcmp(mf->m[i].name, section))
-                return set_why(mf, "material [%s] appears twice%s", section, "");
+            if (!strcmp(mf->m[i].name, section)) {
+                snprintf(mf->why, sizeof mf->why, "material [%.100s] appears twice (first at "
+                         "line %d)", section, mf->m[i].line);
+                return 0;
+            }
         if (mf->n == MAX_MATERIALS)
             return set_why(mf, "more than 64 materials%s%s", "", "");
+        material *m = &mf->m[mf->n];
         if (strlen(section) >= sizeof m->name)
-            return set_why(mf, "material name '%s' is longer than 63 bytes%s", section, "");
-        m = &mf->m[mf->n++];
+            return set_why(mf, "material name '%.100s' is longer than 63 bytes%s", section, "");
+        mf->n++;
         memset(m, 0, sizeof *m);
         snprintf(m->name, sizeof m->name, "%s", section);
         btdf_params_default(&m->p);
@@ -122,64 +157,99 @@ static int on_entry(void *user, const char *section, const char *key, const char
         m->tol = 1e-3;
         m->metric = BTDF_METRIC_L1;
         m->sides = BTDF_SIDE_BOTH;
+        m->line = line;
+        return 1;
     }
-    if (!strcmp(key, "ior")) {
-        char buf[256];
-        snprintf(buf, sizeof buf, "%s", value);
-        int k = 0;
-        for (char *tok = strtok(buf, ","); tok; tok = strtok(NULL, ",")) {
-            if (k == 3 || !num(tok, &m->p.ior[k++]))
-                return set_why(mf, "ior '%s': expected one number or three (R,G,B)%s", value, "");
+    if (!section[0] || mf->n == 0)
+        return set_why(mf, "'%.100s' before any [material] section%s", key, "");
+    material *m = &mf->m[mf->n - 1];
+    int ki = -1;
+    for (int k = 0; k < 10; k++)
+        if (!strcmp(key, KEYS[k]))
+            ki = k;
+    if (ki < 0)
+        return set_why(mf, "unknown key '%.100s' (known: ior, smoothness, k0, theta_i, tolerance, "
+                           "metric, sides, enter, leave, bsdf)%s", key, "");
+    if (m->key_line[ki]) {
+        snprintf(mf->why, sizeof mf->why, "'%s' given twice in [%s] (first at line %d)", key,
+                 m->name, m->key_line[ki]);
+        return 0;
+    }
+    m->key_line[ki] = line;
+    if (ki == K_IOR) {
+        /* blanks around the commas go, as around every value; the numbers themselves
+           follow the tool's one rule */
+        char list[256];
+        size_t o = 0;
+        for (const char *c = value; *c && o + 1 < sizeof list;) {
+            const char *end = strchr(c, ',');
+            size_t n = end ? (size_t)(end - c) : strlen(c);
+            while (n > 0 && (*c == ' ' || *c == '\t'))
+                c++, n--;
+            while (n > 0 && (c[n - 1] == ' ' || c[n - 1] == '\t'))
+                n--;
+            if (o + n + 2 >= sizeof list)
+                break;
+            memcpy(list + o, c, n);
+            o += n;
+            if (end)
+                list[o++] = ',';
+            c = end ? end + 1 : c + n;
+            if (!end)
+                break;
         }
-        if (k != 1 && k != 3)
-            return set_why(mf, "ior '%s': expected one number or three (R,G,B)%s", value, "");
+        list[o] = 0;
+        int k = 0;
+        const char *r = strlen(value) >= sizeof list ? "is too long"
+                                                     : num_double_list(list, m->p.ior, 1, 3, &k);
+        if (r || k == 2) {
+            snprintf(mf->why, sizeof mf->why, "ior '%.200s': %s", value,
+                     r ? r : "expected one number or three (R,G,B)");
+            return 0;
+        }
         m->p.channels = k;
         m->has_ior = 1;
-    } else if (!strcmp(key, "smoothness")) {
-        if (!num(value, &m->p.smoothness))
-            return set_why(mf, "smoothness '%s' is not a number%s", value, "");
+    } else if (ki == K_S) {
+        if (!num(mf, key, value, &m->p.smoothness))
+            return 0;
         m->has_s = 1;
-    } else if (!strcmp(key, "k0")) {
-        if (!num(value, &m->p.k0))
-            return set_why(mf, "k0 '%s' is not a number%s", value, "");
-    } else if (!strcmp(key, "tolerance")) {
-        if (!num(value, &m->tol) || !(m->tol >= 1e-7 && m->tol <= 1.0))
-            return set_why(mf, "tolerance '%s': must be a number in [1e-7, 1]%s", value, "");
-    } else if (!strcmp(key, "metric")) {
+    } else if (ki == K_K0) {
+        if (!num(mf, key, value, &m->p.k0))
+            return 0;
+    } else if (ki == K_TOL) {
+        if (!num(mf, key, value, &m->tol))
+            return 0;
+    } else if (ki == K_METRIC) {
         if (!run_parse_metric(value, &m->metric))
-            return set_why(mf, "metric '%s': must be l1 or max%s", value, "");
-    } else if (!strcmp(key, "theta_i")) {
-        char a[64], b[64];
+            return set_why(mf, "metric '%.100s': must be l1 or max%s", value, "");
+    } else if (ki == K_THETA) {
         const char *colon = strchr(value, ':');
-        if (!colon || (size_t)(colon - value) >= sizeof a)
-            return set_why(mf, "theta_i '%s': expected A:B in degrees%s", value, "");
+        if (!colon || colon - value >= 64)
+            return set_why(mf, "theta_i '%.100s': expected A:B in degrees%s", value, "");
+        char a[64];
         snprintf(a, sizeof a, "%.*s", (int)(colon - value), value);
-        snprintf(b, sizeof b, "%s", colon + 1);
-        if (!num(a, &m->ti0) || !num(b, &m->ti1) || !(m->ti0 >= 0 && m->ti0 <= m->ti1 && m->ti1 <= 90))
-            return set_why(mf, "theta_i '%s': need 0 <= A <= B <= 90 degrees%s", value, "");
-    } else if (!strcmp(key, "sides")) {
+        if (!num(mf, "theta_i", a, &m->ti0) || !num(mf, "theta_i", colon + 1, &m->ti1))
+            return 0;
+        if (!(m->ti0 >= 0 && m->ti0 <= m->ti1 && m->ti1 <= 90))
+            return set_why(mf, "theta_i '%.100s': need 0 <= A <= B <= 90 degrees%s", value, "");
+    } else if (ki == K_SIDES) {
         if (!(m->sides = run_parse_side(value)))
-            return set_why(mf, "sides '%s': must be enter, leave or both%s", value, "");
-    } else if (!strcmp(key, "enter") || !strcmp(key, "leave")) {
-        char **list = key[0] == 'e' ? m->enter : m->leave;
-        int *n = key[0] == 'e' ? &m->nenter : &m->nleave;
-        int before = *n;
+            return set_why(mf, "sides '%.100s': must be enter, leave or both%s", value, "");
+    } else if (ki == K_ENTER || ki == K_LEAVE) {
+        char **list = ki == K_ENTER ? m->enter : m->leave;
+        int *n = ki == K_ENTER ? &m->nenter : &m->nleave;
         if (!split_outputs(mf, key, value, list, n))
             return 0;
-        for (int i = before; i < *n; i++)
+        for (int i = 0; i < *n; i++)
             if (!ends_with(list[i], ".csv") && !ends_with(list[i], ".exr") &&
                 !ends_with(list[i], ".png"))
-                return set_why(mf, "output '%s': tables are .csv, .exr or .png%s", list[i], "");
-    } else if (!strcmp(key, "bsdf")) {
-        int before = m->nbsdf;
+                return set_why(mf, "output '%.200s': tables are .csv, .exr or .png%s", list[i], "");
+    } else if (ki == K_BSDF) {
         if (!split_outputs(mf, key, value, m->bsdf, &m->nbsdf))
             return 0;
-        for (int i = before; i < m->nbsdf; i++)
+        for (int i = 0; i < m->nbsdf; i++)
             if (!ends_with(m->bsdf[i], ".bsdf"))
-                return set_why(mf, "output '%s': must end in .bsdf%s", m->bsdf[i], "");
-    } else {
-        return set_why(mf, "unknown key '%s' (known: ior, smoothness, k0, theta_i, tolerance, "
-                           "metric, sides, enter, leave, bsdf)%s", key, "");
+                return set_why(mf, "output '%.200s': must end in .bsdf%s", m->bsdf[i], "");
     }
     return 1;
 }
@@ -212,17 +282,56 @@ static void stamp_text(char *buf, size_t len, const material *m, const btdf_para
                  p->smoothness, p->k0, m->ti0, m->ti1, m->tol, (int)m->metric, m->sides);
 }
 
+/* .NAME.btdftab-stamp beside the output; for a name too long for that to fit in 255
+   bytes, the name is cut and a hash of the whole name keeps it unique. */
 static void stamp_path(char *buf, size_t len, const char *out)
 {
     const char *base = strrchr(out, '/');
     base = base ? base + 1 : out;
-    snprintf(buf, len, "%.*s.%s.btdftab-stamp", (int)(base - out), out, base);
+    size_t bl = strlen(base);
+    if (1 + bl + 15 <= 255) {
+        snprintf(buf, len, "%.*s.%s.btdftab-stamp", (int)(base - out), out, base);
+        return;
+    }
+    unsigned long long h = 14695981039346656037ull;
+    for (const char *c = base; *c; c++)
+        h = (h ^ (unsigned char)*c) * 1099511628211ull;
+    /* 1 + 200 + 1 + 16 + 15 = 233 bytes */
+    snprintf(buf, len, "%.*s.%.200s-%016llx.btdftab-stamp", (int)(base - out), out, base, h);
 }
 
+/* What identifies an output's content: its size and the 64-bit FNV-1a hash of its
+   bytes, as stamp text; 0 if it is not a readable regular file. */
+static int content_id(const char *path, char *buf, size_t len)
+{
+    struct stat st;
+    if (lstat(path, &st) != 0 || !S_ISREG(st.st_mode))
+        return 0;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    unsigned long long h = 14695981039346656037ull, size = 0;
+    unsigned char chunk[65536];
+    size_t n;
+    while ((n = fread(chunk, 1, sizeof chunk, f)) > 0) {
+        for (size_t i = 0; i < n; i++)
+            h = (h ^ chunk[i]) * 1099511628211ull;
+        size += n;
+    }
+    int bad = ferror(f);
+    fclose(f);
+    if (bad || size != (unsigned long long)st.st_size)
+        return 0;
+    snprintf(buf, len, "size %llu\nfnv1a64 %016llx\n", size, h);
+    return 1;
+}
+
+/* Up to date: the stamp records the same parameters, and the size and hash of the
+   file as it is now (a file cut short, emptied or replaced is rebuilt). */
 static int up_to_date(const char *out, const char *stamp)
 {
-    char sp[4200], have[4096];
-    if (access(out, F_OK) != 0)
+    char sp[4200], have[8192], id[128];
+    if (!content_id(out, id, sizeof id))
         return 0;
     stamp_path(sp, sizeof sp, out);
     FILE *f = fopen(sp, "r");
@@ -231,7 +340,8 @@ static int up_to_date(const char *out, const char *stamp)
     size_t n = fread(have, 1, sizeof have - 1, f);
     fclose(f);
     have[n] = 0;
-    return strcmp(have, stamp) == 0;
+    size_t ls = strlen(stamp);
+    return n > ls && strncmp(have, stamp, ls) == 0 && strcmp(have + ls, id) == 0;
 }
 
 static int write_stamp(const char *out, const char *stamp)
@@ -239,6 +349,16 @@ static int write_stamp(const char *out, const char *stamp)
     char sp[4200];
     stamp_path(sp, sizeof sp, out);
     return btdf_write_buffer(sp, NULL, stamp, strlen(stamp), NULL, 0) == BTDF_OK;
+}
+
+/* The stamp of a file just written: its parameters, then what identifies its content. */
+static int write_stamp_for(const char *out, const char *stamp)
+{
+    char id[128], full[4096 + 128];
+    if (!content_id(out, id, sizeof id))
+        return 0;
+    snprintf(full, sizeof full, "%s%s", stamp, id);
+    return write_stamp(out, full);
 }
 
 static int fail(const char *prog, const char *fmt, const char *a, const char *b)
@@ -326,7 +446,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         if (st != BTDF_OK) {
             fprintf(stderr, "%s: %s: %s\n", mo->prog, outs[k], msg[0] ? msg : btdf_strerror(st));
             code = 1;
-        } else if (!write_stamp(outs[k], stamp)) {
+        } else if (!write_stamp_for(outs[k], stamp)) {
             fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, outs[k],
                     strerror(errno));
             code = 1;
@@ -362,10 +482,85 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
                               mo->best_effort, prov);
         if (code != 0)
             return code;
-        if (!write_stamp(outs[k], stamp)) {
+        if (!write_stamp_for(outs[k], stamp)) {
             fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, outs[k],
                     strerror(errno));
             return 1;
+        }
+    }
+    return 0;
+}
+
+/* The line of key k of m, or of its header when the key was not given. */
+static int line_of(const material *m, int k)
+{
+    return m->key_line[k] ? m->key_line[k] : m->line;
+}
+
+/* Every value against the library's own checks, and every output against the file
+   system and the other outputs, before any work: 0, or the line of the first error
+   with why set. */
+static int validate(const manifest_opts *mo, const manifest *mf, char *why, size_t whylen)
+{
+    char msg[512];
+    for (int i = 0; i < mf->n; i++) {
+        const material *m = &mf->m[i];
+        for (int leave = 0; leave <= 1; leave++) {
+            if (!(leave ? m->nleave : m->nenter))
+                continue;
+            btdf_table_opts o;
+            btdf_table_opts_default(&o);
+            o.params = m->p;
+            if (leave)
+                for (int c = 0; c < o.params.channels; c++)
+                    o.params.ior[c] = 1.0 / o.params.ior[c];
+            o.ti_min = m->ti0 * M_PI / 180.0;
+            o.ti_max = m->ti1 * M_PI / 180.0;
+            o.tolerance = m->tol;
+            o.metric = m->metric;
+            if (btdf_table_opts_check(&o, msg, sizeof msg) != BTDF_OK) {
+                snprintf(why, whylen, "material [%s]: %.400s", m->name, msg);
+                return !strncmp(msg, "tolerance", 9) ? line_of(m, K_TOL)
+                       : !strncmp(msg, "theta", 5)   ? line_of(m, K_THETA)
+                                                     : m->line;
+            }
+        }
+        if (m->nbsdf &&
+            btdf_scatfun_check(&m->p, m->tol, (btdf_side)m->sides, msg, sizeof msg) != BTDF_OK) {
+            snprintf(why, whylen, "material [%s]: %.400s (for its .bsdf output)", m->name, msg);
+            return !strncmp(msg, "tolerance", 9) ? line_of(m, K_TOL)
+                   : !strncmp(msg, "side", 4)    ? line_of(m, K_SIDES)
+                                                 : m->line;
+        }
+        for (int k = 0; k < m->nenter + m->nleave + m->nbsdf; k++) {
+            int key = k < m->nenter ? K_ENTER : k < m->nenter + m->nleave ? K_LEAVE : K_BSDF;
+            const char *out = key == K_ENTER   ? m->enter[k]
+                              : key == K_LEAVE ? m->leave[k - m->nenter]
+                                               : m->bsdf[k - m->nenter - m->nleave];
+            if (btdf_output_check(out, msg, sizeof msg) != BTDF_OK) {
+                snprintf(why, whylen, "output '%.300s': %.400s", out, msg);
+                return m->key_line[key];
+            }
+            if (btdf_same_file(out, mo->path)) {
+                snprintf(why, whylen, "output '%.300s' is the manifest itself", out);
+                return m->key_line[key];
+            }
+            /* every earlier output, of this material and the ones before */
+            for (int j = 0; j <= i; j++) {
+                const material *q = &mf->m[j];
+                int nq = j < i ? q->nenter + q->nleave + q->nbsdf : k;
+                for (int r = 0; r < nq; r++) {
+                    int qk = r < q->nenter ? K_ENTER : r < q->nenter + q->nleave ? K_LEAVE : K_BSDF;
+                    const char *o2 = qk == K_ENTER   ? q->enter[r]
+                                     : qk == K_LEAVE ? q->leave[r - q->nenter]
+                                                     : q->bsdf[r - q->nenter - q->nleave];
+                    if (btdf_same_file(out, o2)) {
+                        snprintf(why, whylen, "output '%.300s' is also written by [%s] at line %d",
+                                 out, q->name, q->key_line[qk]);
+                        return m->key_line[key];
+                    }
+                }
+            }
         }
     }
     return 0;
@@ -376,16 +571,19 @@ int manifest_run(const manifest_opts *mo)
     manifest *mf = calloc(1, sizeof *mf);
     if (!mf)
         return fail(mo->prog, "out of memory%s%s", "", "");
-    int line = ini_parse(mo->path, on_entry, mf);
+    char rwhy[256] = "";
+    int line = ini_read(mo->path, on_entry, mf, rwhy, sizeof rwhy);
+    if (line == 0 && !check_not_empty(mf))
+        line = mf->why_line;
     if (line < 0) {
+        free_manifest(mf);
         free(mf);
-        fprintf(stderr, "%s: %s: cannot read: %s\n", mo->prog, mo->path,
-                line == -1 ? strerror(errno) : "out of memory");
+        fprintf(stderr, "%s: %s: %s\n", mo->prog, mo->path, rwhy);
         return 1;
     }
     if (line > 0) {
-        fprintf(stderr, "%s: %s:%d: %s\n", mo->prog, mo->path, line,
-                mf->why[0] ? mf->why : "syntax error (expected [section], key = value or ;comment)");
+        fprintf(stderr, "%s: %s:%d: %s\n", mo->prog, mo->path, mf->why_line ? mf->why_line : line,
+                mf->why[0] ? mf->why : rwhy);
         free_manifest(mf);
         free(mf);
         return 2;
@@ -397,14 +595,15 @@ int manifest_run(const manifest_opts *mo)
         char why[256];
         const char *miss = !m->has_ior ? "ior" : (!m->has_s ? "smoothness" : NULL);
         if (miss) {
-            fprintf(stderr, "%s: %s: material [%s]: missing '%s'\n", mo->prog, mo->path,
-                    m->name, miss);
+            fprintf(stderr, "%s: %s:%d: material [%s]: missing '%s'\n", mo->prog, mo->path,
+                    m->line, m->name, miss);
             free_manifest(mf);
             free(mf);
             return 2;
         }
         if (btdf_params_check(&m->p, why, sizeof why) != BTDF_OK) {
-            fprintf(stderr, "%s: %s: material [%s]: %s\n", mo->prog, mo->path, m->name, why);
+            fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path, m->line,
+                    m->name, why);
             free_manifest(mf);
             free(mf);
             return 2;
@@ -425,6 +624,14 @@ int manifest_run(const manifest_opts *mo)
     }
     if (mf->n == 0) {
         fprintf(stderr, "%s: %s: no [material] sections\n", mo->prog, mo->path);
+        free(mf);
+        return 2;
+    }
+    char vwhy[800];
+    int vline = validate(mo, mf, vwhy, sizeof vwhy);
+    if (vline) {
+        fprintf(stderr, "%s: %s:%d: %s\n", mo->prog, mo->path, vline, vwhy);
+        free_manifest(mf);
         free(mf);
         return 2;
     }

@@ -20,6 +20,9 @@ const opt_def opt_table[] = {
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
      "evaluate a written table (.csv, .exr, .bsdf) instead of Eq. 25; the file gives\n"
      "the material, so --ior, --smoothness and --k0 do not apply"},
+    {OPT_PART, "part", 0, "P", 0, CMD_EVAL,
+     "transmission (default), or reflection: rows TI TR PHI with theta_r in [0, 90],\n"
+     "phi = 180 the specular plane; the model only (not with --table)"},
     {OPT_OUTPUT, "output", 'o', "FILE", 0, CMD_TABULATE,
      ".csv, .exr, .png (a montage) or .bsdf (pbrt-v3/Mitsuba tabulated, built from\n"
      "Eq. 25 directly); '-' writes CSV to standard output"},
@@ -43,7 +46,7 @@ const opt_def opt_table[] = {
     {OPT_MAX_SAMPLES, "max-samples", 0, "N", 0, CMD_TABULATE, "node budget (default 8000000)"},
     {OPT_MAX_MEMORY, "max-memory", 0, "MIB", 0, CMD_TABULATE,
      "memory cap for the nodes (default 256)"},
-    {OPT_THREADS, "threads", 0, "N", 0, CMD_TABULATE | CMD_BUILD,
+    {OPT_THREADS, "threads", 0, "N", 0, CMD_EVAL | CMD_TABULATE | CMD_BUILD,
      "worker threads, 0 = all cores (default 0)"},
     {OPT_REPORT, "report", 0, "FILE.json", 0, CMD_TABULATE, "write the error report as JSON"},
     {OPT_BEST_EFFORT, "best-effort", 0, NULL, 0, CMD_TABULATE | CMD_BUILD,
@@ -71,15 +74,16 @@ const cmd_def cmd_table[] = {
      "rho at angles (degrees), or rows on stdin",
      "Prints rho (1/sr, one value per channel) at the incident angle TI, outgoing angle TO\n"
      "and azimuth PHI in degrees; without angles, one line per input row 'TI TO PHI'\n"
-     "(blanks or commas; '#' starts a comment)."},
+     "(blanks or commas; '#' starts a comment). With --part reflection, rho_r of the\n"
+     "same surface at rows 'TI TR PHI'."},
     {"tabulate", CMD_TABULATE, "[options] -o FILE", "write a table, a .bsdf or a picture",
      "Builds an adaptive table (or a --grid) of Eq. 25 and writes it in the format its\n"
      "extension names; prints one report line on standard error (slices, samples, times\n"
      "and the errors e_L1, e_max, e_T estimated at points the table was not built on)."},
-    {"albedo", CMD_ALBEDO, "[options] [TI ...]", "T(ti) and the flat Ft(ti)",
-     "Prints, as CSV, the directional transmittance T of Eq. 25 and the Fresnel\n"
-     "transmittance Ft of a flat interface at each incident angle TI in degrees\n"
-     "(default 0, 10, ..., 80)."},
+    {"albedo", CMD_ALBEDO, "[options] [TI ...]", "T(ti), the flat Ft(ti), R(ti), R + T",
+     "Prints, as CSV, the directional transmittance T of Eq. 25, the Fresnel\n"
+     "transmittance Ft of a flat interface, the reflectance R of the same surface and\n"
+     "R + T at each incident angle TI in degrees (default 0, 10, ..., 80)."},
     {"polar", CMD_POLAR, "[options] -o FILE.png", "lobes in the plane of incidence",
      "Draws rho |cos to| in the plane of incidence, one curve per material and angle,\n"
      "like Figs. 5 and 6 of Xu & Sun (2008)."},

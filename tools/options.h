@@ -23,6 +23,7 @@ typedef enum {
     OPT_SMOOTHNESS,
     OPT_K0,
     OPT_TABLE,
+    OPT_PART,
     OPT_OUTPUT,
     OPT_TOLERANCE,
     OPT_METRIC,

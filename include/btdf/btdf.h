@@ -136,20 +136,65 @@ BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double to, doubl
                                double *out);
 
 /* The same by direction vectors (unit length within 1e-6, pointing away from the
-   surface). wo in the upper hemisphere gives 0, wi in the lower gives BTDF_EDOMAIN. */
+   surface). wo in the upper hemisphere gives 0 (btdf_rho_r is that lobe), wi in the
+   lower gives BTDF_EDOMAIN. */
 BTDF_API btdf_status btdf_eval_dir(const btdf_params *p, const double wi[3],
                                    const double wo[3], double *out);
 
-/* count evaluations; out holds count * channels values, channel fastest. The first
-   bad angle stops the batch with BTDF_EDOMAIN and sets *bad_index (may be NULL). */
+/* count evaluations; out holds count * channels values, channel fastest; the values
+   are those of btdf_eval, bit for bit. All angles are checked first: the first bad one
+   gives BTDF_EDOMAIN, sets *bad_index (may be NULL) and leaves out untouched. One
+   thread, a vectorised loop; btdf_eval_grid is the threaded form for grids. */
 BTDF_API btdf_status btdf_eval_batch(const btdf_params *p, size_t count, const double *ti,
                                      const double *to, const double *phi, double *out,
                                      size_t *bad_index);
+
+/* rho on the tensor grid ti[i] x to[j] x phi[k] (radians), written to
+   out[((i * nto + j) * nphi + k) * channels + c], on `threads` threads (0 = all
+   cores). The values are those of btdf_eval, bit for bit, whatever the thread count.
+   BTDF_EDOMAIN for any angle outside the ranges of btdf_eval (out untouched),
+   BTDF_EINVAL for bad parameters, BTDF_ENOMEM, BTDF_EOVERFLOW. */
+BTDF_API btdf_status btdf_eval_grid(const btdf_params *p, size_t nti, const double *ti,
+                                    size_t nto, const double *to, size_t nphi,
+                                    const double *phi, int threads, double *out);
 
 /* Hemispherical transmittance T(ti) = integral of rho |cos to| over the lower
    hemisphere, per channel, by quadrature in facet-slope space; absolute error below
    1e-7 for n > 1 and 1e-6 for n < 1 over the parameter ranges above. */
 BTDF_API btdf_status btdf_transmittance(const btdf_params *p, double ti, double *out);
+
+/* ------------------------------------------------------------------------- */
+/* The reflection of the same interface (MODEL.md section 8)                 */
+/* ------------------------------------------------------------------------- */
+
+/*
+ * The same Beckmann facets (RMS slope 2/s) and shadowing V(ti) V(tr) reflect what
+ * they do not transmit, with the facet's Fresnel reflectance (1 past the critical
+ * angle when n < 1): the Torrance-Sparrow / Walter et al. (2007) BRDF
+ *   rho_r = Fr D V(ti) V(tr) / (4 cos ti cos tr),  h = (e_i + e_r)/|e_i + e_r|.
+ * tr is the polar angle of the reflected direction, [0, pi/2]; phi as for rho, with
+ * phi = pi the specular plane. rho_r is in 1/sr without a cosine factor, reciprocal:
+ * rho_r(ti, tr, phi) = rho_r(tr, ti, phi). Same rules as rho: 0 out of range or below
+ * the smallest normal double, never NaN or inf.
+ */
+BTDF_API double btdf_rho_r(double n, double s, double k0, double ti, double tr, double phi);
+BTDF_API double btdf_rho_r_deg(double n, double s, double k0, double ti, double tr,
+                               double phi);
+
+/* Flat-interface Fresnel reflectance Fr(ti) = 1 - Ft(ti) (1 past the critical angle),
+   formed without that cancellation, so it keeps its digits when n is near 1. */
+BTDF_API double btdf_fresnel_r(double n, double ti);
+
+/* rho_r for every channel of p into out[p->channels]. BTDF_EDOMAIN for angles outside
+   ti, tr in [0, pi/2], finite phi; BTDF_EINVAL for bad parameters. */
+BTDF_API btdf_status btdf_eval_r(const btdf_params *p, double ti, double tr, double phi,
+                                 double *out);
+
+/* Hemispherical reflectance R(ti) = integral of rho_r cos tr over the upper
+   hemisphere, per channel, by the same facet-slope quadrature as T; within 1e-8 of
+   reference-albedo-r.csv (tests/test_model.c). R + T <= 1: what neither holds is
+   the light the shadowing removes. */
+BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *out);
 
 /* ------------------------------------------------------------------------- */
 /* Tables                                                                    */
@@ -213,6 +258,10 @@ typedef struct btdf_table_opts {
 } btdf_table_opts;
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o);
+
+/* The checks btdf_table_build makes of o before any work: BTDF_OK, or BTDF_EINVAL
+   with msg naming the value and what is allowed. */
+BTDF_API btdf_status btdf_table_opts_check(const btdf_table_opts *o, char *msg, size_t msglen);
 
 /* Builds a table. BTDF_OK when the tolerance was met (or for GRID). When the budget
    stops refinement first, *out still holds the best table reached and the status is

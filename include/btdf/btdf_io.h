@@ -89,6 +89,27 @@ BTDF_API btdf_status btdf_write_buffer(const char *path, const char *ext, const 
    signal handler that then ends the process. */
 BTDF_API void btdf_remove_partial_files(void);
 
+/* Whether path may be written, before any work: its folder exists and is writable,
+   its name is legal (at most 255 bytes), and what is there now, if anything, is a
+   regular file (btdf_write never replaces a folder, device, pipe or link). BTDF_OK, or
+   an error with msg saying why (without the path). Nothing is created. */
+BTDF_API btdf_status btdf_output_check(const char *path, char *msg, size_t msglen);
+
+/* 1 when a and b name the same file (the same inode, or the same folder and name when
+   one does not exist yet), else 0: for refusing two outputs, or an output and an
+   input, that are one file. */
+BTDF_API int btdf_same_file(const char *a, const char *b);
+
+/* Outputs of one run that appear together or not at all. After btdf_outputs_begin,
+   every write of this process (btdf_write, btdf_write_buffer, ...) leaves its
+   finished file under its temporary name; btdf_outputs_commit renames them all into
+   place, or none: it fails if any write since begin failed, and if a rename fails,
+   the outputs already renamed are undone and the earlier files put back.
+   btdf_outputs_abort removes them. One group at a time, from one thread. */
+BTDF_API void btdf_outputs_begin(void);
+BTDF_API btdf_status btdf_outputs_commit(char *msg, size_t msglen);
+BTDF_API void btdf_outputs_abort(void);
+
 #ifdef __cplusplus
 }
 #endif

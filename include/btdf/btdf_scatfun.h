@@ -63,6 +63,11 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                                         btdf_side side, int threads, btdf_scatfun **out,
                                         char *msg, size_t msglen);
 
+/* The checks btdf_scatfun_build makes of its arguments before any work: BTDF_OK, or
+   BTDF_EINVAL with msg naming the value and what is allowed. */
+BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
+                                        btdf_side side, char *msg, size_t msglen);
+
 /* Writes f to path (exact SCATFUN v1 layout, float32 little-endian) with the given
    metadata text appended (NULL: a short JSON of the build parameters). The file is
    written under a temporary name in the same folder and renamed at the end; on
