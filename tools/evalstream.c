@@ -41,9 +41,14 @@ static int row(const char *s, const char *end, double *v, int want)
             return n;
         if (n == want)
             return -1;
+        /* Plain decimals only, as tools/numparse reads every other number: no hex,
+           no inf or nan, nothing glued to the number. */
+        const char *t = s;
+        while (t < end && strchr("0123456789+-.eE", *t) != NULL)
+            t++;
         char *e;
         double x = fastnum_strtod(s, &e);
-        if (e == s || !isfinite(x) || e > end)
+        if (e == s || e != t || !isfinite(x))
             return -1;
         v[n++] = x;
         s = e;
