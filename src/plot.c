@@ -1,289 +1,334 @@
 /* SPDX-License-Identifier: MIT */
-/* plot.c: drawing on an RGB canvas; the 5 x 9 bitmap font is drawn for this project. */
+/* plot.c: the drawing layer of plot.h on a cairo RGB24 image surface. */
 #include "plot.h"
 
 #include <math.h>
+#include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* Glyph rows top to bottom, bit 4 = leftmost column. Entries 0-4 are the extra letters
-   (degree, rho, theta, phi, psi), then ASCII 32 to 126. */
-static const unsigned char font[5 + 95][PLOT_GLYPH_H] = {
-    {0x0c, 0x12, 0x12, 0x0c, 0x00, 0x00, 0x00, 0x00, 0x00}, /* degree */
-    {0x00, 0x00, 0x06, 0x09, 0x09, 0x09, 0x0e, 0x08, 0x10}, /* rho */
-    {0x0e, 0x11, 0x11, 0x1f, 0x11, 0x11, 0x0e, 0x00, 0x00}, /* theta */
-    {0x04, 0x04, 0x0e, 0x15, 0x15, 0x0e, 0x04, 0x04, 0x00}, /* phi */
-    {0x04, 0x15, 0x15, 0x15, 0x0e, 0x04, 0x04, 0x00, 0x00}, /* psi */
-    {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}, /* ' ' */
-    {0x04, 0x04, 0x04, 0x04, 0x04, 0x00, 0x04, 0x00, 0x00}, /* '!' */
-    {0x0a, 0x0a, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}, /* '"' */
-    {0x0a, 0x0a, 0x1f, 0x0a, 0x1f, 0x0a, 0x0a, 0x00, 0x00}, /* '#' */
-    {0x04, 0x0f, 0x14, 0x0e, 0x05, 0x1e, 0x04, 0x00, 0x00}, /* '$' */
-    {0x19, 0x19, 0x02, 0x04, 0x08, 0x13, 0x13, 0x00, 0x00}, /* '%' */
-    {0x0c, 0x12, 0x14, 0x08, 0x15, 0x12, 0x0d, 0x00, 0x00}, /* '&' */
-    {0x04, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}, /* "'" */
-    {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02, 0x00, 0x00}, /* '(' */
-    {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08, 0x00, 0x00}, /* ')' */
-    {0x00, 0x04, 0x15, 0x0e, 0x15, 0x04, 0x00, 0x00, 0x00}, /* '*' */
-    {0x00, 0x04, 0x04, 0x1f, 0x04, 0x04, 0x00, 0x00, 0x00}, /* '+' */
-    {0x00, 0x00, 0x00, 0x00, 0x00, 0x06, 0x06, 0x02, 0x04}, /* ',' */
-    {0x00, 0x00, 0x00, 0x1f, 0x00, 0x00, 0x00, 0x00, 0x00}, /* '-' */
-    {0x00, 0x00, 0x00, 0x00, 0x00, 0x0c, 0x0c, 0x00, 0x00}, /* '.' */
-    {0x01, 0x01, 0x02, 0x04, 0x08, 0x10, 0x10, 0x00, 0x00}, /* '/' */
-    {0x0e, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0e, 0x00, 0x00}, /* '0' */
-    {0x04, 0x0c, 0x04, 0x04, 0x04, 0x04, 0x0e, 0x00, 0x00}, /* '1' */
-    {0x0e, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1f, 0x00, 0x00}, /* '2' */
-    {0x1f, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0e, 0x00, 0x00}, /* '3' */
-    {0x02, 0x06, 0x0a, 0x12, 0x1f, 0x02, 0x02, 0x00, 0x00}, /* '4' */
-    {0x1f, 0x10, 0x1e, 0x01, 0x01, 0x11, 0x0e, 0x00, 0x00}, /* '5' */
-    {0x06, 0x08, 0x10, 0x1e, 0x11, 0x11, 0x0e, 0x00, 0x00}, /* '6' */
-    {0x1f, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08, 0x00, 0x00}, /* '7' */
-    {0x0e, 0x11, 0x11, 0x0e, 0x11, 0x11, 0x0e, 0x00, 0x00}, /* '8' */
-    {0x0e, 0x11, 0x11, 0x0f, 0x01, 0x02, 0x0c, 0x00, 0x00}, /* '9' */
-    {0x00, 0x0c, 0x0c, 0x00, 0x0c, 0x0c, 0x00, 0x00, 0x00}, /* ':' */
-    {0x00, 0x0c, 0x0c, 0x00, 0x0c, 0x0c, 0x04, 0x08, 0x00}, /* ';' */
-    {0x02, 0x04, 0x08, 0x10, 0x08, 0x04, 0x02, 0x00, 0x00}, /* '<' */
-    {0x00, 0x00, 0x1f, 0x00, 0x1f, 0x00, 0x00, 0x00, 0x00}, /* '=' */
-    {0x08, 0x04, 0x02, 0x01, 0x02, 0x04, 0x08, 0x00, 0x00}, /* '>' */
-    {0x0e, 0x11, 0x01, 0x02, 0x04, 0x00, 0x04, 0x00, 0x00}, /* '?' */
-    {0x0e, 0x11, 0x17, 0x15, 0x17, 0x10, 0x0f, 0x00, 0x00}, /* '@' */
-    {0x0e, 0x11, 0x11, 0x1f, 0x11, 0x11, 0x11, 0x00, 0x00}, /* 'A' */
-    {0x1e, 0x11, 0x11, 0x1e, 0x11, 0x11, 0x1e, 0x00, 0x00}, /* 'B' */
-    {0x0e, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0e, 0x00, 0x00}, /* 'C' */
-    {0x1c, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1c, 0x00, 0x00}, /* 'D' */
-    {0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x1f, 0x00, 0x00}, /* 'E' */
-    {0x1f, 0x10, 0x10, 0x1e, 0x10, 0x10, 0x10, 0x00, 0x00}, /* 'F' */
-    {0x0e, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0f, 0x00, 0x00}, /* 'G' */
-    {0x11, 0x11, 0x11, 0x1f, 0x11, 0x11, 0x11, 0x00, 0x00}, /* 'H' */
-    {0x0e, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e, 0x00, 0x00}, /* 'I' */
-    {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0c, 0x00, 0x00}, /* 'J' */
-    {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11, 0x00, 0x00}, /* 'K' */
-    {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1f, 0x00, 0x00}, /* 'L' */
-    {0x11, 0x1b, 0x15, 0x15, 0x11, 0x11, 0x11, 0x00, 0x00}, /* 'M' */
-    {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11, 0x00, 0x00}, /* 'N' */
-    {0x0e, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0e, 0x00, 0x00}, /* 'O' */
-    {0x1e, 0x11, 0x11, 0x1e, 0x10, 0x10, 0x10, 0x00, 0x00}, /* 'P' */
-    {0x0e, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0d, 0x00, 0x00}, /* 'Q' */
-    {0x1e, 0x11, 0x11, 0x1e, 0x14, 0x12, 0x11, 0x00, 0x00}, /* 'R' */
-    {0x0f, 0x10, 0x10, 0x0e, 0x01, 0x01, 0x1e, 0x00, 0x00}, /* 'S' */
-    {0x1f, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04, 0x00, 0x00}, /* 'T' */
-    {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0e, 0x00, 0x00}, /* 'U' */
-    {0x11, 0x11, 0x11, 0x11, 0x11, 0x0a, 0x04, 0x00, 0x00}, /* 'V' */
-    {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0a, 0x00, 0x00}, /* 'W' */
-    {0x11, 0x11, 0x0a, 0x04, 0x0a, 0x11, 0x11, 0x00, 0x00}, /* 'X' */
-    {0x11, 0x11, 0x0a, 0x04, 0x04, 0x04, 0x04, 0x00, 0x00}, /* 'Y' */
-    {0x1f, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1f, 0x00, 0x00}, /* 'Z' */
-    {0x0e, 0x08, 0x08, 0x08, 0x08, 0x08, 0x0e, 0x00, 0x00}, /* '[' */
-    {0x10, 0x10, 0x08, 0x04, 0x02, 0x01, 0x01, 0x00, 0x00}, /* '\\' */
-    {0x0e, 0x02, 0x02, 0x02, 0x02, 0x02, 0x0e, 0x00, 0x00}, /* ']' */
-    {0x04, 0x0a, 0x11, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}, /* '^' */
-    {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1f, 0x00}, /* '_' */
-    {0x08, 0x04, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00}, /* '`' */
-    {0x00, 0x00, 0x0e, 0x01, 0x0f, 0x11, 0x0f, 0x00, 0x00}, /* 'a' */
-    {0x10, 0x10, 0x1e, 0x11, 0x11, 0x11, 0x1e, 0x00, 0x00}, /* 'b' */
-    {0x00, 0x00, 0x0e, 0x10, 0x10, 0x11, 0x0e, 0x00, 0x00}, /* 'c' */
-    {0x01, 0x01, 0x0f, 0x11, 0x11, 0x11, 0x0f, 0x00, 0x00}, /* 'd' */
-    {0x00, 0x00, 0x0e, 0x11, 0x1f, 0x10, 0x0e, 0x00, 0x00}, /* 'e' */
-    {0x06, 0x09, 0x08, 0x1c, 0x08, 0x08, 0x08, 0x00, 0x00}, /* 'f' */
-    {0x00, 0x00, 0x0f, 0x11, 0x11, 0x11, 0x0f, 0x01, 0x0e}, /* 'g' */
-    {0x10, 0x10, 0x16, 0x19, 0x11, 0x11, 0x11, 0x00, 0x00}, /* 'h' */
-    {0x04, 0x00, 0x0c, 0x04, 0x04, 0x04, 0x0e, 0x00, 0x00}, /* 'i' */
-    {0x02, 0x00, 0x06, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0c}, /* 'j' */
-    {0x10, 0x10, 0x12, 0x14, 0x18, 0x14, 0x12, 0x00, 0x00}, /* 'k' */
-    {0x0c, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0e, 0x00, 0x00}, /* 'l' */
-    {0x00, 0x00, 0x1a, 0x15, 0x15, 0x15, 0x15, 0x00, 0x00}, /* 'm' */
-    {0x00, 0x00, 0x16, 0x19, 0x11, 0x11, 0x11, 0x00, 0x00}, /* 'n' */
-    {0x00, 0x00, 0x0e, 0x11, 0x11, 0x11, 0x0e, 0x00, 0x00}, /* 'o' */
-    {0x00, 0x00, 0x1e, 0x11, 0x11, 0x11, 0x1e, 0x10, 0x10}, /* 'p' */
-    {0x00, 0x00, 0x0f, 0x11, 0x11, 0x11, 0x0f, 0x01, 0x01}, /* 'q' */
-    {0x00, 0x00, 0x16, 0x19, 0x10, 0x10, 0x10, 0x00, 0x00}, /* 'r' */
-    {0x00, 0x00, 0x0f, 0x10, 0x0e, 0x01, 0x1e, 0x00, 0x00}, /* 's' */
-    {0x08, 0x08, 0x1c, 0x08, 0x08, 0x09, 0x06, 0x00, 0x00}, /* 't' */
-    {0x00, 0x00, 0x11, 0x11, 0x11, 0x13, 0x0d, 0x00, 0x00}, /* 'u' */
-    {0x00, 0x00, 0x11, 0x11, 0x11, 0x0a, 0x04, 0x00, 0x00}, /* 'v' */
-    {0x00, 0x00, 0x11, 0x11, 0x15, 0x15, 0x0a, 0x00, 0x00}, /* 'w' */
-    {0x00, 0x00, 0x11, 0x0a, 0x04, 0x0a, 0x11, 0x00, 0x00}, /* 'x' */
-    {0x00, 0x00, 0x11, 0x11, 0x11, 0x11, 0x0f, 0x01, 0x0e}, /* 'y' */
-    {0x00, 0x00, 0x1f, 0x02, 0x04, 0x08, 0x1f, 0x00, 0x00}, /* 'z' */
-    {0x03, 0x04, 0x04, 0x08, 0x04, 0x04, 0x03, 0x00, 0x00}, /* '{' */
-    {0x04, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04, 0x00}, /* '|' */
-    {0x18, 0x04, 0x04, 0x02, 0x04, 0x04, 0x18, 0x00, 0x00}, /* '}' */
-    {0x00, 0x00, 0x08, 0x15, 0x02, 0x00, 0x00, 0x00, 0x00}, /* '~' */
-};
+#include <cairo-ft.h>
+#include <fontconfig/fontconfig.h>
+
+static void set_colour(cairo_t *cr, plot_rgb col)
+{
+    cairo_set_source_rgb(cr, col.r / 255.0, col.g / 255.0, col.b / 255.0);
+}
+
+/* The pattern of PLOT_FONT's file: the name is matched with the machine's configuration,
+   then only the file and the rendering options below are kept, so that settings such as
+   hinting or sub-pixel order in a fonts.conf do not change the pictures. NULL if no file. */
+static FcPattern *font_pattern(void)
+{
+    FcPattern *want = FcNameParse((const FcChar8 *)PLOT_FONT);
+    if (!want)
+        return NULL;
+    FcConfigSubstitute(NULL, want, FcMatchPattern);
+    FcDefaultSubstitute(want);
+    FcResult res;
+    FcPattern *got = FcFontMatch(NULL, want, &res);
+    FcPatternDestroy(want);
+    if (!got)
+        return NULL;
+    FcChar8 *file = NULL;
+    int index = 0;
+    FcPattern *clean = NULL;
+    if (FcPatternGetString(got, FC_FILE, 0, &file) == FcResultMatch && file) {
+        if (FcPatternGetInteger(got, FC_INDEX, 0, &index) != FcResultMatch)
+            index = 0;
+        clean = FcPatternCreate();
+        if (clean) {
+            FcPatternAddString(clean, FC_FILE, file);
+            FcPatternAddInteger(clean, FC_INDEX, index);
+            FcPatternAddBool(clean, FC_ANTIALIAS, FcTrue);
+            FcPatternAddBool(clean, FC_HINTING, FcFalse);
+            FcPatternAddInteger(clean, FC_HINT_STYLE, FC_HINT_NONE);
+            FcPatternAddBool(clean, FC_AUTOHINT, FcFalse);
+            FcPatternAddInteger(clean, FC_RGBA, FC_RGBA_NONE);
+            FcPatternAddBool(clean, FC_EMBEDDED_BITMAP, FcFalse);
+        }
+    }
+    FcPatternDestroy(got);
+    return clean;
+}
+
+const char *plot_font_file(char *buf, size_t len)
+{
+    FcPattern *p = font_pattern();
+    FcChar8 *file = NULL;
+    const char *out = NULL;
+    if (p && FcPatternGetString(p, FC_FILE, 0, &file) == FcResultMatch && file) {
+        snprintf(buf, len, "%s", (const char *)file);
+        out = buf;
+    }
+    if (p)
+        FcPatternDestroy(p);
+    return out;
+}
 
 int plot_canvas_init(plot_canvas *c, int w, int h, plot_rgb bg)
 {
-    c->w = c->h = 0;
-    c->px = NULL;
-    if (w <= 0 || h <= 0 || (size_t)w > ((size_t)-1) / 3 / (size_t)h)
+    memset(c, 0, sizeof *c);
+    c->surf = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
+    if (cairo_surface_status(c->surf) != CAIRO_STATUS_SUCCESS) {
+        cairo_surface_destroy(c->surf);
+        c->surf = NULL;
         return -1;
-    c->px = malloc((size_t)w * (size_t)h * 3);
-    if (!c->px)
+    }
+    c->cr = cairo_create(c->surf);
+    if (cairo_status(c->cr) != CAIRO_STATUS_SUCCESS) {
+        plot_canvas_free(c);
         return -1;
+    }
     c->w = w;
     c->h = h;
-    for (size_t i = 0; i < (size_t)w * (size_t)h; i++) {
-        c->px[3 * i] = bg.r;
-        c->px[3 * i + 1] = bg.g;
-        c->px[3 * i + 2] = bg.b;
+    /* One font, no hinting: glyph positions then depend on the font file alone, not
+       on the machine's hinting settings, and scale smoothly with the size. */
+    FcPattern *pat = font_pattern();
+    if (pat) {
+        c->face = cairo_ft_font_face_create_for_pattern(pat); /* cairo keeps its own copy */
+        FcPatternDestroy(pat);
+        if (cairo_font_face_status(c->face) != CAIRO_STATUS_SUCCESS) {
+            cairo_font_face_destroy(c->face);
+            c->face = NULL;
+        }
     }
+    if (c->face)
+        cairo_set_font_face(c->cr, c->face);
+    else /* no font file found: cairo's own choice for the name */
+        cairo_select_font_face(c->cr, PLOT_FONT, CAIRO_FONT_SLANT_NORMAL,
+                               CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_font_options_t *fo = cairo_font_options_create();
+    cairo_font_options_set_antialias(fo, CAIRO_ANTIALIAS_GRAY);
+    cairo_font_options_set_hint_style(fo, CAIRO_HINT_STYLE_NONE);
+    cairo_font_options_set_hint_metrics(fo, CAIRO_HINT_METRICS_OFF);
+    cairo_set_font_options(c->cr, fo);
+    cairo_font_options_destroy(fo);
+    cairo_set_line_cap(c->cr, CAIRO_LINE_CAP_ROUND);
+    cairo_set_line_join(c->cr, CAIRO_LINE_JOIN_ROUND);
+    set_colour(c->cr, bg);
+    cairo_paint(c->cr);
     return 0;
 }
 
 void plot_canvas_free(plot_canvas *c)
 {
-    free(c->px);
-    c->px = NULL;
-    c->w = c->h = 0;
+    if (c->cr)
+        cairo_destroy(c->cr);
+    if (c->surf)
+        cairo_surface_destroy(c->surf);
+    if (c->face)
+        cairo_font_face_destroy(c->face);
+    c->face = NULL;
+    c->cr = NULL;
+    c->surf = NULL;
 }
 
-void plot_blend(plot_canvas *c, int x, int y, plot_rgb col, double a)
+unsigned char *plot_canvas_rgb(plot_canvas *c)
 {
-    if (x < 0 || y < 0 || x >= c->w || y >= c->h || !(a > 0.0))
-        return;
-    if (a > 1.0)
-        a = 1.0;
-    unsigned char *p = c->px + 3 * ((size_t)y * (size_t)c->w + (size_t)x);
-    p[0] = (unsigned char)(p[0] + (col.r - p[0]) * a + (col.r >= p[0] ? 0.5 : -0.5));
-    p[1] = (unsigned char)(p[1] + (col.g - p[1]) * a + (col.g >= p[1] ? 0.5 : -0.5));
-    p[2] = (unsigned char)(p[2] + (col.b - p[2]) * a + (col.b >= p[2] ? 0.5 : -0.5));
-}
-
-void plot_rect(plot_canvas *c, int x0, int y0, int x1, int y1, plot_rgb col)
-{
-    x0 = x0 < 0 ? 0 : x0;
-    y0 = y0 < 0 ? 0 : y0;
-    x1 = x1 > c->w ? c->w : x1;
-    y1 = y1 > c->h ? c->h : y1;
-    for (int y = y0; y < y1; y++)
-        for (int x = x0; x < x1; x++) {
-            unsigned char *p = c->px + 3 * ((size_t)y * (size_t)c->w + (size_t)x);
-            p[0] = col.r;
-            p[1] = col.g;
-            p[2] = col.b;
+    cairo_surface_flush(c->surf);
+    const unsigned char *data = cairo_image_surface_get_data(c->surf);
+    int stride = cairo_image_surface_get_stride(c->surf);
+    unsigned char *out = malloc((size_t)c->w * (size_t)c->h * 3);
+    if (!out || !data) {
+        free(out);
+        return NULL;
+    }
+    for (int y = 0; y < c->h; y++) {
+        /* RGB24: one native-endian 32-bit word per pixel, 0x00RRGGBB. */
+        const unsigned char *row = data + (size_t)y * (size_t)stride;
+        unsigned char *o = out + (size_t)y * (size_t)c->w * 3;
+        for (int x = 0; x < c->w; x++) {
+            uint32_t v;
+            memcpy(&v, row + 4 * (size_t)x, 4);
+            o[3 * x] = (unsigned char)(v >> 16);
+            o[3 * x + 1] = (unsigned char)(v >> 8);
+            o[3 * x + 2] = (unsigned char)v;
         }
+    }
+    return out;
 }
 
-void plot_frame(plot_canvas *c, int x0, int y0, int x1, int y1, plot_rgb col)
+void plot_rect(plot_canvas *c, double x0, double y0, double x1, double y1, plot_rgb col)
 {
-    plot_rect(c, x0 - 1, y0 - 1, x1 + 1, y0, col);
-    plot_rect(c, x0 - 1, y1, x1 + 1, y1 + 1, col);
-    plot_rect(c, x0 - 1, y0, x0, y1, col);
-    plot_rect(c, x1, y0, x1 + 1, y1, col);
+    set_colour(c->cr, col);
+    cairo_rectangle(c->cr, x0, y0, x1 - x0, y1 - y0);
+    cairo_fill(c->cr);
 }
 
-/* Coverage of a pixel centre at distance d from a segment of half width hw: a one-pixel
-   linear ramp, which is enough antialiasing for plots. */
+void plot_frame(plot_canvas *c, double x0, double y0, double x1, double y1, double width,
+                plot_rgb col)
+{
+    set_colour(c->cr, col);
+    cairo_set_line_width(c->cr, width);
+    cairo_rectangle(c->cr, x0 - width / 2, y0 - width / 2, x1 - x0 + width, y1 - y0 + width);
+    cairo_stroke(c->cr);
+}
+
 void plot_line(plot_canvas *c, double x0, double y0, double x1, double y1, double width,
-               plot_rgb col)
+               double dash, plot_rgb col)
 {
-    if (!(isfinite(x0) && isfinite(y0) && isfinite(x1) && isfinite(y1)))
+    set_colour(c->cr, col);
+    cairo_set_line_width(c->cr, width);
+    if (dash > 0.0) {
+        double d[2] = {dash, dash * 0.7};
+        cairo_set_dash(c->cr, d, 2, 0.0);
+        cairo_set_line_cap(c->cr, CAIRO_LINE_CAP_BUTT);
+    }
+    cairo_move_to(c->cr, x0, y0);
+    cairo_line_to(c->cr, x1, y1);
+    cairo_stroke(c->cr);
+    if (dash > 0.0) {
+        cairo_set_dash(c->cr, NULL, 0, 0.0);
+        cairo_set_line_cap(c->cr, CAIRO_LINE_CAP_ROUND);
+    }
+}
+
+void plot_polyline(plot_canvas *c, const double *xy, size_t n, double width, plot_rgb col)
+{
+    if (n < 2)
         return;
-    double hw = 0.5 * width;
-    double dx = x1 - x0, dy = y1 - y0, len2 = dx * dx + dy * dy;
-    int xa = (int)floor(fmin(x0, x1) - hw - 1), xb = (int)ceil(fmax(x0, x1) + hw + 1);
-    int ya = (int)floor(fmin(y0, y1) - hw - 1), yb = (int)ceil(fmax(y0, y1) + hw + 1);
-    xa = xa < 0 ? 0 : xa;
-    ya = ya < 0 ? 0 : ya;
-    xb = xb >= c->w ? c->w - 1 : xb;
-    yb = yb >= c->h ? c->h - 1 : yb;
-    for (int y = ya; y <= yb; y++)
-        for (int x = xa; x <= xb; x++) {
-            double px = x + 0.5 - x0, py = y + 0.5 - y0;
-            /* len2 = 0 is a dot: the distance is to the start point. */
-            double t = len2 > 0.0 ? (px * dx + py * dy) / len2 : 0.0;
-            t = t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
-            double ex = px - t * dx, ey = py - t * dy;
-            double cov = hw + 0.5 - sqrt(ex * ex + ey * ey);
-            if (cov > 0.0)
-                plot_blend(c, x, y, col, cov);
-        }
+    set_colour(c->cr, col);
+    cairo_set_line_width(c->cr, width);
+    cairo_move_to(c->cr, xy[0], xy[1]);
+    for (size_t i = 1; i < n; i++)
+        cairo_line_to(c->cr, xy[2 * i], xy[2 * i + 1]);
+    cairo_stroke(c->cr);
 }
 
-void plot_dashed(plot_canvas *c, double x0, double y0, double x1, double y1, double width,
-                 double dash, plot_rgb col)
+void plot_triangle(plot_canvas *c, const double *xy, plot_rgb col)
 {
-    double len = hypot(x1 - x0, y1 - y0);
-    if (!(len > 0.0) || !(dash > 0.0))
-        return; /* nothing to draw; also avoids dividing by a zero length */
-    for (double s = 0.0; s < len; s += 2.0 * dash) {
-        double e = s + dash < len ? s + dash : len;
-        plot_line(c, x0 + (x1 - x0) * s / len, y0 + (y1 - y0) * s / len,
-                  x0 + (x1 - x0) * e / len, y0 + (y1 - y0) * e / len, width, col);
-    }
+    set_colour(c->cr, col);
+    cairo_move_to(c->cr, xy[0], xy[1]);
+    cairo_line_to(c->cr, xy[2], xy[3]);
+    cairo_line_to(c->cr, xy[4], xy[5]);
+    cairo_close_path(c->cr);
+    cairo_fill(c->cr);
 }
 
-/* Next glyph index of the UTF-8 string, advancing *s; '?' for anything unknown. */
-static int next_glyph(const char **s)
+void plot_image(plot_canvas *c, int x0, int y0, int w, int h, const unsigned char *rgb)
 {
-    const unsigned char *p = (const unsigned char *)*s;
-    if (p[0] >= 32 && p[0] < 127) {
-        *s += 1;
-        return 5 + (p[0] - 32);
-    }
-    if ((p[0] == 0xc2 || p[0] == 0xce || p[0] == 0xcf) && p[1] >= 0x80 && p[1] < 0xc0) {
-        *s += 2;
-        unsigned code = ((p[0] & 0x1fu) << 6) | (p[1] & 0x3fu);
-        switch (code) {
-        case 0xb0: return 0;  /* degree */
-        case 0x3c1: return 1; /* rho */
-        case 0x3b8: return 2; /* theta */
-        case 0x3c6: return 3; /* phi */
-        case 0x3c8: return 4; /* psi */
-        default: return 5 + ('?' - 32);
-        }
-    }
-    *s += 1;
-    return 5 + ('?' - 32);
-}
-
-int plot_text_width(const char *s, int scale)
-{
-    int n = 0;
-    while (*s) {
-        next_glyph(&s);
-        n++;
-    }
-    return n > 0 ? (n * PLOT_GLYPH_W - 1) * scale : 0;
-}
-
-/* Glyph g with its top-left at (x, y); rot = 1 turns it a quarter counter-clockwise. */
-static void draw_glyph(plot_canvas *c, int x, int y, int g, int scale, int rot, plot_rgb col)
-{
-    for (int r = 0; r < PLOT_GLYPH_H; r++)
-        for (int k = 0; k < 5; k++) {
-            if (!(font[g][r] & (0x10 >> k)))
+    cairo_surface_flush(c->surf); /* finish cairo's drawing before touching pixels */
+    unsigned char *data = cairo_image_surface_get_data(c->surf);
+    int stride = cairo_image_surface_get_stride(c->surf);
+    if (!data)
+        return;
+    for (int y = 0; y < h; y++) {
+        int yy = y0 + y;
+        if (yy < 0 || yy >= c->h)
+            continue;
+        for (int x = 0; x < w; x++) {
+            int xx = x0 + x;
+            if (xx < 0 || xx >= c->w)
                 continue;
-            int gx = rot ? r : k, gy = rot ? -k : r;
-            plot_rect(c, x + gx * scale, y + gy * scale, x + (gx + 1) * scale,
-                      y + (gy + 1) * scale, col);
+            const unsigned char *p = rgb + 3 * ((size_t)y * (size_t)w + (size_t)x);
+            uint32_t v = (uint32_t)p[0] << 16 | (uint32_t)p[1] << 8 | (uint32_t)p[2];
+            memcpy(data + (size_t)yy * (size_t)stride + 4 * (size_t)xx, &v, 4);
         }
+    }
+    cairo_surface_mark_dirty(c->surf);
 }
 
-void plot_text(plot_canvas *c, int x, int y, double ax, double ay, const char *s, int scale,
-               plot_rgb col)
+double plot_text_width(plot_canvas *c, const char *s, double size)
 {
-    int w = plot_text_width(s, scale), h = 7 * scale;
-    int cx = x - (int)lround(ax * w), cy = y - (int)lround(ay * h);
-    while (*s) {
-        draw_glyph(c, cx, cy, next_glyph(&s), scale, 0, col);
-        cx += PLOT_GLYPH_W * scale;
-    }
+    cairo_text_extents_t te;
+    cairo_set_font_size(c->cr, size);
+    cairo_text_extents(c->cr, s, &te);
+    return te.x_advance;
 }
 
-void plot_text_up(plot_canvas *c, int x, int y, const char *s, int scale, plot_rgb col)
+double plot_text_height(plot_canvas *c, double size)
 {
-    int w = plot_text_width(s, scale), h = 7 * scale;
-    int cx = x - h / 2, cy = y + w / 2;
-    while (*s) {
-        draw_glyph(c, cx, cy - scale, next_glyph(&s), scale, 1, col);
-        cy -= PLOT_GLYPH_W * scale;
+    cairo_font_extents_t fe;
+    cairo_set_font_size(c->cr, size);
+    cairo_font_extents(c->cr, &fe);
+    return fe.ascent + fe.descent;
+}
+
+static void record(plot_canvas *c, plot_box b)
+{
+    if (c->nboxes < PLOT_MAX_BOXES)
+        c->boxes[c->nboxes++] = b;
+}
+
+plot_box plot_text_box(plot_canvas *c, double x, double y, double ax, double ay, const char *s,
+                       double size)
+{
+    cairo_font_extents_t fe;
+    cairo_text_extents_t te;
+    cairo_set_font_size(c->cr, size);
+    cairo_font_extents(c->cr, &fe);
+    cairo_text_extents(c->cr, s, &te);
+    double w = te.x_advance, h = fe.ascent + fe.descent;
+    plot_box b = {x - ax * w, y - ay * h, x - ax * w + w, y - ay * h + h};
+    return b;
+}
+
+plot_box plot_text(plot_canvas *c, double x, double y, double ax, double ay, const char *s,
+                   double size, plot_rgb col)
+{
+    cairo_font_extents_t fe;
+    cairo_text_extents_t te;
+    cairo_set_font_size(c->cr, size);
+    cairo_font_extents(c->cr, &fe);
+    cairo_text_extents(c->cr, s, &te);
+    double w = te.x_advance, h = fe.ascent + fe.descent;
+    plot_box b = {x - ax * w, y - ay * h, x - ax * w + w, y - ay * h + h};
+    set_colour(c->cr, col);
+    cairo_move_to(c->cr, b.x0, b.y0 + fe.ascent);
+    cairo_show_text(c->cr, s);
+    cairo_new_path(c->cr);
+    record(c, b);
+    return b;
+}
+
+plot_box plot_text_up(plot_canvas *c, double x, double y, const char *s, double size,
+                      plot_rgb col)
+{
+    cairo_font_extents_t fe;
+    cairo_text_extents_t te;
+    cairo_set_font_size(c->cr, size);
+    cairo_font_extents(c->cr, &fe);
+    cairo_text_extents(c->cr, s, &te);
+    double w = te.x_advance, h = fe.ascent + fe.descent;
+    cairo_save(c->cr);
+    cairo_translate(c->cr, x, y);
+    cairo_rotate(c->cr, -1.57079632679489662); /* a quarter turn counter-clockwise */
+    set_colour(c->cr, col);
+    cairo_move_to(c->cr, -w / 2, -h / 2 + fe.ascent);
+    cairo_show_text(c->cr, s);
+    cairo_new_path(c->cr);
+    cairo_restore(c->cr);
+    plot_box b = {x - h / 2, y - w / 2, x + h / 2, y + w / 2};
+    record(c, b);
+    return b;
+}
+
+double plot_text_fit(plot_canvas *c, const char *s, double size, double min, double maxw)
+{
+    double w = plot_text_width(c, s, size);
+    if (w <= maxw)
+        return size;
+    /* Width is proportional to size without hinting; w > maxw >= 0 here, so w > 0. */
+    double fit = floor(size * maxw / w * 10.0) / 10.0;
+    return fit < min ? min : fit;
+}
+
+int plot_text_collides(const plot_canvas *c, plot_box b, double pad)
+{
+    for (int i = 0; i < c->nboxes; i++) {
+        const plot_box *o = &c->boxes[i];
+        if (b.x0 < o->x1 + pad && o->x0 < b.x1 + pad && b.y0 < o->y1 + pad &&
+            o->y0 < b.y1 + pad)
+            return 1;
     }
+    return 0;
 }
 
 plot_rgb plot_cmap(double t)
 {
-    /* Anchor colours chosen by eye: dark blue, blue, teal, green, yellow. */
+    /* Anchor colours chosen by eye: dark violet, blue, teal, green, yellow. */
     static const double k[5][3] = {
         {0.27, 0.00, 0.33}, {0.23, 0.32, 0.55}, {0.13, 0.57, 0.55},
         {0.37, 0.79, 0.38}, {0.99, 0.91, 0.14},
@@ -302,4 +347,46 @@ plot_rgb plot_cmap(double t)
     out.g = (unsigned char)lround(255.0 * (k[i][1] + f * (k[i + 1][1] - k[i][1])));
     out.b = (unsigned char)lround(255.0 * (k[i][2] + f * (k[i + 1][2] - k[i][2])));
     return out;
+}
+
+double plot_ticks(double vmax, int most, int *count)
+{
+    if (!(vmax > 0.0) || !isfinite(vmax) || most < 1) {
+        *count = 1;
+        return 1.0;
+    }
+    /* vmax / most > 0: log10 is finite. */
+    double p = pow(10.0, floor(log10(vmax / most)));
+    static const double mant[5] = {1.0, 2.0, 2.5, 5.0, 10.0};
+    double step = 10.0 * p;
+    for (int i = 0; i < 5; i++)
+        if (mant[i] * p * most >= vmax * (1.0 - 1e-12)) {
+            step = mant[i] * p;
+            break;
+        }
+    int n = (int)ceil(vmax / step * (1.0 - 1e-12)); /* step > 0 */
+    *count = n < 1 ? 1 : n;
+    return step;
+}
+
+void plot_tick_label(char *buf, size_t len, double v, double step)
+{
+    double e = floor(log10(step) + 1e-9); /* step > 0 (plot_ticks) */
+    double m = step / pow(10.0, e);
+    int dec = (int)-e + (fabs(m - 2.5) < 1e-6 ? 1 : 0);
+    if (fabs(v) < step * 1e-6)
+        snprintf(buf, len, "0");
+    else if (step >= 1e5 || step < 1e-4)
+        snprintf(buf, len, "%.3g", v);
+    else {
+        snprintf(buf, len, "%.*f", dec > 0 ? dec : 0, v);
+        /* 0.50 -> 0.5, 1.00 -> 1: no digits the value does not have. */
+        if (strchr(buf, '.')) {
+            size_t l = strlen(buf);
+            while (l > 0 && buf[l - 1] == '0')
+                buf[--l] = '\0';
+            if (l > 0 && buf[l - 1] == '.')
+                buf[--l] = '\0';
+        }
+    }
 }

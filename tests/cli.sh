@@ -243,6 +243,16 @@ if "$B" --version | grep -q 'PNG on'; then
         ok "polar picture" || no "polar"
     rm -f "$W"/*.png
     expect 2 "kind must be" "bad preview kind" -- "$B" tabulate --preview sketch="$W/t.png"
+    "$B" tabulate -q --theta-i 0:30 --tolerance 1e-2 --preview render="$W/z.png" --zoom 4 \
+        --log-decades 3 && [ -s "$W/z.png" ] && ok "render with --zoom and --log-decades" || \
+        no "render with --zoom and --log-decades"
+    rm -f "$W"/*.png
+    expect 2 "applies to renders" "--log-decades without a render" -- "$B" tabulate \
+        --theta-i 0:30 -o "$W/m.png" --log-decades 3
+    expect 2 "must lie in \[1, 1000\]" "--zoom below 1" -- "$B" tabulate --zoom 0.5 \
+        --preview render="$W/z.png"
+    expect 2 "at least 480 x 360" "polar below its readable size" -- "$B" polar -o "$W/p.png" \
+        --size 400x300
 else
     expect 1 "switched off at build time (-Dpng=disabled)" "no PNG" -- "$B" tabulate -o "$W/t.png"
 fi

@@ -176,6 +176,8 @@ typedef struct cli {
     btdf_table_opts o; /* tolerance, metric, grid, max_samples */
     size_t mib;
     double ti0, ti1, to0, to1, ph0, ph1;
+    double log_decades; /* render previews: 0 linear */
+    double zoom;        /* render previews: 0 the whole face */
     preview_req previews[MAX_PREVIEWS + 1]; /* + 1: -o F.png */
     int npreview, pic_w, pic_h;
     double mat_n[BTDF_PREVIEW_MAX_CURVES], mat_s[BTDF_PREVIEW_MAX_CURVES];
@@ -261,6 +263,22 @@ static int apply(cli *c, const opt_hit *h)
         }
         return parse_preview(v, &c->previews[c->npreview++]);
     case OPT_SIZE: return parse_picture_size(v, &c->pic_w, &c->pic_h);
+    case OPT_LOG_DECADES:
+        if (!parse_double("--log-decades", v, &c->log_decades))
+            return 0;
+        if (!(c->log_decades >= 1.0 && c->log_decades <= 12.0)) {
+            fail(EXIT_USAGE, "--log-decades: '%s': must lie in [1, 12]", v);
+            return 0;
+        }
+        return 1;
+    case OPT_ZOOM:
+        if (!parse_double("--zoom", v, &c->zoom))
+            return 0;
+        if (!(c->zoom >= 1.0 && c->zoom <= 1000.0)) {
+            fail(EXIT_USAGE, "--zoom: '%s': must lie in [1, 1000]", v);
+            return 0;
+        }
+        return 1;
     case OPT_MATERIAL: {
         const char *colon = strchr(v, ':');
         char buf[64];
@@ -669,7 +687,8 @@ static int tabulate_series(const cli *c, const char *prov)
 {
     static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
                                         OPT_PHI, OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY,
-                                        OPT_REPORT, OPT_SIZE};
+                                        OPT_REPORT, OPT_SIZE, OPT_LOG_DECADES,
+                                        OPT_ZOOM};
     for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
         if (GIVEN(c, table_only[k]))
             return fail(EXIT_USAGE, "%s: --theta-i, --theta-o, --phi, --grid, --metric, "
@@ -735,6 +754,12 @@ static int cmd_tabulate(cli *c, const char *prov)
                                 "not to --grid (a grid has the spacing it is given)");
     if (GIVEN(c, OPT_SIZE) && c->npreview == 0)
         return fail(EXIT_USAGE, "--size applies to pictures: give --preview F.png or -o F.png");
+    int renders = 0;
+    for (int k = 0; k < c->npreview; k++)
+        renders += c->previews[k].kind == BTDF_PREVIEW_RENDER;
+    if ((GIVEN(c, OPT_LOG_DECADES) || GIVEN(c, OPT_ZOOM)) && renders == 0)
+        return fail(EXIT_USAGE, "--%s applies to renders: give --preview render=F.png",
+                    GIVEN(c, OPT_ZOOM) ? "zoom" : "log-decades");
     /* Fail before the work: every output's folder must take a new file. */
     if (out && strcmp(out, "-") && !folder_writable(out))
         return 1;
@@ -827,6 +852,8 @@ static int cmd_tabulate(cli *c, const char *prov)
         btdf_preview_opts_default(&po);
         po.kind = c->previews[k].kind;
         po.analytic = c->previews[k].analytic;
+        po.log_decades = po.kind == BTDF_PREVIEW_RENDER ? c->log_decades : 0.0;
+        po.zoom = po.kind == BTDF_PREVIEW_RENDER ? c->zoom : 0.0;
         po.table = t;
         po.width = c->pic_w;
         po.height = c->pic_h;

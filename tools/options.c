@@ -55,6 +55,12 @@ const opt_def opt_table[] = {
      "a picture of the table; KIND is montage (default), render (the paper's\n"
      "Figs. 10-11) or render-analytic (with Eq. 25 and the difference beside it);\n"
      "repeatable; -o F.png is the same as --preview F.png"},
+    {OPT_LOG_DECADES, "log-decades", 0, "D", 0, CMD_TABULATE,
+     "render previews on a log scale over D decades below each row's maximum\n"
+     "(1 to 12; default linear, as in the paper)"},
+    {OPT_ZOOM, "zoom", 0, "Z", 0, CMD_TABULATE,
+     "render previews show the central 1/Z of the face (1 to 1000; default 1, the\n"
+     "whole face, as in the paper)"},
     {OPT_SIZE, "size", 0, "WxH", 0, CMD_TABULATE | CMD_POLAR,
      "picture size in pixels (default: per kind)"},
     {OPT_MATERIAL, "material", 0, "N:S", 1, CMD_POLAR,

@@ -43,6 +43,8 @@ typedef enum {
     OPT_ANGLES,
     OPT_FORCE,
     OPT_QUIET,
+    OPT_LOG_DECADES,
+    OPT_ZOOM,
     OPT_END
 } opt_id;
 

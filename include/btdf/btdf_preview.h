@@ -10,15 +10,18 @@ extern "C" {
 #endif
 
 /*
- * Three kinds of picture, drawn by the library itself (no plotting dependency);
- * libpng only encodes them, so btdf_preview_render works in every build and
- * btdf_preview_write returns BTDF_ENOTSUP when PNG support was switched off.
+ * Three kinds of picture, drawn with cairo (text in DejaVu Sans) and encoded with
+ * libpng; both come with the png build feature: when it was switched off,
+ * btdf_preview_render and btdf_preview_write return BTDF_ENOTSUP. Sizes below a kind's
+ * readable minimum (polar 480 x 360, montage 480 wide, render panels of 100 pixels)
+ * are refused with BTDF_EINVAL and a message naming the minimum.
  *
  *  BTDF_PREVIEW_POLAR: rho |cos to| (1/sr) in the plane of incidence as a polar plot,
  *    like Figs. 5 and 6 of Xu & Sun (2008): the surface horizontal, the incident
  *    direction drawn in the upper half, the lobe below it, one curve for every
- *    (material, ti) pair, at most BTDF_PREVIEW_MAX_CURVES, with a legend. Channel 0
- *    of each material is drawn.
+ *    (material, channel, ti), at most BTDF_PREVIEW_MAX_CURVES (an R,G,B material
+ *    gives three), with a legend above the surface, round radial ticks and one dashed
+ *    Snell direction per distinct (n, ti).
  *  BTDF_PREVIEW_MONTAGE: every slice of a table in false colour on a log scale
  *    (six decades below the table's maximum), one tile per slice labelled with its
  *    ti, plus a colour bar. Channel 0. At most BTDF_PREVIEW_MAX_TILES tiles: larger
@@ -28,9 +31,10 @@ extern "C" {
  *    point light on the axis inside the block (the medium the table's light comes
  *    from), far (100 widths) and near (0.8 widths), rendered from the table.
  *    Radiance per pixel: rho~ cos ti I / r^2. Scaled linearly so that the brightest
- *    component of each row is 255, as the paper does. With `analytic`, the same
+ *    component of each row is 255, as the paper does, or on a log10 scale
+ *    (log_decades); `zoom` shows the central part of the face. With `analytic`, the same
  *    pictures from Eq. 25 and the relative difference |table - Eq. 25| / max Eq. 25
- *    beside them.
+ *    beside them. Every false-colour or grey panel has a bar with its ends labelled.
  */
 typedef enum {
     BTDF_PREVIEW_POLAR = 0,
@@ -53,7 +57,11 @@ typedef struct btdf_preview_opts {
     /* MONTAGE and RENDER. */
     const btdf_table *table;
     int analytic;                  /* RENDER: add the Eq. 25 and difference panels */
-    const char *title;             /* extra line written on the picture, may be NULL */
+    const char *title;             /* replaces the picture's own title when not NULL */
+    double log_decades;            /* RENDER: 0 linear (the paper's); 1 to 12: log10 scale
+                                      over that many decades below each row's maximum */
+    double zoom;                   /* RENDER: 0 or 1 the whole face (the paper's); Z in
+                                      (1, 1000]: the central 1/Z of it, for narrow lobes */
 } btdf_preview_opts;
 
 /* Zeroes o and sets kind = POLAR. Defaults when width/height are 0: POLAR 960 x 720;
