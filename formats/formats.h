@@ -17,6 +17,7 @@ typedef struct btdf_output_ctx {
     const unsigned char *rgb;    /* width x height 8-bit RGB, rows from the top */
     int width, height;
     const char *description;     /* stored in the file, may be NULL */
+    const struct btdf_rad *rad;  /* BTDF_NEEDS_RADIANCE */
 } btdf_output_ctx;
 
 typedef struct btdf_format_ops {
@@ -51,5 +52,6 @@ extern const btdf_format_ops btdf_format_csv;
 extern const btdf_format_ops btdf_format_exr;
 extern const btdf_format_ops btdf_format_bsdf;
 extern const btdf_format_ops btdf_format_png;
+extern const btdf_format_ops btdf_format_xml;
 
 #endif

@@ -14,7 +14,8 @@
 #endif
 
 static const btdf_format_ops *const all_formats[] = {&btdf_format_csv, &btdf_format_exr,
-                                                     &btdf_format_bsdf, &btdf_format_png};
+                                                     &btdf_format_bsdf, &btdf_format_png,
+                                                     &btdf_format_xml};
 #define NFORMATS (sizeof all_formats / sizeof all_formats[0])
 
 static btdf_status say(char *msg, size_t msglen, btdf_status st, const char *fmt,
@@ -65,7 +66,7 @@ BTDF_API int btdf_format_find(const char *path, btdf_format_info *info)
 
 BTDF_API const char *btdf_format_list(void)
 {
-    return ".csv .exr .bsdf .png"; /* the order of all_formats */
+    return ".csv .exr .bsdf .png .xml"; /* the order of all_formats */
 }
 
 BTDF_API int btdf_format_available(const char *ext)
@@ -170,9 +171,10 @@ BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char 
         if (!what->picture)
             break;
         return write_picture(f, &c, what->picture, path, msg, msglen);
+    case BTDF_NEEDS_RADIANCE: c.rad = what->radiance; break;
     default: break;
     }
-    if (!c.table && !c.scatfun)
+    if (!c.table && !c.scatfun && !c.rad)
         return say(msg, msglen, BTDF_EINVAL, "%s: nothing to write as %s", path, f->name);
     if (to_stdout) {
         btdf_status st = f->write_stream(&c, stdout, msg, msglen);
@@ -192,7 +194,7 @@ BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
     if (!f || f->needs != BTDF_NEEDS_TABLE)
         return say(msg, msglen, BTDF_EINVAL, "unknown table format of '%s': use .csv or .exr%s",
                    path, "");
-    btdf_output what = {t, NULL, NULL, w, NULL};
+    btdf_output what = {t, NULL, NULL, w, NULL, NULL};
     return btdf_write(&what, path, msg, msglen);
 }
 

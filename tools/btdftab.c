@@ -172,6 +172,7 @@ typedef struct cli {
     unsigned char given[OPT_COUNT]; /* how often each option was given */
     btdf_params p;
     int threads, quiet, force, best_effort, sides, reflection;
+    btdf_rad_basis basis;
     const char *table, *out, *report;
     btdf_table_opts o; /* tolerance, metric, grid, max_samples */
     size_t mib;
@@ -238,6 +239,12 @@ static int apply(cli *c, const opt_hit *h)
         c->o.grid_phi = n3[2];
         return 1;
     }
+    case OPT_BASIS:
+        if (btdf_rad_basis_parse(v, &c->basis))
+            return 1;
+        fail(EXIT_USAGE, "--basis: '%s': must be tree3, klems-full, klems-half or klems-quarter",
+             v);
+        return 0;
     case OPT_SIDE:
         if ((c->sides = run_parse_side(v)) != 0)
             return 1;
@@ -705,6 +712,29 @@ static int tabulate_series(const cli *c, const char *prov)
                       c->best_effort, prov);
 }
 
+/* A Radiance .xml is built from Eq. 25 directly, both transmission blocks. */
+static int tabulate_radiance(const cli *c, const char *prov)
+{
+    static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
+                                        OPT_PHI, OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY,
+                                        OPT_SIZE, OPT_SIDE};
+    for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
+        if (GIVEN(c, table_only[k]))
+            return fail(EXIT_USAGE, "%s: --%s does not apply to .xml (it holds every "
+                                    "direction, light from either side)",
+                        c->out, opt_find(table_only[k])->name);
+    if (GIVEN(c, OPT_TOLERANCE) && c->basis != BTDF_RAD_TREE3)
+        return fail(EXIT_USAGE, "--tolerance: a Klems matrix holds exact patch averages; its "
+                                "error is set by the basis, not by a tolerance");
+    if (!check_params(&c->p))
+        return EXIT_USAGE;
+    if (!folder_writable(c->out) || (c->report && !folder_writable(c->report)))
+        return 1;
+    return run_radiance(prog, c->out, c->report, &c->p, c->basis,
+                        GIVEN(c, OPT_TOLERANCE) ? c->o.tolerance : 0.2, c->threads, c->quiet,
+                        c->best_effort, prov);
+}
+
 static int cmd_tabulate(cli *c, const char *prov)
 {
     if (c->npos)
@@ -714,11 +744,15 @@ static int cmd_tabulate(cli *c, const char *prov)
     const char *out = c->out;
     if (out && strcmp(out, "-")) {
         if (!btdf_format_find(out, &fi))
-            return fail(EXIT_USAGE, "%s: unknown output format: use .csv, .exr, .png or .bsdf",
-                        out);
+            return fail(EXIT_USAGE, "%s: unknown output format: use %s", out,
+                        btdf_format_list());
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
+        if (fi.needs == BTDF_NEEDS_RADIANCE)
+            return tabulate_radiance(c, prov);
     }
+    if (GIVEN(c, OPT_BASIS))
+        return fail(EXIT_USAGE, "--basis applies to .xml output only");
     btdf_table_opts o = c->o;
     btdf_params p = c->p;
     if (c->sides && c->sides != BTDF_SIDE_ENTER && out) {
@@ -842,7 +876,7 @@ static int cmd_tabulate(cli *c, const char *prov)
     /* The table, its pictures and its report appear together or not at all. */
     btdf_outputs_begin();
     if (code == 0 && out) {
-        btdf_output what = {t, NULL, NULL, &w, NULL};
+        btdf_output what = {t, NULL, NULL, &w, NULL, NULL};
         st = btdf_write(&what, out, msg, sizeof msg);
         if (st != BTDF_OK)
             code = fail(1, "%s: %s", out, msg[0] ? msg : btdf_strerror(st));
@@ -857,7 +891,7 @@ static int cmd_tabulate(cli *c, const char *prov)
         po.table = t;
         po.width = c->pic_w;
         po.height = c->pic_h;
-        btdf_output what = {NULL, NULL, &po, &w, NULL};
+        btdf_output what = {NULL, NULL, &po, &w, NULL, NULL};
         st = btdf_write(&what, c->previews[k].path, msg, sizeof msg);
         if (st != BTDF_OK)
             code = fail(1, "%s: %s", c->previews[k].path, msg[0] ? msg : btdf_strerror(st));
@@ -924,7 +958,7 @@ static int cmd_polar(const cli *c)
     po.width = c->pic_w;
     po.height = c->pic_h;
     char msg[512] = "";
-    btdf_output what = {NULL, NULL, &po, NULL, NULL};
+    btdf_output what = {NULL, NULL, &po, NULL, NULL, NULL};
     btdf_status st = btdf_write(&what, c->out, msg, sizeof msg);
     if (st != BTDF_OK)
         return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", c->out,

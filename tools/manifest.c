@@ -441,7 +441,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         po.kind = BTDF_PREVIEW_MONTAGE;
         po.table = t;
         btdf_write_opts w = {&r, prov};
-        btdf_output what = {t, NULL, &po, &w, NULL};
+        btdf_output what = {t, NULL, &po, &w, NULL, NULL};
         st = btdf_write(&what, outs[k], msg, sizeof msg);
         if (st != BTDF_OK) {
             fprintf(stderr, "%s: %s: %s\n", mo->prog, outs[k], msg[0] ? msg : btdf_strerror(st));

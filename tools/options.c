@@ -24,11 +24,13 @@ const opt_def opt_table[] = {
      "transmission (default), or reflection: rows TI TR PHI with theta_r in [0, 90],\n"
      "phi = 180 the specular plane; the model only (not with --table)"},
     {OPT_OUTPUT, "output", 'o', "FILE", 0, CMD_TABULATE,
-     ".csv, .exr, .png (a montage) or .bsdf (pbrt-v3/Mitsuba tabulated, built from\n"
-     "Eq. 25 directly); '-' writes CSV to standard output"},
+     ".csv, .exr, .png (a montage), .bsdf (pbrt-v3/Mitsuba tabulated) or .xml\n"
+     "(Radiance/WINDOW BSDF); the last two are built from Eq. 25 directly; '-' writes\n"
+     "CSV to standard output"},
     {OPT_OUTPUT, "output", 'o', "FILE.png", 0, CMD_POLAR, "the picture"},
     {OPT_TOLERANCE, "tolerance", 0, "E", 0, CMD_TABULATE,
-     "target error of the adaptive table or .bsdf (default 1e-3)"},
+     "target error of the adaptive table or .bsdf (default 1e-3), or of a tree3 .xml\n"
+     "(default 0.2)"},
     {OPT_METRIC, "metric", 0, "l1|max", 0, CMD_TABULATE,
      "which error must meet E (default l1)"},
     {OPT_GRID, "grid", 0, "NI,NO,NPHI", 0, CMD_TABULATE,
@@ -36,6 +38,8 @@ const opt_def opt_table[] = {
     {OPT_SIDE, "side", 0, "S", 0, CMD_TABULATE,
      "enter (index n, default), leave (index 1/n); for .bsdf also both (the\n"
      "default there)"},
+    {OPT_BASIS, "basis", 0, "B", 0, CMD_TABULATE,
+     ".xml: tree3 (TensorTree3, default), klems-full, klems-half or klems-quarter"},
     {OPT_THETA_I, "theta-i", 0, "A:B", 0, CMD_TABULATE,
      "incidence range in degrees (default 0:90)"},
     {OPT_THETA_O, "theta-o", 0, "A:B", 0, CMD_TABULATE,

@@ -29,6 +29,7 @@ typedef enum {
     OPT_METRIC,
     OPT_GRID,
     OPT_SIDE,
+    OPT_BASIS,
     OPT_THETA_I,
     OPT_THETA_O,
     OPT_PHI,

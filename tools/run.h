@@ -22,4 +22,12 @@ int run_parse_metric(const char *word, btdf_metric *metric);
 int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
                int threads, int quiet, int best_effort, const char *prov);
 
+/* Builds a Radiance BSDF (.xml) from Eq. 25 in the given basis, reports each block's
+   error as Radiance reads it on standard error (unless quiet), and writes it (and the
+   JSON report with probes, if report is not NULL) together, unless a tree missed its
+   tolerance without best_effort. Exit status as run_series. */
+int run_radiance(const char *prog, const char *path, const char *report, const btdf_params *p,
+                 btdf_rad_basis basis, double tol, int threads, int quiet, int best_effort,
+                 const char *prov);
+
 #endif

@@ -366,5 +366,6 @@ BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind);
 #include "btdf_preview.h"
 #include "btdf_scatfun.h"
 #include "btdf_io.h"
+#include "btdf_radiance.h"
 
 #endif /* BTDF_H */

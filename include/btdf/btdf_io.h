@@ -18,6 +18,7 @@ extern "C" {
  *   .bsdf       a Fourier series built from Eq. 25 (btdf_scatfun_build)
  *   .png        a picture (btdf_preview_opts: a polar plot, or a montage or render
  *               of a table)
+ *   .xml        a WINDOW/Radiance BSDF built from Eq. 25 (btdf_rad_build)
  * btdf_write writes any of them the same way: under a temporary name beside the
  * output, renamed at the end; on any error nothing is left at the path. The
  * temporary files of writes in progress can be removed from a signal handler with
@@ -29,7 +30,8 @@ typedef enum {
     BTDF_NEEDS_NONE = 0,    /* no format has this extension */
     BTDF_NEEDS_TABLE = 1,   /* a btdf_table */
     BTDF_NEEDS_SERIES = 2,  /* a btdf_scatfun */
-    BTDF_NEEDS_PICTURE = 3  /* btdf_preview_opts, drawn when written */
+    BTDF_NEEDS_PICTURE = 3, /* btdf_preview_opts, drawn when written */
+    BTDF_NEEDS_RADIANCE = 4 /* a btdf_rad (btdf_radiance.h) */
 } btdf_needs;
 
 typedef struct btdf_format_info {
@@ -46,7 +48,7 @@ typedef struct btdf_format_info {
    when no format has that extension (info may be NULL). */
 BTDF_API int btdf_format_find(const char *path, btdf_format_info *info);
 
-/* The known extensions, space-separated (".csv .exr .bsdf .png"), for messages. */
+/* The known extensions, space-separated (".csv .exr .bsdf .png .xml"), for messages. */
 BTDF_API const char *btdf_format_list(void);
 
 /* What to write: the member the format needs must be set, the others are ignored. */
@@ -56,6 +58,7 @@ typedef struct btdf_output {
     const struct btdf_preview_opts *picture; /* BTDF_NEEDS_PICTURE */
     const btdf_write_opts *opts;             /* tables: report and provenance, may be NULL */
     const char *metadata_json; /* .bsdf: the text stored in the file; NULL: the parameters */
+    const struct btdf_rad *radiance;         /* BTDF_NEEDS_RADIANCE */
 } btdf_output;
 
 /* Writes what to path in the format its extension names; path "-" is standard output

@@ -1,0 +1,182 @@
+/* SPDX-License-Identifier: MIT */
+/* xml.c: LBNL WINDOW / Radiance BSDF XML (renderer-formats.md section 3), TensorTree3 or
+   Klems, from a btdf_rad built in src/radiance.c. Values are the BTDF in 1/sr, no cosine. */
+#include <stdio.h>
+#include <string.h>
+
+#include "formats.h"
+#include "radiance.h"
+
+/* Text a reader takes literally: &, < and > escaped, control characters dropped. */
+static void put_text(FILE *f, const char *s)
+{
+    for (; s && *s; s++) {
+        if (*s == '&')
+            fputs("&amp;", f);
+        else if (*s == '<')
+            fputs("&lt;", f);
+        else if (*s == '>')
+            fputs("&gt;", f);
+        else if ((unsigned char)*s >= 0x20)
+            fputc(*s, f);
+    }
+}
+
+/* In a comment "--" is not allowed: write it as "- -". */
+static void put_comment_text(FILE *f, const char *s)
+{
+    for (; s && *s; s++) {
+        if ((unsigned char)*s < 0x20)
+            continue;
+        fputc(*s, f);
+        if (*s == '-' && s[1] == '-')
+            fputc(' ', f);
+    }
+}
+
+/* A leaf value as written: 6 significant digits read back to the stored float. */
+static void put_value(FILE *f, float v) { fprintf(f, "%.6g", (double)v); }
+
+/* Node k: a leaf { v }, a grid of 8 leaves { v0 .. v7 } (dimension 0 slowest, as
+   Radiance reads a 2 x 2 x 2 grid), or { child0 .. child7 }. */
+static void put_node(FILE *f, const rad_node *nd, size_t k)
+{
+    if (nd[k].child < 0) {
+        fputc('{', f);
+        put_value(f, nd[k].v);
+        fputc('}', f);
+        return;
+    }
+    const rad_node *c = nd + nd[k].child;
+    int flat = 1;
+    for (int n = 0; n < 8; n++)
+        flat &= c[n].child < 0;
+    fputc('{', f);
+    if (flat) {
+        for (int g = 0; g < 8; g++) {
+            /* grid index g = i0 i1 i2 (i0 slowest); child index n = i0 + 2 i1 + 4 i2 */
+            int n = ((g >> 2) & 1) | (((g >> 1) & 1) << 1) | ((g & 1) << 2);
+            if (g)
+                fputc(' ', f);
+            put_value(f, c[n].v);
+        }
+        fputs("}\n", f);
+        return;
+    }
+    for (int n = 0; n < 8; n++)
+        put_node(f, nd, (size_t)nd[k].child + (size_t)n);
+    fputs("}\n", f);
+}
+
+static void put_klems_basis(FILE *f, const rad_klems_basis *kb)
+{
+    fprintf(f, "\t\t\t<AngleBasis>\n\t\t\t\t<AngleBasisName>%s</AngleBasisName>\n", kb->name);
+    for (int k = 0; k < kb->nbands; k++) {
+        double lo = kb->theta[k], hi = kb->theta[k + 1];
+        double centre = k == 0 ? 0.0 : 0.5 * (lo + hi);
+        fprintf(f,
+                "\t\t\t\t<AngleBasisBlock>\n\t\t\t\t\t<Theta>%g</Theta>\n"
+                "\t\t\t\t\t<nPhis>%d</nPhis>\n\t\t\t\t\t<ThetaBounds>\n"
+                "\t\t\t\t\t\t<LowerTheta>%g</LowerTheta>\n"
+                "\t\t\t\t\t\t<UpperTheta>%g</UpperTheta>\n\t\t\t\t\t</ThetaBounds>\n"
+                "\t\t\t\t</AngleBasisBlock>\n",
+                centre, kb->nphi[k], lo, hi);
+    }
+    fprintf(f, "\t\t\t</AngleBasis>\n");
+}
+
+static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
+{
+    const btdf_rad *r = c->rad;
+    if (!r) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "an .xml BSDF is built from the model (btdf_rad_build), "
+                                  "not written from a table");
+        return BTDF_EINVAL;
+    }
+    int tree = r->basis == RAD_BASIS_TREE3;
+    fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
+    fprintf(f, "<!-- Written by btdftab %s: Xu & Sun (2008) Eq. 25, the BTDF of a rough "
+               "dielectric interface. Values are the BTDF in 1/sr (no cosine factor).\n",
+            BTDF_VERSION_STRING);
+    fprintf(f, "     Transmission Front: light entering the dense side, index n = %.9g; "
+               "Transmission Back: light leaving it, index 1/n.\n     In Radiance the surface "
+               "normal points into the dense medium. No reflection blocks.\n",
+            r->p.ior[0]);
+    if (c->opts->provenance) {
+        fputs("     Command: ", f);
+        put_comment_text(f, c->opts->provenance);
+        fputc('\n', f);
+    }
+    fputs("-->\n", f);
+    fprintf(f, "<WindowElement xmlns=\"http://windows.lbl.gov\" "
+               "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
+               "xsi:schemaLocation=\"http://windows.lbl.gov/BSDF-v1.4.xsd\">\n");
+    fprintf(f, "<WindowElementType>System</WindowElementType>\n<FileType>BSDF</FileType>\n");
+    fprintf(f, "<Optical>\n<Layer>\n\t<Material>\n\t\t<Name>");
+    put_text(f, r->name[0] ? r->name : "rough_interface");
+    fprintf(f, "</Name>\n\t\t<Manufacturer>btdftab %s</Manufacturer>\n", BTDF_VERSION_STRING);
+    fprintf(f, "\t\t<Thickness unit=\"Millimeter\">0</Thickness>\n"
+               "\t\t<DeviceType>Other</DeviceType>\n");
+    fprintf(f, "\t\t<Comments>Xu and Sun 2008 Eq. 25 rough interface: n = %.9g, s = %.9g, "
+               "k0 = %.9g; basis %s",
+            r->p.ior[0], r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
+    if (tree)
+        fprintf(f, ", tolerance %g", r->tolerance);
+    if (r->reported)
+        for (int k = 0; k < r->nblocks; k++)
+            fprintf(f, "; %s: e_L1 max %.4g, e_T max %.4g as Radiance reads it", r->b[k].label,
+                    r->e_l1[k], r->e_t[k]);
+    fprintf(f, "</Comments>\n\t</Material>\n");
+    fprintf(f, "\t<DataDefinition>\n");
+    if (tree) {
+        fprintf(f, "\t\t<IncidentDataStructure>TensorTree3</IncidentDataStructure>\n");
+    } else {
+        fprintf(f, "\t\t<IncidentDataStructure>Columns</IncidentDataStructure>\n");
+        put_klems_basis(f, r->kb);
+    }
+    fprintf(f, "\t</DataDefinition>\n");
+    fprintf(f, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
+               "\t\t<Wavelength unit=\"Integral\">Visible</Wavelength>\n"
+               "\t\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
+               "\t\t<DetectorSpectrum>ASTM E308 1931 Y.dsp</DetectorSpectrum>\n");
+    for (int k = 0; k < r->nblocks; k++) {
+        const rad_block *b = &r->b[k];
+        fprintf(f, "\t\t<WavelengthDataBlock>\n\t\t\t<WavelengthDataDirection>%s"
+                   "</WavelengthDataDirection>\n",
+                b->label);
+        if (tree) {
+            fprintf(f, "\t\t\t<AngleBasis>LBNL/Shirley-Chiu</AngleBasis>\n");
+        } else {
+            fprintf(f, "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
+                       "\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n",
+                    r->kb->name, r->kb->name);
+        }
+        fprintf(f, "\t\t\t<ScatteringDataType>BTDF</ScatteringDataType>\n"
+                   "\t\t\t<ScatteringData>\n");
+        if (tree) {
+            put_node(f, b->nodes, 0);
+        } else {
+            size_t np = (size_t)r->kb->npatch;
+            for (size_t o = 0; o < np; o++) { /* one row per outgoing patch */
+                for (size_t i = 0; i < np; i++) {
+                    if (i)
+                        fputc(' ', f);
+                    put_value(f, b->klems[o * np + i]);
+                }
+                fputc('\n', f);
+            }
+        }
+        fprintf(f, "\t\t\t</ScatteringData>\n\t\t</WavelengthDataBlock>\n");
+    }
+    fprintf(f, "\t</WavelengthData>\n</Layer>\n</Optical>\n</WindowElement>\n");
+    return ferror(f) ? BTDF_EIO : BTDF_OK;
+}
+
+const btdf_format_ops btdf_format_xml = {
+    .name = "Radiance BSDF XML",
+    .ext = ".xml",
+    .available = 1,
+    .needs = BTDF_NEEDS_RADIANCE,
+    .write_stream = xml_write,
+};

@@ -1,0 +1,89 @@
+/* SPDX-License-Identifier: MIT */
+/* btdf_radiance.h: WINDOW/Radiance BSDF XML (TensorTree3 or Klems) built from Eq. 25,
+   written by btdf_write to a .xml path (docs/radiance.md). */
+#ifndef BTDF_RADIANCE_H_PUBLIC
+#define BTDF_RADIANCE_H_PUBLIC
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "btdf.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/*
+ * The file's blocks, as Radiance uses them. Radiance traces from the eye: for a view
+ * direction p and a light direction q on opposite sides it takes the block loaded for
+ * p's side and looks it up with p as the incident direction (the reciprocity of a thin
+ * surface in air). Eq. 25 is not reciprocal in that plain sense
+ * (rho(n; q -> p) = n^2 rho(1/n; p -> q)), so each block holds what a render needs:
+ *   block 0 "Transmission Front" (p on -Z; light from +Z, leaving the dense side, 1/n);
+ *   block 1 "Transmission Back"  (p on +Z; light from -Z, entering it, index n).
+ * The BSDF material's surface normal (+Z) points into the dense medium.
+ */
+typedef struct btdf_rad btdf_rad;
+
+typedef enum {
+    BTDF_RAD_TREE3 = 0,        /* TensorTree3 (Shirley-Chiu), adaptive, to a tolerance */
+    BTDF_RAD_KLEMS_FULL = 1,   /* 145 x 145 patch-pair averages */
+    BTDF_RAD_KLEMS_HALF = 2,   /* 73 x 73 */
+    BTDF_RAD_KLEMS_QUARTER = 3 /* 41 x 41 */
+} btdf_rad_basis;
+
+/* "tree3", "klems-full", "klems-half", "klems-quarter": 1 and *b set, or 0. */
+BTDF_API int btdf_rad_basis_parse(const char *s, btdf_rad_basis *b);
+BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b);
+
+/* Builds both transmission blocks for one channel. tree3: leaf averages whose e_L1
+   (MODEL.md 6) as Radiance reads them meets tolerance ([1e-4, 0.5]) for incidence up
+   to BTDF_RAD_TI_CHECKED_DEG, checked by an estimate of its own; Klems: exact patch
+   averages (tolerance ignored). threads: 0 = all cores; the result does not depend on
+   it. BTDF_OK; BTDF_EBUDGET when the tolerance could not be met (*out holds the best
+   file); BTDF_EINVAL (parameters, more than one channel, tolerance); BTDF_ENOMEM. */
+#define BTDF_RAD_TI_CHECKED_DEG 80.0
+BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
+                                    double tolerance, int threads, btdf_rad **out, char *msg,
+                                    size_t msglen);
+BTDF_API void btdf_rad_free(btdf_rad *r);
+
+typedef struct btdf_rad_block_info {
+    const char *label;  /* "Transmission Front" */
+    btdf_side light;    /* the light the block serves: ENTER (from -Z) or LEAVE */
+    double n_light;     /* its index */
+    size_t values;      /* tree leaves, or Klems entries */
+    int depth;          /* deepest tree level (0 for Klems) */
+} btdf_rad_block_info;
+
+BTDF_API int btdf_rad_block_count(const btdf_rad *r);
+BTDF_API btdf_status btdf_rad_block(const btdf_rad *r, int k, btdf_rad_block_info *info);
+BTDF_API btdf_rad_basis btdf_rad_get_basis(const btdf_rad *r);
+BTDF_API double btdf_rad_seconds_build(const btdf_rad *r);
+
+/* What Radiance's library returns from block k for p on the block's side (the view)
+   and q on the other (the light): unit vectors in Radiance's local frame (z the
+   surface normal, y up), pointing away from the surface. 0 off the block. */
+BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
+                                const double q[3]);
+
+/* The error (MODEL.md 6) of what a render gets from block k against Eq. 25 for the
+   light it serves, at test_angles incidences over 0-90 deg (0 = 48) with about
+   points_per_angle points (0 = 8192). rep->met: the tolerance holds up to
+   BTDF_RAD_TI_CHECKED_DEG. Clear rep with btdf_report_clear. */
+BTDF_API btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,
+                                     size_t points_per_angle, uint64_t seed, int threads,
+                                     btdf_report *rep);
+/* The largest per-angle e_L1 of a report up to BTDF_RAD_TI_CHECKED_DEG. */
+BTDF_API double btdf_rad_e_l1_checked(const btdf_report *rep);
+
+/* What the file's descriptive fields say: the material name, and per block the
+   reported e_L1 and e_T (set both before writing; unset: not written). */
+BTDF_API void btdf_rad_set_name(btdf_rad *r, const char *name);
+BTDF_API void btdf_rad_set_errors(btdf_rad *r, int k, double e_l1, double e_t);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,110 @@
+/* SPDX-License-Identifier: MIT */
+/* radiance.h: WINDOW/Radiance BSDF data in memory (tensor tree and Klems matrices), built
+   from Eq. 25 and read back by Radiance's own lookup rule. No bytes here: formats/xml.c
+   writes the file. */
+#ifndef BTDF_RADIANCE_H
+#define BTDF_RADIANCE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "btdf.h"
+#include "btdf_radiance.h"
+
+/*
+ * Sides and Radiance's frame (docs/radiance.md). The BSDF material's surface normal
+ * (Radiance +Z) points into the dense medium; light from -Z enters it (index n), light
+ * from +Z leaves it (index 1/n).
+ *
+ * How Radiance uses the blocks (measured with rtrace and its BSDF query): it traces
+ * from the eye, and for a view direction p and a light direction q on opposite sides it
+ * takes the block loaded for p's side ("Transmission Front" for p on -Z, "Transmission
+ * Back" for p on +Z) and looks it up with p as the incident direction and q as the
+ * outgoing one, the reciprocity of a thin surface in air. Eq. 25 is not reciprocal in
+ * that plain sense: rho(n; q -> p) = n^2 rho(1/n; p -> q) (MODEL.md 4). So that a
+ * render gets the BTDF of the light's direction, each block holds, with p as incident:
+ *   block 0: "Transmission Front" (p on -Z, light from +Z leaving, index 1/n):
+ *            rho(1/n; q -> p) = rho(n; p -> q) / n^2;
+ *   block 1: "Transmission Back"  (p on +Z, light from -Z entering, index n):
+ *            rho(n; q -> p) = n^2 rho(1/n; p -> q).
+ * Reflection blocks ("Reflection Front/Back") would be blocks 2 and 3 (not built yet).
+ *
+ * Values are BTDF in 1/sr without a cosine factor (MODEL.md section 1).
+ */
+typedef btdf_rad_basis rad_basis;
+#define RAD_BASIS_TREE3 BTDF_RAD_TREE3
+#define RAD_BASIS_KLEMS_FULL BTDF_RAD_KLEMS_FULL
+#define RAD_BASIS_KLEMS_HALF BTDF_RAD_KLEMS_HALF
+#define RAD_BASIS_KLEMS_QUARTER BTDF_RAD_KLEMS_QUARTER
+
+#define RAD_MAX_BLOCKS 4 /* two transmissions now; room for two reflections */
+
+/* One tensor-tree node: a constant leaf (child < 0) or 8 children stored at
+   nodes[child .. child + 7], child index bit d set = upper half of dimension d. */
+typedef struct rad_node {
+    int32_t child;
+    float v; /* the leaf value exactly as written to the file */
+} rad_node;
+
+/* A Klems angle basis: nbands theta bands, band k from theta[k] to theta[k + 1]
+   (degrees) with nphi[k] patches. */
+typedef struct rad_klems_basis {
+    const char *name; /* "LBNL/Klems Full" */
+    int nbands;
+    const double *theta; /* nbands + 1 bounds */
+    const int *nphi;
+    int npatch;
+} rad_klems_basis;
+
+typedef struct rad_block {
+    btdf_side side;      /* the tree's own geometry: ENTER (p on -Z) or LEAVE (p on +Z) */
+    const char *label;   /* "Transmission Front" */
+    double n;            /* index of the tree's own geometry, p as incident */
+    double scale;        /* values are scale * rho(n; p -> q) */
+    btdf_side light;     /* the light this block serves in a render */
+    double n_light;      /* its index: rho(n_light; q -> p) is what a render needs */
+    /* TensorTree3 */
+    rad_node *nodes;
+    size_t nnodes, leaves;
+    int depth;
+    /* Klems: values[out * npatch + in], the file's row-major order */
+    float *klems;
+} rad_block;
+
+struct btdf_rad {
+    rad_basis basis;
+    btdf_params p;
+    double tolerance;
+    int nblocks;
+    rad_block b[RAD_MAX_BLOCKS];
+    const rad_klems_basis *kb; /* Klems bases only */
+    double seconds_build;
+    /* Filled by the caller before writing, for the file's descriptive fields. */
+    char name[128];               /* the material's name in the scene */
+    int reported;                 /* 1 when e_l1, e_t below hold the blocks' reports */
+    double e_l1[RAD_MAX_BLOCKS], e_t[RAD_MAX_BLOCKS];
+};
+
+const rad_klems_basis *rad_klems(rad_basis b);
+const char *rad_basis_name(rad_basis b);
+
+
+
+/* What a render gets for light of the given side (ENTER: from -Z, LEAVE: from +Z) in
+   that light's MODEL.md frame (ti in [0, pi/2], to in [pi/2, pi], phi): the block of
+   the view's side at (p = view, q = light). Compare with rho(n_light; ti, to, phi). */
+double btdf_rad_render(const btdf_rad *r, btdf_side light, double ti, double to, double phi);
+
+/* The tolerance of a tree is met up to this incidence (80 deg). Beyond it Radiance's
+   first coordinate, uniform in sin(theta_i), packs the last 10 degrees into u0 < 0.008,
+   where the BTDF falls by orders of magnitude: every halving there halves the outgoing
+   cells too (the octree splits all coordinates at once), so 1e-2 against the floor
+   max(T, 0.01) would take tens of millions of leaves. The report still covers 0-90. */
+#define RAD_TI_CHECKED (BTDF_RAD_TI_CHECKED_DEG * 3.14159265358979323846 / 180.0)
+
+
+/* Radiance's concentric square <-> disk maps (Shirley and Chiu 1997), square [0,1)^2. */
+void rad_square_to_disk(double a, double b, double *x, double *y);
+void rad_disk_to_square(double x, double y, double *a, double *b);
+
+#endif

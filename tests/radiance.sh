@@ -1,0 +1,56 @@
+#!/bin/sh
+# SPDX-License-Identifier: MIT
+# radiance.sh BTDFTAB PYTHON: writes Radiance BSDF files (tensor tree and Klems) and checks
+# them with Radiance itself (PYTHON must import pyradiance, which bundles Radiance's
+# programs and BSDF library): the file loads, Radiance's lookup equals the report's
+# probes for both blocks, and rtrace gives the hemispherical transmittance within the
+# report's e_T (tests/radiance_check.py). Also: bad --basis values fail cleanly.
+# Ends with "N passed, N failed".
+set -u
+B="$1"
+PY="$2"
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+pass=0
+failn=0
+tally() { # the "N passed, N failed" line of one radiance_check.py run
+    line=$(grep -E '^[0-9]+ passed, [0-9]+ failed$' "$1" | tail -n 1)
+    p=$(echo "$line" | sed -n 's/^\([0-9]*\) passed.*/\1/p'); p=${p:-0}
+    f=$(echo "$line" | sed -n 's/.*passed, \([0-9]*\) failed/\1/p'); f=${f:-1}
+    pass=$((pass + p)); failn=$((failn + f))
+}
+ok() { pass=$((pass + 1)); echo "ok - $1"; }
+no() { failn=$((failn + 1)); echo "not ok - $1"; }
+
+if ! "$PY" -c 'import pyradiance' 2>/dev/null; then
+    echo "not ok - $PY cannot import pyradiance (pip install pyradiance in a venv)"
+    echo "0 passed, 1 failed"
+    exit 1
+fi
+here=$(dirname "$0")
+for basis in tree3 klems-full; do
+    tol=""
+    [ "$basis" = tree3 ] && tol="--tolerance 0.2"
+    if "$B" tabulate -q --ior 1.5 -s 3 --basis "$basis" $tol -o "$W/glazing.xml" \
+        --report "$W/glazing.json"; then
+        ok "tabulate --basis $basis -o glazing.xml"
+        "$PY" "$here/radiance_check.py" "$W/glazing.xml" "$W/glazing.json" | tee "$W/check.log"
+        tally "$W/check.log"
+    else
+        no "tabulate --basis $basis -o glazing.xml"
+    fi
+    rm -f "$W"/glazing.*
+done
+
+# bad input: usage status 2, the value named, nothing written
+"$B" tabulate --basis klems-eighth -o "$W/t.xml" 2>"$W/err"
+[ $? -eq 2 ] && grep -q "klems-eighth" "$W/err" && [ ! -e "$W/t.xml" ] &&
+    ok "--basis klems-eighth: usage error naming the value" || no "--basis klems-eighth"
+"$B" tabulate --ior 1.5,1.6,1.7 -o "$W/t.xml" 2>"$W/err"
+[ $? -eq 2 ] && grep -q "one channel" "$W/err" && [ ! -e "$W/t.xml" ] &&
+    ok "three channels: usage error" || no "three channels to .xml"
+"$B" tabulate --basis klems-half -o "$W/t.csv" 2>"$W/err"
+[ $? -eq 2 ] && grep -q "\.xml output only" "$W/err" && [ ! -e "$W/t.csv" ] &&
+    ok "--basis with a .csv: usage error" || no "--basis with a .csv"
+echo "$pass passed, $failn failed"
+[ "$failn" -eq 0 ]
