@@ -21,6 +21,13 @@ for f in include/btdf/btdf.h include/btdf/btdf_config.h include/btdf/btdf_previe
     [ -e "$W/stage/$f" ] || missing="$missing $f"
 done
 [ -z "$missing" ] && ok "headers, libraries, btdf.pc and btdftab installed" || no "missing:$missing"
+# The Mitsuba plugin beside the library, pointing at the installed library.
+PYD=$W/stage/lib/btdftab/python/btdftab_mitsuba
+if [ -e "$PYD/plugin.py" ] && [ -e "$PYD/libbtdf.py" ] &&
+   lib=$(python3 -c "exec(open('$PYD/_installed.py').read()); print(LIBRARY)") &&
+   [ "$lib" = "$W/stage/lib/libbtdf.so.0" ] && [ -e "$lib" ]; then
+    ok "Mitsuba plugin installed in lib/btdftab/python, loading $lib"
+else no "Mitsuba plugin in lib/btdftab/python (library: ${lib:-none})"; fi
 others=$(nm -D --defined-only "$W/stage/lib/libbtdf.so" | awk '{print $3}' | grep -v '^btdf_' | grep -v '^_' || true)
 [ -z "$others" ] && ok "only btdf_ symbols are exported" || { no "exported non-API symbols"; echo "$others"; }
 export PKG_CONFIG_PATH="$W/stage/lib/pkgconfig"
