@@ -45,11 +45,11 @@ while read -r name args; do
         { tabs_ok=0; echo "tabulate $name failed"; }
 done <<TABLES
 f15.exr --ior 1.5 -s 3
-f15s100.csv --ior 1.5 -s 100
+f15s100.exr --ior 1.5 -s 100
 r066s6.exr --ior 0.6666667 -s 6
 g15.exr --ior 1.5 -s 3 --grid 30,46,37
-f3.csv --ior 1.51,1.52,1.53 -s 3
-f15back.csv --ior 1.5 -s 3 --side leave
+f3.exr --ior 1.51,1.52,1.53 -s 3
+f15back.exr --ior 1.5 -s 3 --side leave
 face.csv --ior 0.7142857 -s 3
 TABLES
 [ "$tabs_ok" -eq 1 ] && ok "tables written by btdftab" || no "tables"

@@ -235,7 +235,7 @@ def analytic_check(pairs=10000, seed=2):
 # (table, n, s, incident angles): for n < 1 the angles stay below and near the critical
 # angle (41.8 degrees), past which almost nothing is transmitted (T(60) = 0.026).
 CASES = [("f15.exr", 1.5, 3.0, [0.0, 30.0, 60.0, 80.0]),
-         ("f15s100.csv", 1.5, 100.0, [0.0, 30.0, 60.0, 80.0]),
+         ("f15s100.exr", 1.5, 100.0, [0.0, 30.0, 60.0, 80.0]),
          ("r066s6.exr", 1.0 / 1.5, 6.0, [0.0, 20.0, 40.0, 60.0])]
 
 
@@ -318,7 +318,7 @@ def chi2_checks():
           "p-value %.3g" % chi.p_value)
     # Negative controls: the same tests reject a pdf 10% off along one axis.
     for fname, s, zoom in (("f15.exr", 3.0, None),
-                           ("f15s100.csv", 100.0, ZoomDomain(
+                           ("f15s100.exr", 100.0, ZoomDomain(
                                [-0.5 / 1.5, 0.0, -math.sqrt(1.0 - 0.25 / 2.25)], 0.15))):
         chi = chi2_one(fname, wi_of(30.0), zoom, distort=True)
         ok = not chi.run(0.01, test_count=ntests, quiet=True)
@@ -504,12 +504,12 @@ if __name__ == "__main__":
         print("%d passed, %d failed" % (passed, failed))
         sys.exit(1 if failed else 0)
     eval_check("facet n = 1.5 s = 3", "f15.exr")
-    eval_check("facet n = 1.5 s = 100", "f15s100.csv")
+    eval_check("facet n = 1.5 s = 100", "f15s100.exr")
     eval_check("facet-reciprocal n = 0.6667 s = 6", "r066s6.exr")
     eval_check("grid n = 1.5 s = 3", "g15.exr")
-    eval_check("facet 3 channels n = 1.51,1.52,1.53 s = 3", "f3.csv")
+    eval_check("facet 3 channels n = 1.51,1.52,1.53 s = 3", "f3.exr")
     eval_check("facet n = 1.5 + back table facet-reciprocal n = 0.6667", "f15.exr",
-               back_name="f15back.csv")
+               back_name="f15back.exr")
     analytic_check()
     error_checks()
     xml_check()

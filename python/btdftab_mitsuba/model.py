@@ -204,9 +204,12 @@ class TableRule:
             v = self._slice(k, x, y, c, valid)
             if self.count > 1:
                 v1 = self._slice(k + 1, x, y, c, valid & (w > 0.0))
-                # A slice whose g is 0 (ti = 90 deg) holds zeros: its reduced value is 0.
-                r0 = dr.select(g0 > 0.0, v / dr.select(g0 > 0.0, g0, 1.0), 0.0)
-                r1 = dr.select(g1 > 0.0, v1 / dr.select(g1 > 0.0, g1, 1.0), 0.0)
+                # A slice whose g is 0 (ti = 90 deg) holds zeros and says nothing of the
+                # reduced value rho/g: the neighbour's stands in (btdf/btdf.h's rule).
+                q0 = dr.select(g0 > 0.0, v / dr.select(g0 > 0.0, g0, 1.0), 0.0)
+                q1 = dr.select(g1 > 0.0, v1 / dr.select(g1 > 0.0, g1, 1.0), 0.0)
+                r0 = dr.select(g0 > 0.0, q0, q1)
+                r1 = dr.select(g1 > 0.0, q1, q0)
                 v = dr.select(w > 0.0, g * ((1.0 - w) * r0 + w * r1), v)
             if recip:
                 v = self.ior[c] * self.ior[c] * v
