@@ -381,6 +381,7 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
         memcpy(r->per_ti, t->check.per_ti, t->check.test_angles * sizeof *r->per_ti);
         r->slices = t->ns;
         r->samples = btdf_table_node_count(t);
+        r->estimate_in_build = 1;
         return BTDF_OK;
     }
     /* The knots are the slice angles, in the table's own ti: for the reciprocal kind

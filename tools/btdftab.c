@@ -693,8 +693,9 @@ static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
             num(r->tolerance), r->metric == BTDF_METRIC_MAX ? "max" : "l1",
             r->met ? "true" : "false");
     fprintf(f, "  \"slices\": %zu,\n  \"samples\": %zu,\n", r->slices, r->samples);
-    fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"seconds_estimate\": %.6f,\n",
-            r->seconds_build, r->seconds_estimate);
+    fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"seconds_estimate\": %.6f,\n"
+               "  \"estimate_within_tabulation\": %s,\n",
+            r->seconds_build, r->seconds_estimate, r->estimate_in_build ? "true" : "false");
     fprintf(f, "  \"test_angles\": %zu,\n  \"test_points\": %zu,\n", r->test_angles,
             r->test_points);
     fprintf(f, "  \"peak_bytes\": %zu,\n", r->peak_bytes);
@@ -932,11 +933,12 @@ static int cmd_tabulate(cli *c, const char *prov)
             snprintf(emax, sizeof emax, "e_max n/a (T < 0.01 at every test angle)");
         snprintf(line, sizeof line,
                  "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
-                 "(%s, %zu angles, %zu points); e_L1 max %.3g mean %.3g; %s; "
+                 "(%s, %zu angles, %zu points%s); e_L1 max %.3g mean %.3g; %s; "
                  "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
                  prog, r.slices, r.samples, r.seconds_build, r.seconds_estimate,
                  o.estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", r.test_angles,
-                 r.test_points, r.e_l1_max, r.e_l1_mean, emax, r.e_t_max, r.e_t_mean,
+                 r.test_points,
+                 r.estimate_in_build ? "; the builder's last check, inside the tabulation" : "", r.e_l1_max, r.e_l1_mean, emax, r.e_t_max, r.e_t_mean,
                  (double)r.peak_bytes / 1048576.0,
                  o.kind == BTDF_TABLE_GRID ? "" : (r.met ? "; tolerance met" : "; TOLERANCE NOT MET"));
     } else {

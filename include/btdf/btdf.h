@@ -339,6 +339,8 @@ typedef struct btdf_report {
     btdf_ti_error *per_ti;       /* test_angles entries, owned by the report */
     size_t e_max_angles;         /* test angles with T >= 0.01, where e_max is defined;
                                     e_max_* are 0 when there are none */
+    int estimate_in_build;       /* 1: this is the builder's own final check, whose time
+                                    seconds_estimate is also inside seconds_build */
 } btdf_report;
 
 /* Estimates the errors of t over [ti_min, ti_max] at test_angles stratified incident
