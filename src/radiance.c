@@ -92,6 +92,17 @@ BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
                                     double tolerance, int threads, btdf_rad **out, char *msg,
                                     size_t msglen)
 {
+    return btdf_rad_build_progress(p, basis, tolerance, threads, NULL, NULL, out, msg, msglen);
+}
+
+/* Passes of a tensor-tree block, at most (the rounds of the eps search below). */
+#define RAD_TREE_PASSES 6
+
+BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basis basis,
+                                             double tolerance, int threads,
+                                             btdf_progress_fn progress, void *user,
+                                             btdf_rad **out, char *msg, size_t msglen)
+{
     btdf_status st = btdf_params_check(p, msg, msglen);
     if (st != BTDF_OK)
         return st;
@@ -133,6 +144,9 @@ BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
     for (int k = 0; k < r->nblocks && st == BTDF_OK; k++) {
         rad_block *b = &r->b[k];
         if (basis != RAD_BASIS_TREE3) {
+            if (progress)
+                progress(user, "Klems patch averages, block", (size_t)k,
+                         (size_t)(r->nblocks - k));
             st = rad_klems_build(p, b->n, b->scale, r->kb, threads, b, msg, msglen);
             continue;
         }
@@ -142,7 +156,11 @@ BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
            n = 1.5, s = 3), then move eps (damped) towards 0.6 * tolerance on an independent
            estimate, at most 6 builds; keep the last build that met the tolerance. */
         double eps = 1e-4 * pow(10.0 * tolerance, 3.0), good_eps = 0.0;
-        for (int round = 0; round < 6; round++) {
+        for (int round = 0; round < RAD_TREE_PASSES; round++) {
+            if (progress) /* a block may stop early: its passes left count as done then */
+                progress(user, k == 0 ? "tensor tree, front block, pass" : "tensor tree, back block, pass",
+                         (size_t)(k * RAD_TREE_PASSES + round),
+                         (size_t)((r->nblocks - k) * RAD_TREE_PASSES - round));
             free(b->nodes);
             b->nodes = NULL;
             st = rad_tree_build(p, b->n, b->scale, eps, threads, RAD_MAX_NODES, b, msg,
@@ -164,7 +182,7 @@ BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
             double g = 0.6 * tolerance / fmax(e, 1e-12);
             g = g * g; /* damped: the slope is near 1/3 but the estimate is noisy */
             eps *= g < 1.0 / 64 ? 1.0 / 64 : (g > 64.0 ? 64.0 : g);
-            if (round == 5) {
+            if (round == RAD_TREE_PASSES - 1) {
                 if (good_eps > 0.0) { /* the last build missed: go back to the good one */
                     free(b->nodes);
                     b->nodes = NULL;

@@ -345,6 +345,8 @@ if command -v script >/dev/null 2>&1 && "$B" --version | grep -q 'OpenEXR on'; t
     [ ! -s "$W/p.tty" ] && ok "--quiet: no progress bar on a terminal" || { no "progress with --quiet"; cat "$W/p.tty"; }
     script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 1e-2 -o '$W/p.bsdf'" /dev/null > "$W/p.tty" 2>&1
     grep -q 'p.bsdf \[#*-*\] .*elevation nodes' "$W/p.tty" && ok "a progress bar for .bsdf" || { no "progress for .bsdf"; cat "$W/p.tty"; }
+    script -qec "'$B' tabulate --basis klems-quarter --threads 1 -o '$W/p.xml'" /dev/null > "$W/p.tty" 2>&1
+    grep -q 'p.xml \[#*-*\] .*Klems patch averages' "$W/p.tty" && ok "a progress bar for .xml" || { no "progress for .xml"; cat "$W/p.tty"; }
     printf '[a]\nior = 1.5\nsmoothness = 3\ntolerance = 5e-4\nenter = p.exr\n' > "$W/p.ini"
     script -qec "'$B' build --threads 1 '$W/p.ini'" /dev/null > "$W/p.tty" 2>&1
     grep -q '\[1/1\] a (enter)' "$W/p.tty" && ok "a progress line for build" || { no "progress for build"; cat "$W/p.tty"; }

@@ -782,9 +782,11 @@ static int tabulate_radiance(const cli *c, const char *prov)
         return EXIT_USAGE;
     if (!folder_writable(c->out) || (c->report && !folder_writable(c->report)))
         return 1;
+    run_progress pr;
+    run_progress_start(&pr, !c->quiet && isatty(2), c->out);
     return run_radiance(prog, c->out, c->report, &c->p, c->basis,
                         GIVEN(c, OPT_TOLERANCE) ? c->o.tolerance : 0.2, c->threads, c->quiet,
-                        c->best_effort, prov);
+                        c->best_effort, prov, &pr);
 }
 
 static int cmd_tabulate(cli *c, const char *prov)

@@ -421,13 +421,17 @@ static void rad_json(FILE *f, const btdf_rad *x, const btdf_params *p, const btd
 
 int run_radiance(const char *prog, const char *path, const char *report, const btdf_params *p,
                  btdf_rad_basis basis, double tol, int threads, int quiet, int best_effort,
-                 const char *prov)
+                 const char *prov, run_progress *pr)
 {
     char msg[512] = "";
     btdf_rad *x = NULL;
-    btdf_status st = btdf_rad_build(p, basis, tol, threads, &x, msg, sizeof msg);
-    if (st != BTDF_OK && st != BTDF_EBUDGET)
+    btdf_status st = btdf_rad_build_progress(p, basis, tol, threads, run_progress_cb, pr, &x,
+                                             msg, sizeof msg);
+    run_progress_stage(pr, "estimating the error");
+    if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        run_progress_end(pr);
         return fail(prog, st == BTDF_EINVAL ? 2 : 1, path, msg[0] ? msg : btdf_strerror(st));
+    }
     /* The material's name in the scene: the file's base name without .xml. */
     const char *base = strrchr(path, '/');
     base = base ? base + 1 : path;
@@ -448,6 +452,8 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
         }
         btdf_rad_set_errors(x, k, rep[k].e_l1_max, rep[k].e_t_max);
         met = met && rep[k].met;
+        if (k == 0)
+            run_progress_end(pr); /* the report lines replace the bar */
         if (!quiet)
             fprintf(stderr,
                     "%s: %s: %s (light %s, as Radiance reads it): %zu %s; build %.3f s, "
@@ -493,6 +499,7 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
         if (st != BTDF_OK)
             code = fail(prog, 1, path, msg[0] ? msg : btdf_strerror(st));
     }
+    run_progress_end(pr); /* if no block was reported */
     free(buf);
     for (int k = 0; k < 4; k++)
         btdf_report_clear(&rep[k]);

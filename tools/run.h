@@ -60,6 +60,6 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
    tolerance without best_effort. Exit status as run_series. */
 int run_radiance(const char *prog, const char *path, const char *report, const btdf_params *p,
                  btdf_rad_basis basis, double tol, int threads, int quiet, int best_effort,
-                 const char *prov);
+                 const char *prov, run_progress *pr);
 
 #endif

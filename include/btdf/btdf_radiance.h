@@ -46,6 +46,12 @@ BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b);
 BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
                                     double tolerance, int threads, btdf_rad **out, char *msg,
                                     size_t msglen);
+/* btdf_rad_build with a progress callback (btdf/btdf.h), called from the calling thread
+   before each block's build pass; progress may be NULL. */
+BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basis basis,
+                                             double tolerance, int threads,
+                                             btdf_progress_fn progress, void *user,
+                                             btdf_rad **out, char *msg, size_t msglen);
 BTDF_API void btdf_rad_free(btdf_rad *r);
 
 typedef struct btdf_rad_block_info {
