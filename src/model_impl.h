@@ -465,7 +465,7 @@ BT_INLINE void bt_az_deg(bt_az *az, double cdeg)
     double ft = 2.0 * n * ca * cb * ((q1 + q2) / (q1 * q2));                            \
     double chi = n * n * cb * (inv_len * inv_len);                                      \
     double r = bt_exp_mul(-(e * inv_vz2 + io->sh), (pref) * ca * ft * chi * (sec2 * sec2)); \
-    r = ok & (r >= DBL_MIN) ? r : 0.0
+    r = (ok & (r >= DBL_MIN)) ? r : 0.0
 
 /* Eq. 25 for index n = 1 + d from the parts above; branch-free (MODEL.md section 2,
    the algebra in the comment of rho_kernel_v). 0 where no facet connects the two
@@ -570,7 +570,7 @@ BT_INLINE double bt_rho_r(double n, double d, double s, const bt_ir *ir, double 
     double fr = bt_fresnel_r(n, d, ca);
     double sec2 = u2 / uz2;
     double r = bt_exp_mul(-(e / uz2 + ir->sh), ir->pref * fr * (sec2 * sec2));
-    return ok & (r >= DBL_MIN) ? r : 0.0;
+    return (ok & (r >= DBL_MIN)) ? r : 0.0;
 }
 
 /* Writes a formatted message to msg (if any) and returns st. */
