@@ -9,6 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 #include <cmocka.h>
 
@@ -35,5 +36,21 @@ static inline void assert_status_(btdf_status want, btdf_status got, const char 
     }
 }
 #define assert_status(want, expr) assert_status_((want), (expr), __FILE__, __LINE__)
+
+/* A fresh folder btdf-TAG-XXXXXX under $TMPDIR (or /tmp) for a suite's files: 0 on success. */
+static inline int btdf_test_mkdtemp(char *dir, size_t len, const char *tag)
+{
+    const char *t = getenv("TMPDIR");
+    snprintf(dir, len, "%s/btdf-%s-XXXXXX", t && *t ? t : "/tmp", tag);
+    return mkdtemp(dir) ? 0 : -1;
+}
+
+/* Removes that folder and everything in it: 0 on success. */
+static inline int btdf_test_rmtree(const char *dir)
+{
+    char cmd[512];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    return system(cmd) == 0 ? 0 : -1;
+}
 
 #endif

@@ -13,17 +13,13 @@ static char dir[256];
 static int setup(void **state)
 {
     (void)state;
-    const char *t = getenv("TMPDIR");
-    snprintf(dir, sizeof dir, "%s/btdf-readers-XXXXXX", t && *t ? t : "/tmp");
-    return mkdtemp(dir) ? 0 : -1;
+    return btdf_test_mkdtemp(dir, sizeof dir, "readers");
 }
 
 static int teardown(void **state)
 {
     (void)state;
-    char cmd[512];
-    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
-    return system(cmd) == 0 ? 0 : -1;
+    return btdf_test_rmtree(dir);
 }
 
 static btdf_table *small_grid(int channels)
