@@ -245,7 +245,20 @@ static double series_at_f(const float *a, size_t m, double c)
 /* Building: per-pair series and adaptive elevation nodes                    */
 /* ------------------------------------------------------------------------- */
 
-enum { SIDE_ENTER = 0, SIDE_LEAVE = 1 };
+/* The four blocks of a full dielectric interface, in pbrt-v3's convention (slow index
+   mu_s = wo.z, fast index mu_f = -wi.z):
+     T_ENTER  mu_s > 0, mu_f > 0: transmission, light entering (index n);
+     T_LEAVE  mu_s < 0, mu_f < 0: transmission, light leaving (index 1/n);
+     R_TOP    mu_s > 0, mu_f < 0: reflection back into the upper medium (index n);
+     R_BOTTOM mu_s < 0, mu_f > 0: reflection inside the dense medium (index 1/n,
+              total internal reflection included).
+   Every block is built on the half-node grid in (|mu_s|, |mu_f|). */
+enum { BLK_T_ENTER = 0, BLK_T_LEAVE = 1, BLK_R_TOP = 2, BLK_R_BOTTOM = 3, NBLK = 4 };
+static const int blk_refl[NBLK] = {0, 0, 1, 1};
+static const int blk_slow_neg[NBLK] = {0, 1, 0, 1}; /* mu_s < 0 */
+static const int blk_fast_neg[NBLK] = {0, 1, 1, 0}; /* mu_f < 0 */
+static const int blk_mask[NBLK] = {BTDF_SCATFUN_T_ENTER, BTDF_SCATFUN_T_LEAVE,
+                                   BTDF_SCATFUN_R_TOP, BTDF_SCATFUN_R_BOTTOM};
 
 typedef struct pair {
     double *a; /* nst * m coefficients, channel-major (Y, R, B) */
@@ -257,26 +270,29 @@ typedef struct build_ctx {
     const btdf_params *p;
     int nc;        /* model channels */
     int nst;       /* stored channels: 1, or 3 (Y, R, B) */
-    double ior[2][3]; /* per side and channel */
+    double ior[NBLK][3];  /* per block and channel */
+    double fold[NBLK][3]; /* per block and model channel: the factor folded into the stored
+                             values so pbrt-v3's single-eta radiance path is right for
+                             every channel (1 for one channel and for reflection) */
     size_t nmin, nmax; /* phi sample counts (powers of two) */
     double budget; /* current target for e_L1 */
     /* half nodes P[0..K-1] ascending, P[K-1] = 1, and the full node list */
     size_t K;
     double *P;
     double *full; /* 2K + 2 */
-    double (*Tn)[2][4]; /* Tn[r][side][stored channel]: max(T, floor) at node r */
-    int want[2];
-    pair *pairs[2]; /* [side][r * K + c] */
+    double (*Tn)[NBLK][4]; /* Tn[r][side][stored channel]: max(T, floor) at node r */
+    int want[NBLK];
+    pair *pairs[NBLK]; /* [block][r * K + c] */
     /* checks */
     size_t nint;    /* intervals = K: [0, P0], [P0, P1], ... */
     double *mid;    /* nint midpoints */
-    double (*Tm)[2][4]; /* norms at midpoints */
-    double *errc[2];    /* [side][r * nint + j]: column check errors (already normalised) */
-    double *errr[2];    /* [side][j]: row check errors (normalised, mu-integrated) */
-    double *gapr[2];    /* [side][j * K + col]: row check gap at one column */
-    unsigned char *okc[2], *okr[2]; /* errc / gapr entries carried from the last pass */
-    pair *pcol[2];      /* [side][r * K + j]: series at (P[r], mid[j]), a future pair */
-    pair *prow[2];      /* [side][j * K + col]: series at (mid[j], P[col]) */
+    double (*Tm)[NBLK][4]; /* norms at midpoints */
+    double *errc[NBLK];    /* [block][r * nint + j]: column check errors (already normalised) */
+    double *errr[NBLK];    /* [block][j]: row check errors (normalised, mu-integrated) */
+    double *gapr[NBLK];    /* [block][j * K + col]: row check gap at one column */
+    unsigned char *okc[NBLK], *okr[NBLK]; /* errc / gapr entries carried from the last pass */
+    pair *pcol[NBLK];      /* [block][r * K + j]: series at (P[r], mid[j]), a future pair */
+    pair *prow[NBLK];      /* [block][j * K + col]: series at (mid[j], P[col]) */
     unsigned char *hasTn, *hasTm; /* norms carried from the last pass */
     int oom, capped;    /* flags raised by workers */
     pthread_mutex_t lock;
@@ -344,16 +360,25 @@ static void build_ws_free(void *vw)
     free(w);
 }
 
-/* Stored channel values of g = rho * mu_f at one azimuth, from the model channels. */
-static void stored_values(const build_ctx *c, int side, const rho_in *ri, const rho_out *ro,
-                          double mu_f, double cph, double sph, double *out)
+/* Stored channel values of g = rho * |mu_f| (rho_r * |mu_f| for a reflection block) at
+   one azimuth, from the model channels, each times the block's fold factor. */
+static void stored_values(const build_ctx *c, int b, const rho_in *ri, const rho_out *ro,
+                          const bt_ir *ir, double mu_f, double cph, double sph, double *out)
 {
     double v[3];
-    for (int k = 0; k < c->nc; k++)
-        v[k] = rho_kernel(c->ior[side][k], c->p->smoothness, ri, ro, cph, sph) * mu_f;
+    for (int k = 0; k < c->nc; k++) {
+        double n = c->ior[b][k];
+        if (blk_refl[b])
+            /* h2 = (1 + cos phi)/2 = sin^2(phi_d/2), MODEL.md 8's azimuth part */
+            v[k] = bt_rho_r(n, n - 1.0, c->p->smoothness, ir, 0.5 * (1.0 + cph), sph) * mu_f;
+        else
+            v[k] = rho_kernel(n, c->p->smoothness, ri, ro, cph, sph) * mu_f;
+    }
     if (c->nst == 1) {
         out[0] = v[0];
     } else {
+        for (int k = 0; k < 3; k++)
+            v[k] *= c->fold[b][k];
         out[0] = LUM_R * v[0] + LUM_G * v[1] + LUM_B * v[2];
         out[1] = v[0];
         out[2] = v[2];
@@ -361,22 +386,34 @@ static void stored_values(const build_ctx *c, int side, const rho_in *ri, const 
 }
 
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
-   j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones). */
-static void sample_grid(const build_ctx *c, const build_ws *w, int side, double mu_s,
+   j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones).
+   mu_s, mu_f are the block's cosines as magnitudes, in [0, 1]. */
+static void sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_s,
                         double mu_f, size_t N, size_t stride, size_t step, size_t phase,
                         double *x)
 {
     rho_in ri;
     rho_out ro;
+    bt_ir ir;
+    memset(&ri, 0, sizeof ri); /* only the block's kind of geometry is used */
+    memset(&ro, 0, sizeof ro);
+    memset(&ir, 0, sizeof ir);
     /* |mu| <= 1 holds for every node and midpoint, so the sqrt arguments are >= 0;
        fmax guards rounding. */
-    rho_in_init(&ri, sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), mu_s, c->p->smoothness, c->p->k0);
-    rho_out_init(&ro, sqrt(fmax(0.0, 1.0 - mu_f * mu_f)), -mu_f, c->p->smoothness, c->p->k0);
+    double ss = sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), sf = sqrt(fmax(0.0, 1.0 - mu_f * mu_f));
+    if (blk_refl[b]) {
+        /* ti = acos mu_s, tr = acos mu_f, both in [0, pi/2] */
+        double ti = atan2(ss, mu_s), tr = atan2(sf, mu_f);
+        bt_ir_rad(&ir, ti, tr, c->p->smoothness, c->p->k0);
+    } else {
+        rho_in_init(&ri, ss, mu_s, c->p->smoothness, c->p->k0);
+        rho_out_init(&ro, sf, -mu_f, c->p->smoothness, c->p->k0);
+    }
     double v[3];
     size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
     for (size_t j = phase; j <= N; j += step) {
         /* phi_d = j pi / N; phi = pi - phi_d, so cos phi = -cos phi_d. */
-        stored_values(c, side, &ri, &ro, mu_f, -w->cosg[j * g], w->sing[j * g], v);
+        stored_values(c, b, &ri, &ro, &ir, mu_f, -w->cosg[j * g], w->sing[j * g], v);
         for (int k = 0; k < c->nst; k++)
             x[k * stride + j] = v[k];
     }
@@ -425,6 +462,24 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
         }
         double worst = 0.0;
         for (int k = 0; k < c->nst; k++) {
+            if (blk_refl[side]) {
+                /* Reflection below the dense side has cusps in phi where facets start
+                   to reflect totally (Fresnel ~ 1 - sqrt), so its coefficients decay
+                   like k^-1.5 and the bound below would double the grid to its cap.
+                   The measured L1 over the circle of the coarse series against the
+                   new samples is the error itself, not a bound. */
+                if (dct_inverse(&w->fb, w->a + k * S, N + 1, N2, w->y))
+                    return 0;
+                double sum = 0.0;
+                for (size_t j = 0; j <= N2; j++) {
+                    double d = fabs(w->y[j] - w->x[k * S + j]);
+                    sum += (j == 0 || j == N2) ? 0.5 * d : d;
+                }
+                /* trapezoid over [0, pi] doubled for the circle; norm >= T_FLOOR */
+                double d = 2.0 * sum * M_PI / (double)N2 / norm[k];
+                if (d > worst)
+                    worst = d;
+            }
             if (dct_forward(&w->fb, w->x + k * S, N2, w->a2 + k * S))
                 return 0;
             /* |integral over the circle of sum d_k cos k phi| <= 2 pi sum |d_k| */
@@ -434,7 +489,7 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
             for (size_t q = N + 1; q <= N2; q++)
                 d += fabs(w->a2[k * S + q]);
             d = 2.0 * M_PI * d / norm[k]; /* norm >= T_FLOOR > 0 */
-            if (d > worst)
+            if (d > worst && !blk_refl[side])
                 worst = d;
             memcpy(w->a + k * S, w->a2 + k * S, (N2 + 1) * sizeof(double));
         }
@@ -476,10 +531,44 @@ static double share_col(const build_ctx *c) { return 0.35 * c->budget; }
 static double share_row(const build_ctx *c) { return 0.35 * c->budget; }
 
 /* Keeps the truncated series of the converged coefficients in w->a as pair pr. */
-static int keep_series(build_ctx *c, build_ws *w, size_t N, const double *norm, pair *pr)
+/* For a reflection block: the shortest length m <= m0 whose dropped tail, measured as
+   the L1 over the circle of the tail series on the grid of N (not bounded by 4 sum
+   |a_q|, far too pessimistic for the k^-1.5 decay of a cusp), costs at most eps_trunc
+   in every stored channel. Bisection: the measured tail shrinks with m. */
+static size_t truncate_len_measured(const build_ctx *c, build_ws *w, size_t N, size_t m0,
+                                    const double *norm, double eps_trunc)
+{
+    size_t S = c->nmax + 1, lo = 0, hi = m0; /* hi passes (the bound holds there) */
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2, q;
+        int pass = 1;
+        for (int k = 0; k < c->nst && pass; k++) {
+            /* tail coefficients a_q for q >= mid, in w->ia */
+            for (q = 0; q <= N; q++)
+                w->ia[q] = q >= mid ? w->a[k * S + q] : 0.0;
+            if (dct_inverse(&w->fb, w->ia, N + 1, N, w->y))
+                return m0;
+            double sum = 0.0;
+            for (size_t j = 0; j <= N; j++)
+                sum += (j == 0 || j == N) ? 0.5 * fabs(w->y[j]) : fabs(w->y[j]);
+            /* trapezoid over [0, pi] doubled for the circle; norm >= T_FLOOR */
+            pass = 2.0 * sum * M_PI / (double)N / norm[k] <= eps_trunc;
+        }
+        if (pass)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return hi;
+}
+
+static int keep_series(build_ctx *c, build_ws *w, int side, size_t N, const double *norm,
+                       pair *pr)
 {
     size_t S = c->nmax + 1;
     size_t m = truncate_len(c, w->a, S, N, norm, share_trunc(c));
+    if (blk_refl[side] && m > 0)
+        m = truncate_len_measured(c, w, N, m, norm, share_trunc(c));
     free(pr->a);
     pr->a = NULL;
     pr->m = (uint32_t)m;
@@ -512,7 +601,7 @@ static void job_row(void *vctx, void *vws, size_t idx)
         if (pr->done)
             continue;
         size_t N = converge(c, w, side, c->P[r], c->P[col], norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, pr))
+        if (N == 0 || keep_series(c, w, side, N, norm, pr))
             goto oom;
     }
     return;
@@ -522,12 +611,22 @@ oom:
     pthread_mutex_unlock(&c->lock);
 }
 
-/* Full node index -> half index r, or -1 for the two zero nodes and the other side. */
-static long half_index(const build_ctx *c, long idx, int side)
+/* Full node index -> half index r on the positive half (nodes > 0), or -1 for the two
+   zero nodes and the negative half. */
+static long half_pos(const build_ctx *c, long idx)
 {
     long K = (long)c->K;
-    if (side == SIDE_ENTER)
-        return idx >= K + 2 ? idx - (K + 2) : -1;
+    return idx >= K + 2 ? idx - (K + 2) : -1;
+}
+
+/* Full node index -> half index r of its magnitude and its sign (1: negative), or -1
+   for the two zero nodes. */
+static long half_any(const build_ctx *c, long idx, int *neg)
+{
+    long K = (long)c->K;
+    *neg = idx <= K - 1;
+    if (idx >= K + 2)
+        return idx - (K + 2);
     return idx >= 0 && idx <= K - 1 ? K - 1 - idx : -1;
 }
 
@@ -585,7 +684,7 @@ static void job_colcheck(void *vctx, void *vws, size_t idx)
             continue; /* same row, same stencil, same budget as last pass */
         double x = c->mid[j];
         size_t N = converge(c, w, side, c->P[r], x, norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, &c->pcol[side][r * c->K + j]))
+        if (N == 0 || keep_series(c, w, side, N, norm, &c->pcol[side][r * c->K + j]))
             goto oom;
         long off;
         double wt[4];
@@ -595,7 +694,7 @@ static void job_colcheck(void *vctx, void *vws, size_t idx)
         /* the positive-half stencil; the negative half is its mirror image */
         if (cr_weights(c->full, nfull, x, &off, wt)) {
             for (int b = 0; b < 4; b++) {
-                long h = half_index(c, off + b, SIDE_ENTER);
+                long h = half_pos(c, off + b);
                 if (h >= 0 && wt[b] != 0.0)
                     add_pair(c, side, r, (size_t)h, wt[b], w->ia, S, &mlen);
             }
@@ -636,14 +735,14 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
             continue;
         }
         size_t N = converge(c, w, side, x, c->P[col], norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, &c->prow[side][j * c->K + col]))
+        if (N == 0 || keep_series(c, w, side, N, norm, &c->prow[side][j * c->K + col]))
             goto oom;
         for (size_t q = 0; q < (size_t)c->nst * S; q++)
             w->ia[q] = 0.0;
         size_t mlen = 0;
         if (ok) {
             for (int a = 0; a < 4; a++) {
-                long h = half_index(c, off + a, SIDE_ENTER);
+                long h = half_pos(c, off + a);
                 if (h >= 0 && wt[a] != 0.0)
                     add_pair(c, side, (size_t)h, col, wt[a], w->ia, S, &mlen);
             }
@@ -659,7 +758,9 @@ oom:
     pthread_mutex_unlock(&c->lock);
 }
 
-/* max(T, floor) per stored channel for slow cosine mu on one side. */
+/* max(T, floor) per stored channel for slow cosine mu in one block (max(R, floor) for
+   a reflection block), times the block's fold factor, so that every check relative
+   to it measures the unfolded error. */
 static void norms_at(const build_ctx *c, int side, double mu, double *out)
 {
     btdf_params q = *c->p;
@@ -667,14 +768,18 @@ static void norms_at(const build_ctx *c, int side, double mu, double *out)
         q.ior[k] = c->ior[side][k];
     double T[3] = {0, 0, 0};
     /* acos of a value in [0, 1] is in [0, pi/2], the accepted range */
-    if (btdf_transmittance(&q, acos(fmin(1.0, fmax(0.0, mu))), T) != BTDF_OK)
+    double ti = acos(fmin(1.0, fmax(0.0, mu)));
+    if ((blk_refl[side] ? btdf_reflectance(&q, ti, T) : btdf_transmittance(&q, ti, T)) !=
+        BTDF_OK)
         T[0] = T[1] = T[2] = 0.0;
     if (c->nst == 1) {
         out[0] = fmax(T[0], T_FLOOR);
     } else {
-        out[0] = fmax(LUM_R * T[0] + LUM_G * T[1] + LUM_B * T[2], T_FLOOR);
-        out[1] = fmax(T[0], T_FLOOR);
-        out[2] = fmax(T[2], T_FLOOR);
+        const double *fo = c->fold[side];
+        out[0] = fmax(LUM_R * T[0] * fo[0] + LUM_G * T[1] * fo[1] + LUM_B * T[2] * fo[2],
+                      T_FLOOR);
+        out[1] = fmax(T[0], T_FLOOR) * fo[0];
+        out[2] = fmax(T[2], T_FLOOR) * fo[2];
     }
 }
 
@@ -692,7 +797,7 @@ static void free_pair_array(pair **pp, size_t count)
 static void free_state(build_ctx *c)
 {
     size_t KK = c->K * c->K;
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         free_pair_array(&c->pairs[s], KK);
         free_pair_array(&c->pcol[s], KK);
         free_pair_array(&c->prow[s], KK);
@@ -718,7 +823,7 @@ static void free_state(build_ctx *c)
 static int ensure_state(build_ctx *c)
 {
     size_t K = c->K, KK = K * K;
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         if (!c->pairs[s])
             c->pairs[s] = calloc(KK, sizeof(pair));
         if (!c->pcol[s])
@@ -764,13 +869,13 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
     size_t K = c->K, KK2 = KQ * KQ;
     size_t *map = malloc(K * sizeof *map), *qn = malloc(K * sizeof *qn);
     unsigned char *same = malloc(K), *sten = malloc(K);
-    pair *np[2][3] = {{NULL}};
-    double *ne[2] = {NULL}, *ng[2] = {NULL};
-    unsigned char *noc[2] = {NULL}, *nor[2] = {NULL};
-    double(*tn)[2][4] = calloc(KQ, sizeof *tn), (*tm)[2][4] = calloc(KQ, sizeof *tm);
+    pair *np[NBLK][3] = {{NULL}};
+    double *ne[NBLK] = {NULL}, *ng[NBLK] = {NULL};
+    unsigned char *noc[NBLK] = {NULL}, *nor[NBLK] = {NULL};
+    double(*tn)[NBLK][4] = calloc(KQ, sizeof *tn), (*tm)[NBLK][4] = calloc(KQ, sizeof *tm);
     unsigned char *htn = calloc(KQ, 1), *htm = calloc(KQ, 1);
     int ok = map && qn && same && sten && tn && tm && htn && htm;
-    for (int s = 0; s < 2 && ok; s++) {
+    for (int s = 0; s < NBLK && ok; s++) {
         for (int k = 0; k < 3; k++)
             ok &= (np[s][k] = calloc(KK2, sizeof(pair))) != NULL;
         ok &= (ne[s] = calloc(KK2, sizeof(double))) != NULL;
@@ -779,7 +884,7 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
         ok &= (nor[s] = calloc(KK2, 1)) != NULL;
     }
     if (!ok) {
-        for (int s = 0; s < 2; s++) {
+        for (int s = 0; s < NBLK; s++) {
             for (int k = 0; k < 3; k++)
                 free(np[s][k]);
             free(ne[s]);
@@ -801,7 +906,7 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
     }
     for (size_t j = 0; j < K; j++)
         sten[j] = same[j] && (j == 0 || same[j - 1]) && (j + 1 >= K || same[j + 1]);
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         pair *pp = c->pairs[s], *pc = c->pcol[s], *pr = c->prow[s];
         for (size_t r = 0; r < K; r++)
             for (size_t col = 0; col < K; col++) {
@@ -856,7 +961,7 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
         }
     }
     free_state(c); /* the moved series were detached above */
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         c->pairs[s] = np[s][0];
         c->pcol[s] = np[s][1];
         c->prow[s] = np[s][2];
@@ -901,7 +1006,7 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
 {
     size_t K = c->K, n = 2 * K + 2;
     size_t total = 0, mmax = 0;
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         if (!c->want[s])
             continue;
         for (size_t i = 0; i < K * K; i++) {
@@ -947,13 +1052,11 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     for (size_t i = 0; i < n; i++) {
         for (size_t o = 0; o < n; o++) {
             const pair *pr = NULL;
-            for (int s = 0; s < 2 && !pr; s++) {
-                if (!c->want[s])
-                    continue;
-                long hi = half_index(c, (long)i, s), ho = half_index(c, (long)o, s);
-                if (hi >= 0 && ho >= 0)
+            int ni, no;
+            long hi = half_any(c, (long)i, &ni), ho = half_any(c, (long)o, &no);
+            for (int s = 0; s < NBLK && !pr && hi >= 0 && ho >= 0; s++)
+                if (c->want[s] && blk_slow_neg[s] == ni && blk_fast_neg[s] == no)
                     pr = &c->pairs[s][(size_t)hi * K + (size_t)ho];
-            }
             size_t m = pr ? pr->m : 0;
             f->offsets[2 * (i * n + o)] = (uint32_t)pos;
             f->offsets[2 * (i * n + o) + 1] = (uint32_t)m;
@@ -985,7 +1088,9 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     free(cd);
     f->built = 1;
     f->params = *c->p;
-    f->sides = (c->want[0] ? BTDF_SIDE_ENTER : 0) | (c->want[1] ? BTDF_SIDE_LEAVE : 0);
+    f->sides = 0;
+    for (int s = 0; s < NBLK; s++)
+        f->sides |= c->want[s] ? blk_mask[s] : 0;
     *out = f;
     return BTDF_OK;
 }
@@ -1029,7 +1134,7 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
 static size_t state_bytes(const build_ctx *c)
 {
     size_t KK = c->K * c->K, b = 0;
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         if (!c->want[s])
             continue;
         const pair *arr[3] = {c->pairs[s], c->pcol[s], c->prow[s]};
@@ -1059,9 +1164,11 @@ BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
         return st;
     if (!(tolerance >= 1e-6 && tolerance <= 0.5))
         return scatfun_say(msg, msglen, BTDF_EINVAL, "tolerance %g: must lie in [1e-6, 0.5]", tolerance);
-    if (side < BTDF_SIDE_ENTER || side > BTDF_SIDE_BOTH)
-        return scatfun_say(msg, msglen, BTDF_EINVAL, "side %d: must be 1 (enter), 2 (leave) or 3 (both)",
-                   (int)side);
+    if ((int)side < 1 || (int)side > BTDF_SCATFUN_ALL)
+        return scatfun_say(msg, msglen, BTDF_EINVAL,
+                           "blocks %d: must be a mask of 1 (transmission entering), 2 "
+                           "(transmission leaving), 4 (reflection on top), 8 (reflection "
+                           "below), from 1 to 15", (int)side);
     return BTDF_OK;
 }
 
@@ -1132,11 +1239,27 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
     c.nc = p->channels;
     c.nst = p->channels == 3 ? 3 : 1;
     for (int k = 0; k < c.nc; k++) {
-        c.ior[SIDE_ENTER][k] = p->ior[k];
-        c.ior[SIDE_LEAVE][k] = 1.0 / p->ior[k]; /* ior >= BTDF_IOR_MIN > 0 (checked) */
+        c.ior[BLK_T_ENTER][k] = c.ior[BLK_R_TOP][k] = p->ior[k];
+        /* ior >= BTDF_IOR_MIN > 0 (checked) */
+        c.ior[BLK_T_LEAVE][k] = c.ior[BLK_R_BOTTOM][k] = 1.0 / p->ior[k];
     }
-    c.want[SIDE_ENTER] = (side & BTDF_SIDE_ENTER) != 0;
-    c.want[SIDE_LEAVE] = (side & BTDF_SIDE_LEAVE) != 0;
+    for (int b = 0; b < NBLK; b++) {
+        c.want[b] = ((int)side & blk_mask[b]) != 0;
+        for (int k = 0; k < 3; k++)
+            c.fold[b][k] = 1.0;
+    }
+    if (c.nc == 3) {
+        /* pbrt-v3 scales transmission by e^2 with the header's one eta = n_G: reading
+           T_LEAVE for light from above gives n_G^2 rho_c(1/n_c; o->i), and the truth is
+           n_c^2 rho_c(1/n_c; o->i) (reciprocity), so that block carries (n_c/n_G)^2;
+           T_ENTER read for light from below gives rho_c(n_c; o->i)/n_G^2 against
+           rho_c(n_c; o->i)/n_c^2, so it carries (n_G/n_c)^2. Reflection has no factor. */
+        for (int k = 0; k < 3; k++) {
+            double q = p->ior[k] / p->ior[1]; /* ior > 0 (checked) */
+            c.fold[BLK_T_LEAVE][k] = q * q;
+            c.fold[BLK_T_ENTER][k] = 1.0 / (q * q);
+        }
+    }
     /* The lobe spans about 2/s rad of facet tilt; a first azimuth grid of about 8 s
        points puts several samples across it, so no lobe falls between samples. */
     c.nmin = pow2_at_least(fmax(64.0, 8.0 * p->smoothness));
@@ -1174,7 +1297,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         for (size_t j = 0; j < K; j++) {
             /* checked where a split would put the node, so check series become pairs */
             c.mid[j] = to_float_node(split_point(P, K, j, 0.5));
-            for (int s = 0; s < 2; s++) {
+            for (int s = 0; s < NBLK; s++) {
                 if (!c.want[s])
                     continue;
                 if (!c.hasTn[j])
@@ -1184,12 +1307,12 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             }
             c.hasTn[j] = c.hasTm[j] = 1;
         }
-        if (btdf_parallel_for_ws(threads, 2 * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
+        if (btdf_parallel_for_ws(threads, NBLK * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
             st = BTDF_ENOMEM;
             goto done;
         }
         size_t total = 0;
-        for (int s = 0; s < 2; s++)
+        for (int s = 0; s < NBLK; s++)
             for (size_t i = 0; c.want[s] && i < K * K; i++)
                 total += c.pairs[s][i].m * (size_t)c.nst;
         if (total > max_coeffs) {
@@ -1202,8 +1325,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             st = BTDF_EBUDGET;
             break;
         }
-        if (btdf_parallel_for_ws(threads, 2 * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
-            btdf_parallel_for_ws(threads, 2 * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
+        if (btdf_parallel_for_ws(threads, NBLK * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
+            btdf_parallel_for_ws(threads, NBLK * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
             c.oom) {
             st = BTDF_ENOMEM;
             goto done;
@@ -1222,10 +1345,10 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         size_t nsplit = 0;
         double endr = 1.0;
         int rowbad = 0; /* once a row fails, also split the ones close to failing */
-        for (int s = 0; s < 2; s++)
+        for (int s = 0; s < NBLK; s++)
             for (size_t j = 0; c.want[s] && j < K; j++)
                 rowbad |= c.errr[s][j] > share_row(&c);
-        for (int s = 0; s < 2; s++) {
+        for (int s = 0; s < NBLK; s++) {
             if (!c.want[s])
                 continue;
             for (size_t r = 0; r < K; r++) {
@@ -1263,9 +1386,9 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                 goto done;
             }
             double e = 0.0;
-            for (int s = 0; s < 2; s++)
+            for (int s = 0; s < NBLK; s++)
                 if (c.want[s])
-                    e = fmax(e, quick_l1(f, p, s == 0 ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE,
+                    e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s],
                                          threads));
             if (e < best_err) {
                 btdf_scatfun_free(best);
@@ -1338,9 +1461,9 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             btdf_status a = assemble(&c, &f, msg, msglen);
             if (a == BTDF_OK) {
                 double e = 0.0;
-                for (int s = 0; s < 2; s++)
+                for (int s = 0; s < NBLK; s++)
                     if (c.want[s])
-                        e = fmax(e, quick_l1(f, p, s == 0 ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE,
+                        e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s],
                                              threads));
                 if (e < best_err || !best) {
                     btdf_scatfun_free(best);
@@ -1463,21 +1586,27 @@ BTDF_API btdf_status btdf_scatfun_eval_mu(const btdf_scatfun *f, double mu_s, do
     return BTDF_OK;
 }
 
-/* (mu_s, mu_f, radiance) of a side and mode for angles in MODEL.md's frame. */
+/* (mu_s, mu_f, radiance) of a block and mode for angles in MODEL.md's frame; to is
+   the transmitted angle in [pi/2, pi] or, for reflection, tr in [0, pi/2]. */
 static void side_mus(btdf_side side, btdf_scatfun_mode mode, double ti, double to,
                      double *mu_s, double *mu_f, int *radiance)
 {
-    double ci = cos(ti), co = -cos(to); /* both >= 0 in range */
-    if (side == BTDF_SIDE_ENTER) {
-        if (mode == BTDF_SCATFUN_DIRECT)
-            *mu_s = ci, *mu_f = co, *radiance = 0;
-        else
-            *mu_s = -co, *mu_f = -ci, *radiance = 1;
-    } else {
-        if (mode == BTDF_SCATFUN_DIRECT)
-            *mu_s = -ci, *mu_f = -co, *radiance = 0;
-        else
-            *mu_s = co, *mu_f = ci, *radiance = 1;
+    double ci = cos(ti), co = fabs(cos(to)); /* both >= 0 in range */
+    int adj = mode == BTDF_SCATFUN_ADJOINT;
+    *radiance = adj;
+    switch ((int)side) {
+    case BTDF_SCATFUN_T_ENTER:
+        *mu_s = adj ? -co : ci, *mu_f = adj ? -ci : co;
+        break;
+    case BTDF_SCATFUN_T_LEAVE:
+        *mu_s = adj ? co : -ci, *mu_f = adj ? ci : -co;
+        break;
+    case BTDF_SCATFUN_R_TOP: /* the camera's direction in the slow index for ADJOINT */
+        *mu_s = adj ? co : ci, *mu_f = adj ? -ci : -co;
+        break;
+    default: /* BTDF_SCATFUN_R_BOTTOM */
+        *mu_s = adj ? -co : -ci, *mu_f = adj ? ci : co;
+        break;
     }
 }
 
@@ -1487,11 +1616,15 @@ BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side sid
 {
     if (!f || !out)
         return BTDF_EINVAL;
-    if (side != BTDF_SIDE_ENTER && side != BTDF_SIDE_LEAVE)
+    int b = (int)side;
+    if (b != BTDF_SCATFUN_T_ENTER && b != BTDF_SCATFUN_T_LEAVE && b != BTDF_SCATFUN_R_TOP &&
+        b != BTDF_SCATFUN_R_BOTTOM)
         return BTDF_EINVAL;
     if (mode != BTDF_SCATFUN_DIRECT && mode != BTDF_SCATFUN_ADJOINT)
         return BTDF_EINVAL;
-    if (!(ti >= 0.0 && ti <= M_PI / 2) || !(to >= M_PI / 2 && to <= M_PI) || !isfinite(phi))
+    int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
+    int to_ok = refl ? (to >= 0.0 && to <= M_PI / 2) : (to >= M_PI / 2 && to <= M_PI);
+    if (!(ti >= 0.0 && ti <= M_PI / 2) || !to_ok || !isfinite(phi))
         return BTDF_EDOMAIN;
     double ms, mf;
     int rad;
@@ -1501,7 +1634,7 @@ BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side sid
        has no such gap (docs/scatfun.md, "Views on the normal"). */
     ms = fmin(f->xd[f->n - 1], fmax(f->xd[0], ms));
     mf = fmin(f->xd[f->n - 1], fmax(f->xd[0], mf));
-    /* phi = pi is forward, phi_d = 0: cos phi_d = -cos phi */
+    /* phi = pi is forward (specular), phi_d = 0: cos phi_d = -cos phi */
     return btdf_scatfun_eval_mu(f, ms, mf, -cos(phi), rad, out);
 }
 
@@ -1517,17 +1650,135 @@ BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double 
 
 typedef struct mis_obj {
     const btdf_scatfun *f;
-    btdf_side side;
+    btdf_side side; /* the block evaluated (eval_side's side) */
+    btdf_scatfun_mode mode;
 } mis_obj;
 
 static void mis_eval(const void *obj, double ti, const double *q, double *out)
 {
     const mis_obj *m = obj;
     double phi = atan2(q[5], q[4]);
-    if (btdf_scatfun_eval_side(m->f, m->side, BTDF_SCATFUN_DIRECT, ti, q[7], phi, out) !=
-        BTDF_OK)
+    if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, q[7], phi, out) != BTDF_OK)
         for (uint32_t k = 0; k < m->f->channels; k++)
             out[k] = 0.0;
+}
+
+/* splitmix64, as the tables' estimator uses (one stream per test angle) */
+static double refl_unif(uint64_t *x)
+{
+    uint64_t z = (*x += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+#define U_EST_R 7.0 /* facet slopes beyond u = 7 hold exp(-49) of the distribution */
+
+/* d(omega_h) of a stratum of facet slopes around u (tan tn = 2u/s) stratified in
+   w = 1 - exp(-u^2) and psi, doubled for the mirror half: (2/s^2) e^{u^2} q^{-3/2}. */
+static double refl_h_measure(double u, double s, double dw, double dpsi)
+{
+    double rr = 2.0 * u / s, q = 1.0 + rr * rr;
+    return (2.0 / (s * s)) * exp(u * u) / (q * sqrt(q)) * dw * dpsi * 2.0;
+}
+
+/*
+ * One incident angle of a reflection block: integral of |rho_r~ - rho_r| cos tr d(omega_r)
+ * over the upper hemisphere of the block's side, by two sample sets combined by the
+ * balance heuristic, as the tables' estimator does for transmission:
+ *  A: facet normals h stratified in w = 1 - exp(-u^2) (tan th = 2u/s) and psi in
+ *     [0, pi], reflected: e_r = 2 (e_i.h) h - e_i, d(omega_r) = 4 (e_i.h) d(omega_h);
+ *  B: reflected directions stratified in (cos tr, phi), phi in [0, pi].
+ * Both cover the half phi in [0, pi] and count twice (rho_r is even in phi). The
+ * norm is max(R(ti), 0.01) (MODEL.md sections 6 and 8).
+ */
+static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint64_t rng,
+                         size_t ppa, btdf_ti_error *res)
+{
+    const mis_obj *m = obj;
+    double s = p->smoothness, sti = sin(ti), cti = cos(ti);
+    const size_t npsi = 32, nu = (ppa + 31) / 32, nmu = 64, nphi = 64;
+    double wmax = -expm1(-U_EST_R * U_EST_R);
+    double dw = wmax / (double)nu, dpsi = M_PI / (double)npsi;
+    double dmu = 1.0 / (double)nmu, dphi = M_PI / (double)nphi;
+    double R[BTDF_MAX_CHANNELS], tab[BTDF_MAX_CHANNELS];
+    if (btdf_reflectance(p, ti, R) != BTDF_OK)
+        for (int c = 0; c < p->channels; c++)
+            R[c] = 0.0;
+    size_t pts = 0;
+    for (int c = 0; c < p->channels; c++) {
+        double n = p->ior[c], l1 = 0.0, sgn = 0.0, dmax = 0.0, vmax = 0.0;
+        for (size_t iu = 0; iu < nu; iu++) {
+            for (size_t ip = 0; ip < npsi; ip++) {
+                double w = wmax * ((double)iu + refl_unif(&rng)) / (double)nu;
+                double psi = M_PI * ((double)ip + refl_unif(&rng)) / (double)npsi;
+                double u = sqrt(-log1p(-w)); /* w < 1: finite */
+                double rr = 2.0 * u / s;     /* s > 0 (checked) */
+                double cth = 1.0 / sqrt(1.0 + rr * rr), sth = rr * cth;
+                double hx = sth * cos(psi), hy = sth * sin(psi), hz = cth;
+                double ca = sti * hx + cti * hz; /* e_i = (sin ti, 0, cos ti) */
+                pts++;
+                if (!(ca > 0.0))
+                    continue; /* the facet faces away: no reflection from it */
+                double rx = 2.0 * ca * hx - sti, ry = 2.0 * ca * hy, rz = 2.0 * ca * hz - cti;
+                if (!(rz > 0.0))
+                    continue; /* reflected into the other medium: rho_r is 0 there */
+                double tr = atan2(sqrt(rx * rx + ry * ry), rz), phi = atan2(ry, rx);
+                double va = rz * 4.0 * ca * refl_h_measure(u, s, dw, dpsi);
+                double vb = rz * dmu * dphi * 2.0;
+                double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
+                if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, tab) != BTDF_OK)
+                    tab[c] = 0.0;
+                double d = tab[c] - rho, wgt = va * vb / (va + vb); /* va, vb > 0 */
+                l1 += fabs(d) * wgt;
+                sgn += d * wgt;
+                dmax = fmax(dmax, fabs(d));
+                vmax = fmax(vmax, rho);
+            }
+        }
+        for (size_t im = 0; im < nmu; im++) {
+            for (size_t ip = 0; ip < nphi; ip++) {
+                double mu = ((double)im + refl_unif(&rng)) / (double)nmu; /* cos tr */
+                double ph = M_PI * ((double)ip + refl_unif(&rng)) / (double)nphi;
+                double sr = sqrt(fmax(0.0, 1.0 - mu * mu));
+                double rx = sr * cos(ph), ry = sr * sin(ph), rz = mu;
+                double vb = mu * dmu * dphi * 2.0, share = vb;
+                pts++;
+                /* the facet that reflects e_i into e_r: h = (e_i + e_r)/|e_i + e_r| */
+                double ux = sti + rx, uy = ry, uz = cti + rz;
+                double ul = sqrt(ux * ux + uy * uy + uz * uz);
+                if (uz > 0.0 && ul > 0.0) {
+                    double ca = (sti * ux + cti * uz) / ul;
+                    double u = 0.5 * s * sqrt(ux * ux + uy * uy) / uz; /* tan th = |u_xy|/u_z */
+                    if (u < U_EST_R && ca > 0.0) {
+                        double va = rz * 4.0 * ca * refl_h_measure(u, s, dw, dpsi);
+                        if (va > 0.0)
+                            share = va * vb / (va + vb);
+                    }
+                }
+                double tr = atan2(sr, mu), phi = ph;
+                double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
+                if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, tab) != BTDF_OK)
+                    tab[c] = 0.0;
+                double d = tab[c] - rho;
+                l1 += fabs(d) * share;
+                sgn += d * share;
+                dmax = fmax(dmax, fabs(d));
+                vmax = fmax(vmax, rho);
+            }
+        }
+        double fl = fmax(R[c], T_FLOOR); /* MODEL.md section 6 floor, with R for T */
+        if (c == 0) {
+            res->T = R[c];
+            res->T_table = R[c] + sgn;
+        }
+        res->e_l1 = fmax(res->e_l1, l1 / fl);
+        res->e_t = fmax(res->e_t, fabs(sgn) / fl);
+        if (R[c] >= T_FLOOR && vmax > 0.0)
+            res->e_max = fmax(res->e_max, dmax / vmax);
+    }
+    return pts;
 }
 
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
@@ -1537,12 +1788,42 @@ btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf
                                size_t angles, size_t ppa, uint64_t seed, int threads,
                                btdf_report *r)
 {
+    int b = (int)side;
+    int below = b == BTDF_SCATFUN_T_LEAVE || b == BTDF_SCATFUN_R_BOTTOM;
+    mis_obj m = {f, side, BTDF_SCATFUN_DIRECT};
+    if (f->channels == 3 && (b == BTDF_SCATFUN_T_ENTER || b == BTDF_SCATFUN_T_LEAVE)) {
+        /* the fold is right on pbrt's radiance path: this block is what a camera on its
+           slow side sees of light from the other side, ADJOINT of that light's side */
+        m.side = (btdf_side)(b == BTDF_SCATFUN_T_ENTER ? BTDF_SCATFUN_T_LEAVE
+                                                       : BTDF_SCATFUN_T_ENTER);
+        m.mode = BTDF_SCATFUN_ADJOINT;
+        below = b == BTDF_SCATFUN_T_ENTER; /* the light comes from below */
+    }
     btdf_params q = *p;
-    if (side == BTDF_SIDE_LEAVE)
+    if (below)
         for (int k = 0; k < q.channels; k++)
             q.ior[k] = 1.0 / p->ior[k];
-    mis_obj m = {f, side};
-    return btdf_estimate_fn(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, mis_eval, &m, r);
+    /* Knots: the incident angles of the elevation nodes (both indices share them), so
+       every interval between nodes gets its midpoint tested (a band between two nodes
+       can hold the largest error: docs/scatfun.md, "Error report"). */
+    double *knots = malloc((f->n + 1) * sizeof *knots);
+    if (!knots)
+        return BTDF_ENOMEM;
+    size_t nk = 0;
+    knots[nk++] = 0.0;
+    for (uint32_t i = f->n; i-- > 0;)
+        if (f->xd[i] > 0.0 && f->xd[i] < 1.0)
+            knots[nk++] = acos(f->xd[i]); /* ascending in ti as mu descends */
+    knots[nk++] = M_PI / 2;
+    btdf_status st;
+    if (b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM)
+        st = btdf_estimate_angles(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
+                                  refl_angle, &m, r);
+    else
+        st = btdf_estimate_knots(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
+                                 mis_eval, &m, r);
+    free(knots);
+    return st;
 }
 
 BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_params *p,
@@ -1550,7 +1831,9 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
                                          size_t points_per_angle, uint64_t seed,
                                          int threads, btdf_report *r)
 {
-    if (!f || !r || (side != BTDF_SIDE_ENTER && side != BTDF_SIDE_LEAVE))
+    if (!f || !r ||
+        ((int)side != BTDF_SCATFUN_T_ENTER && (int)side != BTDF_SCATFUN_T_LEAVE &&
+         (int)side != BTDF_SCATFUN_R_TOP && (int)side != BTDF_SCATFUN_R_BOTTOM))
         return BTDF_EINVAL;
     if (btdf_params_check(p, NULL, 0) != BTDF_OK)
         return BTDF_EINVAL;

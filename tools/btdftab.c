@@ -172,6 +172,7 @@ typedef struct cli {
     unsigned char given[OPT_COUNT]; /* how often each option was given */
     btdf_params p;
     int threads, quiet, force, best_effort, sides, reflection, dry_run, shard_k, shard_n;
+    int part; /* --part: 1 transmission, 2 reflection, 3 both; 0 not given */
     btdf_rad_basis basis;
     const char *table, *out, *report;
     btdf_table_opts o; /* tolerance, metric, grid, max_samples */
@@ -212,11 +213,12 @@ static int apply(cli *c, const opt_hit *h)
     case OPT_K0: return parse_double("--k0", v, &c->p.k0);
     case OPT_TABLE: c->table = v; return 1;
     case OPT_PART:
-        if (!strcmp(v, "transmission") || !strcmp(v, "reflection")) {
+        if (!strcmp(v, "transmission") || !strcmp(v, "reflection") || !strcmp(v, "both")) {
             c->reflection = v[0] == 'r';
+            c->part = v[0] == 't' ? 1 : v[0] == 'r' ? 2 : 3;
             return 1;
         }
-        fail(EXIT_USAGE, "--part: '%s': must be transmission or reflection", v);
+        fail(EXIT_USAGE, "--part: '%s': must be transmission, reflection or both", v);
         return 0;
     case OPT_OUTPUT: c->out = v; return 1;
     case OPT_REPORT: c->report = v; return 1;
@@ -528,6 +530,9 @@ static int cmd_eval(const cli *c)
     if (c->table && (GIVEN(c, OPT_IOR) || GIVEN(c, OPT_SMOOTHNESS) || GIVEN(c, OPT_K0)))
         return fail(EXIT_USAGE, "--ior, --smoothness and --k0 do not apply with --table "
                                 "(the table gives the material)");
+    if (c->part == 3)
+        return fail(EXIT_USAGE, "--part both: eval prints one part: must be transmission or "
+                                "reflection");
     if (c->reflection && c->table)
         return fail(EXIT_USAGE, "--part reflection: evaluates the model only; tables and "
                                 ".bsdf files hold the transmission");
@@ -757,8 +762,11 @@ static int tabulate_series(const cli *c, const char *prov)
     run_progress_start(&pr, !c->quiet && isatty(2), c->out);
     /* --max-samples caps the stored coefficients, --max-memory the builder's series;
        each only when given (the format has its own budgets otherwise) */
-    return run_series_ex(prog, c->out, &c->p, c->o.tolerance,
-                         c->sides ? c->sides : BTDF_SIDE_BOTH, c->threads, c->quiet,
+    /* --side picks the light's sides, --part the parts: light from above has T_ENTER
+       and R_TOP, light from below T_LEAVE and R_BOTTOM (btdf_scatfun_block) */
+    int sides = c->sides ? c->sides : BTDF_SIDE_BOTH, part = c->part ? c->part : 3;
+    int blocks = ((part & 1) ? sides : 0) | ((part & 2) ? sides << 2 : 0);
+    return run_series_ex(prog, c->out, &c->p, c->o.tolerance, blocks, c->threads, c->quiet,
                          c->best_effort, prov, c->report,
                          GIVEN(c, OPT_MAX_SAMPLES) ? c->o.max_samples : 0,
                          GIVEN(c, OPT_MAX_MEMORY) ? c->mib << 20 : 0, &pr);
@@ -802,9 +810,12 @@ static int cmd_tabulate(cli *c, const char *prov)
                         btdf_format_list());
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
-        if (fi.needs == BTDF_NEEDS_RADIANCE)
-            return tabulate_radiance(c, prov);
     }
+    if (c->part)
+        return fail(EXIT_USAGE, "%s: --part applies to .bsdf output (and to eval)",
+                    out ? out : "tabulate");
+    if (out && strcmp(out, "-") && fi.needs == BTDF_NEEDS_RADIANCE)
+        return tabulate_radiance(c, prov);
     if (GIVEN(c, OPT_BASIS))
         return fail(EXIT_USAGE, "--basis applies to .xml output only");
     btdf_table_opts o = c->o;

@@ -22,6 +22,11 @@
  *    max |rho~ - rho| / max rho over the points, where T >= 0.01 (MODEL.md section 6).
  * Prints one line: the reported max, the dense max and where, their ratio, whether the
  * report said "met" and whether the dense max is above the tolerance.
+ *
+ * With --bsdf FILE (a written .bsdf of the material given by --ior, -s, --k0) it scans
+ * that file instead, through btdf_scatfun_eval_side for one transmission block
+ * (--block enter, the default, or leave: index 1/n), against btdf_scatfun_report for
+ * that block with the seed btdftab tabulate uses; --tolerance is then the file's.
  */
 #include <math.h>
 #include <pthread.h>
@@ -30,6 +35,7 @@
 #include <string.h>
 
 #include <btdf/btdf.h>
+#include <btdf/btdf_scatfun.h>
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -40,6 +46,8 @@
 
 typedef struct scan {
     const btdf_table *t;
+    const btdf_scatfun *f; /* scanned instead of t when set */
+    btdf_side side;
     const btdf_params *p;
     int nu, npsi;
 } scan;
@@ -70,6 +78,18 @@ static int refract_dir(double n, double ti, double tn, double psi, double *mu, d
     return 1;
 }
 
+/* The evaluation under test: the table, or the file's block as pbrt-v3 reads it. */
+static void eval_under_test(const scan *sc, double ti, double to, double ph, double *tab)
+{
+    if (sc->f) {
+        if (btdf_scatfun_eval_side(sc->f, sc->side, BTDF_SCATFUN_DIRECT, ti, to, ph, tab) !=
+            BTDF_OK)
+            tab[0] = tab[1] = tab[2] = 0.0;
+    } else {
+        btdf_table_eval(sc->t, ti, to, ph, tab);
+    }
+}
+
 static void one_angle(const scan *sc, double ti, ang_err *out)
 {
     const btdf_params *p = sc->p;
@@ -86,7 +106,7 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
             for (int ip = 0; ip < 2 * sc->npsi; ip++) {
                 double dph = M_PI / (2 * sc->npsi), ph = (ip + 0.5) * dph, tab[3] = {0, 0, 0};
                 double rho = btdf_rho(n, s, p->k0, ti, to, ph), w = -mu * dmu * dph * 2.0;
-                btdf_table_eval(sc->t, ti, to, ph, tab);
+                eval_under_test(sc, ti, to, ph, tab);
                 double d = fabs(tab[c] - rho);
                 T += rho * w;
                 l1 += d * w;
@@ -114,7 +134,7 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
                 double w = -mu * jac * du * dpsi * 2.0;
                 double to = acos(mu), ph = fabs(phi);
                 double rho = btdf_rho(n, s, p->k0, ti, to, ph), tab[3] = {0, 0, 0};
-                btdf_table_eval(sc->t, ti, to, ph, tab);
+                eval_under_test(sc, ti, to, ph, tab);
                 double d = fabs(tab[c] - rho);
                 T += rho * w;
                 l1 += d * w;
@@ -174,6 +194,8 @@ int main(int argc, char **argv)
     btdf_table_opts_default(&o);
     double step = 0.25, a = 0.0, b = 90.0;
     int nu = 256, npsi = 192, threads = 2, dump = 0;
+    const char *bsdf = NULL;
+    btdf_side side = BTDF_SIDE_ENTER;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!v) {
@@ -210,6 +232,14 @@ int main(int argc, char **argv)
             npsi = atoi(v);
         } else if (!strcmp(k, "--dump")) {
             dump = atoi(v); /* 1: every angle's T and errors on standard output */
+        } else if (!strcmp(k, "--bsdf")) {
+            bsdf = v;
+        } else if (!strcmp(k, "--block")) {
+            if (strcmp(v, "enter") && strcmp(v, "leave")) {
+                fprintf(stderr, "btdf-densescan: --block %s: enter or leave\n", v);
+                return 2;
+            }
+            side = v[0] == 'e' ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE;
         } else if (!strcmp(k, "--threads")) {
             threads = atoi(v);
         } else {
@@ -225,21 +255,37 @@ int main(int argc, char **argv)
     o.ti_max = b * M_PI / 180;
     char msg[512] = "";
     btdf_table *t = NULL;
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    if (st != BTDF_OK && st != BTDF_EBUDGET) {
-        fprintf(stderr, "btdf-densescan: build: %s\n", msg);
-        return 1;
-    }
+    btdf_scatfun *f = NULL;
     btdf_report r;
     memset(&r, 0, sizeof r);
-    if (btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, 0, &r) != BTDF_OK) {
-        fprintf(stderr, "btdf-densescan: estimate failed\n");
-        return 1;
+    btdf_params truth = o.params; /* the scanned block's index: 1/n for light leaving */
+    if (bsdf) {
+        if (btdf_scatfun_read(bsdf, &f, msg, sizeof msg) != BTDF_OK) {
+            fprintf(stderr, "btdf-densescan: %s: %s\n", bsdf, msg);
+            return 1;
+        }
+        if (side == BTDF_SIDE_LEAVE)
+            for (int c = 0; c < truth.channels; c++)
+                truth.ior[c] = 1.0 / truth.ior[c]; /* ior > 0: a file was built with it */
+        if (btdf_scatfun_report(f, &o.params, side, 0, 0, REPORT_SEED, 0, &r) != BTDF_OK) {
+            fprintf(stderr, "btdf-densescan: %s: report failed (channels or block)\n", bsdf);
+            return 1;
+        }
+    } else {
+        btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
+        if (st != BTDF_OK && st != BTDF_EBUDGET) {
+            fprintf(stderr, "btdf-densescan: build: %s\n", msg);
+            return 1;
+        }
+        if (btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, 0, &r) != BTDF_OK) {
+            fprintf(stderr, "btdf-densescan: estimate failed\n");
+            return 1;
+        }
     }
     int is_max = o.metric == BTDF_METRIC_MAX;
     double reported = is_max ? r.e_max_max : r.e_l1_max;
     int met = reported <= o.tolerance;
-    scan sc = {t, &o.params, nu, npsi};
+    scan sc = {t, f, side, &truth, nu, npsi};
     size_t n0 = (size_t)floor((b - a) / step) + 1, cap = n0 + 1 + 5 * 27;
     double *ti = malloc(cap * sizeof *ti);
     ang_err *res = malloc(cap * sizeof *res);
@@ -290,7 +336,7 @@ int main(int argc, char **argv)
     double tdev = 0.0;
     for (size_t k = 0; k < n; k++) {
         double T[3];
-        btdf_transmittance(&o.params, res[k].ti, T);
+        btdf_transmittance(&truth, res[k].ti, T);
         if (T[0] >= 0.01)
             tdev = fmax(tdev, fabs(res[k].T - T[0]) / T[0]);
     }
@@ -302,6 +348,7 @@ int main(int argc, char **argv)
            met && dense > o.tolerance ? "DENSE ABOVE TOLERANCE" : "consistent", tdev);
     btdf_report_clear(&r);
     btdf_table_free(t);
+    btdf_scatfun_free(f);
     free(ti);
     free(res);
     return 0;

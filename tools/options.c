@@ -23,6 +23,9 @@ const opt_def opt_table[] = {
     {OPT_PART, "part", 0, "P", 0, CMD_EVAL,
      "transmission (default), or reflection: rows TI TR PHI with theta_r in [0, 90],\n"
      "phi = 180 the specular plane; the model only (not with --table)"},
+    {OPT_PART, "part", 0, "P", 0, CMD_TABULATE,
+     ".bsdf only: both (default: transmission and reflection of the interface, four\n"
+     "blocks), transmission (the file as before: no reflection) or reflection"},
     {OPT_OUTPUT, "output", 'o', "FILE", 0, CMD_TABULATE,
      ".csv, .exr, .png (a montage), .bsdf (pbrt-v3/Mitsuba tabulated) or .xml\n"
      "(Radiance/WINDOW BSDF); the last two are built from Eq. 25 directly; '-' writes\n"
