@@ -28,6 +28,7 @@ BTDF_API void btdf_table_opts_default(btdf_table_opts *o)
     o->to_max = M_PI;
     o->phi_min = 0.0;
     o->phi_max = M_PI;
+    o->part = BTDF_PART_TRANSMISSION;
 }
 
 #define DEFAULT_MAX_SAMPLES ((size_t)8000000)
@@ -87,6 +88,14 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
     }
     if (o->threads < 0 || o->threads > 256)
         return bad(msg, msglen, "threads %g: must lie in [0, 256]", (double)o->threads);
+    /* part 0 (a zeroed struct) is the transmission, as before the field existed */
+    if (o->part != 0 && o->part != BTDF_PART_TRANSMISSION && o->part != BTDF_PART_REFLECTION &&
+        o->part != BTDF_PART_BOTH)
+        return bad(msg, msglen, "part %g: must be transmission (1), reflection (2) or both (3)",
+                   (double)o->part);
+    if (o->kind == BTDF_TABLE_GRID && o->part != 0 && o->part != BTDF_PART_TRANSMISSION)
+        return bad(msg, msglen, "part %g: grid tables hold the transmission only; the "
+                                "reflection needs a facet table", (double)o->part);
     return BTDF_OK;
 }
 
@@ -221,6 +230,7 @@ typedef struct slice_target {
     btdf_metric metric;
     double U; /* last row at u = U */
     size_t max_nodes;
+    int refl; /* the reflection's lobe (facet_rho_r) instead of the transmission's */
 } slice_target;
 
 typedef struct slice_out {
@@ -254,9 +264,32 @@ static double facet_rho(double n, double s, double k0, const rho_in *a, double s
     return r >= DBL_MIN ? r : 0.0; /* MODEL.md 3.6 */
 }
 
-/* Evaluates rho (all channels) and the channel-0 measure weight on rows x cols. */
-static int eval_nodes(const btdf_params *p, const rho_in *a, const double *rows, size_t nr,
-                      const double *cols, size_t nc, double *vals, double *w)
+/* The same for the reflection (MODEL.md section 8) at the facet that mirrors e_i into
+   e_r = 2 ca h - e_i: rho_r = [s^2/(4 pi) V(ti)/cos ti] e^{-s^2 t^2/4} (1 + t^2)^2
+   Fr V(tr) / (4 cos tr). tn = 0 is the mirror direction, so the nodes that follow the
+   refracted lobe in facet space follow the specular lobe here. *w = cos tr 4 ca sin tn
+   (d(omega_r) = 4 ca d(omega_h)). */
+static double facet_rho_r(double n, double s, double k0, const rho_in *a, double stn,
+                          double ctn, double cpsi, double spsi, double beck, double *w)
+{
+    *w = 0.0;
+    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
+    if (!(ca > 0.0))
+        return 0.0; /* the facet faces away from e_i */
+    double rx = 2.0 * ca * stn * cpsi - a->sin_ti, ry = 2.0 * ca * stn * spsi;
+    double rz = 2.0 * ca * ctn - a->cos_ti;
+    if (!(rz > 0.0))
+        return 0.0; /* e_r would point into the lower medium */
+    double vo = shadow_v(sqrt(rx * rx + ry * ry) / rz, s, k0); /* rz > 0 just checked */
+    *w = rz * 4.0 * ca * stn;
+    double r = a->pref * beck * bt_fresnel_r(n, n - 1.0, ca) * vo / (4.0 * rz);
+    return r >= DBL_MIN ? r : 0.0; /* MODEL.md 3.6 */
+}
+
+/* Evaluates rho (rho_r when refl; all channels) and the channel-0 measure weight on
+   rows x cols. */
+static int eval_nodes(const btdf_params *p, int refl, const rho_in *a, const double *rows,
+                      size_t nr, const double *cols, size_t nc, double *vals, double *w)
 {
     size_t nch = (size_t)p->channels;
     double s = p->smoothness;
@@ -276,9 +309,11 @@ static int eval_nodes(const btdf_params *p, const rho_in *a, const double *rows,
             for (size_t c = 0; c < nch; c++) {
                 double wt;
                 vals[(i * nc + j) * nch + c] =
-                    beck > 0.0 ? facet_rho(p->ior[c], s, p->k0, a, stn, ctn, cc[2 * j],
-                                           cc[2 * j + 1], beck, &wt)
-                               : (wt = 0.0);
+                    !(beck > 0.0) ? (wt = 0.0)
+                    : refl ? facet_rho_r(p->ior[c], s, p->k0, a, stn, ctn, cc[2 * j],
+                                         cc[2 * j + 1], beck, &wt)
+                           : facet_rho(p->ior[c], s, p->k0, a, stn, ctn, cc[2 * j],
+                                       cc[2 * j + 1], beck, &wt);
                 if (c == 0 && w)
                     w[i * nc + j] = wt;
             }
@@ -355,7 +390,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
         rows[i] = atan(2.0 * tg->U * (double)i / (double)(nr - 1) / p->smoothness);
     for (size_t j = 0; j < nc; j++)
         cols[j] = M_PI * (double)j / (double)(nc - 1);
-    if (!eval_nodes(p, &a, rows, nr, cols, nc, vals, w))
+    if (!eval_nodes(p, tg->refl, &a, rows, nr, cols, nc, vals, w))
         goto nomem;
     for (;;) {
         rm = malloc((nr - 1) * sizeof(double));
@@ -374,8 +409,8 @@ static void build_slice(const slice_target *tg, slice_out *o)
             rm[i] = 0.5 * (rows[i] + rows[i + 1]);
         for (size_t j = 0; j + 1 < nc; j++)
             cm[j] = 0.5 * (cols[j] + cols[j + 1]);
-        if (!eval_nodes(p, &a, rm, nr - 1, cols, nc, vr, wr) ||
-            !eval_nodes(p, &a, rows, nr, cm, nc - 1, vc, wc))
+        if (!eval_nodes(p, tg->refl, &a, rm, nr - 1, cols, nc, vr, wr) ||
+            !eval_nodes(p, tg->refl, &a, rows, nr, cm, nc - 1, vc, wc))
             goto nomem;
         double vmax = 0.0;
         for (size_t q = 0; q < nr * nc * nch; q++)
@@ -469,7 +504,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
                     src = vc + (i * (nc - 1) + j) * nch;
                     sw = wc[i * (nc - 1) + j];
                 } else {
-                    eval_nodes(p, &a, &nrows[I], 1, &ncols[J], 1, cross, &sw); /* no alloc fail: nc = 1 */
+                    eval_nodes(p, tg->refl, &a, &nrows[I], 1, &ncols[J], 1, cross, &sw); /* no alloc fail: nc = 1 */
                     src = cross;
                 }
                 memcpy(nv + (I * NC + J) * nch, src, nch * sizeof(double));
@@ -511,10 +546,23 @@ typedef struct facet_job {
     slice_out *out;
 } facet_job;
 
-static double t_floor(const btdf_params *p, double ti)
+/* The part being built (BOTH never reaches the builder: it builds each part). */
+static int opts_refl(const btdf_table_opts *o)
 {
-    /* MODEL.md section 6: errors are relative to max(T, 0.01) */
-    return fmax(btdf_transmittance_coarse(p, ti), 0.01);
+    return o->part == BTDF_PART_REFLECTION;
+}
+
+/* T(ti), or R(ti) for the reflection, coarse. */
+static double part_coarse(const btdf_table_opts *o, double ti)
+{
+    return opts_refl(o) ? btdf_reflectance_coarse(&o->params, ti)
+                        : btdf_transmittance_coarse(&o->params, ti);
+}
+
+static double t_floor(const btdf_table_opts *o, double ti)
+{
+    /* MODEL.md section 6: errors are relative to max(T, 0.01), max(R, 0.01) */
+    return fmax(part_coarse(o, ti), 0.01);
 }
 
 static void facet_slice_job(void *arg, size_t k)
@@ -527,8 +575,9 @@ static void facet_slice_job(void *arg, size_t k)
     tg.metric = o->metric;
     tg.U = j->U;
     tg.max_nodes = j->max_nodes;
+    tg.refl = opts_refl(o);
     tg.target = o->tolerance * j->frac_slice *
-                (o->metric == BTDF_METRIC_MAX ? 1.0 : t_floor(&o->params, tg.ti));
+                (o->metric == BTDF_METRIC_MAX ? 1.0 : t_floor(o, tg.ti));
     build_slice(&tg, &j->out[k]);
 }
 
@@ -566,7 +615,7 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
     }
     if (o->metric == BTDF_METRIC_MAX)
         return vmax > 0.0 ? dmax / vmax : 0.0; /* empty slices have no max error */
-    return fmax(ech[0], fmax(ech[1], ech[2])) / t_floor(&o->params, M->s.ti);
+    return fmax(ech[0], fmax(ech[1], ech[2])) / t_floor(o, M->s.ti);
 }
 
 static void free_slice_out(slice_out *s)
@@ -747,7 +796,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                error relative to it is far from symmetric about the midpoint, and the
                midpoint test misses the peak: such intervals are split regardless. */
             if (o->metric == BTDF_METRIC_L1) {
-                double fa = t_floor(&o->params, sl[k].s.ti), fb = t_floor(&o->params, sl[k + 1].s.ti);
+                double fa = t_floor(o, sl[k].s.ti), fb = t_floor(o, sl[k + 1].s.ti);
                 if (fmax(fa, fb) > 1.5 * fmin(fa, fb))
                     e = fmax(e, 2.0 * o->tolerance * frac_ti);
             }
@@ -759,7 +808,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
             int za = !(incident_factor(&o->params, sl[k].s.ti) > 0.0);
             int zb = !(incident_factor(&o->params, sl[k + 1].s.ti) > 0.0);
             if (za != zb) {
-                double tother = btdf_transmittance_coarse(&o->params, sl[za ? k + 1 : k].s.ti);
+                double tother = part_coarse(o, sl[za ? k + 1 : k].s.ti);
                 double bound = o->metric == BTDF_METRIC_L1 ? tother / 0.01
                                                              : (tother >= 0.01 ? 1.0 : 0.0);
                 e = fmax(e, bound);
@@ -908,16 +957,14 @@ static void budget_text(char *msg, size_t msglen, int which, const btdf_table_op
                  e, e / tol, tol);
 }
 
-BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out, char *msg,
-                                      size_t msglen)
+/* One part: the transmission, or the reflection when o->part is REFLECTION. */
+static btdf_status build_part(const btdf_table_opts *o, btdf_table **out, char *msg,
+                              size_t msglen)
 {
-    if (!o || !out)
-        return BTDF_EINVAL;
-    btdf_status st = check_opts(o, msg, msglen);
-    if (st != BTDF_OK)
-        return st;
+    int refl = opts_refl(o);
+    btdf_table_kind kind = refl ? BTDF_TABLE_FACET_REFLECTION : o->kind;
     btdf_table *t;
-    st = btdf_table_new(o->kind, &o->params, &t, msg, msglen);
+    btdf_status st = btdf_table_new(kind, &o->params, &t, msg, msglen);
     if (st != BTDF_OK)
         return st;
     if (o->kind == BTDF_TABLE_GRID) {
@@ -933,7 +980,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
        the table of 1/n over all incident angles, whose facet space is well conditioned
        (btdf.h, BTDF_TABLE_FACET_RECIPROCAL). Errors are still measured for n. */
     btdf_table_opts ob = *o;
-    int recip = 1;
+    int recip = !refl; /* the reflection's facet space is well conditioned for every n */
     for (int c = 0; c < o->params.channels; c++)
         recip = recip && o->params.ior[c] < 1.0;
     if (recip) {
@@ -969,7 +1016,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         t->p = ob.params;
         budget_hit = 0;
         st = build_facet_pass(&ob, fs, ft, t, &budget_hit);
-        t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : BTDF_TABLE_FACET;
+        t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : kind;
         t->p = o->params;
         if (st != BTDF_OK)
             break;
@@ -999,7 +1046,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         t->check_seed = BUILD_CHECK_SEED;
         if (e < best_e) {
             btdf_table *fresh = NULL;
-            st = btdf_table_new(o->kind, &o->params, &fresh, msg, msglen);
+            st = btdf_table_new(kind, &o->params, &fresh, msg, msglen);
             if (st != BTDF_OK)
                 break;
             btdf_table_free(best);
@@ -1042,4 +1089,53 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         return BTDF_EBUDGET;
     }
     return BTDF_OK;
+}
+
+BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out, char *msg,
+                                      size_t msglen)
+{
+    if (!o || !out)
+        return BTDF_EINVAL;
+    btdf_status st = check_opts(o, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    if (o->part != BTDF_PART_BOTH)
+        return build_part(o, out, msg, msglen);
+    /* Both parts: each its own table, refined to the tolerance with the whole budget;
+       the reflection is attached to the transmission. A part the budget stopped makes
+       the whole BTDF_EBUDGET, with that part's message. */
+    btdf_table_opts ot = *o, orr = *o;
+    ot.part = BTDF_PART_TRANSMISSION;
+    orr.part = BTDF_PART_REFLECTION;
+    char mt[512] = "", mr[512] = "";
+    btdf_table *t = NULL, *r = NULL;
+    btdf_status st_t = build_part(&ot, &t, mt, sizeof mt);
+    if (st_t != BTDF_OK && st_t != BTDF_EBUDGET) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "transmission: %s", mt);
+        return st_t;
+    }
+    btdf_status st_r = build_part(&orr, &r, mr, sizeof mr);
+    if (st_r != BTDF_OK && st_r != BTDF_EBUDGET) {
+        btdf_table_free(t);
+        if (msg && msglen)
+            snprintf(msg, msglen, "reflection: %s", mr);
+        return st_r;
+    }
+    st = btdf_table_attach_reflection(t, r, msg, msglen);
+    if (st != BTDF_OK) {
+        btdf_table_free(t);
+        btdf_table_free(r);
+        return st;
+    }
+    *out = t;
+    if (msg && msglen) {
+        msg[0] = 0;
+        if (mt[0] && mr[0])
+            snprintf(msg, msglen, "transmission: %s; reflection: %s", mt, mr);
+        else if (mt[0] || mr[0])
+            snprintf(msg, msglen, "%s: %s", mt[0] ? "transmission" : "reflection",
+                     mt[0] ? mt : mr);
+    }
+    return st_t != BTDF_OK ? st_t : st_r;
 }

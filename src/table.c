@@ -134,6 +134,43 @@ int facet_eval(double n, double s, double k0, const rho_in *a, double stn, doubl
     return 1;
 }
 
+int facet_eval_r(double n, double s, double k0, const rho_in *a, double stn, double ctn,
+                 double cpsi, double spsi, facet_geo *g)
+{
+    g->rho = 0.0;
+    g->weight = 0.0;
+    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
+    if (!(ca > 0.0))
+        return 0; /* the facet faces away from e_i */
+    double rx = 2.0 * ca * stn * cpsi - a->sin_ti, ry = 2.0 * ca * stn * spsi;
+    double rz = 2.0 * ca * ctn - a->cos_ti;
+    if (!(rz > 0.0))
+        return 0; /* mirrored into the lower hemisphere: no reflected direction */
+    double st = sqrt(rx * rx + ry * ry);
+    g->sin_to = st;
+    g->cos_to = rz;
+    /* e_r on the axis: phi is undefined and does not matter, take phi = 0. */
+    g->cos_phi = st > 0.0 ? rx / st : 1.0;
+    g->sin_phi = st > 0.0 ? ry / st : 0.0;
+    /* rho_r from the model's own evaluator at e_r's angles, not from this geometry */
+    g->rho = btdf_rho_r(n, s, k0, atan2(a->sin_ti, a->cos_ti), atan2(st, rz),
+                        atan2(g->sin_phi, g->cos_phi));
+    g->weight = rz * 4.0 * ca; /* d(omega_r) = 4 (e_i.h) d(omega_h) */
+    return 1;
+}
+
+int facet_of_r(double sti, double cti, double str, double ctr, double cph, double sph,
+               double *tn, double *psi)
+{
+    double hx = sti + str * cph, hy = str * sph, hz = cti + ctr;
+    if (!(hz > 0.0))
+        return 0; /* both directions graze: no facet, and rho_r is 0 there */
+    hy = fabs(hy);
+    *tn = atan2(sqrt(hx * hx + hy * hy), hz);
+    *psi = atan2(hy, hx);
+    return 1;
+}
+
 int facet_of(double n, double sti, double cti, double sto, double cto, double cph,
              double sph, double *tn, double *psi)
 {
@@ -211,8 +248,69 @@ double blend_ti(double v0, double v1, double w, double g, double g0, double g1)
 
 const char *table_kind_name(btdf_table_kind k)
 {
-    return k == BTDF_TABLE_GRID ? "grid"
-                                : (k == BTDF_TABLE_FACET_RECIPROCAL ? "facet-reciprocal" : "facet");
+    return k == BTDF_TABLE_GRID                ? "grid"
+           : k == BTDF_TABLE_FACET_RECIPROCAL  ? "facet-reciprocal"
+           : k == BTDF_TABLE_FACET_REFLECTION  ? "facet-reflection"
+                                               : "facet";
+}
+
+BTDF_API const char *btdf_part_name(btdf_part part)
+{
+    return part == BTDF_PART_REFLECTION ? "reflection"
+           : part == BTDF_PART_BOTH     ? "both"
+                                        : "transmission";
+}
+
+BTDF_API int btdf_part_parse(const char *name, btdf_part *part)
+{
+    const btdf_part all[3] = {BTDF_PART_TRANSMISSION, BTDF_PART_REFLECTION, BTDF_PART_BOTH};
+    for (int i = 0; name && i < 3; i++)
+        if (!strcmp(name, btdf_part_name(all[i]))) {
+            *part = all[i];
+            return 1;
+        }
+    return 0;
+}
+
+BTDF_API const btdf_table *btdf_table_part(const btdf_table *t, btdf_part part)
+{
+    if (!t)
+        return NULL;
+    int r = kind_is_reflection(t->kind);
+    if (part == BTDF_PART_TRANSMISSION)
+        return r ? NULL : t;
+    if (part == BTDF_PART_REFLECTION)
+        return r ? t : t->refl;
+    return NULL;
+}
+
+BTDF_API btdf_part btdf_table_parts(const btdf_table *t)
+{
+    if (t && kind_is_reflection(t->kind))
+        return BTDF_PART_REFLECTION;
+    return t && t->refl ? BTDF_PART_BOTH : BTDF_PART_TRANSMISSION;
+}
+
+BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, char *msg,
+                                                  size_t msglen)
+{
+    if (!t || !r)
+        return BTDF_EINVAL;
+    const char *why = NULL;
+    if (kind_is_reflection(t->kind) || t->refl)
+        why = "the table is a reflection or holds one already";
+    else if (!kind_is_reflection(r->kind) || r->refl)
+        why = "the table to attach is not a reflection table";
+    else if (t->p.channels != r->p.channels || t->p.smoothness != r->p.smoothness ||
+             t->p.k0 != r->p.k0 || memcmp(t->p.ior, r->p.ior, sizeof t->p.ior) != 0)
+        why = "the two parts have different parameters";
+    if (why) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "%s", why);
+        return BTDF_EINVAL;
+    }
+    t->refl = r;
+    return BTDF_OK;
 }
 
 BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind)
@@ -222,9 +320,9 @@ BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind)
 
 int table_kind_parse(const char *name, btdf_table_kind *k)
 {
-    const btdf_table_kind all[3] = {BTDF_TABLE_FACET, BTDF_TABLE_GRID,
-                                    BTDF_TABLE_FACET_RECIPROCAL};
-    for (int i = 0; i < 3; i++)
+    const btdf_table_kind all[4] = {BTDF_TABLE_FACET, BTDF_TABLE_GRID,
+                                    BTDF_TABLE_FACET_RECIPROCAL, BTDF_TABLE_FACET_REFLECTION};
+    for (int i = 0; i < 4; i++)
         if (!strcmp(name, table_kind_name(all[i]))) {
             *k = all[i];
             return 1;
@@ -248,8 +346,9 @@ BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
     if (!out)
         return BTDF_EINVAL;
     if (kind != BTDF_TABLE_FACET && kind != BTDF_TABLE_GRID &&
-        kind != BTDF_TABLE_FACET_RECIPROCAL) {
-        set_msg(msg, msglen, "table kind: must be facet, grid or facet-reciprocal");
+        kind != BTDF_TABLE_FACET_RECIPROCAL && kind != BTDF_TABLE_FACET_REFLECTION) {
+        set_msg(msg, msglen,
+                "table kind: must be facet, grid, facet-reciprocal or facet-reflection");
         return BTDF_EINVAL;
     }
     btdf_status st = btdf_params_check(p, msg, msglen);
@@ -275,6 +374,7 @@ BTDF_API void btdf_table_free(btdf_table *t)
     }
     free(t->s);
     btdf_report_clear(&t->check);
+    btdf_table_free(t->refl);
     free(t);
 }
 
@@ -441,7 +541,10 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
     }
     for (int c = 0; c < nch; c++) {
         double x, y, n = recip ? 1.0 / t->p.ior[c] : t->p.ior[c];
-        if (t->kind != BTDF_TABLE_GRID) {
+        if (t->kind == BTDF_TABLE_FACET_REFLECTION) {
+            if (!facet_of_r(sti, cti, sto, cto, cph, sph, &x, &y))
+                continue; /* both directions graze: rho_r is 0 */
+        } else if (t->kind != BTDF_TABLE_GRID) {
             if (!facet_of(n, sti, cti, sto, cto, cph, sph, &x, &y))
                 continue; /* no facet connects the two directions: exactly 0 */
         } else {
@@ -461,7 +564,9 @@ BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, 
 {
     if (!t || !out)
         return BTDF_EINVAL;
-    if (!(ti >= 0.0 && ti <= M_PI / 2 && to >= M_PI / 2 && to <= M_PI && isfinite(phi)))
+    int refl = kind_is_reflection(t->kind); /* to is tr in [0, pi/2] */
+    if (!(ti >= 0.0 && ti <= M_PI / 2 && isfinite(phi) &&
+          (refl ? to >= 0.0 && to <= M_PI / 2 : to >= M_PI / 2 && to <= M_PI)))
         return BTDF_EDOMAIN;
     double f = fmod(fabs(phi), 2.0 * M_PI);
     if (f > M_PI)

@@ -27,7 +27,15 @@ struct btdf_table {
     double check_ti0, check_ti1;
     size_t check_angles, check_ppa;
     uint64_t check_seed;
+    /* A table holding both parts: the reflection (kind FACET_REFLECTION), owned. */
+    struct btdf_table *refl;
 };
+
+/* 1 for the kinds that hold rho_r (MODEL.md section 8). */
+static inline int kind_is_reflection(btdf_table_kind k)
+{
+    return k == BTDF_TABLE_FACET_REFLECTION;
+}
 
 /* Refraction of e_i(ti) through the facet of tilt tn and azimuth psi (psi = 0 leans
    towards e_i). On success (1) fills the outgoing geometry and rho; 0 where the
@@ -40,6 +48,18 @@ typedef struct facet_geo {
 
 int facet_eval(double n, double s, double k0, const rho_in *a, double tn_sin, double tn_cos,
                double cpsi, double spsi, facet_geo *g);
+
+/* The same for reflection: the facet (tn, psi) mirrors e_i into e_r = 2 (e_i.h) h - e_i;
+   g gets e_r (sin_to, cos_to = cos tr > 0), rho_r, and weight = cos tr 4 (e_i.h), so
+   that cos tr d(omega_r) = weight d(omega_h). 0 where e_r would leave the upper
+   hemisphere (rho_r = 0 there). */
+int facet_eval_r(double n, double s, double k0, const rho_in *a, double tn_sin,
+                 double tn_cos, double cpsi, double spsi, facet_geo *g);
+
+/* The facet (tn, psi) that mirrors e_i into e_r (h along e_i + e_r); 0 if none (both
+   grazing). */
+int facet_of_r(double sti, double cti, double str, double ctr, double cph, double sph,
+               double *tn, double *psi);
 
 /* The facet (tn, psi) that refracts e_i into e_o for index n; 0 if none. */
 int facet_of(double n, double sti, double cti, double sto, double cto, double cph,
@@ -71,6 +91,12 @@ typedef void (*est_eval_fn)(const void *obj, double ti, const double *q, double 
 btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
                              size_t test_angles, size_t points_per_angle, uint64_t seed,
                              int threads, est_eval_fn fn, const void *obj, btdf_report *r);
+
+/* The same for an evaluation of the reflection: against rho_r (MODEL.md section 8)
+   over the upper hemisphere, relative to max(R(ti), 0.01); q holds tr for to. */
+btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
+                               size_t test_angles, size_t points_per_angle, uint64_t seed,
+                               int threads, est_eval_fn fn, const void *obj, btdf_report *r);
 
 /* Monotonic wall clock in seconds. */
 double btdf_now(void);

@@ -43,7 +43,8 @@ awk 'BEGIN { for (i = 0; i < 300000; i++) printf "%g %g %g\n", i % 90, 90 + (i %
 rm -f "$W/rows" "$W/e1" "$W/e2"
 expect 2 "theta-r 95" "theta-r out of range" -- "$B" eval --part reflection 30 95 180
 expect 2 "line 3: theta-o 45" "bad row deep in a stream" -- sh -c "printf '30 150 180\n\n30 45 180\n' | '$B' eval"
-expect 2 "must be transmission or reflection" "bad --part" -- "$B" eval --part both 30 150 180
+expect 2 "eval reads one part at a time" "eval --part both" -- "$B" eval --part both 30 150 180
+expect 2 "must be transmission, reflection or both" "bad --part" -- "$B" eval --part mirror 30 150 180
 "$B" --version | grep -q '^btdftab [0-9]' && ok "--version" || no "--version"
 "$B" --help | grep -q 'tabulate' && ok "--help" || no "--help"
 "$B" albedo --ior 1.5 -s 100 0 30 | grep -q '^30,0.958' && ok "albedo" || no "albedo"

@@ -73,7 +73,7 @@ static btdf_table *make_table(int channels, btdf_table_kind kind, int round_valu
 static btdf_status write_exr(const btdf_table *t, const char *path, const btdf_write_opts *w,
                              char *msg, size_t msglen)
 {
-    btdf_write_opts none = {NULL, NULL};
+    btdf_write_opts none = {NULL, NULL, NULL};
     btdf_output_ctx c = {.table = t, .opts = w ? w : &none};
     return btdf_format_exr.write_path(&c, path, msg, msglen);
 }
@@ -180,7 +180,7 @@ static void test_attributes(void **state)
     rep.test_angles = 2;
     rep.per_ti = per;
     rep.met = 1;
-    btdf_write_opts w = {&rep, "btdftab -o x.exr --s 3.3"};
+    btdf_write_opts w = {&rep, "btdftab -o x.exr --s 3.3", NULL};
     char msg[300] = "";
     assert_int_equal(write_exr(f->table, f->path, &w, msg, sizeof msg), BTDF_OK);
 

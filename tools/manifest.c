@@ -554,7 +554,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         btdf_preview_opts_default(&po);
         po.kind = BTDF_PREVIEW_MONTAGE;
         po.table = t;
-        btdf_write_opts w = {&r, prov};
+        btdf_write_opts w = {&r, prov, NULL};
         btdf_output what = {t, NULL, &po, &w, NULL, NULL};
         st = btdf_write(&what, outs[k], msg, sizeof msg);
         if (st != BTDF_OK) {

@@ -487,7 +487,7 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
     }
     if (code == 0) { /* the file and its report appear together or not at all */
         btdf_outputs_begin();
-        btdf_write_opts w = {NULL, prov};
+        btdf_write_opts w = {NULL, prov, NULL};
         btdf_output what = {NULL, NULL, NULL, &w, NULL, x};
         st = btdf_write(&what, path, msg, sizeof msg);
         if (st == BTDF_OK && report)

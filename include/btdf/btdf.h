@@ -223,12 +223,34 @@ BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *o
  * and multiplies the result by the query's; a slice where that factor is 0 (ti = 90
  * deg) holds zeros, and its neighbour's divided value stands in for it. Outside the
  * slices' ti range the table gives 0.
+ *
+ * Reflection (MODEL.md section 8) has a kind of its own:
+ *  BTDF_TABLE_FACET_REFLECTION: slices hold rho_r at facet normals (tn, psi) like
+ *    FACET, for the facet h = (e_i + e_r)/|e_i + e_r| that mirrors e_i into e_r; tn = 0
+ *    is the mirror direction (tr = ti, phi = pi), the centre of the specular lobe. The
+ *    rule is FACET's (bilinear in (tn, |psi|), linear in ti after dividing by
+ *    V(ti)/cos ti, the incident factor rho_r shares with rho). For this kind
+ *    btdf_table_eval's `to` is the reflected polar angle tr in [0, pi/2].
  */
 typedef enum {
     BTDF_TABLE_FACET = 0,
     BTDF_TABLE_GRID = 1,
-    BTDF_TABLE_FACET_RECIPROCAL = 2
+    BTDF_TABLE_FACET_RECIPROCAL = 2,
+    BTDF_TABLE_FACET_REFLECTION = 3
 } btdf_table_kind;
+
+/* Which lobes of the interface a table holds: its transmission (Eq. 25), its
+   reflection (MODEL.md section 8), or both, each a table of its own kind, with the
+   reflection attached to the transmission table (btdf_table_part). */
+typedef enum {
+    BTDF_PART_TRANSMISSION = 1,
+    BTDF_PART_REFLECTION = 2,
+    BTDF_PART_BOTH = 3
+} btdf_part;
+
+/* "transmission", "reflection", "both"; parse returns 0 for an unknown name. */
+BTDF_API const char *btdf_part_name(btdf_part part);
+BTDF_API int btdf_part_parse(const char *name, btdf_part *part);
 
 typedef struct btdf_table btdf_table;
 
@@ -277,6 +299,9 @@ typedef struct btdf_table_opts {
     btdf_progress_fn progress; /* may be NULL (the default) */
     void *progress_user;       /* passed to progress */
     btdf_estimate_mode estimate; /* FACET: the builder's check (default FULL) */
+    btdf_part part;         /* which lobes (default TRANSMISSION; REFLECTION and BOTH
+                               need kind FACET); each part is refined to the tolerance
+                               and has the whole budget to itself */
 } btdf_table_opts;
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o);
@@ -303,6 +328,18 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
                                           const double *cols, const double *values,
                                           char *msg, size_t msglen);
 
+/* The table of one part: t itself when it is that part, the reflection attached to a
+   transmission table for REFLECTION, NULL when t does not hold it (BOTH: NULL). */
+BTDF_API const btdf_table *btdf_table_part(const btdf_table *t, btdf_part part);
+/* Which parts t holds: TRANSMISSION, REFLECTION or BOTH. */
+BTDF_API btdf_part btdf_table_parts(const btdf_table *t);
+/* Attaches r, a FACET_REFLECTION table of the same parameters, to the transmission
+   table t, which takes ownership of it (readers of files holding both parts).
+   BTDF_EINVAL when t is not a transmission table, already holds a reflection, or the
+   parameters differ; r is then not taken. */
+BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, char *msg,
+                                                  size_t msglen);
+
 BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t);
 BTDF_API const btdf_params *btdf_table_get_params(const btdf_table *t);
 BTDF_API size_t btdf_table_slice_count(const btdf_table *t);
@@ -311,7 +348,10 @@ BTDF_API size_t btdf_table_node_count(const btdf_table *t);
 /* BTDF_EINVAL if k is out of range. */
 BTDF_API btdf_status btdf_table_slice(const btdf_table *t, size_t k, btdf_slice *out);
 
-/* rho~ per channel into out[channels]. Same domain rules as btdf_eval. */
+/* rho~ per channel into out[channels]. Same domain rules as btdf_eval; for a
+   FACET_REFLECTION table, rho_r~ with `to` the reflected angle tr in [0, pi/2] (the
+   rules of btdf_eval_r). A table holding both parts evaluates its transmission here:
+   btdf_table_part gives the reflection. */
 BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, double phi,
                                      double *out);
 
@@ -321,7 +361,8 @@ BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, 
 
 typedef struct btdf_ti_error {
     double ti;                   /* radians */
-    double T, T_table;           /* true and tabulated transmittance (channel 0) */
+    double T, T_table;           /* true and tabulated transmittance (channel 0);
+                                    R and R~ for a reflection table */
     double e_l1, e_t, e_max;     /* worst channel; e_max = 0 where T < 0.01 */
 } btdf_ti_error;
 
@@ -350,7 +391,10 @@ typedef struct btdf_report {
    where the per-angle error or T changes fast (per_ti lists them all, by ti; the means
    are over the stratified angles). A table the builder checked with the same request
    returns that check. Frees nothing in *r first: pass a
-   zeroed report and call btdf_report_clear after. */
+   zeroed report and call btdf_report_clear after. A FACET_REFLECTION table is
+   measured against rho_r over the upper hemisphere, with R(ti) in place of T(ti)
+   (e_L1 and e_T relative to max(R, 0.01)); a table holding both parts is measured on
+   its transmission: estimate btdf_table_part(t, BTDF_PART_REFLECTION) for the other. */
 BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
                                          size_t test_angles, size_t points_per_angle,
                                          uint64_t seed, int threads, btdf_report *r);
@@ -367,6 +411,8 @@ typedef enum { BTDF_SIDE_ENTER = 1, BTDF_SIDE_LEAVE = 2, BTDF_SIDE_BOTH = 3 } bt
 typedef struct btdf_write_opts {
     const btdf_report *report; /* error report stored with the table, may be NULL */
     const char *provenance;    /* e.g. the command line, may be NULL */
+    const btdf_report *report_reflection; /* a table holding both parts: the report of
+                                             its reflection, may be NULL */
 } btdf_write_opts;
 
 /* Writes t to path in the format its extension names (.csv, .exr). The file is
@@ -384,7 +430,8 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
 /* 1 if files of this extension (".exr", "exr") can be written by this build. */
 BTDF_API int btdf_format_available(const char *ext);
 
-/* The name of a table kind as files record it: "facet", "facet-reciprocal", "grid". */
+/* The name of a table kind as files record it: "facet", "facet-reciprocal", "grid",
+   "facet-reflection". */
 BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind);
 
 #ifdef __cplusplus
