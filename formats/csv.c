@@ -58,8 +58,15 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
             t->kind == BTDF_TABLE_GRID
                 ? "bilinear in (theta_o, phi) per slice, linear in theta_i after dividing by "
                   "V(theta_i)/cos(theta_i)"
-                : "bilinear in facet (tilt, azimuth) per slice at the facet refracting e_i into "
-                  "e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)");
+                : t->rule == BTDF_RULE_CHI
+                      ? "bilinear in facet (tilt, azimuth) per slice of rho/K at the facet "
+                        "refracting e_i into e_o, K = cb (ca + n cb)^2, linear in theta_i after "
+                        "dividing by V(theta_i)/cos(theta_i), times the query's K"
+                      : "bilinear in facet (tilt, azimuth) per slice at the facet refracting e_i "
+                        "into e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)");
+    /* Read by machines: files without this line are read with the plain rule. */
+    if (t->kind != BTDF_TABLE_GRID)
+        fprintf(f, "# slice-rule: %s\n", btdf_table_rule_name(t->rule));
     if (t->kind == BTDF_TABLE_FACET_RECIPROCAL)
         fprintf(f, "# reciprocal: slices hold the table of index 1/n, indexed by ti_rad = pi - "
                    "theta_o; rho(n; ti, to, phi) = n^2 rho(1/n; pi - to, pi - ti, phi)\n");
@@ -233,6 +240,7 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     int have_rows = 0, have_end = 0;
     size_t declared = 0, ended = 0, seen = 0;
     btdf_table_kind kind = BTDF_TABLE_FACET;
+    btdf_table_rule rule = BTDF_RULE_PLAIN; /* files from before the rule had a name */
     btdf_table *t = NULL;
     dvec rr = {0}, cc = {0}, vv = {0};
     double cur_ti = -1.0;
@@ -269,6 +277,9 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 if (!table_kind_parse(word, &kind))
                     st = ferr(msg, msglen, path, ln,
                               "kind must be facet, facet-reciprocal or grid");
+            } else if (sscanf(line, "# slice-rule: %63s", word) == 1) {
+                if (!btdf_table_rule_parse(word, &rule))
+                    st = ferr(msg, msglen, path, ln, "slice-rule must be plain or chi");
             } else if (sscanf(line, "# channels: %d", &p.channels) == 1) {
                 have_ch = 1;
             } else if (!strncmp(line, "# ior:", 6)) {
@@ -300,7 +311,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 break;
             }
             char why[200];
-            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK) {
+            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK ||
+                btdf_table_set_rule(t, rule, why, sizeof why) != BTDF_OK) {
                 st = ferr(msg, msglen, path, ln, why);
                 break;
             }

@@ -139,6 +139,11 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
     const char *const *names = chan_names(p->channels);
     exr_result_t rc =
         exr_attr_set_string(ctx, 0, ATTR_PREFIX "kind", table_kind_name(btdf_table_get_kind(t)));
+    /* The interpolation rule of facet tables (btdf.h); absent: plain, as every file
+       written before it had a name. */
+    if (rc == EXR_ERR_SUCCESS && btdf_table_get_kind(t) != BTDF_TABLE_GRID)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "rule",
+                                 btdf_table_rule_name(btdf_table_get_rule(t)));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_int(ctx, 0, ATTR_PREFIX "channels", p->channels);
     if (rc == EXR_ERR_SUCCESS)
@@ -770,6 +775,22 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
         if (st != BTDF_OK)
             st = say(st == BTDF_EINVAL ? BTDF_EFORMAT : st, msg, msglen,
                      "bad parameters in the file: %s", why);
+    }
+    if (st == BTDF_OK) { /* no attribute: the plain rule of files written before it */
+        const char *rs = NULL;
+        int32_t len = 0;
+        btdf_table_rule rule = BTDF_RULE_PLAIN;
+        char why[200] = "", name[16] = "";
+        if (exr_attr_get_string(r.ctx, 0, ATTR_PREFIX "rule", &len, &rs) == EXR_ERR_SUCCESS) {
+            /* EXR strings carry a length and need not end in NUL */
+            if (rs && len > 0 && (size_t)len < sizeof name)
+                memcpy(name, rs, (size_t)len);
+            if (!btdf_table_rule_parse(name, &rule))
+                st = say(BTDF_EFORMAT, msg, msglen,
+                         "attribute " ATTR_PREFIX "rule \"%s\": must be plain or chi", name);
+        }
+        if (st == BTDF_OK && btdf_table_set_rule(t, rule, why, sizeof why) != BTDF_OK)
+            st = say(BTDF_EFORMAT, msg, msglen, "%s", why);
     }
     for (int k = 0; k < nparts && st == BTDF_OK; k++)
         st = read_slice(&r, t, k, p.channels);

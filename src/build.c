@@ -332,6 +332,12 @@ static int axis_refine(const double *a, size_t m, const unsigned char *mark, dou
     return 1;
 }
 
+/* A node's reduced value rho / K; K = 0 where the facet refracts nothing, and rho = 0. */
+static double red(double v, double k)
+{
+    return k > 0.0 ? v / k : 0.0;
+}
+
 static void build_slice(const slice_target *tg, slice_out *o)
 {
     const btdf_params *p = tg->p;
@@ -377,6 +383,26 @@ static void build_slice(const slice_target *tg, slice_out *o)
         if (!eval_nodes(p, &a, rm, nr - 1, cols, nc, vr, wr) ||
             !eval_nodes(p, &a, rows, nr, cm, nc - 1, vc, wc))
             goto nomem;
+        /* The table's rule (BTDF_RULE_CHI) interpolates rho / K, K = chi_shape(n, e_i.h):
+           the error of an interval is that of the reduced values, times K at the midpoint. */
+        double *sr = malloc((2 * nr + nc + 2 * (nr - 1) + (nc - 1)) * sizeof(double));
+        if (!sr)
+            goto nomem;
+        double *cr = sr + nr, *cp = cr + nr, *smr = cp + nc, *cmr = smr + (nr - 1),
+               *cpm = cmr + (nr - 1);
+        for (size_t i = 0; i < nr; i++) {
+            sr[i] = sin(rows[i]);
+            cr[i] = cos(rows[i]);
+        }
+        for (size_t i = 0; i + 1 < nr; i++) {
+            smr[i] = sin(rm[i]);
+            cmr[i] = cos(rm[i]);
+        }
+        for (size_t j = 0; j < nc; j++)
+            cp[j] = cos(cols[j]);
+        for (size_t j = 0; j + 1 < nc; j++)
+            cpm[j] = cos(cm[j]);
+        double sti = a.sin_ti, cti = a.cos_ti;
         double vmax = 0.0;
         for (size_t q = 0; q < nr * nc * nch; q++)
             vmax = fmax(vmax, vals[q]);
@@ -388,8 +414,12 @@ static void build_slice(const slice_target *tg, slice_out *o)
             double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0};
             for (size_t j = 0; j < nc; j++)
                 for (size_t c = 0; c < nch; c++) {
-                    double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
-                                        vals[((i + 1) * nc + j) * nch + c]);
+                    double n = p->ior[c];
+                    double k0 = chi_shape(n, sr[i] * cp[j] * sti + cr[i] * cti);
+                    double k1 = chi_shape(n, sr[i + 1] * cp[j] * sti + cr[i + 1] * cti);
+                    double km = chi_shape(n, smr[i] * cp[j] * sti + cmr[i] * cti);
+                    double lin = 0.5 * km * (red(vals[(i * nc + j) * nch + c], k0) +
+                                             red(vals[((i + 1) * nc + j) * nch + c], k1));
                     double d = fabs(vr[(i * nc + j) * nch + c] - lin);
                     if (is_max)
                         ech[c] = fmax(ech[c], d * norm);
@@ -405,8 +435,12 @@ static void build_slice(const slice_target *tg, slice_out *o)
             double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0};
             for (size_t i = 0; i < nr; i++)
                 for (size_t c = 0; c < nch; c++) {
-                    double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
-                                        vals[(i * nc + j + 1) * nch + c]);
+                    double n = p->ior[c];
+                    double k0 = chi_shape(n, sr[i] * cp[j] * sti + cr[i] * cti);
+                    double k1 = chi_shape(n, sr[i] * cp[j + 1] * sti + cr[i] * cti);
+                    double km = chi_shape(n, sr[i] * cpm[j] * sti + cr[i] * cti);
+                    double lin = 0.5 * km * (red(vals[(i * nc + j) * nch + c], k0) +
+                                             red(vals[(i * nc + j + 1) * nch + c], k1));
                     double d = fabs(vc[(i * (nc - 1) + j) * nch + c] - lin);
                     if (is_max)
                         ech[c] = fmax(ech[c], d * norm);
@@ -418,6 +452,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
             total += e;
             worst = fmax(worst, e);
         }
+        free(sr);
         if ((is_max ? worst : total) <= tg->target)
             break;
         /* Bisect every interval above its average share (for max: above the target). */
@@ -511,6 +546,8 @@ typedef struct facet_job {
     slice_out *out;
 } facet_job;
 
+static void free_slice_out(slice_out *s);
+
 static double t_floor(const btdf_params *p, double ti)
 {
     /* MODEL.md section 6: errors are relative to max(T, 0.01) */
@@ -530,6 +567,15 @@ static void facet_slice_job(void *arg, size_t k)
     tg.target = o->tolerance * j->frac_slice *
                 (o->metric == BTDF_METRIC_MAX ? 1.0 : t_floor(&o->params, tg.ti));
     build_slice(&tg, &j->out[k]);
+    /* The rule's node geometry, for blend_error's interpolation between slices. */
+    btdf_table rule;
+    memset(&rule, 0, sizeof rule);
+    rule.kind = BTDF_TABLE_FACET;
+    rule.rule = BTDF_RULE_CHI;
+    if (!j->out[k].nomem && j->out[k].s.vals && !slice_prepare(&rule, &j->out[k].s)) {
+        free_slice_out(&j->out[k]);
+        j->out[k].nomem = 1;
+    }
 }
 
 /* Error of blending slices a and b half-way, measured on slice m's nodes, relative. */
@@ -537,8 +583,10 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
                           const slice_out *M)
 {
     btdf_table tmp;
+    memset(&tmp, 0, sizeof tmp);
     tslice two[2] = {A->s, B->s};
     tmp.kind = BTDF_TABLE_FACET;
+    tmp.rule = BTDF_RULE_CHI; /* the rule of the table being built (A and B have geo) */
     tmp.p = o->params;
     tmp.ns = 2;
     tmp.cap = 2;
@@ -549,13 +597,16 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
     double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0}; /* per channel: the metric takes the worst */
     double g = incident_factor(&o->params, M->s.ti), ga = incident_factor(&o->params, A->s.ti),
            gb = incident_factor(&o->params, B->s.ti);
+    double sti = sin(s->ti), cti = cos(s->ti);
     for (size_t i = 0; i < s->nr; i++) {
-        double tw = trap(s->rows, s->nr, i);
+        double tw = trap(s->rows, s->nr, i), stn = sin(s->rows[i]), ctn = cos(s->rows[i]);
         for (size_t j = 0; j < s->nc; j++) {
+            double ca = stn * cos(s->cols[j]) * sti + ctn * cti; /* e_i.h at M's ti */
             for (size_t c = 0; c < nch; c++) {
-                double bl = blend_ti(slice_interp(&tmp, 0, s->rows[i], s->cols[j], (int)c),
-                                     slice_interp(&tmp, 1, s->rows[i], s->cols[j], (int)c),
-                                     1.0 - wa, g, ga, gb);
+                double km = chi_shape(o->params.ior[c], ca);
+                double bl = km * blend_ti(slice_interp_red(&tmp, 0, s->rows[i], s->cols[j], (int)c),
+                                          slice_interp_red(&tmp, 1, s->rows[i], s->cols[j], (int)c),
+                                          1.0 - wa, g, ga, gb);
                 double tv = s->vals[(i * s->nc + j) * nch + c];
                 double d = fabs(bl - tv);
                 vmax = fmax(vmax, tv);
@@ -571,6 +622,7 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
 
 static void free_slice_out(slice_out *s)
 {
+    free(s->s.geo);
     free(s->s.rows);
     free(s->s.cols);
     free(s->s.vals);
@@ -877,6 +929,7 @@ static void table_clear(btdf_table *t)
         free(t->s[k].rows);
         free(t->s[k].cols);
         free(t->s[k].vals);
+        free(t->s[k].geo);
     }
     t->ns = 0;
 }
@@ -920,6 +973,8 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     st = btdf_table_new(o->kind, &o->params, &t, msg, msglen);
     if (st != BTDF_OK)
         return st;
+    if (o->kind != BTDF_TABLE_GRID)
+        t->rule = BTDF_RULE_CHI; /* btdf.h: adaptive tables interpolate rho / K */
     if (o->kind == BTDF_TABLE_GRID) {
         st = build_grid(o, t, msg, msglen);
         if (st != BTDF_OK) {
@@ -1002,6 +1057,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
             st = btdf_table_new(o->kind, &o->params, &fresh, msg, msglen);
             if (st != BTDF_OK)
                 break;
+            fresh->rule = BTDF_RULE_CHI;
             btdf_table_free(best);
             best = t;
             t = fresh;

@@ -223,6 +223,17 @@ BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *o
  * and multiplies the result by the query's; a slice where that factor is 0 (ti = 90
  * deg) holds zeros, and its neighbour's divided value stands in for it. Outside the
  * slices' ti range the table gives 0.
+ *
+ * Facet tables have one of two rules for what is interpolated (btdf_table_rule):
+ *  BTDF_RULE_PLAIN: rho itself, as above (every table written before the rule had a
+ *    name, and the default of btdf_table_new).
+ *  BTDF_RULE_CHI: rho / K, K = cb (ca + n cb)^2, where ca = e_i.h at the slice's own ti
+ *    for each node (0 where ca <= 0: the facet refracts nothing, and so does the node)
+ *    and cb = sqrt(1 - (1 - ca^2)/n^2); the blend in ti is of those reduced values (each
+ *    also divided by its slice's incident factor), and the result is multiplied by the
+ *    query's K (its own ca) and incident factor. K is the Jacobian chi of Eq. 25 times
+ *    (n^2 - 1)^2 / n^2: rho / K is smooth in facet space for every n, while rho grows
+ *    like ca^3 / (n - 1)^2 near n = 1. btdf_table_build makes CHI tables.
  */
 typedef enum {
     BTDF_TABLE_FACET = 0,
@@ -231,6 +242,8 @@ typedef enum {
 } btdf_table_kind;
 
 typedef struct btdf_table btdf_table;
+
+typedef enum { BTDF_RULE_PLAIN = 0, BTDF_RULE_CHI = 1 } btdf_table_rule;
 
 /* A read-only view of slice k. values[(r * ncols + c) * channels + ch]. */
 typedef struct btdf_slice {
@@ -302,6 +315,15 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
                                           const double *rows, size_t ncols,
                                           const double *cols, const double *values,
                                           char *msg, size_t msglen);
+
+/* The interpolation rule (above). set_rule only on a table with no slices yet and of a
+   facet kind (grid tables are plain): BTDF_EINVAL otherwise, saying why. */
+BTDF_API btdf_status btdf_table_set_rule(btdf_table *t, btdf_table_rule rule, char *msg,
+                                         size_t msglen);
+BTDF_API btdf_table_rule btdf_table_get_rule(const btdf_table *t);
+/* "plain" or "chi", as files name the rules; parse gives 0 for an unknown name. */
+BTDF_API const char *btdf_table_rule_name(btdf_table_rule rule);
+BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule);
 
 BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t);
 BTDF_API const btdf_params *btdf_table_get_params(const btdf_table *t);
