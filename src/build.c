@@ -228,6 +228,7 @@ typedef struct slice_out {
     double *w; /* measure weight per node (channel 0), for incidence refinement */
     int budget_hit;
     int nomem;
+    size_t evals; /* Eq. 25 evaluations made building it */
 } slice_out;
 
 /* Eq. 25 written in facet space for the builder, with the Beckmann factor hoisted per
@@ -347,7 +348,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
     rho_in a;
     rho_in_init(&a, sin(tg->ti), cos(tg->ti), p->smoothness, p->k0);
     int is_max = tg->metric == BTDF_METRIC_MAX;
-    size_t nr = 17, nc = 13;
+    size_t nr = 17, nc = 13, evals = 0; /* evals: points where Eq. 25 was evaluated */
     double *rows = malloc(nr * sizeof(double)), *cols = malloc(nc * sizeof(double));
     double *vals = malloc(nr * nc * nch * sizeof(double)), *w = malloc(nr * nc * sizeof(double));
     /* per pass: midpoints of row intervals x columns (vr, wr) and rows x midpoints of
@@ -363,6 +364,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
         cols[j] = M_PI * (double)j / (double)(nc - 1);
     if (!eval_nodes(p, &a, rows, nr, cols, nc, vals, w))
         goto nomem;
+    evals = nr * nc;
     for (;;) {
         rm = malloc((nr - 1) * sizeof(double));
         cm = malloc((nc - 1) * sizeof(double));
@@ -383,6 +385,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
         if (!eval_nodes(p, &a, rm, nr - 1, cols, nc, vr, wr) ||
             !eval_nodes(p, &a, rows, nr, cm, nc - 1, vc, wc))
             goto nomem;
+        evals += (nr - 1) * nc + nr * (nc - 1);
         /* The table's rule (BTDF_RULE_CHI) interpolates rho / K, K = chi_shape(n, e_i.h):
            the error of an interval is that of the reduced values, times K at the midpoint. */
         double *sr = malloc((2 * nr + nc + 2 * (nr - 1) + (nc - 1)) * sizeof(double));
@@ -505,6 +508,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
                     sw = wc[i * (nc - 1) + j];
                 } else {
                     eval_nodes(p, &a, &nrows[I], 1, &ncols[J], 1, cross, &sw); /* no alloc fail: nc = 1 */
+                    evals++;
                     src = cross;
                 }
                 memcpy(nv + (I * NC + J) * nch, src, nch * sizeof(double));
@@ -528,6 +532,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
     o->s.cols = cols;
     o->s.vals = vals;
     o->w = w;
+    o->evals = evals;
     return;
 nomem:
     free(rows); free(cols); free(vals); free(w);
@@ -666,7 +671,8 @@ static size_t facet_first_slices(const btdf_table_opts *o)
 
 /* One adaptive build with the given shares of the tolerance. */
 static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
-                                    double frac_ti, btdf_table *t, int *budget_hit)
+                                    double frac_ti, btdf_table *t, int *budget_hit,
+                                    size_t *evals)
 {
     size_t node_cap = facet_node_cap(o);
     /* Tail: facets with u > U carry a fraction exp(-U^2) of the facet distribution; U
@@ -696,14 +702,17 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
     for (size_t k = 0; k < ns; k++)
         nodes += sl[k].s.nr * sl[k].s.nc;
     if (nodes > node_cap) { /* the first slices alone overran: again, each a share */
-        for (size_t k = 0; k < ns; k++)
+        for (size_t k = 0; k < ns; k++) {
+            *evals += sl[k].evals;
             free_slice_out(&sl[k]);
+        }
         j.max_nodes = node_cap / n0;
         *budget_hit |= facet_limit(o);
         btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
     }
     nodes = 0;
     for (size_t k = 0; k < ns; k++) {
+        *evals += sl[k].evals;
         if (sl[k].nomem)
             st = BTDF_ENOMEM;
         *budget_hit |= sl[k].budget_hit;
@@ -787,6 +796,8 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         btdf_parallel_for(o->threads, nt, facet_slice_job, &j);
         j.max_nodes = saved_max;
         size_t keep = 0;
+        for (q = 0; q < nt; q++)
+            *evals += cand[q].evals;
         for (q = 0; q < nt; q++) {
             if (cand[q].nomem) {
                 st = BTDF_ENOMEM;
@@ -1016,6 +1027,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     int budget_hit = 0, best_budget = 0;
     double best_e = INFINITY;
     btdf_table *best = NULL;
+    size_t evals = 0; /* Eq. 25 evaluations of every pass, kept with the table */
     for (int pass = 0; pass < 6; pass++) {
         if (pass > 0 && o->progress) /* the check fell short: a tighter pass, at most 6 */
             o->progress(o->progress_user, "tighter pass", (size_t)pass, (size_t)(6 - pass));
@@ -1023,7 +1035,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         t->kind = BTDF_TABLE_FACET;
         t->p = ob.params;
         budget_hit = 0;
-        st = build_facet_pass(&ob, fs, ft, t, &budget_hit);
+        st = build_facet_pass(&ob, fs, ft, t, &budget_hit, &evals);
         t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : BTDF_TABLE_FACET;
         t->p = o->params;
         if (st != BTDF_OK)
@@ -1079,6 +1091,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     }
     if (!best)
         return BTDF_ENOMEM;
+    best->build_evals = evals;
     *out = best;
     if (o->estimate == BTDF_ESTIMATE_NONE) {
         if (best_budget && msg && msglen)

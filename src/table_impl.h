@@ -30,6 +30,7 @@ struct btdf_table {
     double check_ti0, check_ti1;
     size_t check_angles, check_ppa;
     uint64_t check_seed;
+    size_t build_evals; /* points where the builder evaluated Eq. 25, over all its passes */
 };
 
 /* Refraction of e_i(ti) through the facet of tilt tn and azimuth psi (psi = 0 leans
