@@ -547,6 +547,7 @@ typedef struct facet_job {
     double frac_slice;
     double U;
     size_t max_nodes;
+    const size_t *max_each; /* per slice to build, when not NULL: its own node limit */
     const double *ti;
     slice_out *out;
 } facet_job;
@@ -568,7 +569,7 @@ static void facet_slice_job(void *arg, size_t k)
     tg.ti = j->ti[k];
     tg.metric = o->metric;
     tg.U = j->U;
-    tg.max_nodes = j->max_nodes;
+    tg.max_nodes = j->max_each ? j->max_each[k] : j->max_nodes;
     tg.target = o->tolerance * j->frac_slice *
                 (o->metric == BTDF_METRIC_MAX ? 1.0 : t_floor(&o->params, tg.ti));
     build_slice(&tg, &j->out[k]);
@@ -679,7 +680,8 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
        puts that below a tenth of the tolerance. */
     double U = sqrt(log(10.0 / o->tolerance)) + 1.0;
     size_t per_slice = node_cap / 8 > 1000 ? node_cap / 8 : 1000;
-    facet_job j = {o, frac_slice, U, per_slice < node_cap ? per_slice : node_cap, NULL, NULL};
+    facet_job j = {o, frac_slice, U, per_slice < node_cap ? per_slice : node_cap, NULL, NULL,
+                   NULL};
     double span = o->ti_max - o->ti_min;
     size_t n0 = facet_first_slices(o); /* btdf_table_build checked n0 slices fit */
     size_t cap = n0, ns = n0;
@@ -741,7 +743,9 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         slice_out *cand = calloc(nt, sizeof *cand);
         double *ecand = calloc(nt, sizeof *ecand);
         unsigned char *taken = calloc(nt, 1);
-        if (!mt || !at || !cand || !ecand || !taken) {
+        size_t *need = malloc(nt * sizeof(size_t));
+        if (!mt || !at || !cand || !ecand || !taken || !need) {
+            free(need);
             free(mt);
             free(at);
             free(cand);
@@ -756,45 +760,74 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                 mt[q] = 0.5 * (sl[k].s.ti + sl[k + 1].s.ti);
                 at[q++] = k;
             }
-        /* When the room left cannot hold a slice of the present average size for every
-           candidate, test only as many as it can, the widest intervals first (the others
-           stay open): equal shares too small for any would all stop short and spend the
-           budget on slices that cannot meet their target. */
-        size_t avg = ns ? nodes / ns : 0, left = nodes < node_cap ? node_cap - nodes : 0;
-        if (avg > 0 && nt > 1 && nt * avg > left && left / avg >= 1) {
-            size_t fit = left / avg;
-            for (size_t a2 = 0; a2 < fit; a2++) { /* selection of the fit widest */
+        /* Room for the candidates, each by its neighbours' sizes: a slice between two
+           others needs about as many nodes as the larger of them (a quarter more, for
+           what lies between). When the room left cannot hold every candidate so, test
+           only those it can, the widest intervals first (the others stay open): equal
+           shares too small for some would stop them short and end refinement with the
+           budget far from spent. What room is left over is shared in proportion. */
+        size_t left = nodes < node_cap ? node_cap - nodes : 0;
+        double total = 0.0;
+        for (q = 0; q < nt; q++) {
+            size_t a = sl[at[q]].s.nr * sl[at[q]].s.nc, b = sl[at[q] + 1].s.nr * sl[at[q] + 1].s.nc;
+            size_t m = a > b ? a : b;
+            m += m / 4;
+            m = m < SLICE_MIN_NODES ? SLICE_MIN_NODES : m;
+            need[q] = m < j.max_nodes ? m : j.max_nodes;
+            total += (double)need[q];
+        }
+        if (nt > 1 && total > (double)left) {
+            size_t fit = 0;
+            double used = 0.0;
+            for (size_t a2 = 0; a2 < nt; a2++) { /* selection of the widest first */
                 size_t w = a2;
                 for (size_t b2 = a2 + 1; b2 < nt; b2++)
                     if (sl[at[b2] + 1].s.ti - sl[at[b2]].s.ti > sl[at[w] + 1].s.ti - sl[at[w]].s.ti)
                         w = b2;
                 double tm = mt[a2];
-                size_t ta = at[a2];
+                size_t ta = at[a2], tn = need[a2];
                 mt[a2] = mt[w];
                 at[a2] = at[w];
+                need[a2] = need[w];
                 mt[w] = tm;
                 at[w] = ta;
+                need[w] = tn;
+                if (used + (double)need[a2] > (double)left)
+                    break;
+                used += (double)need[a2];
+                fit++;
             }
-            nt = fit;
+            nt = fit ? fit : 1; /* none fits whole: the widest gets what is left */
+            total = fit ? used : (double)left;
+            if (!fit)
+                need[0] = left;
+        }
+        int short_room = 0;
+        for (q = 0; q < nt; q++) {
+            /* total > 0: every need is at least SLICE_MIN_NODES or all of left */
+            double share = total > 0.0 ? (double)need[q] * (double)left / total : 0.0;
+            size_t r = share < (double)j.max_nodes ? (size_t)share : j.max_nodes;
+            need[q] = r;
+            short_room |= r < SLICE_MIN_NODES;
         }
         j.ti = mt;
         j.out = cand;
         /* The candidates are held beside the slices: together they stay in the budget. */
-        size_t room = nodes < node_cap ? (node_cap - nodes) / nt : 0;
-        if (room < SLICE_MIN_NODES) {
+        if (short_room) {
             *budget_hit |= facet_limit(o);
             free(mt);
             free(at);
             free(cand);
             free(ecand);
             free(taken);
+            free(need);
             break;
         }
         size_t saved_max = j.max_nodes;
-        if (room < j.max_nodes)
-            j.max_nodes = room;
+        j.max_each = need;
         btdf_parallel_for(o->threads, nt, facet_slice_job, &j);
         j.max_nodes = saved_max;
+        j.max_each = NULL;
         size_t keep = 0;
         for (q = 0; q < nt; q++)
             *evals += cand[q].evals;
@@ -874,6 +907,13 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                 st = BTDF_ENOMEM;
             } else {
                 open = no;
+                /* Intervals still open (not tested this round: the room held only some
+                   candidates) stay open; the left end names each, as none was split. */
+                double *still = malloc(ns * sizeof(double));
+                size_t nst = 0;
+                for (size_t k = 0; k + 1 < ns && still; k++)
+                    if (open[k])
+                        still[nst++] = sl[k].s.ti;
                 /* Old intervals that were split stay open as their two halves. */
                 for (q = 0; q < nt; q++) {
                     if (cand[q].s.vals) {
@@ -885,7 +925,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                     }
                 }
                 /* Re-sort by ti and mark which intervals remain open: an interval is
-                   open when one of its ends was just added. */
+                   open when one of its ends was just added, or it was open and untested. */
                 double *fresh = malloc(ns * sizeof(double));
                 size_t nf = 0;
                 for (size_t k = ns - keep; k < ns && fresh; k++)
@@ -896,9 +936,13 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                     for (size_t f = 0; f < nf; f++)
                         if (sl[k].s.ti == fresh[f] || sl[k + 1].s.ti == fresh[f])
                             open[k] = 1;
+                    for (size_t f = 0; f < nst && !open[k]; f++)
+                        if (sl[k].s.ti == still[f])
+                            open[k] = 1;
                 }
                 free(fresh);
-                if (!fresh)
+                free(still);
+                if (!fresh || !still)
                     st = BTDF_ENOMEM;
             }
         } else if (st == BTDF_OK && !keep) {
@@ -913,6 +957,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         free(cand);
         free(ecand);
         free(taken);
+        free(need);
         free(mt);
         free(at);
     }
