@@ -89,16 +89,25 @@ static void csv_error_line(FILE *f, const char *key, const btdf_report *r)
             r->e_t_mean, r->test_angles, r->test_points);
 }
 
-static const char *rule_text(btdf_table_kind k)
+static const char *rule_text(const btdf_table *t)
 {
-    return k == BTDF_TABLE_GRID
-               ? "bilinear in (theta_o, phi) per slice, linear in theta_i after dividing by "
-                 "V(theta_i)/cos(theta_i)"
-           : k == BTDF_TABLE_FACET_REFLECTION
+    btdf_table_kind k = t->kind;
+    if (k == BTDF_TABLE_GRID)
+        return "bilinear in (theta_o, phi) per slice, linear in theta_i after dividing by "
+               "V(theta_i)/cos(theta_i)";
+    if (t->rule == BTDF_RULE_FRESNEL)
+        return "bilinear in facet (tilt, azimuth) per slice of rho_r/Fr at the facet mirroring "
+               "e_i into e_r, Fr the facet's Fresnel reflectance at ca, linear in theta_i after "
+               "dividing by V(theta_i)/cos(theta_i), times the query's Fr";
+    if (t->rule == BTDF_RULE_CHI)
+        return "bilinear in facet (tilt, azimuth) per slice of rho/K at the facet "
+               "refracting e_i into e_o, K = cb (ca + n cb)^2, linear in theta_i after "
+               "dividing by V(theta_i)/cos(theta_i), times the query's K";
+    return k == BTDF_TABLE_FACET_REFLECTION
                ? "bilinear in facet (tilt, azimuth) per slice at the facet mirroring e_i into "
                  "e_r, linear in theta_i after dividing by V(theta_i)/cos(theta_i)"
-               : "bilinear in facet (tilt, azimuth) per slice at the facet refracting e_i into "
-                 "e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)";
+               : "bilinear in facet (tilt, azimuth) per slice at the facet refracting e_i "
+                 "into e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)";
 }
 
 static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
@@ -136,9 +145,14 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                    "angle theta_r in [0, 90]; angles in degrees and radians\n");
     else
         fprintf(f, "# units: rho in 1/sr, no cosine factor; angles in degrees and radians\n");
-    fprintf(f, "# rule: %s\n", rule_text(t->kind));
+    fprintf(f, "# rule: %s\n", rule_text(t));
     if (tr)
-        fprintf(f, "# rule reflection: %s\n", rule_text(tr->kind));
+        fprintf(f, "# rule reflection: %s\n", rule_text(tr));
+    /* Read by machines: files without these lines are read with the plain rule. */
+    if (t->kind != BTDF_TABLE_GRID)
+        fprintf(f, "# slice-rule: %s\n", btdf_table_rule_name(t->rule));
+    if (tr)
+        fprintf(f, "# slice-rule reflection: %s\n", btdf_table_rule_name(tr->rule));
     if (t->kind == BTDF_TABLE_FACET_RECIPROCAL)
         fprintf(f, "# reciprocal: slices hold the table of index 1/n, indexed by ti_rad = pi - "
                    "theta_o; rho(n; ti, to, phi) = n^2 rho(1/n; pi - to, pi - ti, phi)\n");
@@ -274,6 +288,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     int part_col = 0, have_parts = 0; /* a file holding both parts */
     size_t declared = 0, ended = 0, seen = 0;
     btdf_table_kind kind = BTDF_TABLE_FACET;
+    btdf_table_rule rule = BTDF_RULE_PLAIN; /* files from before the rule had a name */
+    btdf_table_rule rule_r = BTDF_RULE_PLAIN; /* the reflection's, in a file holding both */
     btdf_table *t = NULL, *tr = NULL, *cur = NULL; /* cur: the part being read */
     dvec rr = {0}, cc = {0}, vv = {0};
     double cur_ti = -1.0;
@@ -312,6 +328,12 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                               "kind must be facet, facet-reciprocal, grid or facet-reflection");
             } else if (!strncmp(line, "# parts: transmission, reflection", 33)) {
                 have_parts = 1;
+            } else if (sscanf(line, "# slice-rule reflection: %63s", word) == 1) {
+                if (!btdf_table_rule_parse(word, &rule_r))
+                    st = ferr(msg, msglen, path, ln, "slice-rule must be plain, chi or fresnel");
+            } else if (sscanf(line, "# slice-rule: %63s", word) == 1) {
+                if (!btdf_table_rule_parse(word, &rule))
+                    st = ferr(msg, msglen, path, ln, "slice-rule must be plain, chi or fresnel");
             } else if (sscanf(line, "# channels: %d", &p.channels) == 1) {
                 have_ch = 1;
             } else if (!strncmp(line, "# ior:", 6)) {
@@ -351,7 +373,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 break;
             }
             char why[200];
-            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK) {
+            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK ||
+                btdf_table_set_rule(t, rule, why, sizeof why) != BTDF_OK) {
                 st = ferr(msg, msglen, path, ln, why);
                 break;
             }
@@ -382,8 +405,9 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
                 char why[200];
                 if (st == BTDF_OK &&
-                    btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &p, &tr, why, sizeof why) !=
-                        BTDF_OK)
+                    (btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &p, &tr, why, sizeof why) !=
+                         BTDF_OK ||
+                     btdf_table_set_rule(tr, rule_r, why, sizeof why) != BTDF_OK))
                     st = ferr(msg, msglen, path, ln, why);
                 if (st != BTDF_OK)
                     break;

@@ -145,6 +145,11 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
     const char *const *names = chan_names(p->channels);
     exr_result_t rc =
         exr_attr_set_string(ctx, 0, ATTR_PREFIX "kind", table_kind_name(btdf_table_get_kind(t)));
+    /* The interpolation rule of facet tables (btdf.h); absent: plain, as every file
+       written before it had a name. */
+    if (rc == EXR_ERR_SUCCESS && btdf_table_get_kind(t) != BTDF_TABLE_GRID)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "rule",
+                                 btdf_table_rule_name(btdf_table_get_rule(t)));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_int(ctx, 0, ATTR_PREFIX "channels", p->channels);
     if (rc == EXR_ERR_SUCCESS)
@@ -171,6 +176,8 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "refl.kind", table_kind_name(tr->kind));
     if (rc == EXR_ERR_SUCCESS && tr)
         rc = exr_attr_set_int(ctx, 0, ATTR_PREFIX "refl.slices", (int32_t)tr->ns);
+    if (rc == EXR_ERR_SUCCESS && tr)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "refl.rule", btdf_table_rule_name(tr->rule));
     if (rc == EXR_ERR_SUCCESS && tr)
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "refl.value",
                                  "rho_r, the reflection of the same facets (BRDF), no cosine "
@@ -766,6 +773,27 @@ static btdf_status read_slice(reader *r, btdf_table *t, int part, int channels)
     return st;
 }
 
+/* The interpolation rule stored in attribute `name` of part 0 into t; no attribute:
+   the plain rule of files written before it. */
+static btdf_status read_rule(reader *r, const char *name, btdf_table *t)
+{
+    const char *rs = NULL;
+    int32_t len = 0;
+    btdf_table_rule rule = BTDF_RULE_PLAIN;
+    char why[200] = "", word[16] = "";
+    if (exr_attr_get_string(r->ctx, 0, name, &len, &rs) == EXR_ERR_SUCCESS) {
+        /* EXR strings carry a length and need not end in NUL */
+        if (rs && len > 0 && (size_t)len < sizeof word)
+            memcpy(word, rs, (size_t)len);
+        if (!btdf_table_rule_parse(word, &rule))
+            return say(BTDF_EFORMAT, r->msg, r->msglen,
+                       "attribute %s \"%s\": must be plain, chi or fresnel", name, word);
+    }
+    if (btdf_table_set_rule(t, rule, why, sizeof why) != BTDF_OK)
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "%s", why);
+    return BTDF_OK;
+}
+
 static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_t msglen)
 {
     reader r = {NULL, {0, {0}}, path, msg, msglen, 0};
@@ -831,6 +859,10 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
             st = say(st == BTDF_EINVAL ? BTDF_EFORMAT : st, msg, msglen,
                      "bad parameters in the file: %s", why);
     }
+    if (st == BTDF_OK)
+        st = read_rule(&r, ATTR_PREFIX "rule", t);
+    if (st == BTDF_OK && tr)
+        st = read_rule(&r, ATTR_PREFIX "refl.rule", tr);
     for (int k = 0; k < nparts && st == BTDF_OK; k++)
         st = read_slice(&r, k < nslices ? t : tr, k, p.channels);
     exr_finish(&r.ctx);

@@ -129,9 +129,9 @@ static void est_angle(void *arg, size_t k)
                 mu = refl ? mu : -mu;
                 double ph = M_PI * ((double)ip + unif(&rng)) / (double)j->nphi;
                 double sto = sqrt(fmax(0.0, 1.0 - mu * mu)), cph = cos(ph), sph = sin(ph);
-                double vb = fabs(mu) * dmu * dphi * 2.0, share = vb, tn, ps;
+                double vb = fabs(mu) * dmu * dphi * 2.0, share = vb, tn, ps, ca_r;
                 pts++;
-                if (refl ? facet_of_r(sti, cti, sto, mu, cph, sph, &tn, &ps)
+                if (refl ? facet_of_r(sti, cti, sto, mu, cph, sph, &tn, &ps, &ca_r)
                          : facet_of(n, sti, cti, sto, mu, cph, sph, &tn, &ps)) {
                     double u = 0.5 * s * tan(tn);
                     facet_geo g;

@@ -160,12 +160,13 @@ int facet_eval_r(double n, double s, double k0, const rho_in *a, double stn, dou
 }
 
 int facet_of_r(double sti, double cti, double str, double ctr, double cph, double sph,
-               double *tn, double *psi)
+               double *tn, double *psi, double *ca)
 {
     double hx = sti + str * cph, hy = str * sph, hz = cti + ctr;
     if (!(hz > 0.0))
         return 0; /* both directions graze: no facet, and rho_r is 0 there */
     hy = fabs(hy);
+    *ca = 0.5 * sqrt(hx * hx + hy * hy + hz * hz);
     *tn = atan2(sqrt(hx * hx + hy * hy), hz);
     *psi = atan2(hy, hx);
     return 1;
@@ -173,6 +174,12 @@ int facet_of_r(double sti, double cti, double str, double ctr, double cph, doubl
 
 int facet_of(double n, double sti, double cti, double sto, double cto, double cph,
              double sph, double *tn, double *psi)
+{
+    return facet_of_ca(n, sti, cti, sto, cto, cph, sph, tn, psi, NULL);
+}
+
+int facet_of_ca(double n, double sti, double cti, double sto, double cto, double cph,
+                double sph, double *tn, double *psi, double *ca_out)
 {
     double vx = sti + n * sto * cph, vy = n * sto * sph, vz = cti + n * cto;
     double sg = vz < 0.0 ? -1.0 : 1.0; /* h = sg v / |v| has h_z >= 0 */
@@ -183,6 +190,55 @@ int facet_of(double n, double sti, double cti, double sto, double cto, double cp
     double hx = sg * vx, hy = fabs(vy), hz = sg * vz;
     *tn = atan2(sqrt(hx * hx + hy * hy), hz);
     *psi = atan2(hy, hx);
+    if (ca_out) {
+        /* |v| > 0: vz != 0 was checked above */
+        double len = sqrt(hx * hx + hy * hy + hz * hz);
+        *ca_out = fmin(1.0, ca / len);
+    }
+    return 1;
+}
+
+double chi_shape(double n, double ca)
+{
+    if (!(ca > 0.0))
+        return 0.0; /* the facet faces away from e_i */
+    double sb2 = (1.0 - ca * ca) / (n * n); /* n > 0 (btdf_params_check) */
+    if (!(sb2 < 1.0))
+        return 0.0; /* total internal reflection on this facet */
+    double cb = sqrt(1.0 - sb2), d = ca + n * cb;
+    return cb * d * d;
+}
+
+double rule_factor(btdf_table_rule rule, double n, double ca)
+{
+    if (rule == BTDF_RULE_CHI)
+        return chi_shape(n, ca);
+    if (rule == BTDF_RULE_FRESNEL) /* the facet faces away from e_i: no reflection */
+        return ca > 0.0 ? bt_fresnel_r(n, n - 1.0, ca) : 0.0;
+    return 1.0;
+}
+
+/* The slices' own index for channel c (1/n for a reciprocal table). */
+static double slice_index(const btdf_table *t, int c)
+{
+    return t->kind == BTDF_TABLE_FACET_RECIPROCAL ? 1.0 / t->p.ior[c] : t->p.ior[c];
+}
+
+int slice_prepare(const btdf_table *t, tslice *s)
+{
+    free(s->geo);
+    s->geo = NULL;
+    if (t->rule == BTDF_RULE_PLAIN || t->kind == BTDF_TABLE_GRID)
+        return 1;
+    s->geo = malloc((2 * s->nr + s->nc) * sizeof(double));
+    if (!s->geo)
+        return 0;
+    for (size_t i = 0; i < s->nr; i++) {
+        s->geo[i] = sin(s->rows[i]);
+        s->geo[s->nr + i] = cos(s->rows[i]);
+    }
+    for (size_t j = 0; j < s->nc; j++)
+        s->geo[2 * s->nr + j] = cos(s->cols[j]);
     return 1;
 }
 
@@ -200,7 +256,7 @@ static size_t bracket(const double *a, size_t m, double x)
     return lo;
 }
 
-double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch)
+double slice_interp_red(const btdf_table *t, size_t k, double x, double y, int ch)
 {
     const tslice *s = &t->s[k];
     int nch = t->p.channels;
@@ -221,7 +277,32 @@ double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch)
     const double *V = s->vals;
     double f00 = V[(i * s->nc + j) * nch + ch], f01 = V[(i * s->nc + j1) * nch + ch];
     double f10 = V[(i1 * s->nc + j) * nch + ch], f11 = V[(i1 * s->nc + j1) * nch + ch];
+    if (s->geo) { /* BTDF_RULE_CHI, _FRESNEL: interpolate rho / K of each node */
+        double n = slice_index(t, ch), sti = sin(s->ti), cti = cos(s->ti);
+        const double *sn = s->geo, *cn = s->geo + s->nr, *cp = s->geo + 2 * s->nr;
+        btdf_table_rule rl = t->rule;
+        double k00 = rule_factor(rl, n, sn[i] * cp[j] * sti + cn[i] * cti);
+        double k01 = rule_factor(rl, n, sn[i] * cp[j1] * sti + cn[i] * cti);
+        double k10 = rule_factor(rl, n, sn[i1] * cp[j] * sti + cn[i1] * cti);
+        double k11 = rule_factor(rl, n, sn[i1] * cp[j1] * sti + cn[i1] * cti);
+        /* K = 0: the node's facet refracts nothing and its rho is 0; so is rho / K */
+        f00 = k00 > 0.0 ? f00 / k00 : 0.0;
+        f01 = k01 > 0.0 ? f01 / k01 : 0.0;
+        f10 = k10 > 0.0 ? f10 / k10 : 0.0;
+        f11 = k11 > 0.0 ? f11 / k11 : 0.0;
+    }
     return (1.0 - u) * ((1.0 - v) * f00 + v * f01) + u * ((1.0 - v) * f10 + v * f11);
+}
+
+double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch)
+{
+    double r = slice_interp_red(t, k, x, y, ch);
+    const tslice *s = &t->s[k];
+    if (!s->geo || r == 0.0)
+        return r;
+    double ti = s->ti;
+    double ca = sin(x) * cos(y) * sin(ti) + cos(x) * cos(ti); /* e_i . h of the slice */
+    return r * rule_factor(t->rule, slice_index(t, ch), ca);
 }
 
 double incident_factor(const btdf_params *p, double ti)
@@ -371,6 +452,7 @@ BTDF_API void btdf_table_free(btdf_table *t)
         free(t->s[k].rows);
         free(t->s[k].cols);
         free(t->s[k].vals);
+        free(t->s[k].geo);
     }
     free(t->s);
     btdf_report_clear(&t->check);
@@ -391,6 +473,8 @@ btdf_status table_push_slice(btdf_table *t, tslice *s)
         t->cap = nc;
     }
     s->g = incident_factor(&t->p, s->ti);
+    if (!slice_prepare(t, s)) /* replaces any geo s had */
+        return BTDF_ENOMEM;
     t->s[t->ns++] = *s;
     t->check_valid = 0; /* the check was of the table without this slice */
     return BTDF_OK;
@@ -449,7 +533,7 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
         }
     }
     tslice s = {ti, nrows, ncols, malloc(nrows * sizeof(double)),
-                malloc(ncols * sizeof(double)), malloc(nv * nch * sizeof(double)), 0.0};
+                malloc(ncols * sizeof(double)), malloc(nv * nch * sizeof(double)), 0.0, NULL};
     if (!s.rows || !s.cols || !s.vals) {
         free(s.rows);
         free(s.cols);
@@ -466,6 +550,51 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
         free(s.vals);
     }
     return st;
+}
+
+BTDF_API btdf_status btdf_table_set_rule(btdf_table *t, btdf_table_rule rule, char *msg,
+                                         size_t msglen)
+{
+    if (!t)
+        return BTDF_EINVAL;
+    if (rule != BTDF_RULE_PLAIN && rule != BTDF_RULE_CHI && rule != BTDF_RULE_FRESNEL) {
+        set_msg(msg, msglen, "table rule: must be plain (0), chi (1) or fresnel (2)");
+        return BTDF_EINVAL;
+    }
+    if (t->ns > 0) {
+        set_msg(msg, msglen, "table rule: must be set before the first slice is added");
+        return BTDF_EINVAL;
+    }
+    if (rule == BTDF_RULE_CHI && (t->kind == BTDF_TABLE_GRID || kind_is_reflection(t->kind))) {
+        set_msg(msg, msglen, "table rule chi: only for facet and facet-reciprocal tables");
+        return BTDF_EINVAL;
+    }
+    if (rule == BTDF_RULE_FRESNEL && !kind_is_reflection(t->kind)) {
+        set_msg(msg, msglen, "table rule fresnel: only for facet-reflection tables");
+        return BTDF_EINVAL;
+    }
+    t->rule = rule;
+    return BTDF_OK;
+}
+
+BTDF_API btdf_table_rule btdf_table_get_rule(const btdf_table *t) { return t->rule; }
+
+BTDF_API const char *btdf_table_rule_name(btdf_table_rule rule)
+{
+    return rule == BTDF_RULE_CHI ? "chi" : rule == BTDF_RULE_FRESNEL ? "fresnel" : "plain";
+}
+
+BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule)
+{
+    if (!strcmp(name, "chi"))
+        *rule = BTDF_RULE_CHI;
+    else if (!strcmp(name, "fresnel"))
+        *rule = BTDF_RULE_FRESNEL;
+    else if (!strcmp(name, "plain"))
+        *rule = BTDF_RULE_PLAIN;
+    else
+        return 0;
+    return 1;
 }
 
 BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t) { return t->kind; }
@@ -539,21 +668,27 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
         g0 = t->s[k].g;
         g1 = t->s[k + 1].g;
     }
+    int chi = t->rule != BTDF_RULE_PLAIN && t->kind != BTDF_TABLE_GRID;
     for (int c = 0; c < nch; c++) {
-        double x, y, n = recip ? 1.0 / t->p.ior[c] : t->p.ior[c];
+        double x, y, ca = 1.0, n = recip ? 1.0 / t->p.ior[c] : t->p.ior[c];
         if (t->kind == BTDF_TABLE_FACET_REFLECTION) {
-            if (!facet_of_r(sti, cti, sto, cto, cph, sph, &x, &y))
+            if (!facet_of_r(sti, cti, sto, cto, cph, sph, &x, &y, &ca))
                 continue; /* both directions graze: rho_r is 0 */
         } else if (t->kind != BTDF_TABLE_GRID) {
-            if (!facet_of(n, sti, cti, sto, cto, cph, sph, &x, &y))
+            if (!facet_of_ca(n, sti, cti, sto, cto, cph, sph, &x, &y, &ca))
                 continue; /* no facet connects the two directions: exactly 0 */
         } else {
             x = to;
             y = phi_fold;
         }
-        double v = slice_interp(t, k, x, y, c);
+        /* CHI: the slices' reduced values rho / K are blended; the query's K restores rho */
+        double kq = chi ? rule_factor(t->rule, n, ca) : 1.0;
+        if (!(kq > 0.0))
+            continue; /* the query's facet refracts nothing: 0, as Eq. 25 */
+        double v = slice_interp_red(t, k, x, y, c);
         if (w > 0.0)
-            v = blend_ti(v, slice_interp(t, k + 1, x, y, c), w, g, g0, g1);
+            v = blend_ti(v, slice_interp_red(t, k + 1, x, y, c), w, g, g0, g1);
+        v *= kq;
         /* reciprocity factor (1/n')^2 = n^2 with n' = 1/n the table's own index */
         out[c] = recip ? t->p.ior[c] * t->p.ior[c] * v : v;
     }

@@ -17,7 +17,7 @@
  *  - the outgoing direction of each facet by refraction written out here, and the
  *    measure |cos to| d(cos to) d(phi) by a numerical Jacobian (central differences) of
  *    that map, not by the closed form the library uses;
- *  - for n < 1 (the facet measure diverges at the critical angle) a midpoint rule
+ *  - for n <= 1/1.01 (the facet measure diverges at the critical angle) a midpoint rule
  *    over (cos to, phi) with twice the counts instead;
  *  - T by the same rule (so the floor max(T, 0.01) is this program's own), e_max as
  *    max |rho~ - rho| / max rho over the points, where T >= 0.01 (MODEL.md section 6).
@@ -113,8 +113,12 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
         double n = p->ior[c], T = 0.0, l1 = 0.0, dmax = 0.0, vmax = 0.0;
         /* n < 1: the facet map's measure diverges at the critical angle, which a product
            rule cannot integrate; the outgoing hemisphere is smooth there, and the lobes
-           of light leaving the dense side are wide (the cases scanned have s <= 100). */
-        for (int im = 0; n < 1.0 && !refl && im < 2 * sc->nu; im++) {
+           of light leaving the dense side are wide (the cases scanned have s <= 100).
+           Except near n = 1 (1/n - 1 < 0.01): the lobe is about 2 (1/n - 1)/s rad wide,
+           a few cells of the (cos to, phi) grid at most; there the facets' Fresnel factor
+           falls to 0 well before the critical angle, and the facet rule is used. */
+        int out_rule = !refl && n < 1.0 && 1.0 / n - 1.0 >= 0.01;
+        for (int im = 0; out_rule && im < 2 * sc->nu; im++) {
             double dmu = 1.0 / (2 * sc->nu), mu = -(im + 0.5) * dmu, to = acos(mu);
             for (int ip = 0; ip < 2 * sc->npsi; ip++) {
                 double dph = M_PI / (2 * sc->npsi), ph = (ip + 0.5) * dph, tab[3] = {0, 0, 0};
@@ -127,7 +131,7 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
                 vmax = fmax(vmax, rho);
             }
         }
-        for (int iu = 0; (n >= 1.0 || refl) && iu < sc->nu; iu++) {
+        for (int iu = 0; !out_rule && iu < sc->nu; iu++) {
             double u = (iu + 0.5) * du;
             double hu = 1e-6 * fmax(1.0, u);
             for (int ip = 0; ip < sc->npsi; ip++) {

@@ -224,12 +224,24 @@ BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *o
  * deg) holds zeros, and its neighbour's divided value stands in for it. Outside the
  * slices' ti range the table gives 0.
  *
+ * Facet tables have one of two rules for what is interpolated (btdf_table_rule):
+ *  BTDF_RULE_PLAIN: rho itself, as above (every table written before the rule had a
+ *    name, and the default of btdf_table_new).
+ *  BTDF_RULE_CHI: rho / K, K = cb (ca + n cb)^2, where ca = e_i.h at the slice's own ti
+ *    for each node (0 where ca <= 0: the facet refracts nothing, and so does the node)
+ *    and cb = sqrt(1 - (1 - ca^2)/n^2); the blend in ti is of those reduced values (each
+ *    also divided by its slice's incident factor), and the result is multiplied by the
+ *    query's K (its own ca) and incident factor. K is the Jacobian chi of Eq. 25 times
+ *    (n^2 - 1)^2 / n^2: rho / K is smooth in facet space for every n, while rho grows
+ *    like ca^3 / (n - 1)^2 near n = 1. btdf_table_build makes CHI tables.
+ *
  * Reflection (MODEL.md section 8) has a kind of its own:
  *  BTDF_TABLE_FACET_REFLECTION: slices hold rho_r at facet normals (tn, psi) like
  *    FACET, for the facet h = (e_i + e_r)/|e_i + e_r| that mirrors e_i into e_r; tn = 0
  *    is the mirror direction (tr = ti, phi = pi), the centre of the specular lobe. The
- *    rule is FACET's (bilinear in (tn, |psi|), linear in ti after dividing by
- *    V(ti)/cos ti, the incident factor rho_r shares with rho). For this kind
+ *    rule is FACET's with K = Fr(ca) (BTDF_RULE_FRESNEL, ca = e_i.h = |e_i + e_r|/2):
+ *    bilinear in (tn, |psi|) of rho_r / Fr, linear in ti after dividing by V(ti)/cos ti
+ *    (the incident factor rho_r shares with rho), times the query's Fr. For this kind
  *    btdf_table_eval's `to` is the reflected polar angle tr in [0, pi/2].
  */
 typedef enum {
@@ -253,6 +265,10 @@ BTDF_API const char *btdf_part_name(btdf_part part);
 BTDF_API int btdf_part_parse(const char *name, btdf_part *part);
 
 typedef struct btdf_table btdf_table;
+
+/* FRESNEL: the rule of reflection tables, CHI's with K = Fr(ca), the facet's Fresnel
+   reflectance (1 past the critical angle): rho_r / Fr is smooth where Fr has its kink. */
+typedef enum { BTDF_RULE_PLAIN = 0, BTDF_RULE_CHI = 1, BTDF_RULE_FRESNEL = 2 } btdf_table_rule;
 
 /* A read-only view of slice k. values[(r * ncols + c) * channels + ch]. */
 typedef struct btdf_slice {
@@ -339,6 +355,16 @@ BTDF_API btdf_part btdf_table_parts(const btdf_table *t);
    parameters differ; r is then not taken. */
 BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, char *msg,
                                                   size_t msglen);
+
+/* The interpolation rule (above). set_rule only on a table with no slices yet and of a
+   facet kind (grid tables are plain): BTDF_EINVAL otherwise, saying why. */
+BTDF_API btdf_status btdf_table_set_rule(btdf_table *t, btdf_table_rule rule, char *msg,
+                                         size_t msglen);
+BTDF_API btdf_table_rule btdf_table_get_rule(const btdf_table *t);
+/* "plain", "chi" or "fresnel", as files name the rules; parse gives 0 for an unknown
+   name. */
+BTDF_API const char *btdf_table_rule_name(btdf_table_rule rule);
+BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule);
 
 BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t);
 BTDF_API const btdf_params *btdf_table_get_params(const btdf_table *t);

@@ -19,6 +19,9 @@ KIND_FACET_RECIPROCAL = 2
 KIND_NAMES = {KIND_FACET: "facet", KIND_GRID: "grid",
               KIND_FACET_RECIPROCAL: "facet-reciprocal"}
 MAX_CHANNELS = 3
+# How facet slices interpolate (btdf/btdf.h, btdf_table_rule): rho itself, or rho / K.
+RULE_PLAIN = 0
+RULE_CHI = 1
 
 
 class BtdfError(RuntimeError):
@@ -99,6 +102,8 @@ def _declare(lib):
     lib.btdf_table_free.argtypes = [tp]
     lib.btdf_table_get_kind.restype = ctypes.c_int
     lib.btdf_table_get_kind.argtypes = [tp]
+    lib.btdf_table_get_rule.restype = ctypes.c_int
+    lib.btdf_table_get_rule.argtypes = [tp]
     lib.btdf_table_get_params.restype = ctypes.POINTER(_Params)
     lib.btdf_table_get_params.argtypes = [tp]
     lib.btdf_table_slice_count.restype = ctypes.c_size_t
@@ -152,6 +157,7 @@ class Table:
         self._h = h
         self.path = path
         self.kind = lib.btdf_table_get_kind(h)
+        self.rule = lib.btdf_table_get_rule(h)
         p = lib.btdf_table_get_params(h).contents
         self.channels = p.channels
         self.ior = [p.ior[c] for c in range(p.channels)]

@@ -47,8 +47,24 @@ def incident_factor(sti, cti, s, k0):
     return dr.select(ok, shadow_v(sti / c, s, k0) / c, 0.0)
 
 
+def chi_shape(n, ca):
+    """K = cb (ca + n cb)^2 of the chi rule (btdf/btdf.h), cb by Snell's law from ca;
+    0 where the facet refracts nothing (ca <= 0, total internal reflection)."""
+    sb2 = (1.0 - ca * ca) / (n * n)
+    ok = (ca > 0.0) & (sb2 < 1.0)
+    cb = dr.sqrt(dr.select(ok, 1.0 - sb2, 0.0))  # 1 - sb2 > 0 where used
+    d = ca + n * cb
+    return dr.select(ok, cb * d * d, 0.0)
+
+
 def facet_of(n, sti, cti, sto, cto, cph, sph):
     """(valid, tn, |psi|) of the facet refracting e_i into e_o for index n (btdf/btdf.h)."""
+    valid, tn, psi, _ = facet_of_ca(n, sti, cti, sto, cto, cph, sph)
+    return valid, tn, psi
+
+
+def facet_of_ca(n, sti, cti, sto, cto, cph, sph):
+    """facet_of and ca = e_i.h of that facet, as btdf_table_eval computes them."""
     vx = sti + n * sto * cph
     vy = n * sto * sph
     vz = cti + n * cto
@@ -61,7 +77,9 @@ def facet_of(n, sti, cti, sto, cto, cph, sph):
     hz = sg * vz
     tn = dr.atan2(dr.sqrt(hx * hx + hy * hy), hz)
     psi = dr.atan2(hy, hx)
-    return valid, tn, psi
+    ln = dr.sqrt(hx * hx + hy * hy + hz * hz)
+    cah = dr.minimum(1.0, ca / dr.select(valid, ln, 1.0))  # |v| > 0 where valid
+    return valid, tn, psi, cah
 
 
 def rho_eq25(n, s, k0, sti, cti, sto, cto, cph, sph):
@@ -118,6 +136,16 @@ class TableRule:
         self.row_off, self.col_off = u32(table.row_off), u32(table.col_off)
         self.val_off = u32(table.val_off)
         self.rows, self.cols, self.values = f64(table.rows), f64(table.cols), f64(table.values)
+        # The chi rule interpolates rho / K at the nodes: their geometry for K, per slice.
+        self.chi = (getattr(table, "rule", libbtdf.RULE_PLAIN) == libbtdf.RULE_CHI
+                    and self.kind != libbtdf.KIND_GRID)
+        if self.chi:
+            ad = table.ti.__class__
+            self.sti = f64(ad("d", [math.sin(t) for t in table.ti]))
+            self.cti = f64(ad("d", [math.cos(t) for t in table.ti]))
+            self.srow = f64(ad("d", [math.sin(r) for r in table.rows]))
+            self.crow = f64(ad("d", [math.cos(r) for r in table.rows]))
+            self.ccol = f64(ad("d", [math.cos(c) for c in table.cols]))
         # Fixed bisection depths: enough for the largest slice and for the slice count.
         self.it_s = max(1, math.ceil(math.log2(max(2, self.count))))
         self.it_r = max(1, math.ceil(math.log2(max(2, max(table.nrows)))))
@@ -138,8 +166,9 @@ class TableRule:
             hi = dr.select(act & _not(right), mid, hi)
         return lo
 
-    def _slice(self, k, x, y, ch, active):
-        """Bilinear value of slice k at (x, y), channel ch; 0 outside its node range."""
+    def _slice(self, k, x, y, ch, active, n=1.0):
+        """Bilinear value of slice k at (x, y), channel ch; 0 outside its node range. Under
+        the chi rule, of the reduced values rho / K (n: the slices' index)."""
         ro = _gather(self.row_off, k, active)
         co = _gather(self.col_off, k, active)
         vo = _gather(self.val_off, k, active)
@@ -168,6 +197,22 @@ class TableRule:
         f01 = _gather(self.values, vo + (i * nc + j1) * nch + ch, inside)
         f10 = _gather(self.values, vo + (i1 * nc + j) * nch + ch, inside)
         f11 = _gather(self.values, vo + (i1 * nc + j1) * nch + ch, inside)
+        if self.chi:
+            sti = _gather(self.sti, k, inside)
+            cti = _gather(self.cti, k, inside)
+            sa = _gather(self.srow, ro + i, inside)
+            ca_ = _gather(self.crow, ro + i, inside)
+            sb = _gather(self.srow, ro + i1, inside)
+            cb_ = _gather(self.crow, ro + i1, inside)
+            pa = _gather(self.ccol, co + j, inside)
+            pb = _gather(self.ccol, co + j1, inside)
+            fs = []
+            for f, sr, cr, cp in ((f00, sa, ca_, pa), (f01, sa, ca_, pb),
+                                  (f10, sb, cb_, pa), (f11, sb, cb_, pb)):
+                kk = chi_shape(n, sr * cp * sti + cr * cti)
+                # K = 0: the node's facet refracts nothing, its rho is 0 and so is rho / K
+                fs.append(dr.select(kk > 0.0, f / dr.select(kk > 0.0, kk, 1.0), 0.0))
+            f00, f01, f10, f11 = fs
         val = (1.0 - u) * ((1.0 - v) * f00 + v * f01) + u * ((1.0 - v) * f10 + v * f11)
         return dr.select(inside, val, 0.0)
 
@@ -195,15 +240,19 @@ class TableRule:
             k = 0 if not _jit() else mi.UInt32(0)
         out = []
         for c in range(self.channels):
+            n = 1.0
             if grid:
                 valid, x, y = inr, x_grid, y_grid
             else:
                 n = 1.0 / self.ior[c] if recip else self.ior[c]
-                valid, x, y = facet_of(n, sti, cti, sto, cto, cph, sph)
+                valid, x, y, ca = facet_of_ca(n, sti, cti, sto, cto, cph, sph)
                 valid = valid & inr
-            v = self._slice(k, x, y, c, valid)
+                if self.chi:  # the query's K restores rho from the blended rho / K
+                    kq = chi_shape(n, ca)
+                    valid = valid & (kq > 0.0)
+            v = self._slice(k, x, y, c, valid, n)
             if self.count > 1:
-                v1 = self._slice(k + 1, x, y, c, valid & (w > 0.0))
+                v1 = self._slice(k + 1, x, y, c, valid & (w > 0.0), n)
                 # A slice whose g is 0 (ti = 90 deg) holds zeros and says nothing of the
                 # reduced value rho/g: the neighbour's stands in (btdf/btdf.h's rule).
                 q0 = dr.select(g0 > 0.0, v / dr.select(g0 > 0.0, g0, 1.0), 0.0)
@@ -211,6 +260,8 @@ class TableRule:
                 r0 = dr.select(g0 > 0.0, q0, q1)
                 r1 = dr.select(g1 > 0.0, q1, q0)
                 v = dr.select(w > 0.0, g * ((1.0 - w) * r0 + w * r1), v)
+            if self.chi:
+                v = v * kq
             if recip:
                 v = self.ior[c] * self.ior[c] * v
             out.append(dr.select(valid, v, 0.0))
