@@ -1179,6 +1179,7 @@ static int cmd_polar(const cli *c)
     po.nti = na;
     po.width = c->pic_w;
     po.height = c->pic_h;
+    po.part = c->part;
     char msg[512] = "";
     btdf_output what = {NULL, NULL, &po, NULL, NULL, NULL};
     btdf_status st = btdf_write(&what, c->out, msg, sizeof msg);

@@ -23,6 +23,9 @@ const opt_def opt_table[] = {
     {OPT_PART, "part", 0, "P", 0, CMD_EVAL,
      "transmission (default), or reflection: rows TI TR PHI with theta_r in [0, 90],\n"
      "phi = 180 the specular plane; of the model, or of a --table that holds it"},
+    {OPT_PART, "part", 0, "P", 0, CMD_POLAR,
+     "transmission (default: the lobe below the surface), reflection (rho_r |cos\n"
+     "theta_r| above it) or both, like the paper's figures of both halves"},
     {OPT_PART, "part", 0, "P", 0, CMD_TABULATE,
      "the lobes a .csv/.exr table holds: transmission (default), reflection (theta_r in\n"
      "[0, 90], nodes around the mirror direction) or both (one file, each part meeting\n"
