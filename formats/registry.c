@@ -307,6 +307,8 @@ static btdf_status table_inspect(const btdf_input *in, FILE *out)
     fprintf(out, "\nsmoothness: %s\n", b);
     btdf_format_double(p->k0, b, sizeof b);
     fprintf(out, "k0: %s\n", b);
+    if (kind != BTDF_TABLE_GRID) /* what the slices interpolate (docs/tables.md) */
+        fprintf(out, "slice rule: %s\n", btdf_table_rule_name(btdf_table_get_rule(t)));
     size_t ns = btdf_table_slice_count(t), nodes = btdf_table_node_count(t);
     btdf_slice s0, s1;
     if (ns > 0 && btdf_table_slice(t, 0, &s0) == BTDF_OK &&
