@@ -353,11 +353,14 @@ static btdf_status table_inspect(const btdf_input *in, FILE *out)
     fprintf(out, "\nsmoothness: %s\n", b);
     btdf_format_double(p->k0, b, sizeof b);
     fprintf(out, "k0: %s\n", b);
+    if (kind != BTDF_TABLE_GRID) /* what the slices interpolate (docs/tables.md) */
+        fprintf(out, "slice rule: %s\n", btdf_table_rule_name(btdf_table_get_rule(t)));
     const btdf_table *tr = btdf_table_parts(t) == BTDF_PART_BOTH
                                ? btdf_table_part(t, BTDF_PART_REFLECTION) : NULL;
     if (tr)
-        fprintf(out, "parts: transmission, reflection (kind %s)\n",
-                btdf_table_kind_name(btdf_table_get_kind(tr)));
+        fprintf(out, "parts: transmission, reflection (kind %s, slice rule %s)\n",
+                btdf_table_kind_name(btdf_table_get_kind(tr)),
+                btdf_table_rule_name(btdf_table_get_rule(tr)));
     inspect_part(t, out, "");
     if (tr)
         inspect_part(tr, out, "reflection ");

@@ -215,6 +215,11 @@ s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
 [ -n "$s" ] && [ $((s * 32)) -le 1048576 ] && ok "3 channels at --max-memory 1: $s nodes, $((s * 32)) bytes" || no "--max-memory 1: $s nodes"
 rm -f "$W"/b.*
 
+# adaptive tables name their slice rule, and inspect says it
+"$B" tabulate -q --ior 1.0001 -s 3 --tolerance 3e-2 -o "$W/r.csv" && grep -q '^# slice-rule: chi$' "$W/r.csv" && \
+    "$B" inspect "$W/r.csv" | grep -q '^slice rule: chi$' && ok "slice rule chi in the CSV and in inspect" || no "slice rule"
+rm -f "$W/r.csv"
+
 # .bsdf: built, inspected, evaluated; --theta-i does not apply
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 -o "$W/g.bsdf" && "$B" inspect "$W/g.bsdf" | grep -q 'SCATFUN v1' && \
     ok ".bsdf written and inspected" || no ".bsdf"
