@@ -22,6 +22,8 @@
  * tables that of channel 0; empty where no facet refracts into the lower hemisphere).
  * A comment line "# rows: N" before the first node row gives the number of them, and
  * the last line is "# end: N rows": a file cut anywhere, or missing rows, is refused.
+ * A file holding both parts (transmission and reflection, docs/formats.md) has a last
+ * column, part, and a "# parts:" line; the reflection's rows follow the transmission's.
  */
 
 /* pre, the shortest decimal that reads back to x, post. */

@@ -21,7 +21,9 @@
  *   pixel (x = col, y = row), data window (0, 0) - (ncols - 1, nrows - 1);
  *   per part:  btdf.ti (double, radians), btdf.rows / btdf.cols (string, %.17g
  *              radians separated by spaces), btdf.rowAxis / btdf.colAxis (string);
- *   part 0:    the table (kind, channels, n per channel, s, k0, units, report). */
+ *   part 0:    the table (kind, channels, n per channel, s, k0, units, report);
+ *   a file holding both parts: the reflection's slices after the transmission's, each
+ *   with btdf.part "reflection", and btdf.refl.* on part 0 (docs/formats.md). */
 
 #define ATTR_PREFIX "btdf."
 
