@@ -302,7 +302,7 @@ static void rule_in_files(void **state)
     free(x);
     btdf_table *e = NULL;
     assert_status(BTDF_EFORMAT, btdf_table_read(p2, &e, msg, sizeof msg));
-    assert_non_null(strstr(msg, "plain or chi"));
+    assert_non_null(strstr(msg, "plain, chi or fresnel"));
     /* a grid table cannot take the chi rule; a rule is set before any slice */
     btdf_table *g = NULL;
     assert_status(BTDF_OK, btdf_table_new(BTDF_TABLE_GRID, btdf_table_get_params(a), &g, msg,
