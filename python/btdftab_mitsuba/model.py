@@ -94,6 +94,54 @@ def rho_eq25(n, s, k0, sti, cti, sto, cto, cph, sph):
     return dr.select(ok, r, 0.0)
 
 
+def fresnel_r(n, ca):
+    """Fresnel reflectance of a facet at incidence cosine ca > 0 for the index ratio n
+    (the medium behind over the medium of the light); 1 past the critical angle (n < 1).
+    Formed as libbtdf forms it (MODEL.md section 8), without the cancellation of
+    1 - Ft: with dd = n^2 - 1 and g^2 = n^2 cos^2 b = dd + ca^2,
+    ca - g = -dd/(ca + g) and n ca - g/n = dd ((n^2 + 1) ca^2 - 1)/(n^2 (n ca + g/n)),
+    so Fr keeps its relative accuracy when n is near 1."""
+    d = n - 1.0
+    dd = d * (2.0 + d)
+    g2 = dd + ca * ca
+    tir = g2 <= 0.0
+    g = dr.sqrt(dr.select(tir, 0.0, g2))
+    s1 = ca + g  # > 0 for ca > 0
+    p1 = n * ca + g / n  # > 0 for ca > 0
+    s1 = dr.select(s1 > 0.0, s1, 1.0)  # ca = 0 only on lanes the caller masks out
+    p1 = dr.select(p1 > 0.0, p1, 1.0)
+    rs = dd / (s1 * s1)
+    rp = dd * ((n * n + 1.0) * ca * ca - 1.0) / (n * n * p1 * p1)
+    return dr.select(tir, 1.0, 0.5 * (rs * rs + rp * rp))
+
+
+def rho_r(n, s, k0, sti, cti, str_, ctr, cph, sph):
+    """The reflection of the same facets (MODEL.md section 8), one channel, for the
+    reflected direction e_r = (str_ cph, str_ sph, ctr), ctr >= 0, in the light's
+    medium: Fr D V(ti) V(tr) / (4 cos ti cos tr) with h = (e_i + e_r)/|e_i + e_r|.
+    0 at grazing angles, never NaN."""
+    ux = sti + str_ * cph
+    uy = str_ * sph
+    uz = cti + ctr  # 2 cos a cos tn
+    rxy2 = ux * ux + uy * uy
+    uz2 = uz * uz
+    ok = (cti > 0.0) & (ctr > 0.0) & (uz > 0.0)
+    e = 0.25 * s * s * rxy2  # s^2 tan^2 tn / 4 = e / uz^2
+    # past this exponent D underflows to 0 anyway; the cut keeps e/uz2 finite
+    ok &= e < 746.0 * uz2  # libbtdf's cut (BTDF_EXP_CUT)
+    uz2 = dr.select(ok, uz2, 1.0)
+    u2 = rxy2 + uz2
+    ca = 0.5 * dr.sqrt(u2)  # cos a = |u|/2 > 0
+    fr = fresnel_r(n, ca)
+    sec2 = u2 / uz2  # 1/cos^2 tn
+    d = s * s / (4.0 * math.pi) * sec2 * sec2 * dr.exp(-e / uz2)
+    ci = dr.select(ok, cti, 1.0)  # both > 0 where used
+    cr = dr.select(ok, ctr, 1.0)
+    v = shadow_v(sti / ci, s, k0) * shadow_v(str_ / cr, s, k0)
+    r = fr * d * v / (4.0 * ci * cr)
+    return dr.select(ok, r, 0.0)
+
+
 class TableRule:
     """The slices of a table (read by libbtdf) on the device, and the rule of btdf/btdf.h."""
 
