@@ -3,7 +3,7 @@
 tests/mitsuba.sh in a venv with mitsuba from PyPI:
 
     python tests/mitsuba_checks.py VARIANT TABLE_DIR [--render OUT_DIR] [--render-only]
-        [--repeats N]
+        [--repeats N] [--part both|transmission]
 
 TABLE_DIR holds the tables tests/mitsuba.sh writes with btdftab. Prints one "ok" or
 "not ok" line per check, the measured figures, and "N passed, N failed" last.
@@ -25,6 +25,7 @@ VARIANT, TABLES = sys.argv[1], sys.argv[2]
 RENDER_DIR = sys.argv[sys.argv.index("--render") + 1] if "--render" in sys.argv else None
 REPEATS = int(sys.argv[sys.argv.index("--repeats") + 1]) if "--repeats" in sys.argv else 3
 RENDER_ONLY = "--render-only" in sys.argv  # the timing of docs/mitsuba3.md
+PART = sys.argv[sys.argv.index("--part") + 1] if "--part" in sys.argv else "both"
 mi.set_variant(VARIANT)
 import btdftab_mitsuba  # noqa: E402  (registers the plugin)
 from btdftab_mitsuba import libbtdf  # noqa: E402
@@ -247,8 +248,9 @@ def wi_of(deg, side=1.0):
 class ZoomDomain:
     """Directions within a cone around `center`, by gnomonic coordinates (x, y) in
     [-r, r]^2: w = normalize(x e1 + y e2 + center), d(omega) = dx dy / (1+x^2+y^2)^1.5.
-    For s = 100 the lobe is about 0.4 degrees wide, below the sphere's 1.8-degree cells
-    at res = 101, where the trapezoid rule cannot integrate the pdf over a cell."""
+    For s = 100 the lobe is about 0.4 degrees wide, below the sphere's cells at res = 101
+    (50 x 101 over phi x cos theta: 7.2 degrees by 0.02), where the trapezoid rule
+    cannot integrate the pdf over a cell."""
 
     def __init__(self, center, r):
         self.e3 = mi.ScalarVector3f(center)
@@ -291,7 +293,8 @@ def pdf_adapter(d, wi):
     pdf > 0, not where its weight is nonzero: at grazing exits the shadowing V(t)
     underflows float (t within 0.2 degrees of the horizon at s = 3), the weight is 0
     although the direction was drawn, and dropping those samples (2072 of 10^6 for
-    light from behind at 70 degrees, one run) would make the histogram miss what the pdf holds."""
+    light from behind at 70 degrees, one run) would make the histogram miss what the
+    pdf holds."""
     plugin = mi.load_dict(d)
     ctx = mi.BSDFContext()
 
@@ -345,7 +348,7 @@ def chi2_checks():
             check(ok, "chi2: n = %.4g, s = %g, ti = %g deg, p-value %.3g (1e6 samples, %s)%s"
                   % (n, s, deg, chi.p_value,
                      "101 x 101 cells over 0.15 rad around the refracted direction" if zoom
-                     else "101 x 202 cells over the sphere",
+                     else "50 x 101 cells (phi, cos theta) over the sphere",
                      "" if ok else ": " + chi.messages.strip()))
     # the other side of the (1.5, 3) table: light from behind, by reciprocity
     chi = chi2_one("f15.exr", wi_of(45.0, -1.0))
@@ -509,8 +512,10 @@ def component_checks():
                          float(dr.ravel(p)[0]) if JIT else float(p)))
         res[name] = vals
     ok = (all(x > 0 for x in res["all"][0] + res["all"][1])
-          and res["component 0"][0][0] == res["all"][0][0] and res["component 0"][1] == (0.0, 0.0)
-          and res["component 1"][1][0] == res["all"][1][0] and res["component 1"][0] == (0.0, 0.0)
+          and res["component 0"][0][0] == res["all"][0][0]
+          and res["component 0"][1] == (0.0, 0.0)
+          and res["component 1"][1][0] == res["all"][1][0]
+          and res["component 1"][0] == (0.0, 0.0)
           and res["GlossyReflection"][0] == res["component 0"][0]
           and res["GlossyTransmission"][1] == res["component 1"][1]
           and res["component 0"][0][1] > res["all"][0][1]
@@ -762,8 +767,9 @@ def render_checks(res, spp, repeats):
     e_max = report_of("face.csv")["e_max"]["max"]
     n = libbtdf.Table(face).ior[0]
     s = libbtdf.Table(face).smoothness
-    sc_t = scene({"type": "btdftab", "filename": face}, res, spp)
-    sc_a = scene({"type": "btdftab", "filename": face, "mode": "analytic"}, res, spp)
+    sc_t = scene({"type": "btdftab", "filename": face, "part": PART}, res, spp)
+    sc_a = scene({"type": "btdftab", "filename": face, "mode": "analytic", "part": PART},
+                 res, spp)
     # roughdielectric: the normal faces the medium of index 1/n (the light's side)
     sc_r = scene({"type": "roughdielectric", "distribution": "beckmann", "alpha": 2.0 / s,
                   "int_ior": 1.0, "ext_ior": 1.0 / n, "sample_visible": True}, res, spp)
