@@ -200,34 +200,43 @@ def eval_check(label, fname, back_name=None, pairs=10000, seed=1):
 
 
 def analytic_check(pairs=10000, seed=2):
-    """Mode analytic against btdf_eval (Eq. 25 of libbtdf), both sides."""
-    for n, s in ((1.5, 3.0), (1.0 / 1.5, 6.0), (1.5, 100.0)):
-        b = bsdf(mode="analytic", ior=str(n), smoothness=s, part="transmission")
+    """Mode analytic against btdf_eval (Eq. 25 of libbtdf), both sides; part = both
+    evaluates both lobes in one pass (model.rho_any), part = transmission Eq. 25 alone."""
+    for n, s, part in ((1.5, 3.0, "transmission"), (1.0 / 1.5, 6.0, "transmission"),
+                       (1.5, 100.0, "transmission"), (1.5, 3.0, "both"),
+                       (1.0 / 1.5, 6.0, "both"), (1.5, 100.0, "both")):
+        b = bsdf(mode="analytic", ior=str(n), smoothness=s, part=part)
         p = libbtdf.make_params(n, s)
         pb = libbtdf.make_params(1.0 / n, s)
         rng = random.Random(seed)
         wis = [f32(rand_dir(rng, i % 2 == 0)) for i in range(pairs)]
         wos = [rand_dir(rng, w[2] < 0) for w in wis]
-        lobe = sampled_dirs(b, wis[pairs // 2:], rng)
+        lobe = sampled_dirs(bsdf(mode="analytic", ior=str(n), smoothness=s,
+                                 part="transmission"), wis[pairs // 2:], rng)
         wos = [f32(w) for w in wos[:pairs // 2] + lobe]
-        got = eval_many(b, mi.TransportMode.Importance, wis, wos)
-        max_rel = 0.0
-        bad = 0
-        for a, c, g in zip(wis, wos, got):
-            if a[2] * c[2] >= 0:
-                continue
-            flip = lambda v: [v[0], v[1], -v[2]]  # noqa: E731
-            ref = (libbtdf.rho(p, *angles(a, c)) if a[2] > 0
-                   else libbtdf.rho(pb, *angles(flip(a), flip(c))))[0] * abs(c[2])
-            d = abs(g[0] - ref)
-            if ref >= FLT_MIN:
-                max_rel = max(max_rel, d / ref)
-            # Eq. 25 in double in both, then two float roundings; at s = 100 the lobe's
-            # exponent s^2 tan^2/4 amplifies double rounding of the angles, measured < 1e-9.
-            if d > 2.0 * EPS32 * ref + FLT_MIN:
-                bad += 1
-        check(bad == 0, "analytic mode = btdf_eval, n = %.4g, s = %g: max rel diff %.3g"
-              % (n, s, max_rel))
+        flip = lambda v: [v[0], v[1], -v[2]]  # noqa: E731
+        for mode, mname in ((mi.TransportMode.Importance, "importance"),
+                            (mi.TransportMode.Radiance, "radiance")):
+            got = eval_many(b, mode, wis, wos)
+            max_rel = 0.0
+            bad = 0
+            for a, c, g in zip(wis, wos, got):
+                if a[2] * c[2] >= 0:
+                    continue
+                # light arrives along src: wi in importance mode, wo in radiance mode
+                src, dst = (c, a) if mode == mi.TransportMode.Radiance else (a, c)
+                ref = (libbtdf.rho(p, *angles(src, dst)) if src[2] > 0
+                       else libbtdf.rho(pb, *angles(flip(src), flip(dst))))[0] * abs(c[2])
+                d = abs(g[0] - ref)
+                if ref >= FLT_MIN:
+                    max_rel = max(max_rel, d / ref)
+                # Eq. 25 in double in both, then two float roundings; at s = 100 the
+                # lobe's exponent s^2 tan^2/4 amplifies double rounding of the angles,
+                # measured < 1e-9.
+                if d > 2.0 * EPS32 * ref + FLT_MIN:
+                    bad += 1
+            check(bad == 0, "analytic mode = btdf_eval, part = %s, %s mode, n = %.4g, "
+                  "s = %g: max rel diff %.3g" % (part, mname, n, s, max_rel))
 
 
 # ---------------------------------------------------------------------------------

@@ -25,7 +25,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import libbtdf
-from .model import TableRule, rho_eq25, rho_r
+from .model import TableRule, rho_any, rho_eq25, rho_r
 
 _classes = {}
 
@@ -47,8 +47,8 @@ def _to_float(x):
 
 
 def _angles(a, b):
-    """(sti, cti, sto, cto, cph, sph) in double for a (z >= 0) and b (z <= 0), the
-    directions normalised; phi is the azimuth of b relative to a."""
+    """(sti, cti, sto, cto, cph, sph) in double for a (z >= 0) and b (either side; cto
+    keeps b's sign), the directions normalised; phi is the azimuth of b relative to a."""
     ax, ay, az = _f64(a.x), _f64(a.y), _f64(a.z)
     bx, by, bz = _f64(b.x), _f64(b.y), _f64(b.z)
     la = dr.sqrt(ax * ax + ay * ay + az * az)
@@ -225,6 +225,18 @@ def _make_class():
             if not (en_r or en_t):
                 return value
             wi = si.wi
+            if en_t and en_r and self.mode == "analytic":
+                # Both lobes in one pass (rho_any): D and the shadowing once per query.
+                # rho_r is reciprocal, so the transport mode's order serves both.
+                src, dst = (wo, wi) if ctx.mode == mi.TransportMode.Radiance else (wi, wo)
+                front = src.z > 0.0
+                ang = _angles(dr.select(front, src, _flip(src)),
+                              dr.select(front, dst, _flip(dst)))
+                vals = []
+                for n in self.ior:
+                    ns = dr.select(front, _f64(n), _f64(1.0 / n))  # double, not float
+                    vals.append(dr.select(active, rho_any(ns, self.s, self.k0, *ang), 0.0))
+                return dr.select(active, self._spectrum(vals) * dr.abs(wo.z), value)
             if en_t:
                 trans = active & (wi.z * wo.z < 0.0)
                 if ctx.mode == mi.TransportMode.Radiance:
