@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 
 #include <openexr.h>
+#include <pthread.h>
 
 #include "formats.h"
 #include "model_impl.h"
@@ -33,16 +34,57 @@ typedef struct exr_err {
     char text[256];
 } exr_err;
 
+static void note_error(exr_err *e, exr_result_t code, const char *text)
+{
+    if (e->have)
+        return; /* keep the first: later ones are usually consequences */
+    e->have = 1;
+    snprintf(e->text, sizeof e->text, "%s", text ? text : exr_get_default_error_message(code));
+}
+
+/* Reading contexts: the record is the context's user data. */
 static void on_exr_error(exr_const_context_t ctx, exr_result_t code, const char *text)
 {
     void *ud = NULL;
     if (exr_get_user_data(ctx, &ud) != EXR_ERR_SUCCESS || ud == NULL)
         return;
-    exr_err *e = ud;
-    if (e->have)
-        return; /* keep the first: later ones are usually consequences */
-    e->have = 1;
-    snprintf(e->text, sizeof e->text, "%s", text ? text : exr_get_default_error_message(code));
+    note_error(ud, code, text);
+}
+
+/* Writing contexts: OpenEXR reports a write error while it holds the context's lock,
+   and exr_get_user_data takes that same lock (a write context locks it on every call),
+   so asking for the user data from the handler would wait forever. Writers register
+   their record here instead, under a lock of our own that is never held while calling
+   into OpenEXR. A context not (yet) registered keeps OpenEXR's default message. */
+#define WRITE_SLOTS 64
+static pthread_mutex_t write_slots_lock = PTHREAD_MUTEX_INITIALIZER;
+static struct {
+    exr_const_context_t ctx;
+    exr_err *err;
+} write_slots[WRITE_SLOTS];
+
+/* Registers err for ctx (err != NULL), or frees err's slot (ctx == NULL). */
+static void write_slot_set(exr_const_context_t ctx, exr_err *err, const exr_err *old)
+{
+    pthread_mutex_lock(&write_slots_lock);
+    for (size_t i = 0; i < WRITE_SLOTS; i++)
+        if (write_slots[i].err == old) {
+            write_slots[i].ctx = ctx;
+            write_slots[i].err = err;
+            break;
+        }
+    pthread_mutex_unlock(&write_slots_lock);
+}
+
+static void on_exr_write_error(exr_const_context_t ctx, exr_result_t code, const char *text)
+{
+    pthread_mutex_lock(&write_slots_lock);
+    for (size_t i = 0; i < WRITE_SLOTS; i++)
+        if (write_slots[i].ctx == ctx && write_slots[i].err) {
+            note_error(write_slots[i].err, code, text);
+            break;
+        }
+    pthread_mutex_unlock(&write_slots_lock);
 }
 
 #define say btdf_say /* model_impl.h */
@@ -381,8 +423,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
 
     exr_err err = {0, {0}};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    init.error_handler_fn = on_exr_error;
-    init.user_data = &err;
+    init.error_handler_fn = on_exr_write_error;
     exr_context_t ctx = NULL;
     btdf_status st = BTDF_OK;
     exr_result_t rc = exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init);
@@ -390,6 +431,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
         free(planes);
         return say(BTDF_EIO, msg, msglen, "%s", exr_text(&err, rc));
     }
+    write_slot_set(ctx, &err, NULL); /* from here on, OpenEXR's messages reach err */
     const char *const *names = chan_names(channels);
     for (size_t k = 0; k < nslices && rc == EXR_ERR_SUCCESS; k++) {
         btdf_slice sl;
@@ -435,6 +477,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
     }
     free(planes);
     rc = exr_finish(&ctx);
+    write_slot_set(NULL, NULL, &err);
     if (st == BTDF_OK && rc != EXR_ERR_SUCCESS)
         st = say(BTDF_EIO, msg, msglen, "OpenEXR: %s", exr_text(&err, rc));
     return st;
