@@ -61,6 +61,7 @@ typedef struct rad_block {
     const char *label;   /* "Transmission Front" */
     double n;            /* index of the tree's own geometry, p as incident */
     double scale;        /* values are scale * rho(n; p -> q) */
+    int reflect;         /* 1: a reflection block, rho_r(n) for p and q on its side */
     btdf_side light;     /* the light this block serves in a render */
     double n_light;      /* its index: rho(n_light; q -> p) is what a render needs */
     /* TensorTree3 */

@@ -74,15 +74,14 @@ static void test_tree_file(void **state)
     r->tolerance = 0.5;
     r->nblocks = 2;
     double n = p.ior[0];
-    rad_block b0 = {BTDF_SIDE_ENTER, "Transmission Front", n, 1 / (n * n), BTDF_SIDE_LEAVE,
+    rad_block b0 = {BTDF_SIDE_ENTER, "Transmission Front", n, 1 / (n * n), 0, BTDF_SIDE_LEAVE,
                     1 / n, NULL, 0, 0, 0, NULL};
-    rad_block b1 = {BTDF_SIDE_LEAVE, "Transmission Back", 1 / n, n * n, BTDF_SIDE_ENTER, n,
+    rad_block b1 = {BTDF_SIDE_LEAVE, "Transmission Back", 1 / n, n * n, 0, BTDF_SIDE_ENTER, n,
                     NULL, 0, 0, 0, NULL};
     r->b[0] = b0;
     r->b[1] = b1;
     for (int k = 0; k < 2; k++)
-        assert_status(BTDF_OK, rad_tree_build(&p, r->b[k].n, r->b[k].scale, 3e-4, 0,
-                                              (size_t)1 << 24, &r->b[k], NULL, 0));
+        assert_status(BTDF_OK, rad_tree_build(&p, 3e-4, 0, (size_t)1 << 24, &r->b[k], NULL, 0));
     assert_int_equal(btdf_rad_block_count(r), 2);
     for (int k = 0; k < 2; k++) {
         btdf_report rep;
