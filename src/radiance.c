@@ -84,10 +84,10 @@ BTDF_API double btdf_rad_e_l1_checked(const btdf_report *rep)
 
 /* The tree's node budget: 2^25 nodes (384 MB while building), far beyond any useful file. */
 #define RAD_MAX_NODES ((size_t)1 << 23)
-/* The builder's own error estimate: its own seed, 96 light angles up to RAD_TI_CHECKED
+/* The builder's own error estimate: its own seed, 192 light angles up to RAD_TI_CHECKED
    (stratified) and 32 x 64 views each, stratified in projected solid angle. */
 #define RAD_CHECK_SEED 0x5ad1a7e5u
-#define RAD_CHECK_ANGLES 96
+#define RAD_CHECK_ANGLES 192
 #define RAD_CHECK_S 32
 #define RAD_CHECK_PHI 64
 /* Aim below the tolerance: the report is another, independent estimate. */

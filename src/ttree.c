@@ -35,6 +35,7 @@
  * grown in steps (rad_tb_grow), can be cut (rad_tb_extract) at any eps above, so the
  * caller searches eps against an error estimate without evaluating cells again.
  */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -44,7 +45,7 @@
 
 #define RAD_FTINY 1e-6 /* Radiance's FTINY in double builds, in u0 */
 #define NS 4           /* samples per cell and dimension */
-#define NR_GRID 1025   /* nodes of the floor max(T, 0.01) over the ring radius r in [0, 1] */
+#define NR_GRID 129    /* nodes of the floor max(T, 0.01) over the ring radius r in [0, 1] */
 
 void rad_square_to_disk(double a, double b, double *x, double *y)
 {
@@ -164,19 +165,25 @@ static int32_t buf_alloc(tt_buf *b, size_t count)
     return first;
 }
 
-/* The smallest floor over ring radii [lo, hi]. */
+/* The floor at ring radius x, linear between the grid's nodes. */
+static double floor_at(const tt_ctx *c, double x)
+{
+    double t = fmin(fmax(x, 0.0), 1.0) * (NR_GRID - 1);
+    long i = (long)t;
+    if (i >= NR_GRID - 1)
+        return c->rfloor[NR_GRID - 1];
+    double w = t - (double)i;
+    return (1.0 - w) * c->rfloor[i] + w * c->rfloor[i + 1];
+}
+
+/* The smallest floor over ring radii [lo, hi]: the ends and the nodes between. */
 static double floor_min(const tt_ctx *c, double lo, double hi)
 {
-    double scale = (double)(NR_GRID - 1);
-    long i0 = (long)floor(lo * scale), i1 = (long)ceil(hi * scale);
-    if (i0 < 0)
-        i0 = 0;
-    if (i1 > NR_GRID - 1)
-        i1 = NR_GRID - 1;
-    double m = 1e300;
+    double m = fmin(floor_at(c, lo), floor_at(c, hi));
+    long i0 = (long)ceil(fmax(lo, 0.0) * (NR_GRID - 1)), i1 = (long)floor(fmin(hi, 1.0) * (NR_GRID - 1));
     for (long i = i0; i <= i1; i++)
         m = fmin(m, c->rfloor[i]);
-    return m < 1e300 ? m : 0.01;
+    return m;
 }
 
 /* Leaf values carry 4 significant digits (relative rounding <= 5e-4, which moves an
@@ -193,6 +200,25 @@ static float file_value(double v)
 /* Distance from 0 to [lo, hi] and the largest |x| on it. */
 static double dist0(double lo, double hi) { return lo > 0.0 ? lo : (hi < 0.0 ? -hi : 0.0); }
 static double absmax(double lo, double hi) { return fmax(fabs(lo), fabs(hi)); }
+
+/* rho_r (MODEL.md section 8) for the view e_i = (st, 0, ct) and the light at disk
+   point r (cos phi, sin phi) of the tree (phi = pi: specular), with the shadowing
+   factors vi = V(ti), vr = V(tr) given: Fr D V V / (4 cos ti cos tr) with the
+   half vector h = e_i + e_r, cos a = |h| / 2, tan^2 tn = (h_x^2 + h_y^2) / h_z^2. */
+static double rho_r_cell(const tt_ctx *c, double st, double ct, double vi, double r,
+                         double cph, double sph, double vr)
+{
+    double cr = sqrt(fmax(0.0, 1.0 - r * r));
+    double hx = st + r * cph, hy = r * sph, hz = ct + cr; /* hz > 0: both cosines >= 0 */
+    double rxy2 = hx * hx + hy * hy, hz2 = hz * hz, u2 = rxy2 + hz2;
+    if (!(ct > 0.0 && cr > 0.0 && hz2 > 0.0))
+        return 0.0; /* grazing: rho_r -> 0 (shadowing), and no 1/0 */
+    double sec2 = u2 / hz2;
+    double fr = bt_fresnel_r(c->n, c->n - 1.0, 0.5 * sqrt(u2));
+    double v = c->s * c->s / (16.0 * M_PI) * fr * exp(-0.25 * c->s * c->s * rxy2 / hz2) *
+               sec2 * sec2 * vi * vr / (ct * cr);
+    return v >= DBL_MIN ? v : 0.0;
+}
 
 /* The largest over the r bins of sum |f - v| ws: a cell's share of one light's e_L1. */
 static double tt_binmax(double f[NS][NS * NS], double ws[NS][NS * NS], const int *bin, double v)
@@ -212,7 +238,7 @@ static void tt_eval(const tt_ctx *c, tb_node *nd, int level, uint32_t i0, uint32
 {
     double h = ldexp(1.0, -level), f[NS][NS * NS], rr[NS * NS];
     rho_out ro[NS * NS];
-    double cph[NS * NS], sph[NS * NS];
+    double cph[NS * NS], sph[NS * NS], vr[NS * NS];
     for (int j = 0; j < NS; j++) {
         for (int k = 0; k < NS; k++) {
             double a = ((double)i1 + (j + 0.5) / NS) * h, bb = ((double)i2 + (k + 0.5) / NS) * h;
@@ -223,6 +249,8 @@ static void tt_eval(const tt_ctx *c, tb_node *nd, int level, uint32_t i0, uint32
             rr[m] = r;
             if (!c->reflect)
                 rho_out_init(&ro[m], r, -sqrt(1.0 - r2), c->s, c->k0);
+            else /* a midpoint has r < 1: cos > 0 */
+                vr[m] = shadow_v(r / sqrt(1.0 - r2), c->s, c->k0);
             /* phi = psi + pi, psi the azimuth of (x, y); any phi at the centre r = 0 */
             cph[m] = r > 0.0 ? -x / r : 1.0;
             sph[m] = r > 0.0 ? -y / r : 0.0;
@@ -234,10 +262,10 @@ static void tt_eval(const tt_ctx *c, tb_node *nd, int level, uint32_t i0, uint32
         double st = fmin(1.0, fmax(0.0, 1.0 - 2.0 * (u0 + RAD_FTINY)));
         sp[i] = st;
         if (c->reflect) {
-            double tp = asin(st);
+            double ct = sqrt(1.0 - st * st);
+            double vi = shadow_v(st / ct, c->s, c->k0); /* ct > 0 below u0 = 0.5 - FTINY */
             for (int m = 0; m < NS * NS; m++)
-                f[i][m] = btdf_rho_r(c->n, c->s, c->k0, tp, asin(rr[m]),
-                                     atan2(sph[m], cph[m]));
+                f[i][m] = rho_r_cell(c, st, ct, vi, rr[m], cph[m], sph[m], vr[m]);
         } else {
             rho_in ri;
             rho_in_init(&ri, st, sqrt(1.0 - st * st), c->s, c->k0);
