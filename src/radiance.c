@@ -92,6 +92,9 @@ BTDF_API double btdf_rad_e_l1_checked(const btdf_report *rep)
 #define RAD_CHECK_PHI 64
 /* Aim below the tolerance: the report is another, independent estimate. */
 #define RAD_AIM 0.85
+#define RAD_EDGE_DIV 64 /* ring radii j / 64: the r edges of level-7 cells */
+/* The final check of a cut tree, by the report's estimator with the builder's seed. */
+#define RAD_AIM_CHECK 0.92
 
 BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
                                     double tolerance, int threads, btdf_rad **out, char *msg,
@@ -201,6 +204,15 @@ static btdf_status rad_probes_make(const btdf_rad *r, int k, double ti_max, size
 {
     memset(pr, 0, sizeof *pr);
     pr->ti_max = ti_max;
+    /* e_L1 jumps where a light's ring passes from one cell to the next in r, at
+       r = j / 2^(L-1) for a cell of level L; a stratified set misses narrow peaks
+       there, so the builder's set (ti_max < pi/2) adds both sides of every level-7
+       edge up to ti_max. */
+    size_t extra = 0;
+    if (ti_max < M_PI / 2)
+        for (int j = 1; j < RAD_EDGE_DIV && asin((j + 1e-6) / RAD_EDGE_DIV) <= ti_max; j++)
+            extra += 2;
+    m += extra;
     pr->m = m;
     pr->ns = ns;
     pr->nphi = nphi;
@@ -224,7 +236,12 @@ static btdf_status rad_probes_make(const btdf_rad *r, int k, double ti_max, size
     q.ior[0] = r->b[k].n_light;
     uint64_t z = seed;
     for (size_t i = 0; i < m; i++) {
-        pr->ti[i] = pr->ti_max * ((double)i + rad_unif(&z)) / (double)m;
+        if (i < m - extra) {
+            pr->ti[i] = pr->ti_max * ((double)i + rad_unif(&z)) / (double)(m - extra);
+        } else {
+            size_t e = i - (m - extra);
+            pr->ti[i] = asin(((double)(e / 2 + 1) + (e % 2 ? 1e-6 : -1e-6)) / RAD_EDGE_DIV);
+        }
         double v = 0.0;
         btdf_status st = r->b[k].reflect ? btdf_reflectance(&q, pr->ti[i], &v)
                                          : btdf_transmittance(&q, pr->ti[i], &v);
@@ -354,10 +371,34 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
                 hi = x;
         }
         st = rad_tb_extract(t, lo, b);
-    } else if (st == BTDF_EBUDGET) {
+        /* The probes see e_L1 at fixed angles; it jumps where a light's ring enters the
+           next cell, and the report's estimate refines there. So check the cut tree
+           with that estimator too (its own seed) and cut finer while it misses. */
+        for (int i = 0; i < 6 && st == BTDF_OK; i++) {
+            btdf_report rep;
+            memset(&rep, 0, sizeof rep);
+            st = btdf_rad_report(r, k, 48, 4096, RAD_CHECK_SEED, threads, &rep);
+            double ec = btdf_rad_e_l1_checked(&rep);
+            btdf_report_clear(&rep);
+            if (getenv("BTDF_RAD_DEBUG"))
+                fprintf(stderr, "check %s eps %.3g: %zu leaves, e_L1 max %.4g\n", b->label, lo,
+                        b->leaves, ec);
+            if (st != BTDF_OK || ec <= RAD_AIM_CHECK * r->tolerance)
+                break;
+            lo *= 0.6;
+            if (lo < eps) { /* below what the tree was grown to: grow it further */
+                eps = lo;
+                st = rad_tb_grow(t, eps, RAD_MAX_NODES);
+                if (st != BTDF_OK)
+                    break;
+            }
+            st = rad_tb_extract(t, lo, b);
+        }
+    }
+    if (st == BTDF_EBUDGET) {
         snprintf(msg, msglen, "%s: e_L1 %.3g above the tolerance %g with the node budget "
                               "(%zu nodes)", b->label, e, r->tolerance, (size_t)RAD_MAX_NODES);
-    } else {
+    } else if (st != BTDF_OK) {
         btdf_say(st, msg, msglen, "out of memory building the tensor tree");
     }
     rad_tb_free(t);
