@@ -41,8 +41,8 @@ BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b);
 /* Builds the blocks for one channel. tree3: the two transmission and two reflection
    blocks, leaves whose e_L1 (MODEL.md 6) as Radiance reads them meets tolerance
    ([1e-3, 0.5]) for light up to BTDF_RAD_TI_CHECKED_DEG, checked by estimates of its
-   own; Klems: the two transmission blocks, exact patch averages (tolerance ignored). threads: 0 = all cores; the result does not depend on
-   it. BTDF_OK; BTDF_EBUDGET when the tolerance could not be met (*out holds the best
+   own; Klems: the two transmission blocks, exact patch averages (tolerance ignored).
+   threads: 0 = all cores; the result does not depend on it. BTDF_OK; BTDF_EBUDGET when the tolerance could not be met (*out holds the best
    file); BTDF_EINVAL (parameters, more than one channel, tolerance); BTDF_ENOMEM. */
 #define BTDF_RAD_TI_CHECKED_DEG 80.0
 BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
