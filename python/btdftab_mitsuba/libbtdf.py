@@ -115,6 +115,11 @@ def _declare(lib):
                               ctypes.c_double, dp]
     lib.btdf_transmittance.restype = ctypes.c_int
     lib.btdf_transmittance.argtypes = [ctypes.POINTER(_Params), ctypes.c_double, dp]
+    lib.btdf_eval_r.restype = ctypes.c_int
+    lib.btdf_eval_r.argtypes = [ctypes.POINTER(_Params), ctypes.c_double, ctypes.c_double,
+                                ctypes.c_double, dp]
+    lib.btdf_reflectance.restype = ctypes.c_int
+    lib.btdf_reflectance.argtypes = [ctypes.POINTER(_Params), ctypes.c_double, dp]
 
 
 def _check(status, what, msg=None):
@@ -216,4 +221,18 @@ def transmittance(params, ti):
     """btdf_transmittance: T(ti) per channel."""
     out = (ctypes.c_double * MAX_CHANNELS)()
     _check(library().btdf_transmittance(ctypes.byref(params), ti, out), "btdf_transmittance")
+    return [out[c] for c in range(params.channels)]
+
+
+def rho_r(params, ti, tr, phi):
+    """btdf_eval_r: the reflection rho_r per channel (MODEL.md section 8)."""
+    out = (ctypes.c_double * MAX_CHANNELS)()
+    _check(library().btdf_eval_r(ctypes.byref(params), ti, tr, phi, out), "btdf_eval_r")
+    return [out[c] for c in range(params.channels)]
+
+
+def reflectance(params, ti):
+    """btdf_reflectance: R(ti) per channel."""
+    out = (ctypes.c_double * MAX_CHANNELS)()
+    _check(library().btdf_reflectance(ctypes.byref(params), ti, out), "btdf_reflectance")
     return [out[c] for c in range(params.channels)]

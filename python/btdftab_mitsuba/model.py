@@ -94,6 +94,93 @@ def rho_eq25(n, s, k0, sti, cti, sto, cto, cph, sph):
     return dr.select(ok, r, 0.0)
 
 
+def fresnel_r(n, ca):
+    """Fresnel reflectance of a facet at incidence cosine ca > 0 for the index ratio n
+    (the medium behind over the medium of the light); 1 past the critical angle (n < 1).
+    Formed as libbtdf forms it (MODEL.md section 8), without the cancellation of
+    1 - Ft: with dd = n^2 - 1 and g^2 = n^2 cos^2 b = dd + ca^2,
+    ca - g = -dd/(ca + g) and n ca - g/n = dd ((n^2 + 1) ca^2 - 1)/(n^2 (n ca + g/n)),
+    so Fr keeps its relative accuracy when n is near 1."""
+    d = n - 1.0
+    dd = d * (2.0 + d)
+    g2 = dd + ca * ca
+    tir = g2 <= 0.0
+    g = dr.sqrt(dr.select(tir, 0.0, g2))
+    s1 = ca + g  # > 0 for ca > 0
+    p1 = n * ca + g / n  # > 0 for ca > 0
+    s1 = dr.select(s1 > 0.0, s1, 1.0)  # ca = 0 only on lanes the caller masks out
+    p1 = dr.select(p1 > 0.0, p1, 1.0)
+    rs = dd / (s1 * s1)
+    rp = dd * ((n * n + 1.0) * ca * ca - 1.0) / (n * n * p1 * p1)
+    return dr.select(tir, 1.0, 0.5 * (rs * rs + rp * rp))
+
+
+def rho_r(n, s, k0, sti, cti, str_, ctr, cph, sph):
+    """The reflection of the same facets (MODEL.md section 8), one channel, for the
+    reflected direction e_r = (str_ cph, str_ sph, ctr), ctr >= 0, in the light's
+    medium: Fr D V(ti) V(tr) / (4 cos ti cos tr) with h = (e_i + e_r)/|e_i + e_r|.
+    0 at grazing angles, never NaN."""
+    ux = sti + str_ * cph
+    uy = str_ * sph
+    uz = cti + ctr  # 2 cos a cos tn
+    rxy2 = ux * ux + uy * uy
+    uz2 = uz * uz
+    ok = (cti > 0.0) & (ctr > 0.0) & (uz > 0.0)
+    e = 0.25 * s * s * rxy2  # s^2 tan^2 tn / 4 = e / uz^2
+    # past this exponent D underflows to 0 anyway; the cut keeps e/uz2 finite
+    ok &= e < 746.0 * uz2  # libbtdf's cut (BTDF_EXP_CUT)
+    uz2 = dr.select(ok, uz2, 1.0)
+    u2 = rxy2 + uz2
+    ca = 0.5 * dr.sqrt(u2)  # cos a = |u|/2 > 0
+    fr = fresnel_r(n, ca)
+    sec2 = u2 / uz2  # 1/cos^2 tn
+    d = s * s / (4.0 * math.pi) * sec2 * sec2 * dr.exp(-e / uz2)
+    ci = dr.select(ok, cti, 1.0)  # both > 0 where used
+    cr = dr.select(ok, ctr, 1.0)
+    v = shadow_v(sti / ci, s, k0) * shadow_v(str_ / cr, s, k0)
+    r = fr * d * v / (4.0 * ci * cr)
+    return dr.select(ok, r, 0.0)
+
+
+def rho_any(n, s, k0, sti, cti, sto, cto, cph, sph):
+    """rho (Eq. 25) where cto < 0 and rho_r where cto > 0, in one pass: both are
+    D(h) V(ti) V(to) times a facet factor, with h along e_i + k e_o (k = n through the
+    surface, 1 back into the light's medium), so a lane evaluates D and the shadowing
+    once instead of both formulas. Same values as rho_eq25 and rho_r (double, never NaN)."""
+    refl = cto > 0.0
+    k = dr.select(refl, 1.0, n)
+    vx = sti + k * sto * cph
+    vy = k * sto * sph
+    vz = cti + k * cto
+    rxy2 = vx * vx + vy * vy
+    vz2 = vz * vz
+    ok = (cti > 0.0) & (cto != 0.0) & (vz2 > 0.0)
+    e = 0.25 * s * s * rxy2  # s^2 tan^2 tn / 4 = e / vz^2
+    ok &= e < 746.0 * vz2  # past it D underflows to 0 (libbtdf's BTDF_EXP_CUT)
+    vz2 = dr.select(ok, vz2, 1.0)  # > 0 where used
+    l2 = rxy2 + vz2
+    inv_l = dr.rsqrt(l2)
+    sg = dr.select(vz < 0.0, -1.0, 1.0)  # h = sg v/|v| has h_z > 0
+    ca = sg * (sti * vx + cti * vz) * inv_l
+    cbs = sg * (sto * (cph * vx + sph * vy) + cto * vz) * inv_l  # e_o . h
+    cb = dr.select(refl, cbs, -cbs)
+    ok &= (ca > 0.0) & (cb > 0.0)
+    sec2 = l2 / vz2  # 1/cos^2 tn
+    d = s * s / (4.0 * math.pi) * sec2 * sec2 * dr.exp(-e / vz2)
+    ci = dr.select(ok, cti, 1.0)  # both > 0 where used
+    co = dr.select(ok, dr.abs(cto), 1.0)
+    v = shadow_v(sti / ci, s, k0) * shadow_v(sto / co, s, k0)
+    # transmission: ca Ft chi / (cos ti cos to), chi = n^2 cb/|v|^2, Ft of the facet
+    d1 = dr.select(ok, ca + n * cb, 1.0)  # > 0 where used
+    d2 = dr.select(ok, n * ca + cb, 1.0)
+    ft = 2.0 * n * ca * cb * (1.0 / (d1 * d1) + 1.0 / (d2 * d2))
+    f_t = ca * ft * n * n * cb * inv_l * inv_l
+    # reflection: Fr / 4 (cos a = ca)
+    f_r = 0.25 * fresnel_r(n, dr.select(ok, ca, 1.0))
+    r = d * v * dr.select(refl, f_r, f_t) / (ci * co)
+    return dr.select(ok, r, 0.0)
+
+
 class TableRule:
     """The slices of a table (read by libbtdf) on the device, and the rule of btdf/btdf.h."""
 
