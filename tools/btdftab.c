@@ -838,7 +838,7 @@ static int tabulate_series(const cli *c, const char *prov)
                          GIVEN(c, OPT_MAX_MEMORY) ? c->mib << 20 : 0, &pr);
 }
 
-/* A Radiance .xml is built from Eq. 25 directly, both transmission blocks. */
+/* A Radiance .xml is built from Eq. 25 (and rho_r) directly: all its blocks. */
 static int tabulate_radiance(const cli *c, const char *prov)
 {
     static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
