@@ -38,7 +38,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "exr_check: %s\n", msg);
         return 1;
     }
-    btdf_write_opts w = {NULL, NULL};
+    btdf_write_opts w = {NULL, NULL, NULL};
     btdf_output_ctx c = {.table = a, .opts = &w};
     st = btdf_format_exr.write_path(&c, argv[2], msg, sizeof msg);
     double t2 = now();

@@ -90,7 +90,7 @@ int main(int argc, char **argv)
                k ? "" : (st == BTDF_OK ? ", tolerance met" : ", TOLERANCE NOT MET"));
 #if BTDF_HAVE_OPENEXR
         /* The table file the pictures are made from. */
-        btdf_write_opts w = {NULL, "examples/previews"};
+        btdf_write_opts w = {NULL, "examples/previews", NULL};
         snprintf(path, sizeof path, "%s/table-%s.exr", argc > 2 ? argv[2] : dir, name);
         bad |= check(btdf_table_write(t, path, &w, msg, sizeof msg), path, msg);
 #endif

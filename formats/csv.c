@@ -22,6 +22,8 @@
  * tables that of channel 0; empty where no facet refracts into the lower hemisphere).
  * A comment line "# rows: N" before the first node row gives the number of them, and
  * the last line is "# end: N rows": a file cut anywhere, or missing rows, is refused.
+ * A file holding both parts (transmission and reflection, docs/formats.md) has a last
+ * column, part, and a "# parts:" line; the reflection's rows follow the transmission's.
  */
 
 /* pre, the shortest decimal that reads back to x, post. */
@@ -32,51 +34,13 @@ static void put_num(FILE *f, const char *pre, double x, const char *post)
     fprintf(f, "%s%s%s", pre, b, post);
 }
 
-static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
+/* The node rows of one part's table; suffix ends each row (",reflection\n" in a file
+   holding both parts, "\n" otherwise). */
+static void csv_rows(FILE *f, const btdf_table *t, const char *suffix)
 {
-    (void)msg;
-    (void)msglen;
-    const btdf_table *t = c->table;
     const btdf_params *p = &t->p;
     int nch = p->channels;
-    /* The header row comes first and the comment block after it, so that one call
-       reads the file: numpy.genfromtxt(f, delimiter=',', names=True) takes its names
-       from the first line, and pandas.read_csv(f, comment='#') skips the comments
-       wherever they are (docs/formats.md). */
-    fprintf(f, "theta_i_deg,theta_o_deg,phi_deg,%s,ti_rad,row_rad,col_rad\n",
-            nch == 1 ? "rho" : "rho_r,rho_g,rho_b");
-    fprintf(f, "# btdftab %s table\n", BTDF_VERSION_STRING);
-    fprintf(f, "# kind: %s\n", table_kind_name(t->kind));
-    fprintf(f, "# channels: %d\n", nch);
-    fprintf(f, "# ior:");
-    for (int ch = 0; ch < nch; ch++)
-        put_num(f, " ", p->ior[ch], "");
-    put_num(f, "\n# smoothness: ", p->smoothness, "\n");
-    put_num(f, "# k0: ", p->k0, "\n");
-    fprintf(f, "# units: rho in 1/sr, no cosine factor; angles in degrees and radians\n");
-    fprintf(f, "# rule: %s\n",
-            t->kind == BTDF_TABLE_GRID
-                ? "bilinear in (theta_o, phi) per slice, linear in theta_i after dividing by "
-                  "V(theta_i)/cos(theta_i)"
-                : "bilinear in facet (tilt, azimuth) per slice at the facet refracting e_i into "
-                  "e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)");
-    if (t->kind == BTDF_TABLE_FACET_RECIPROCAL)
-        fprintf(f, "# reciprocal: slices hold the table of index 1/n, indexed by ti_rad = pi - "
-                   "theta_o; rho(n; ti, to, phi) = n^2 rho(1/n; pi - to, pi - ti, phi)\n");
-    if (c->opts->provenance)
-        fprintf(f, "# provenance: %s\n", c->opts->provenance);
-    const btdf_report *r = c->opts->report;
-    if (r)
-        fprintf(f,
-                "# error: e_L1 max %.4g mean %.4g; e_max max %.4g mean %.4g; e_T max %.4g mean "
-                "%.4g; %zu test angles, %zu test points\n",
-                r->e_l1_max, r->e_l1_mean, r->e_max_max, r->e_max_mean, r->e_t_max,
-                r->e_t_mean, r->test_angles, r->test_points);
-    /* The row count here and the end line make a cut or a lost row detectable. */
-    size_t nrows = 0;
-    for (size_t k = 0; k < t->ns; k++)
-        nrows += t->s[k].nr * t->s[k].nc;
-    fprintf(f, "# rows: %zu\n", nrows);
+    int refl = kind_is_reflection(t->kind);
     for (size_t k = 0; k < t->ns; k++) {
         const tslice *s = &t->s[k];
         double ti = s->ti, sti = sin(ti), cti = cos(ti);
@@ -93,8 +57,10 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                     snprintf(ph_s, sizeof ph_s, "%.10g", s->cols[j] * 180.0 / M_PI);
                 } else {
                     facet_geo g;
-                    if (facet_eval(n0, p->smoothness, p->k0, &a, sin(s->rows[i]),
-                                   cos(s->rows[i]), cos(s->cols[j]), sin(s->cols[j]), &g)) {
+                    double stn = sin(s->rows[i]), ctn = cos(s->rows[i]);
+                    double cps = cos(s->cols[j]), sps = sin(s->cols[j]);
+                    if (refl ? facet_eval_r(n0, p->smoothness, p->k0, &a, stn, ctn, cps, sps, &g)
+                             : facet_eval(n0, p->smoothness, p->k0, &a, stn, ctn, cps, sps, &g)) {
                         double to = atan2(g.sin_to, g.cos_to) * 180.0 / M_PI;
                         if (recip) { /* the node's directions for light leaving: swapped */
                             snprintf(ti_s, sizeof ti_s, "%.10g", 180.0 - to);
@@ -110,10 +76,100 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                     put_num(f, ",", s->vals[(i * s->nc + j) * (size_t)nch + (size_t)ch], "");
                 put_num(f, ",", ti, "");
                 put_num(f, ",", s->rows[i], "");
-                put_num(f, ",", s->cols[j], "\n");
+                put_num(f, ",", s->cols[j], suffix);
             }
         }
     }
+}
+
+static void csv_error_line(FILE *f, const char *key, const btdf_report *r)
+{
+    fprintf(f,
+            "# %s: e_L1 max %.4g mean %.4g; e_max max %.4g mean %.4g; e_T max %.4g mean "
+            "%.4g; %zu test angles, %zu test points\n",
+            key, r->e_l1_max, r->e_l1_mean, r->e_max_max, r->e_max_mean, r->e_t_max,
+            r->e_t_mean, r->test_angles, r->test_points);
+}
+
+static const char *rule_text(const btdf_table *t)
+{
+    btdf_table_kind k = t->kind;
+    if (k == BTDF_TABLE_GRID)
+        return "bilinear in (theta_o, phi) per slice, linear in theta_i after dividing by "
+               "V(theta_i)/cos(theta_i)";
+    if (t->rule == BTDF_RULE_FRESNEL)
+        return "bilinear in facet (tilt, azimuth) per slice of rho_r/Fr at the facet mirroring "
+               "e_i into e_r, Fr the facet's Fresnel reflectance at ca, linear in theta_i after "
+               "dividing by V(theta_i)/cos(theta_i), times the query's Fr";
+    if (t->rule == BTDF_RULE_CHI)
+        return "bilinear in facet (tilt, azimuth) per slice of rho/K at the facet "
+               "refracting e_i into e_o, K = cb (ca + n cb)^2, linear in theta_i after "
+               "dividing by V(theta_i)/cos(theta_i), times the query's K";
+    return k == BTDF_TABLE_FACET_REFLECTION
+               ? "bilinear in facet (tilt, azimuth) per slice at the facet mirroring e_i into "
+                 "e_r, linear in theta_i after dividing by V(theta_i)/cos(theta_i)"
+               : "bilinear in facet (tilt, azimuth) per slice at the facet refracting e_i "
+                 "into e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)";
+}
+
+static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
+{
+    (void)msg;
+    (void)msglen;
+    const btdf_table *t = c->table;
+    const btdf_table *tr = t->refl; /* a table holding both parts: its reflection */
+    const btdf_params *p = &t->p;
+    int nch = p->channels;
+    int refl = kind_is_reflection(t->kind);
+    /* The header row comes first and the comment block after it, so that one call
+       reads the file: numpy.genfromtxt(f, delimiter=',', names=True) takes its names
+       from the first line, and pandas.read_csv(f, comment='#') skips the comments
+       wherever they are (docs/formats.md). A file holding both parts has a last
+       column, part, naming each row's. */
+    fprintf(f, "theta_i_deg,theta_o_deg,phi_deg,%s,ti_rad,row_rad,col_rad%s\n",
+            nch == 1 ? "rho" : "rho_r,rho_g,rho_b", tr ? ",part" : "");
+    fprintf(f, "# btdftab %s table\n", BTDF_VERSION_STRING);
+    fprintf(f, "# kind: %s\n", table_kind_name(t->kind));
+    if (tr)
+        fprintf(f, "# parts: transmission, reflection (%s)\n", table_kind_name(tr->kind));
+    fprintf(f, "# channels: %d\n", nch);
+    fprintf(f, "# ior:");
+    for (int ch = 0; ch < nch; ch++)
+        put_num(f, " ", p->ior[ch], "");
+    put_num(f, "\n# smoothness: ", p->smoothness, "\n");
+    put_num(f, "# k0: ", p->k0, "\n");
+    if (tr)
+        fprintf(f, "# units: rho in 1/sr, no cosine factor (rho_r on the reflection rows, "
+                   "theta_o_deg their reflected angle in [0, 90]); angles in degrees and "
+                   "radians\n");
+    else if (refl)
+        fprintf(f, "# units: rho_r in 1/sr, no cosine factor; theta_o_deg is the reflected "
+                   "angle theta_r in [0, 90]; angles in degrees and radians\n");
+    else
+        fprintf(f, "# units: rho in 1/sr, no cosine factor; angles in degrees and radians\n");
+    fprintf(f, "# rule: %s\n", rule_text(t));
+    if (tr)
+        fprintf(f, "# rule reflection: %s\n", rule_text(tr));
+    /* Read by machines: files without these lines are read with the plain rule. */
+    if (t->kind != BTDF_TABLE_GRID)
+        fprintf(f, "# slice-rule: %s\n", btdf_table_rule_name(t->rule));
+    if (tr)
+        fprintf(f, "# slice-rule reflection: %s\n", btdf_table_rule_name(tr->rule));
+    if (t->kind == BTDF_TABLE_FACET_RECIPROCAL)
+        fprintf(f, "# reciprocal: slices hold the table of index 1/n, indexed by ti_rad = pi - "
+                   "theta_o; rho(n; ti, to, phi) = n^2 rho(1/n; pi - to, pi - ti, phi)\n");
+    if (c->opts->provenance)
+        fprintf(f, "# provenance: %s\n", c->opts->provenance);
+    if (c->opts->report)
+        csv_error_line(f, "error", c->opts->report);
+    if (tr && c->opts->report_reflection)
+        csv_error_line(f, "error reflection", c->opts->report_reflection);
+    /* The row count here and the end line make a cut or a lost row detectable. */
+    size_t nrows = btdf_table_node_count(t) + (tr ? btdf_table_node_count(tr) : 0);
+    fprintf(f, "# rows: %zu\n", nrows);
+    csv_rows(f, t, tr ? ",transmission\n" : "\n");
+    if (tr)
+        csv_rows(f, tr, ",reflection\n");
     fprintf(f, "# end: %zu rows\n", nrows);
     return BTDF_OK;
 }
@@ -231,9 +287,12 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     btdf_params_default(&p);
     int have_kind = 0, have_ch = 0, have_ior = 0, have_s = 0, have_k0 = 0, header = 0;
     int have_rows = 0, have_end = 0;
+    int part_col = 0, have_parts = 0; /* a file holding both parts */
     size_t declared = 0, ended = 0, seen = 0;
     btdf_table_kind kind = BTDF_TABLE_FACET;
-    btdf_table *t = NULL;
+    btdf_table_rule rule = BTDF_RULE_PLAIN; /* files from before the rule had a name */
+    btdf_table_rule rule_r = BTDF_RULE_PLAIN; /* the reflection's, in a file holding both */
+    btdf_table *t = NULL, *tr = NULL, *cur = NULL; /* cur: the part being read */
     dvec rr = {0}, cc = {0}, vv = {0};
     double cur_ti = -1.0;
     char line[4096];
@@ -268,7 +327,15 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 have_kind = 1;
                 if (!table_kind_parse(word, &kind))
                     st = ferr(msg, msglen, path, ln,
-                              "kind must be facet, facet-reciprocal or grid");
+                              "kind must be facet, facet-reciprocal, grid or facet-reflection");
+            } else if (!strncmp(line, "# parts: transmission, reflection", 33)) {
+                have_parts = 1;
+            } else if (sscanf(line, "# slice-rule reflection: %63s", word) == 1) {
+                if (!btdf_table_rule_parse(word, &rule_r))
+                    st = ferr(msg, msglen, path, ln, "slice-rule must be plain, chi or fresnel");
+            } else if (sscanf(line, "# slice-rule: %63s", word) == 1) {
+                if (!btdf_table_rule_parse(word, &rule))
+                    st = ferr(msg, msglen, path, ln, "slice-rule must be plain, chi or fresnel");
             } else if (sscanf(line, "# channels: %d", &p.channels) == 1) {
                 have_ch = 1;
             } else if (!strncmp(line, "# ior:", 6)) {
@@ -287,11 +354,19 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 break;
             }
             header = 1;
+            size_t hl = strcspn(line, "\r\n");
+            part_col = hl >= 5 && !strncmp(line + hl - 5, ",part", 5);
             continue;
         }
         /* The comments may come before the header row or after it (btdftab writes
            them after it): the parameters are needed by the first node row. */
         if (!t) {
+            if (part_col != have_parts || (part_col && kind_is_reflection(kind))) {
+                st = ferr(msg, msglen, path, ln,
+                          "a part column needs the '# parts: transmission, reflection' line "
+                          "and a transmission kind, and that line the column");
+                break;
+            }
             if (!have_kind || !have_ch || !have_s || !have_k0 || have_ior != p.channels ||
                 !have_rows) {
                 st = ferr(msg, msglen, path, ln,
@@ -300,19 +375,48 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 break;
             }
             char why[200];
-            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK) {
+            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK ||
+                btdf_table_set_rule(t, rule, why, sizeof why) != BTDF_OK) {
                 st = ferr(msg, msglen, path, ln, why);
                 break;
             }
+            cur = t;
         }
         char *fld[16];
         int nf = split(line, fld, 16);
-        int want = 3 + p.channels + 3;
+        int want = 3 + p.channels + 3 + part_col;
         if (nf != want) {
             char why[80];
             snprintf(why, sizeof why, "expected %d fields, found %d", want, nf);
             st = ferr(msg, msglen, path, ln, why);
             break;
+        }
+        if (part_col) {
+            const char *pw = fld[nf - 1];
+            int is_r = !strcmp(pw, "reflection");
+            if (!is_r && strcmp(pw, "transmission")) {
+                st = ferr(msg, msglen, path, ln, "part must be transmission or reflection");
+                break;
+            }
+            if (!is_r && tr) {
+                st = ferr(msg, msglen, path, ln,
+                          "a transmission row after the reflection rows began");
+                break;
+            }
+            if (is_r && !tr) { /* the transmission is complete: on to the reflection */
+                st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
+                char why[200];
+                if (st == BTDF_OK &&
+                    (btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &p, &tr, why, sizeof why) !=
+                         BTDF_OK ||
+                     btdf_table_set_rule(tr, rule_r, why, sizeof why) != BTDF_OK))
+                    st = ferr(msg, msglen, path, ln, why);
+                if (st != BTDF_OK)
+                    break;
+                cur = tr;
+                cur_ti = -1.0;
+            }
+            nf--; /* the numbers end before the part */
         }
         double ti, row, col, v[BTDF_MAX_CHANNELS];
         int ok = num(fld[nf - 3], &ti) && num(fld[nf - 2], &row) && num(fld[nf - 1], &col);
@@ -327,7 +431,7 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
             break;
         }
         if (ti != cur_ti) {
-            st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
+            st = flush_slice(cur, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
             cur_ti = ti;
         }
         if (st == BTDF_OK && !(push(&rr, row) && push(&cc, col)))
@@ -356,9 +460,19 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     if (st == BTDF_OK && !t)
         st = ferr(msg, msglen, path, ln, "no table rows");
     if (st == BTDF_OK)
-        st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
+        st = flush_slice(cur, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
     if (st == BTDF_OK && t->ns == 0)
         st = ferr(msg, msglen, path, ln, "no table rows");
+    if (st == BTDF_OK && part_col && (!tr || tr->ns == 0))
+        st = ferr(msg, msglen, path, ln, "the file declares both parts but has no reflection rows");
+    if (st == BTDF_OK && tr) {
+        char why[200];
+        if (btdf_table_attach_reflection(t, tr, why, sizeof why) != BTDF_OK)
+            st = ferr(msg, msglen, path, ln, why);
+        else
+            tr = NULL; /* owned by t */
+    }
+    btdf_table_free(tr);
     fclose(f);
     free(rr.v);
     free(cc.v);
@@ -385,7 +499,8 @@ static btdf_status csv_stored(const char *path, FILE *out)
             rows++; /* the header row, then the first node row ends the block */
             continue;
         }
-        if (!strncmp(line, "# provenance: ", 14) || !strncmp(line, "# error: ", 9))
+        if (!strncmp(line, "# provenance: ", 14) || !strncmp(line, "# error: ", 9) ||
+            !strncmp(line, "# error reflection: ", 20))
             fputs(line + 2, out);
     }
     fclose(f);

@@ -11,6 +11,7 @@
 #include <sys/stat.h>
 
 #include <openexr.h>
+#include <pthread.h>
 
 #include "formats.h"
 #include "model_impl.h"
@@ -21,7 +22,9 @@
  *   pixel (x = col, y = row), data window (0, 0) - (ncols - 1, nrows - 1);
  *   per part:  btdf.ti (double, radians), btdf.rows / btdf.cols (string, %.17g
  *              radians separated by spaces), btdf.rowAxis / btdf.colAxis (string);
- *   part 0:    the table (kind, channels, n per channel, s, k0, units, report). */
+ *   part 0:    the table (kind, channels, n per channel, s, k0, units, report);
+ *   a file holding both parts: the reflection's slices after the transmission's, each
+ *   with btdf.part "reflection", and btdf.refl.* on part 0 (docs/formats.md). */
 
 #define ATTR_PREFIX "btdf."
 
@@ -31,16 +34,57 @@ typedef struct exr_err {
     char text[256];
 } exr_err;
 
+static void note_error(exr_err *e, exr_result_t code, const char *text)
+{
+    if (e->have)
+        return; /* keep the first: later ones are usually consequences */
+    e->have = 1;
+    snprintf(e->text, sizeof e->text, "%s", text ? text : exr_get_default_error_message(code));
+}
+
+/* Reading contexts: the record is the context's user data. */
 static void on_exr_error(exr_const_context_t ctx, exr_result_t code, const char *text)
 {
     void *ud = NULL;
     if (exr_get_user_data(ctx, &ud) != EXR_ERR_SUCCESS || ud == NULL)
         return;
-    exr_err *e = ud;
-    if (e->have)
-        return; /* keep the first: later ones are usually consequences */
-    e->have = 1;
-    snprintf(e->text, sizeof e->text, "%s", text ? text : exr_get_default_error_message(code));
+    note_error(ud, code, text);
+}
+
+/* Writing contexts: OpenEXR reports a write error while it holds the context's lock,
+   and exr_get_user_data takes that same lock (a write context locks it on every call),
+   so asking for the user data from the handler would wait forever. Writers register
+   their record here instead, under a lock of our own that is never held while calling
+   into OpenEXR. A context not (yet) registered keeps OpenEXR's default message. */
+#define WRITE_SLOTS 64
+static pthread_mutex_t write_slots_lock = PTHREAD_MUTEX_INITIALIZER;
+static struct {
+    exr_const_context_t ctx;
+    exr_err *err;
+} write_slots[WRITE_SLOTS];
+
+/* Registers err for ctx (err != NULL), or frees err's slot (ctx == NULL). */
+static void write_slot_set(exr_const_context_t ctx, exr_err *err, const exr_err *old)
+{
+    pthread_mutex_lock(&write_slots_lock);
+    for (size_t i = 0; i < WRITE_SLOTS; i++)
+        if (write_slots[i].err == old) {
+            write_slots[i].ctx = ctx;
+            write_slots[i].err = err;
+            break;
+        }
+    pthread_mutex_unlock(&write_slots_lock);
+}
+
+static void on_exr_write_error(exr_const_context_t ctx, exr_result_t code, const char *text)
+{
+    pthread_mutex_lock(&write_slots_lock);
+    for (size_t i = 0; i < WRITE_SLOTS; i++)
+        if (write_slots[i].ctx == ctx && write_slots[i].err) {
+            note_error(write_slots[i].err, code, text);
+            break;
+        }
+    pthread_mutex_unlock(&write_slots_lock);
 }
 
 #define say btdf_say /* model_impl.h */
@@ -84,14 +128,18 @@ static char *format_list(const double *x, size_t n)
 /* Writing                                                                   */
 /* ------------------------------------------------------------------------- */
 
-static exr_result_t set_report(exr_context_t ctx, const btdf_report *r)
+/* pre: "btdf.report." for the table's own part, "btdf.reflection.report." for the
+   reflection of a file holding both. */
+static exr_result_t set_report(exr_context_t ctx, const btdf_report *r, const char *pre)
 {
     exr_result_t rc = EXR_ERR_SUCCESS;
+    char an[96];
     /* No times or memory here: files must be the same bytes for the same inputs; the
        tool prints those on standard error and in --report. */
 #define SETD(name, v)                                                                    \
+    snprintf(an, sizeof an, "%s%s", pre, name);                                          \
     if (rc == EXR_ERR_SUCCESS)                                                           \
-    rc = exr_attr_set_double(ctx, 0, ATTR_PREFIX "report." name, (double)(v))
+    rc = exr_attr_set_double(ctx, 0, an, (double)(v))
     SETD("slices", r->slices);
     SETD("samples", r->samples);
     SETD("testAngles", r->test_angles);
@@ -104,11 +152,12 @@ static exr_result_t set_report(exr_context_t ctx, const btdf_report *r)
     SETD("eMaxMean", r->e_max_mean);
     SETD("tolerance", r->tolerance);
 #undef SETD
+    snprintf(an, sizeof an, "%smetric", pre);
     if (rc == EXR_ERR_SUCCESS)
-        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "report.metric",
-                                 r->metric == BTDF_METRIC_MAX ? "max" : "l1");
+        rc = exr_attr_set_string(ctx, 0, an, r->metric == BTDF_METRIC_MAX ? "max" : "l1");
+    snprintf(an, sizeof an, "%smet", pre);
     if (rc == EXR_ERR_SUCCESS)
-        rc = exr_attr_set_int(ctx, 0, ATTR_PREFIX "report.met", r->met ? 1 : 0);
+        rc = exr_attr_set_int(ctx, 0, an, r->met ? 1 : 0);
     if (rc != EXR_ERR_SUCCESS || r->test_angles == 0 || r->per_ti == NULL)
         return rc;
     /* One line per test angle; 6 numbers of at most 17 characters each. */
@@ -126,7 +175,8 @@ static exr_result_t set_report(exr_context_t ctx, const btdf_report *r)
             break;
         used += (size_t)w;
     }
-    rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "report.perTi", s);
+    snprintf(an, sizeof an, "%sperTi", pre);
+    rc = exr_attr_set_string(ctx, 0, an, s);
     free(s);
     return rc;
 }
@@ -139,6 +189,11 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
     const char *const *names = chan_names(p->channels);
     exr_result_t rc =
         exr_attr_set_string(ctx, 0, ATTR_PREFIX "kind", table_kind_name(btdf_table_get_kind(t)));
+    /* The interpolation rule of facet tables (btdf.h); absent: plain, as every file
+       written before it had a name. */
+    if (rc == EXR_ERR_SUCCESS && btdf_table_get_kind(t) != BTDF_TABLE_GRID)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "rule",
+                                 btdf_table_rule_name(btdf_table_get_rule(t)));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_int(ctx, 0, ATTR_PREFIX "channels", p->channels);
     if (rc == EXR_ERR_SUCCESS)
@@ -154,15 +209,31 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
         rc = exr_attr_set_double(ctx, 0, ATTR_PREFIX "k0", p->k0);
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "units", "1/sr");
+    int refl = kind_is_reflection(btdf_table_get_kind(t));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "value",
-                                 "rho, the BTDF of Xu & Sun 2008 Eq. 25, no cosine factor");
+                                 refl ? "rho_r, the reflection of the same facets (BRDF), no "
+                                        "cosine factor"
+                                      : "rho, the BTDF of Xu & Sun 2008 Eq. 25, no cosine factor");
+    const btdf_table *tr = t->refl;
+    if (rc == EXR_ERR_SUCCESS && tr)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "refl.kind", table_kind_name(tr->kind));
+    if (rc == EXR_ERR_SUCCESS && tr)
+        rc = exr_attr_set_int(ctx, 0, ATTR_PREFIX "refl.slices", (int32_t)tr->ns);
+    if (rc == EXR_ERR_SUCCESS && tr)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "refl.rule", btdf_table_rule_name(tr->rule));
+    if (rc == EXR_ERR_SUCCESS && tr)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "refl.value",
+                                 "rho_r, the reflection of the same facets (BRDF), no cosine "
+                                 "factor; parts after the transmission's");
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "version", BTDF_VERSION_STRING);
     if (rc == EXR_ERR_SUCCESS && w->provenance)
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "provenance", w->provenance);
     if (rc == EXR_ERR_SUCCESS && w->report)
-        rc = set_report(ctx, w->report);
+        rc = set_report(ctx, w->report, ATTR_PREFIX "report.");
+    if (rc == EXR_ERR_SUCCESS && tr && w->report_reflection)
+        rc = set_report(ctx, w->report_reflection, ATTR_PREFIX "refl.report.");
     return rc;
 }
 
@@ -184,9 +255,20 @@ static exr_result_t set_slice_attrs(exr_context_t ctx, int part, btdf_table_kind
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, part, ATTR_PREFIX "colAxis",
                                  kind == BTDF_TABLE_GRID ? "phi" : "psi");
+    if (rc == EXR_ERR_SUCCESS && kind_is_reflection(kind)) /* only the reflection says */
+        rc = exr_attr_set_string(ctx, part, ATTR_PREFIX "part", "reflection");
     free(rows);
     free(cols);
     return rc;
+}
+
+/* Slice k of the file: the transmission's slices first, then those of an attached
+   reflection (a file holding both parts). Sets *own to the table it belongs to. */
+static void file_slice(const btdf_table *t, size_t k, btdf_slice *sl, const btdf_table **own)
+{
+    size_t nt = btdf_table_slice_count(t);
+    *own = k < nt ? t : t->refl;
+    btdf_table_slice(*own, k < nt ? k : k - nt, sl);
 }
 
 /* Slice k as planar float channels, planes[ch][r * ncols + c]. */
@@ -302,8 +384,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
 {
     const btdf_table *t = c->table;
     const btdf_params *p = btdf_table_get_params(t);
-    btdf_table_kind kind = btdf_table_get_kind(t);
-    size_t nslices = btdf_table_slice_count(t);
+    size_t nslices = btdf_table_slice_count(t) + btdf_table_slice_count(t->refl);
     int channels = p->channels;
     if (nslices == 0)
         return say(BTDF_EINVAL, msg, msglen, "the table has no slices: nothing to write");
@@ -313,7 +394,8 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
     size_t maxpix = 0, maxrows = 0, maxcols = 0;
     for (size_t k = 0; k < nslices; k++) {
         btdf_slice sl;
-        btdf_table_slice(t, k, &sl);
+        const btdf_table *own;
+        file_slice(t, k, &sl, &own);
         if (sl.nrows == 0 || sl.ncols == 0 || sl.nrows > INT32_MAX || sl.ncols > INT32_MAX)
             return say(BTDF_EOVERFLOW, msg, msglen,
                        "slice %zu has %zu x %zu nodes: not an OpenEXR image size", k,
@@ -341,8 +423,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
 
     exr_err err = {0, {0}};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    init.error_handler_fn = on_exr_error;
-    init.user_data = &err;
+    init.error_handler_fn = on_exr_write_error;
     exr_context_t ctx = NULL;
     btdf_status st = BTDF_OK;
     exr_result_t rc = exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init);
@@ -350,13 +431,21 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
         free(planes);
         return say(BTDF_EIO, msg, msglen, "%s", exr_text(&err, rc));
     }
+    write_slot_set(ctx, &err, NULL); /* from here on, OpenEXR's messages reach err */
     const char *const *names = chan_names(channels);
     for (size_t k = 0; k < nslices && rc == EXR_ERR_SUCCESS; k++) {
         btdf_slice sl;
-        btdf_table_slice(t, k, &sl);
+        const btdf_table *own;
+        file_slice(t, k, &sl, &own);
+        btdf_table_kind kind = btdf_table_get_kind(own);
         char pname[64];
-        snprintf(pname, sizeof pname, "slice%04zu ti=%.4fdeg", k,
-                 sl.ti * (180.0 / 3.14159265358979323846));
+        /* part names are unique in a file: a reflection's count from its own first */
+        if (own != t)
+            snprintf(pname, sizeof pname, "reflection%04zu ti=%.4fdeg",
+                     k - btdf_table_slice_count(t), sl.ti * (180.0 / 3.14159265358979323846));
+        else
+            snprintf(pname, sizeof pname, "slice%04zu ti=%.4fdeg", k,
+                     sl.ti * (180.0 / 3.14159265358979323846));
         int part = -1;
         rc = exr_add_part(ctx, pname, EXR_STORAGE_SCANLINE, &part);
         exr_attr_box2i_t data = disp;
@@ -372,7 +461,7 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
             rc = set_slice_attrs(ctx, part, kind, &sl);
     }
     if (rc == EXR_ERR_SUCCESS)
-        rc = set_table_attrs(ctx, t, c->opts, nslices);
+        rc = set_table_attrs(ctx, t, c->opts, btdf_table_slice_count(t));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_write_header(ctx);
     if (rc != EXR_ERR_SUCCESS)
@@ -380,13 +469,15 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
                  "OpenEXR header: %s", exr_text(&err, rc));
     for (size_t k = 0; k < nslices && st == BTDF_OK; k++) {
         btdf_slice sl;
-        btdf_table_slice(t, k, &sl);
+        const btdf_table *own;
+        file_slice(t, k, &sl, &own);
         st = slice_to_float(&sl, channels, planes, msg, msglen);
         if (st == BTDF_OK)
             st = write_part_pixels(ctx, (int)k, &sl, channels, planes, &err, msg, msglen);
     }
     free(planes);
     rc = exr_finish(&ctx);
+    write_slot_set(NULL, NULL, &err);
     if (st == BTDF_OK && rc != EXR_ERR_SUCCESS)
         st = say(BTDF_EIO, msg, msglen, "OpenEXR: %s", exr_text(&err, rc));
     return st;
@@ -727,6 +818,27 @@ static btdf_status read_slice(reader *r, btdf_table *t, int part, int channels)
     return st;
 }
 
+/* The interpolation rule stored in attribute `name` of part 0 into t; no attribute:
+   the plain rule of files written before it. */
+static btdf_status read_rule(reader *r, const char *name, btdf_table *t)
+{
+    const char *rs = NULL;
+    int32_t len = 0;
+    btdf_table_rule rule = BTDF_RULE_PLAIN;
+    char why[200] = "", word[16] = "";
+    if (exr_attr_get_string(r->ctx, 0, name, &len, &rs) == EXR_ERR_SUCCESS) {
+        /* EXR strings carry a length and need not end in NUL */
+        if (rs && len > 0 && (size_t)len < sizeof word)
+            memcpy(word, rs, (size_t)len);
+        if (!btdf_table_rule_parse(word, &rule))
+            return say(BTDF_EFORMAT, r->msg, r->msglen,
+                       "attribute %s \"%s\": must be plain, chi or fresnel", name, word);
+    }
+    if (btdf_table_set_rule(t, rule, why, sizeof why) != BTDF_OK)
+        return say(BTDF_EFORMAT, r->msg, r->msglen, "%s", why);
+    return BTDF_OK;
+}
+
 static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_t msglen)
 {
     reader r = {NULL, {0, {0}}, path, msg, msglen, 0};
@@ -758,12 +870,33 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
         st = say(BTDF_EFORMAT, msg, msglen, "no image parts");
     if (st == BTDF_OK)
         st = read_params(&r, &kind, &p);
-    int32_t nslices = 0;
+    int32_t nslices = 0, nrefl = 0;
+    /* A file holding both parts: the reflection's slices follow the transmission's. */
+    int both = exr_attr_get_int(r.ctx, 0, ATTR_PREFIX "refl.slices", &nrefl) ==
+               EXR_ERR_SUCCESS;
+    if (st == BTDF_OK && both) {
+        char *rk = get_string(&r, 0, ATTR_PREFIX "refl.kind", &st);
+        btdf_table_kind k2 = BTDF_TABLE_FACET;
+        if (st == BTDF_OK && (!table_kind_parse(rk, &k2) || !kind_is_reflection(k2) ||
+                              kind_is_reflection(kind) || nrefl < 1))
+            st = say(BTDF_EFORMAT, msg, msglen, "a file holding both parts needs a "
+                     "transmission kind, " ATTR_PREFIX "refl.kind facet-reflection "
+                     "and at least one reflection slice");
+        free(rk);
+    }
     if (st == BTDF_OK &&
         (exr_attr_get_int(r.ctx, 0, ATTR_PREFIX "slices", &nslices) != EXR_ERR_SUCCESS ||
-         nslices != nparts))
+         nslices < 1 || nrefl < 0 || (int64_t)nslices + nrefl != nparts))
         st = say(BTDF_EFORMAT, msg, msglen, ATTR_PREFIX "slices does not match the %d parts",
                  nparts);
+    btdf_table *tr = NULL;
+    if (st == BTDF_OK && both) {
+        char why[200] = "";
+        st = btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &p, &tr, why, sizeof why);
+        if (st != BTDF_OK)
+            st = say(st == BTDF_EINVAL ? BTDF_EFORMAT : st, msg, msglen,
+                     "bad parameters in the file: %s", why);
+    }
     if (st == BTDF_OK) {
         char why[200] = "";
         st = btdf_table_new(kind, &p, &t, why, sizeof why);
@@ -771,9 +904,22 @@ static btdf_status exr_read(const char *path, btdf_table **out, char *msg, size_
             st = say(st == BTDF_EINVAL ? BTDF_EFORMAT : st, msg, msglen,
                      "bad parameters in the file: %s", why);
     }
+    if (st == BTDF_OK)
+        st = read_rule(&r, ATTR_PREFIX "rule", t);
+    if (st == BTDF_OK && tr)
+        st = read_rule(&r, ATTR_PREFIX "refl.rule", tr);
     for (int k = 0; k < nparts && st == BTDF_OK; k++)
-        st = read_slice(&r, t, k, p.channels);
+        st = read_slice(&r, k < nslices ? t : tr, k, p.channels);
     exr_finish(&r.ctx);
+    if (st == BTDF_OK && tr) {
+        char why[200] = "";
+        st = btdf_table_attach_reflection(t, tr, why, sizeof why);
+        if (st == BTDF_OK)
+            tr = NULL; /* owned by t */
+        else
+            st = say(BTDF_EFORMAT, msg, msglen, "%s", why);
+    }
+    btdf_table_free(tr);
     if (st != BTDF_OK) {
         btdf_table_free(t);
         return st;
@@ -798,17 +944,21 @@ static btdf_status exr_stored(const char *path, FILE *out)
         fprintf(out, "provenance: %s\n", prov);
     static const char *const names[8] = {"eL1Max",  "eL1Mean", "eMaxMax",    "eMaxMean",
                                          "eTMax",   "eTMean",  "testAngles", "testPoints"};
-    double v[8];
-    int have = 1;
-    for (size_t k = 0; k < 8 && have; k++) {
-        char attr[64];
-        snprintf(attr, sizeof attr, ATTR_PREFIX "report.%s", names[k]);
-        have = exr_attr_get_double(ctx, 0, attr, &v[k]) == EXR_ERR_SUCCESS;
+    static const char *const pre[2] = {ATTR_PREFIX "report.", ATTR_PREFIX "refl.report."};
+    static const char *const key[2] = {"error", "error reflection"};
+    for (int q = 0; q < 2; q++) {
+        double v[8];
+        int have = 1;
+        for (size_t k = 0; k < 8 && have; k++) {
+            char attr[80];
+            snprintf(attr, sizeof attr, "%s%s", pre[q], names[k]);
+            have = exr_attr_get_double(ctx, 0, attr, &v[k]) == EXR_ERR_SUCCESS;
+        }
+        if (have) /* the wording of the CSV's "# error:" line */
+            fprintf(out, "%s: e_L1 max %.4g mean %.4g; e_max max %.4g mean %.4g; e_T max %.4g "
+                         "mean %.4g; %.0f test angles, %.0f test points\n",
+                    key[q], v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
     }
-    if (have) /* the wording of the CSV's "# error:" line */
-        fprintf(out, "error: e_L1 max %.4g mean %.4g; e_max max %.4g mean %.4g; e_T max %.4g "
-                     "mean %.4g; %.0f test angles, %.0f test points\n",
-                v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
     exr_finish(&ctx);
     return ferror(out) ? BTDF_EIO : BTDF_OK;
 }

@@ -158,7 +158,7 @@ BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char 
                    btdf_format_list());
     if (!f->available)
         return switched_off(f, msg, msglen);
-    btdf_write_opts none = {NULL, NULL};
+    btdf_write_opts none = {NULL, NULL, NULL};
     btdf_output_ctx c;
     memset(&c, 0, sizeof c);
     c.opts = what->opts ? what->opts : &none;
@@ -208,7 +208,7 @@ BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *
         return switched_off(&btdf_format_png, msg, msglen);
     btdf_output_ctx c;
     memset(&c, 0, sizeof c);
-    btdf_write_opts none = {NULL, NULL};
+    btdf_write_opts none = {NULL, NULL, NULL};
     c.opts = &none;
     return write_picture(&btdf_format_png, &c, o, path, msg, msglen);
 }
@@ -220,7 +220,7 @@ BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
         return say(msg, msglen, BTDF_EINVAL, "file or path missing%s%s", "", "");
     btdf_output_ctx c;
     memset(&c, 0, sizeof c);
-    btdf_write_opts none = {NULL, NULL};
+    btdf_write_opts none = {NULL, NULL, NULL};
     c.opts = &none;
     c.scatfun = f;
     c.metadata_json = metadata_json;
@@ -291,31 +291,21 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
     return st;
 }
 
-/* The summary of a table file: its header, ranges and sizes, then one line per slice. */
-static btdf_status table_inspect(const btdf_input *in, FILE *out)
+/* The ranges, sizes and slices of one part; label prefixes its lines ("" for a table
+   of one part, so that those print as they always have). */
+static void inspect_part(const btdf_table *t, FILE *out, const char *label)
 {
-    const btdf_table *t = in->table;
     const btdf_params *p = btdf_table_get_params(t);
     btdf_table_kind kind = btdf_table_get_kind(t);
-    char b[40];
-    fprintf(out, "kind: %s\nchannels: %d\nior:", btdf_table_kind_name(kind), p->channels);
-    for (int ch = 0; ch < p->channels; ch++) {
-        btdf_format_double(p->ior[ch], b, sizeof b);
-        fprintf(out, " %s", b);
-    }
-    btdf_format_double(p->smoothness, b, sizeof b);
-    fprintf(out, "\nsmoothness: %s\n", b);
-    btdf_format_double(p->k0, b, sizeof b);
-    fprintf(out, "k0: %s\n", b);
     size_t ns = btdf_table_slice_count(t), nodes = btdf_table_node_count(t);
     btdf_slice s0, s1;
     if (ns > 0 && btdf_table_slice(t, 0, &s0) == BTDF_OK &&
         btdf_table_slice(t, ns - 1, &s1) == BTDF_OK) {
         if (kind == BTDF_TABLE_FACET_RECIPROCAL) /* slices are indexed by pi - theta_o */
-            fprintf(out, "theta_i range: 0:90 deg (slices over theta_o %.6g:%.6g deg)\n",
-                    180.0 - s1.ti * 180.0 / M_PI, 180.0 - s0.ti * 180.0 / M_PI);
+            fprintf(out, "%stheta_i range: 0:90 deg (slices over theta_o %.6g:%.6g deg)\n",
+                    label, 180.0 - s1.ti * 180.0 / M_PI, 180.0 - s0.ti * 180.0 / M_PI);
         else
-            fprintf(out, "theta_i range: %.6g:%.6g deg\n", s0.ti * 180.0 / M_PI,
+            fprintf(out, "%stheta_i range: %.6g:%.6g deg\n", label, s0.ti * 180.0 / M_PI,
                     s1.ti * 180.0 / M_PI);
     }
     /* Value range over every node of every channel. */
@@ -334,16 +324,46 @@ static btdf_status table_inspect(const btdf_input *in, FILE *out)
             first = 0;
         }
     }
-    fprintf(out, "rho range: %.6g to %.6g 1/sr\n", lo, hi);
-    fprintf(out, "slices: %zu\nnodes: %zu\nvalues: %zu doubles (%.1f MiB in memory)\n", ns,
-            nodes, nodes * (size_t)p->channels,
+    fprintf(out, "%s%s range: %.6g to %.6g 1/sr\n", label,
+            kind == BTDF_TABLE_FACET_REFLECTION ? "rho_r" : "rho", lo, hi);
+    fprintf(out, "%sslices: %zu\n%snodes: %zu\n%svalues: %zu doubles (%.1f MiB in memory)\n",
+            label, ns, label, nodes, label, nodes * (size_t)p->channels,
             (double)(nodes * (size_t)(p->channels + 2) * sizeof(double)) / 1048576.0);
     for (size_t k = 0; k < ns; k++) {
         btdf_slice s;
         btdf_table_slice(t, k, &s);
-        fprintf(out, "slice %zu: index %.6f deg, %zu x %zu\n", k, s.ti * 180.0 / M_PI, s.nrows,
-                s.ncols);
+        fprintf(out, "%sslice %zu: index %.6f deg, %zu x %zu\n", label, k, s.ti * 180.0 / M_PI,
+                s.nrows, s.ncols);
     }
+}
+
+/* The summary of a table file: its header, ranges and sizes, then one line per slice. */
+static btdf_status table_inspect(const btdf_input *in, FILE *out)
+{
+    const btdf_table *t = in->table;
+    const btdf_params *p = btdf_table_get_params(t);
+    btdf_table_kind kind = btdf_table_get_kind(t);
+    char b[40];
+    fprintf(out, "kind: %s\nchannels: %d\nior:", btdf_table_kind_name(kind), p->channels);
+    for (int ch = 0; ch < p->channels; ch++) {
+        btdf_format_double(p->ior[ch], b, sizeof b);
+        fprintf(out, " %s", b);
+    }
+    btdf_format_double(p->smoothness, b, sizeof b);
+    fprintf(out, "\nsmoothness: %s\n", b);
+    btdf_format_double(p->k0, b, sizeof b);
+    fprintf(out, "k0: %s\n", b);
+    if (kind != BTDF_TABLE_GRID) /* what the slices interpolate (docs/tables.md) */
+        fprintf(out, "slice rule: %s\n", btdf_table_rule_name(btdf_table_get_rule(t)));
+    const btdf_table *tr = btdf_table_parts(t) == BTDF_PART_BOTH
+                               ? btdf_table_part(t, BTDF_PART_REFLECTION) : NULL;
+    if (tr)
+        fprintf(out, "parts: transmission, reflection (kind %s, slice rule %s)\n",
+                btdf_table_kind_name(btdf_table_get_kind(tr)),
+                btdf_table_rule_name(btdf_table_get_rule(tr)));
+    inspect_part(t, out, "");
+    if (tr)
+        inspect_part(tr, out, "reflection ");
     return ferror(out) ? BTDF_EIO : BTDF_OK;
 }
 

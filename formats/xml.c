@@ -34,8 +34,33 @@ static void put_comment_text(FILE *f, const char *s)
     }
 }
 
-/* A leaf value as written: 6 significant digits read back to the stored float. */
-static void put_value(FILE *f, float v) { fprintf(f, "%.6g", (double)v); }
+/* A value as written: 6 significant digits (FLT_DIG: reads back to the stored float),
+   in as few characters as C's strtod and Radiance's reader take: no "0" before the
+   point (".0123"), no "+" or leading zeros in the exponent ("1.2e-5"). Tree leaves
+   are rounded to 4 digits already (ttree.c), so they print as such. */
+static void put_value(FILE *f, float v)
+{
+    char t[32], o[32];
+    snprintf(t, sizeof t, "%.6g", (double)v);
+    const char *s = t;
+    size_t k = 0;
+    if (s[0] == '0' && s[1] == '.')
+        s++; /* "0.0123" -> ".0123" */
+    for (; *s && k + 1 < sizeof o; s++) {
+        o[k++] = *s;
+        if (*s == 'e') {
+            s++;
+            if (*s == '-')
+                o[k++] = '-';
+            else if (*s != '+')
+                s--; /* not printf's form: copy as it is */
+            while (s[1] == '0' && s[2] != '\0')
+                s++; /* "e-05" -> "e-5" */
+        }
+    }
+    o[k] = '\0';
+    fputs(o, f);
+}
 
 /* Node k: a leaf { v }, a grid of 8 leaves { v0 .. v7 } (dimension 0 slowest, as
    Radiance reads a 2 x 2 x 2 grid), or { child0 .. child7 }. */
@@ -99,9 +124,10 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "<!-- Written by btdftab %s: Xu & Sun (2008) Eq. 25, the BTDF of a rough "
                "dielectric interface. Values are the BTDF in 1/sr (no cosine factor).\n",
             BTDF_VERSION_STRING);
-    fprintf(f, "     Transmission Front: light entering the dense side, index n = %.9g; "
-               "Transmission Back: light leaving it, index 1/n.\n     In Radiance the surface "
-               "normal points into the dense medium. No reflection blocks.\n",
+    fprintf(f, "     In Radiance the surface normal points into the dense medium (index n = %.9g).\n"
+               "     Transmission Front serves light from the dense side (leaving it, 1/n), "
+               "Transmission Back light entering it (n);\n     Reflection Front light "
+               "reflected outside (n), Reflection Back inside (1/n), when present.\n",
             r->p.ior[0]);
     if (c->opts->provenance) {
         fputs("     Command: ", f);

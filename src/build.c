@@ -28,6 +28,7 @@ BTDF_API void btdf_table_opts_default(btdf_table_opts *o)
     o->to_max = M_PI;
     o->phi_min = 0.0;
     o->phi_max = M_PI;
+    o->part = BTDF_PART_TRANSMISSION;
 }
 
 #define DEFAULT_MAX_SAMPLES ((size_t)8000000)
@@ -87,6 +88,14 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
     }
     if (o->threads < 0 || o->threads > 256)
         return bad(msg, msglen, "threads %g: must lie in [0, 256]", (double)o->threads);
+    /* part 0 (a zeroed struct) is the transmission, as before the field existed */
+    if (o->part != 0 && o->part != BTDF_PART_TRANSMISSION && o->part != BTDF_PART_REFLECTION &&
+        o->part != BTDF_PART_BOTH)
+        return bad(msg, msglen, "part %g: must be transmission (1), reflection (2) or both (3)",
+                   (double)o->part);
+    if (o->kind == BTDF_TABLE_GRID && o->part != 0 && o->part != BTDF_PART_TRANSMISSION)
+        return bad(msg, msglen, "part %g: grid tables hold the transmission only; the "
+                                "reflection needs a facet table", (double)o->part);
     return BTDF_OK;
 }
 
@@ -221,6 +230,7 @@ typedef struct slice_target {
     btdf_metric metric;
     double U; /* last row at u = U */
     size_t max_nodes;
+    int refl; /* the reflection's lobe (facet_rho_r) instead of the transmission's */
 } slice_target;
 
 typedef struct slice_out {
@@ -228,6 +238,7 @@ typedef struct slice_out {
     double *w; /* measure weight per node (channel 0), for incidence refinement */
     int budget_hit;
     int nomem;
+    size_t evals; /* Eq. 25 evaluations made building it */
 } slice_out;
 
 /* Eq. 25 written in facet space for the builder, with the Beckmann factor hoisted per
@@ -254,9 +265,32 @@ static double facet_rho(double n, double s, double k0, const rho_in *a, double s
     return r >= DBL_MIN ? r : 0.0; /* MODEL.md 3.6 */
 }
 
-/* Evaluates rho (all channels) and the channel-0 measure weight on rows x cols. */
-static int eval_nodes(const btdf_params *p, const rho_in *a, const double *rows, size_t nr,
-                      const double *cols, size_t nc, double *vals, double *w)
+/* The same for the reflection (MODEL.md section 8) at the facet that mirrors e_i into
+   e_r = 2 ca h - e_i: rho_r = [s^2/(4 pi) V(ti)/cos ti] e^{-s^2 t^2/4} (1 + t^2)^2
+   Fr V(tr) / (4 cos tr). tn = 0 is the mirror direction, so the nodes that follow the
+   refracted lobe in facet space follow the specular lobe here. *w = cos tr 4 ca sin tn
+   (d(omega_r) = 4 ca d(omega_h)). */
+static double facet_rho_r(double n, double s, double k0, const rho_in *a, double stn,
+                          double ctn, double cpsi, double spsi, double beck, double *w)
+{
+    *w = 0.0;
+    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
+    if (!(ca > 0.0))
+        return 0.0; /* the facet faces away from e_i */
+    double rx = 2.0 * ca * stn * cpsi - a->sin_ti, ry = 2.0 * ca * stn * spsi;
+    double rz = 2.0 * ca * ctn - a->cos_ti;
+    if (!(rz > 0.0))
+        return 0.0; /* e_r would point into the lower medium */
+    double vo = shadow_v(sqrt(rx * rx + ry * ry) / rz, s, k0); /* rz > 0 just checked */
+    *w = rz * 4.0 * ca * stn;
+    double r = a->pref * beck * bt_fresnel_r(n, n - 1.0, ca) * vo / (4.0 * rz);
+    return r >= DBL_MIN ? r : 0.0; /* MODEL.md 3.6 */
+}
+
+/* Evaluates rho (rho_r when refl; all channels) and the channel-0 measure weight on
+   rows x cols. */
+static int eval_nodes(const btdf_params *p, int refl, const rho_in *a, const double *rows,
+                      size_t nr, const double *cols, size_t nc, double *vals, double *w)
 {
     size_t nch = (size_t)p->channels;
     double s = p->smoothness;
@@ -276,9 +310,11 @@ static int eval_nodes(const btdf_params *p, const rho_in *a, const double *rows,
             for (size_t c = 0; c < nch; c++) {
                 double wt;
                 vals[(i * nc + j) * nch + c] =
-                    beck > 0.0 ? facet_rho(p->ior[c], s, p->k0, a, stn, ctn, cc[2 * j],
-                                           cc[2 * j + 1], beck, &wt)
-                               : (wt = 0.0);
+                    !(beck > 0.0) ? (wt = 0.0)
+                    : refl ? facet_rho_r(p->ior[c], s, p->k0, a, stn, ctn, cc[2 * j],
+                                         cc[2 * j + 1], beck, &wt)
+                           : facet_rho(p->ior[c], s, p->k0, a, stn, ctn, cc[2 * j],
+                                       cc[2 * j + 1], beck, &wt);
                 if (c == 0 && w)
                     w[i * nc + j] = wt;
             }
@@ -332,6 +368,12 @@ static int axis_refine(const double *a, size_t m, const unsigned char *mark, dou
     return 1;
 }
 
+/* A node's reduced value rho / K; K = 0 where the facet refracts nothing, and rho = 0. */
+static double red(double v, double k)
+{
+    return k > 0.0 ? v / k : 0.0;
+}
+
 static void build_slice(const slice_target *tg, slice_out *o)
 {
     const btdf_params *p = tg->p;
@@ -341,7 +383,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
     rho_in a;
     rho_in_init(&a, sin(tg->ti), cos(tg->ti), p->smoothness, p->k0);
     int is_max = tg->metric == BTDF_METRIC_MAX;
-    size_t nr = 17, nc = 13;
+    size_t nr = 17, nc = 13, evals = 0; /* evals: points where Eq. 25 was evaluated */
     double *rows = malloc(nr * sizeof(double)), *cols = malloc(nc * sizeof(double));
     double *vals = malloc(nr * nc * nch * sizeof(double)), *w = malloc(nr * nc * sizeof(double));
     /* per pass: midpoints of row intervals x columns (vr, wr) and rows x midpoints of
@@ -355,8 +397,9 @@ static void build_slice(const slice_target *tg, slice_out *o)
         rows[i] = atan(2.0 * tg->U * (double)i / (double)(nr - 1) / p->smoothness);
     for (size_t j = 0; j < nc; j++)
         cols[j] = M_PI * (double)j / (double)(nc - 1);
-    if (!eval_nodes(p, &a, rows, nr, cols, nc, vals, w))
+    if (!eval_nodes(p, tg->refl, &a, rows, nr, cols, nc, vals, w))
         goto nomem;
+    evals = nr * nc;
     for (;;) {
         rm = malloc((nr - 1) * sizeof(double));
         cm = malloc((nc - 1) * sizeof(double));
@@ -374,9 +417,32 @@ static void build_slice(const slice_target *tg, slice_out *o)
             rm[i] = 0.5 * (rows[i] + rows[i + 1]);
         for (size_t j = 0; j + 1 < nc; j++)
             cm[j] = 0.5 * (cols[j] + cols[j + 1]);
-        if (!eval_nodes(p, &a, rm, nr - 1, cols, nc, vr, wr) ||
-            !eval_nodes(p, &a, rows, nr, cm, nc - 1, vc, wc))
+        if (!eval_nodes(p, tg->refl, &a, rm, nr - 1, cols, nc, vr, wr) ||
+            !eval_nodes(p, tg->refl, &a, rows, nr, cm, nc - 1, vc, wc))
             goto nomem;
+        evals += (nr - 1) * nc + nr * (nc - 1);
+        /* The table's rule (BTDF_RULE_CHI) interpolates rho / K, K = chi_shape(n, e_i.h):
+           the error of an interval is that of the reduced values, times K at the midpoint.
+           The reflection's (BTDF_RULE_FRESNEL) has K = Fr(e_i.h). */
+        btdf_table_rule rl = tg->refl ? BTDF_RULE_FRESNEL : BTDF_RULE_CHI;
+        double *sr = malloc((2 * nr + nc + 2 * (nr - 1) + (nc - 1)) * sizeof(double));
+        if (!sr)
+            goto nomem;
+        double *cr = sr + nr, *cp = cr + nr, *smr = cp + nc, *cmr = smr + (nr - 1),
+               *cpm = cmr + (nr - 1);
+        for (size_t i = 0; i < nr; i++) {
+            sr[i] = sin(rows[i]);
+            cr[i] = cos(rows[i]);
+        }
+        for (size_t i = 0; i + 1 < nr; i++) {
+            smr[i] = sin(rm[i]);
+            cmr[i] = cos(rm[i]);
+        }
+        for (size_t j = 0; j < nc; j++)
+            cp[j] = cos(cols[j]);
+        for (size_t j = 0; j + 1 < nc; j++)
+            cpm[j] = cos(cm[j]);
+        double sti = a.sin_ti, cti = a.cos_ti;
         double vmax = 0.0;
         for (size_t q = 0; q < nr * nc * nch; q++)
             vmax = fmax(vmax, vals[q]);
@@ -388,8 +454,12 @@ static void build_slice(const slice_target *tg, slice_out *o)
             double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0};
             for (size_t j = 0; j < nc; j++)
                 for (size_t c = 0; c < nch; c++) {
-                    double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
-                                        vals[((i + 1) * nc + j) * nch + c]);
+                    double n = p->ior[c];
+                    double k0 = rule_factor(rl, n, sr[i] * cp[j] * sti + cr[i] * cti);
+                    double k1 = rule_factor(rl, n, sr[i + 1] * cp[j] * sti + cr[i + 1] * cti);
+                    double km = rule_factor(rl, n, smr[i] * cp[j] * sti + cmr[i] * cti);
+                    double lin = 0.5 * km * (red(vals[(i * nc + j) * nch + c], k0) +
+                                             red(vals[((i + 1) * nc + j) * nch + c], k1));
                     double d = fabs(vr[(i * nc + j) * nch + c] - lin);
                     if (is_max)
                         ech[c] = fmax(ech[c], d * norm);
@@ -405,8 +475,12 @@ static void build_slice(const slice_target *tg, slice_out *o)
             double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0};
             for (size_t i = 0; i < nr; i++)
                 for (size_t c = 0; c < nch; c++) {
-                    double lin = 0.5 * (vals[(i * nc + j) * nch + c] +
-                                        vals[(i * nc + j + 1) * nch + c]);
+                    double n = p->ior[c];
+                    double k0 = rule_factor(rl, n, sr[i] * cp[j] * sti + cr[i] * cti);
+                    double k1 = rule_factor(rl, n, sr[i] * cp[j + 1] * sti + cr[i] * cti);
+                    double km = rule_factor(rl, n, sr[i] * cpm[j] * sti + cr[i] * cti);
+                    double lin = 0.5 * km * (red(vals[(i * nc + j) * nch + c], k0) +
+                                             red(vals[(i * nc + j + 1) * nch + c], k1));
                     double d = fabs(vc[(i * (nc - 1) + j) * nch + c] - lin);
                     if (is_max)
                         ech[c] = fmax(ech[c], d * norm);
@@ -418,6 +492,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
             total += e;
             worst = fmax(worst, e);
         }
+        free(sr);
         if ((is_max ? worst : total) <= tg->target)
             break;
         /* Bisect every interval above its average share (for max: above the target). */
@@ -469,7 +544,8 @@ static void build_slice(const slice_target *tg, slice_out *o)
                     src = vc + (i * (nc - 1) + j) * nch;
                     sw = wc[i * (nc - 1) + j];
                 } else {
-                    eval_nodes(p, &a, &nrows[I], 1, &ncols[J], 1, cross, &sw); /* no alloc fail: nc = 1 */
+                    eval_nodes(p, tg->refl, &a, &nrows[I], 1, &ncols[J], 1, cross, &sw); /* no alloc fail: nc = 1 */
+                    evals++;
                     src = cross;
                 }
                 memcpy(nv + (I * NC + J) * nch, src, nch * sizeof(double));
@@ -493,6 +569,7 @@ static void build_slice(const slice_target *tg, slice_out *o)
     o->s.cols = cols;
     o->s.vals = vals;
     o->w = w;
+    o->evals = evals;
     return;
 nomem:
     free(rows); free(cols); free(vals); free(w);
@@ -507,14 +584,30 @@ typedef struct facet_job {
     double frac_slice;
     double U;
     size_t max_nodes;
+    const size_t *max_each; /* per slice to build, when not NULL: its own node limit */
     const double *ti;
     slice_out *out;
 } facet_job;
 
-static double t_floor(const btdf_params *p, double ti)
+static void free_slice_out(slice_out *s);
+
+/* The part being built (BOTH never reaches the builder: it builds each part). */
+static int opts_refl(const btdf_table_opts *o)
 {
-    /* MODEL.md section 6: errors are relative to max(T, 0.01) */
-    return fmax(btdf_transmittance_coarse(p, ti), 0.01);
+    return o->part == BTDF_PART_REFLECTION;
+}
+
+/* T(ti), or R(ti) for the reflection, coarse. */
+static double part_coarse(const btdf_table_opts *o, double ti)
+{
+    return opts_refl(o) ? btdf_reflectance_coarse(&o->params, ti)
+                        : btdf_transmittance_coarse(&o->params, ti);
+}
+
+static double t_floor(const btdf_table_opts *o, double ti)
+{
+    /* MODEL.md section 6: errors are relative to max(T, 0.01), max(R, 0.01) */
+    return fmax(part_coarse(o, ti), 0.01);
 }
 
 static void facet_slice_job(void *arg, size_t k)
@@ -526,10 +619,20 @@ static void facet_slice_job(void *arg, size_t k)
     tg.ti = j->ti[k];
     tg.metric = o->metric;
     tg.U = j->U;
-    tg.max_nodes = j->max_nodes;
+    tg.max_nodes = j->max_each ? j->max_each[k] : j->max_nodes;
+    tg.refl = opts_refl(o);
     tg.target = o->tolerance * j->frac_slice *
-                (o->metric == BTDF_METRIC_MAX ? 1.0 : t_floor(&o->params, tg.ti));
+                (o->metric == BTDF_METRIC_MAX ? 1.0 : t_floor(o, tg.ti));
     build_slice(&tg, &j->out[k]);
+    /* The rule's node geometry, for blend_error's interpolation between slices. */
+    btdf_table rule;
+    memset(&rule, 0, sizeof rule);
+    rule.kind = tg.refl ? BTDF_TABLE_FACET_REFLECTION : BTDF_TABLE_FACET;
+    rule.rule = tg.refl ? BTDF_RULE_FRESNEL : BTDF_RULE_CHI;
+    if (!j->out[k].nomem && j->out[k].s.vals && !slice_prepare(&rule, &j->out[k].s)) {
+        free_slice_out(&j->out[k]);
+        j->out[k].nomem = 1;
+    }
 }
 
 /* Error of blending slices a and b half-way, measured on slice m's nodes, relative. */
@@ -537,8 +640,12 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
                           const slice_out *M)
 {
     btdf_table tmp;
+    memset(&tmp, 0, sizeof tmp);
     tslice two[2] = {A->s, B->s};
-    tmp.kind = BTDF_TABLE_FACET;
+    int refl = opts_refl(o);
+    tmp.kind = refl ? BTDF_TABLE_FACET_REFLECTION : BTDF_TABLE_FACET;
+    /* the rule of the table being built (A and B have geo) */
+    tmp.rule = refl ? BTDF_RULE_FRESNEL : BTDF_RULE_CHI;
     tmp.p = o->params;
     tmp.ns = 2;
     tmp.cap = 2;
@@ -549,13 +656,16 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
     double ech[BTDF_MAX_CHANNELS] = {0.0, 0.0, 0.0}; /* per channel: the metric takes the worst */
     double g = incident_factor(&o->params, M->s.ti), ga = incident_factor(&o->params, A->s.ti),
            gb = incident_factor(&o->params, B->s.ti);
+    double sti = sin(s->ti), cti = cos(s->ti);
     for (size_t i = 0; i < s->nr; i++) {
-        double tw = trap(s->rows, s->nr, i);
+        double tw = trap(s->rows, s->nr, i), stn = sin(s->rows[i]), ctn = cos(s->rows[i]);
         for (size_t j = 0; j < s->nc; j++) {
+            double ca = stn * cos(s->cols[j]) * sti + ctn * cti; /* e_i.h at M's ti */
             for (size_t c = 0; c < nch; c++) {
-                double bl = blend_ti(slice_interp(&tmp, 0, s->rows[i], s->cols[j], (int)c),
-                                     slice_interp(&tmp, 1, s->rows[i], s->cols[j], (int)c),
-                                     1.0 - wa, g, ga, gb);
+                double km = rule_factor(tmp.rule, o->params.ior[c], ca);
+                double bl = km * blend_ti(slice_interp_red(&tmp, 0, s->rows[i], s->cols[j], (int)c),
+                                          slice_interp_red(&tmp, 1, s->rows[i], s->cols[j], (int)c),
+                                          1.0 - wa, g, ga, gb);
                 double tv = s->vals[(i * s->nc + j) * nch + c];
                 double d = fabs(bl - tv);
                 vmax = fmax(vmax, tv);
@@ -566,11 +676,12 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
     }
     if (o->metric == BTDF_METRIC_MAX)
         return vmax > 0.0 ? dmax / vmax : 0.0; /* empty slices have no max error */
-    return fmax(ech[0], fmax(ech[1], ech[2])) / t_floor(&o->params, M->s.ti);
+    return fmax(ech[0], fmax(ech[1], ech[2])) / t_floor(o, M->s.ti);
 }
 
 static void free_slice_out(slice_out *s)
 {
+    free(s->s.geo);
     free(s->s.rows);
     free(s->s.cols);
     free(s->s.vals);
@@ -614,14 +725,16 @@ static size_t facet_first_slices(const btdf_table_opts *o)
 
 /* One adaptive build with the given shares of the tolerance. */
 static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
-                                    double frac_ti, btdf_table *t, int *budget_hit)
+                                    double frac_ti, btdf_table *t, int *budget_hit,
+                                    size_t *evals)
 {
     size_t node_cap = facet_node_cap(o);
     /* Tail: facets with u > U carry a fraction exp(-U^2) of the facet distribution; U
        puts that below a tenth of the tolerance. */
     double U = sqrt(log(10.0 / o->tolerance)) + 1.0;
     size_t per_slice = node_cap / 8 > 1000 ? node_cap / 8 : 1000;
-    facet_job j = {o, frac_slice, U, per_slice < node_cap ? per_slice : node_cap, NULL, NULL};
+    facet_job j = {o, frac_slice, U, per_slice < node_cap ? per_slice : node_cap, NULL, NULL,
+                   NULL};
     double span = o->ti_max - o->ti_min;
     size_t n0 = facet_first_slices(o); /* btdf_table_build checked n0 slices fit */
     size_t cap = n0, ns = n0;
@@ -644,14 +757,17 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
     for (size_t k = 0; k < ns; k++)
         nodes += sl[k].s.nr * sl[k].s.nc;
     if (nodes > node_cap) { /* the first slices alone overran: again, each a share */
-        for (size_t k = 0; k < ns; k++)
+        for (size_t k = 0; k < ns; k++) {
+            *evals += sl[k].evals;
             free_slice_out(&sl[k]);
+        }
         j.max_nodes = node_cap / n0;
         *budget_hit |= facet_limit(o);
         btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
     }
     nodes = 0;
     for (size_t k = 0; k < ns; k++) {
+        *evals += sl[k].evals;
         if (sl[k].nomem)
             st = BTDF_ENOMEM;
         *budget_hit |= sl[k].budget_hit;
@@ -680,7 +796,9 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         slice_out *cand = calloc(nt, sizeof *cand);
         double *ecand = calloc(nt, sizeof *ecand);
         unsigned char *taken = calloc(nt, 1);
-        if (!mt || !at || !cand || !ecand || !taken) {
+        size_t *need = malloc(nt * sizeof(size_t));
+        if (!mt || !at || !cand || !ecand || !taken || !need) {
+            free(need);
             free(mt);
             free(at);
             free(cand);
@@ -695,46 +813,77 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                 mt[q] = 0.5 * (sl[k].s.ti + sl[k + 1].s.ti);
                 at[q++] = k;
             }
-        /* When the room left cannot hold a slice of the present average size for every
-           candidate, test only as many as it can, the widest intervals first (the others
-           stay open): equal shares too small for any would all stop short and spend the
-           budget on slices that cannot meet their target. */
-        size_t avg = ns ? nodes / ns : 0, left = nodes < node_cap ? node_cap - nodes : 0;
-        if (avg > 0 && nt > 1 && nt * avg > left && left / avg >= 1) {
-            size_t fit = left / avg;
-            for (size_t a2 = 0; a2 < fit; a2++) { /* selection of the fit widest */
+        /* Room for the candidates, each by its neighbours' sizes: a slice between two
+           others needs about as many nodes as the larger of them (a quarter more, for
+           what lies between). When the room left cannot hold every candidate so, test
+           only those it can, the widest intervals first (the others stay open): equal
+           shares too small for some would stop them short and end refinement with the
+           budget far from spent. What room is left over is shared in proportion. */
+        size_t left = nodes < node_cap ? node_cap - nodes : 0;
+        double total = 0.0;
+        for (q = 0; q < nt; q++) {
+            size_t a = sl[at[q]].s.nr * sl[at[q]].s.nc, b = sl[at[q] + 1].s.nr * sl[at[q] + 1].s.nc;
+            size_t m = a > b ? a : b;
+            m += m / 4;
+            m = m < SLICE_MIN_NODES ? SLICE_MIN_NODES : m;
+            need[q] = m < j.max_nodes ? m : j.max_nodes;
+            total += (double)need[q];
+        }
+        if (nt > 1 && total > (double)left) {
+            size_t fit = 0;
+            double used = 0.0;
+            for (size_t a2 = 0; a2 < nt; a2++) { /* selection of the widest first */
                 size_t w = a2;
                 for (size_t b2 = a2 + 1; b2 < nt; b2++)
                     if (sl[at[b2] + 1].s.ti - sl[at[b2]].s.ti > sl[at[w] + 1].s.ti - sl[at[w]].s.ti)
                         w = b2;
                 double tm = mt[a2];
-                size_t ta = at[a2];
+                size_t ta = at[a2], tn = need[a2];
                 mt[a2] = mt[w];
                 at[a2] = at[w];
+                need[a2] = need[w];
                 mt[w] = tm;
                 at[w] = ta;
+                need[w] = tn;
+                if (used + (double)need[a2] > (double)left)
+                    break;
+                used += (double)need[a2];
+                fit++;
             }
-            nt = fit;
+            nt = fit ? fit : 1; /* none fits whole: the widest gets what is left */
+            total = fit ? used : (double)left;
+            if (!fit)
+                need[0] = left;
+        }
+        int short_room = 0;
+        for (q = 0; q < nt; q++) {
+            /* total > 0: every need is at least SLICE_MIN_NODES or all of left */
+            double share = total > 0.0 ? (double)need[q] * (double)left / total : 0.0;
+            size_t r = share < (double)j.max_nodes ? (size_t)share : j.max_nodes;
+            need[q] = r;
+            short_room |= r < SLICE_MIN_NODES;
         }
         j.ti = mt;
         j.out = cand;
         /* The candidates are held beside the slices: together they stay in the budget. */
-        size_t room = nodes < node_cap ? (node_cap - nodes) / nt : 0;
-        if (room < SLICE_MIN_NODES) {
+        if (short_room) {
             *budget_hit |= facet_limit(o);
             free(mt);
             free(at);
             free(cand);
             free(ecand);
             free(taken);
+            free(need);
             break;
         }
         size_t saved_max = j.max_nodes;
-        if (room < j.max_nodes)
-            j.max_nodes = room;
+        j.max_each = need;
         btdf_parallel_for(o->threads, nt, facet_slice_job, &j);
         j.max_nodes = saved_max;
+        j.max_each = NULL;
         size_t keep = 0;
+        for (q = 0; q < nt; q++)
+            *evals += cand[q].evals;
         for (q = 0; q < nt; q++) {
             if (cand[q].nomem) {
                 st = BTDF_ENOMEM;
@@ -747,7 +896,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                error relative to it is far from symmetric about the midpoint, and the
                midpoint test misses the peak: such intervals are split regardless. */
             if (o->metric == BTDF_METRIC_L1) {
-                double fa = t_floor(&o->params, sl[k].s.ti), fb = t_floor(&o->params, sl[k + 1].s.ti);
+                double fa = t_floor(o, sl[k].s.ti), fb = t_floor(o, sl[k + 1].s.ti);
                 if (fmax(fa, fb) > 1.5 * fmin(fa, fb))
                     e = fmax(e, 2.0 * o->tolerance * frac_ti);
             }
@@ -759,7 +908,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
             int za = !(incident_factor(&o->params, sl[k].s.ti) > 0.0);
             int zb = !(incident_factor(&o->params, sl[k + 1].s.ti) > 0.0);
             if (za != zb) {
-                double tother = btdf_transmittance_coarse(&o->params, sl[za ? k + 1 : k].s.ti);
+                double tother = part_coarse(o, sl[za ? k + 1 : k].s.ti);
                 double bound = o->metric == BTDF_METRIC_L1 ? tother / 0.01
                                                              : (tother >= 0.01 ? 1.0 : 0.0);
                 e = fmax(e, bound);
@@ -811,6 +960,13 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                 st = BTDF_ENOMEM;
             } else {
                 open = no;
+                /* Intervals still open (not tested this round: the room held only some
+                   candidates) stay open; the left end names each, as none was split. */
+                double *still = malloc(ns * sizeof(double));
+                size_t nst = 0;
+                for (size_t k = 0; k + 1 < ns && still; k++)
+                    if (open[k])
+                        still[nst++] = sl[k].s.ti;
                 /* Old intervals that were split stay open as their two halves. */
                 for (q = 0; q < nt; q++) {
                     if (cand[q].s.vals) {
@@ -822,7 +978,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                     }
                 }
                 /* Re-sort by ti and mark which intervals remain open: an interval is
-                   open when one of its ends was just added. */
+                   open when one of its ends was just added, or it was open and untested. */
                 double *fresh = malloc(ns * sizeof(double));
                 size_t nf = 0;
                 for (size_t k = ns - keep; k < ns && fresh; k++)
@@ -833,9 +989,13 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
                     for (size_t f = 0; f < nf; f++)
                         if (sl[k].s.ti == fresh[f] || sl[k + 1].s.ti == fresh[f])
                             open[k] = 1;
+                    for (size_t f = 0; f < nst && !open[k]; f++)
+                        if (sl[k].s.ti == still[f])
+                            open[k] = 1;
                 }
                 free(fresh);
-                if (!fresh)
+                free(still);
+                if (!fresh || !still)
                     st = BTDF_ENOMEM;
             }
         } else if (st == BTDF_OK && !keep) {
@@ -850,6 +1010,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         free(cand);
         free(ecand);
         free(taken);
+        free(need);
         free(mt);
         free(at);
     }
@@ -877,6 +1038,7 @@ static void table_clear(btdf_table *t)
         free(t->s[k].rows);
         free(t->s[k].cols);
         free(t->s[k].vals);
+        free(t->s[k].geo);
     }
     t->ns = 0;
 }
@@ -908,18 +1070,18 @@ static void budget_text(char *msg, size_t msglen, int which, const btdf_table_op
                  e, e / tol, tol);
 }
 
-BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out, char *msg,
-                                      size_t msglen)
+/* One part: the transmission, or the reflection when o->part is REFLECTION. */
+static btdf_status build_part(const btdf_table_opts *o, btdf_table **out, char *msg,
+                              size_t msglen)
 {
-    if (!o || !out)
-        return BTDF_EINVAL;
-    btdf_status st = check_opts(o, msg, msglen);
-    if (st != BTDF_OK)
-        return st;
+    int refl = opts_refl(o);
+    btdf_table_kind kind = refl ? BTDF_TABLE_FACET_REFLECTION : o->kind;
     btdf_table *t;
-    st = btdf_table_new(o->kind, &o->params, &t, msg, msglen);
+    btdf_status st = btdf_table_new(kind, &o->params, &t, msg, msglen);
     if (st != BTDF_OK)
         return st;
+    if (o->kind != BTDF_TABLE_GRID)
+        t->rule = refl ? BTDF_RULE_FRESNEL : BTDF_RULE_CHI; /* btdf.h: adaptive tables interpolate rho / K */
     if (o->kind == BTDF_TABLE_GRID) {
         st = build_grid(o, t, msg, msglen);
         if (st != BTDF_OK) {
@@ -933,7 +1095,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
        the table of 1/n over all incident angles, whose facet space is well conditioned
        (btdf.h, BTDF_TABLE_FACET_RECIPROCAL). Errors are still measured for n. */
     btdf_table_opts ob = *o;
-    int recip = 1;
+    int recip = !refl; /* the reflection's facet space is well conditioned for every n */
     for (int c = 0; c < o->params.channels; c++)
         recip = recip && o->params.ior[c] < 1.0;
     if (recip) {
@@ -961,6 +1123,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     int budget_hit = 0, best_budget = 0;
     double best_e = INFINITY;
     btdf_table *best = NULL;
+    size_t evals = 0; /* Eq. 25 evaluations of every pass, kept with the table */
     for (int pass = 0; pass < 6; pass++) {
         if (pass > 0 && o->progress) /* the check fell short: a tighter pass, at most 6 */
             o->progress(o->progress_user, "tighter pass", (size_t)pass, (size_t)(6 - pass));
@@ -968,8 +1131,8 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         t->kind = BTDF_TABLE_FACET;
         t->p = ob.params;
         budget_hit = 0;
-        st = build_facet_pass(&ob, fs, ft, t, &budget_hit);
-        t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : BTDF_TABLE_FACET;
+        st = build_facet_pass(&ob, fs, ft, t, &budget_hit, &evals);
+        t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : kind;
         t->p = o->params;
         if (st != BTDF_OK)
             break;
@@ -999,9 +1162,10 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         t->check_seed = BUILD_CHECK_SEED;
         if (e < best_e) {
             btdf_table *fresh = NULL;
-            st = btdf_table_new(o->kind, &o->params, &fresh, msg, msglen);
+            st = btdf_table_new(kind, &o->params, &fresh, msg, msglen);
             if (st != BTDF_OK)
                 break;
+            fresh->rule = refl ? BTDF_RULE_FRESNEL : BTDF_RULE_CHI;
             btdf_table_free(best);
             best = t;
             t = fresh;
@@ -1023,6 +1187,7 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     }
     if (!best)
         return BTDF_ENOMEM;
+    best->build_evals = evals;
     *out = best;
     if (o->estimate == BTDF_ESTIMATE_NONE) {
         if (best_budget && msg && msglen)
@@ -1042,4 +1207,53 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
         return BTDF_EBUDGET;
     }
     return BTDF_OK;
+}
+
+BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out, char *msg,
+                                      size_t msglen)
+{
+    if (!o || !out)
+        return BTDF_EINVAL;
+    btdf_status st = check_opts(o, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    if (o->part != BTDF_PART_BOTH)
+        return build_part(o, out, msg, msglen);
+    /* Both parts: each its own table, refined to the tolerance with the whole budget;
+       the reflection is attached to the transmission. A part the budget stopped makes
+       the whole BTDF_EBUDGET, with that part's message. */
+    btdf_table_opts ot = *o, orr = *o;
+    ot.part = BTDF_PART_TRANSMISSION;
+    orr.part = BTDF_PART_REFLECTION;
+    char mt[512] = "", mr[512] = "";
+    btdf_table *t = NULL, *r = NULL;
+    btdf_status st_t = build_part(&ot, &t, mt, sizeof mt);
+    if (st_t != BTDF_OK && st_t != BTDF_EBUDGET) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "transmission: %s", mt);
+        return st_t;
+    }
+    btdf_status st_r = build_part(&orr, &r, mr, sizeof mr);
+    if (st_r != BTDF_OK && st_r != BTDF_EBUDGET) {
+        btdf_table_free(t);
+        if (msg && msglen)
+            snprintf(msg, msglen, "reflection: %s", mr);
+        return st_r;
+    }
+    st = btdf_table_attach_reflection(t, r, msg, msglen);
+    if (st != BTDF_OK) {
+        btdf_table_free(t);
+        btdf_table_free(r);
+        return st;
+    }
+    *out = t;
+    if (msg && msglen) {
+        msg[0] = 0;
+        if (mt[0] && mr[0])
+            snprintf(msg, msglen, "transmission: %s; reflection: %s", mt, mr);
+        else if (mt[0] || mr[0])
+            snprintf(msg, msglen, "%s: %s", mt[0] ? "transmission" : "reflection",
+                     mt[0] ? mt : mr);
+    }
+    return st_t != BTDF_OK ? st_t : st_r;
 }

@@ -33,6 +33,7 @@ typedef struct est_job {
     uint64_t seed;
     btdf_ti_error *res;
     size_t *points;
+    int refl;             /* 1: the truth is rho_r over the upper hemisphere, R for T */
 } est_job;
 
 /*
@@ -44,6 +45,9 @@ typedef struct est_job {
  * Each sample counts with V_A V_B / (V_A + V_B) (V_A = infinity where A cannot reach).
  * A alone has unbounded weights for n < 1, where chi -> 0 at the critical angle;
  * B alone misses narrow lobes; together they are bounded and follow the lobe.
+ * Reflection (MODEL.md section 8) is measured the same way on cos tr d(omega_r): A's
+ * facets mirror e_i (V_A = cos tr 4 (e_i.h) d(omega_h)), B's directions cover the upper
+ * hemisphere, and R(ti) takes the place of T(ti).
  */
 #define U_EST 7.0 /* A's neglected tail holds exp(-49) of the facet distribution */
 
@@ -92,7 +96,11 @@ static void est_angle(void *arg, size_t k)
     memset(r, 0, sizeof *r);
     r->ti = ti;
     double Tall[BTDF_MAX_CHANNELS];
-    btdf_transmittance(p, ti, Tall);
+    int refl = j->refl;
+    if (refl)
+        btdf_reflectance(p, ti, Tall);
+    else
+        btdf_transmittance(p, ti, Tall);
     double wmax = -expm1(-U_EST * U_EST);
     double dw = wmax / (double)j->nu, dpsi = M_PI / (double)j->npsi;
     double dmu = 1.0 / (double)j->nmu, dphi = M_PI / (double)j->nphi;
@@ -110,10 +118,11 @@ static void est_angle(void *arg, size_t k)
                 double ctn = 1.0 / sqrt(1.0 + rr * rr), stn = rr * ctn;
                 facet_geo g;
                 pts++;
-                if (!facet_eval(n, s, p->k0, &a, stn, ctn, cos(psi), sin(psi), &g))
-                    continue; /* no outgoing direction: both the table and Eq. 25 are 0 */
+                if (!(refl ? facet_eval_r(n, s, p->k0, &a, stn, ctn, cos(psi), sin(psi), &g)
+                           : facet_eval(n, s, p->k0, &a, stn, ctn, cos(psi), sin(psi), &g)))
+                    continue; /* no outgoing direction: both the table and the model are 0 */
                 double va = g.weight * a_measure(u, s, dw, dpsi);
-                double vb = -g.cos_to * dmu * dphi * 2.0;
+                double vb = fabs(g.cos_to) * dmu * dphi * 2.0;
                 double to = atan2(g.sin_to, g.cos_to);
                 double pf = fabs(atan2(g.sin_phi, g.cos_phi));
                 const double q[8] = {sti, cti, g.sin_to, g.cos_to, g.cos_phi, g.sin_phi, pf, to};
@@ -124,23 +133,33 @@ static void est_angle(void *arg, size_t k)
         }
         for (size_t im = 0; im < j->nmu; im++) {
             for (size_t ip = 0; ip < j->nphi; ip++) {
-                double mu = -((double)im + unif(&rng)) / (double)j->nmu; /* cos to */
+                double mu = ((double)im + unif(&rng)) / (double)j->nmu; /* |cos to| */
+                mu = refl ? mu : -mu;
                 double ph = M_PI * ((double)ip + unif(&rng)) / (double)j->nphi;
                 double sto = sqrt(fmax(0.0, 1.0 - mu * mu)), cph = cos(ph), sph = sin(ph);
-                double vb = -mu * dmu * dphi * 2.0, share = vb, tn, ps;
+                double vb = fabs(mu) * dmu * dphi * 2.0, share = vb, tn, ps, ca_r;
                 pts++;
-                if (facet_of(n, sti, cti, sto, mu, cph, sph, &tn, &ps)) {
+                if (refl ? facet_of_r(sti, cti, sto, mu, cph, sph, &tn, &ps, &ca_r)
+                         : facet_of(n, sti, cti, sto, mu, cph, sph, &tn, &ps)) {
                     double u = 0.5 * s * tan(tn);
                     facet_geo g;
                     if (u < U_EST &&
-                        facet_eval(n, s, p->k0, &a, sin(tn), cos(tn), cos(ps), sin(ps), &g)) {
+                        (refl ? facet_eval_r(n, s, p->k0, &a, sin(tn), cos(tn), cos(ps),
+                                             sin(ps), &g)
+                              : facet_eval(n, s, p->k0, &a, sin(tn), cos(tn), cos(ps),
+                                           sin(ps), &g))) {
                         double va = g.weight * a_measure(u, s, dw, dpsi);
                         share = va * vb / (va + vb);
                     }
                 }
-                rho_out b;
-                rho_out_init(&b, sto, mu, s, p->k0);
-                double rho = rho_kernel(n, s, &a, &b, cph, sph);
+                double rho;
+                if (refl) {
+                    rho = btdf_rho_r(n, s, p->k0, ti, atan2(sto, mu), ph);
+                } else {
+                    rho_out b;
+                    rho_out_init(&b, sto, mu, s, p->k0);
+                    rho = rho_kernel(n, s, &a, &b, cph, sph);
+                }
                 const double q[8] = {sti, cti, sto, mu, cph, sph, ph, atan2(sto, mu)};
                 j->fn(j->obj, ti, q, tab);
                 est_add(&acc, tab[c], rho, share);
@@ -219,11 +238,11 @@ static double ratio(double a, double b, double fl)
     return a > b ? a / b : b / a;
 }
 
-static btdf_status estimate_impl(const btdf_params *p, double ti_min, double ti_max,
-                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
-                                 int threads, const double *knots, size_t nknots,
-                                 est_eval_fn fn, est_angle_fn custom, const void *obj,
-                                 btdf_report *r)
+static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
+                                 double ti_max, size_t test_angles, size_t points_per_angle,
+                                 uint64_t seed, int threads, const double *knots,
+                                 size_t nknots, est_eval_fn fn, est_angle_fn custom,
+                                 const void *obj, btdf_report *r)
 {
     if (!p || !(fn || custom) || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
         return BTDF_EINVAL;
@@ -237,6 +256,7 @@ static btdf_status estimate_impl(const btdf_params *p, double ti_min, double ti_
     est_job j;
     memset(&j, 0, sizeof j);
     j.p = p;
+    j.refl = refl;
     j.fn = fn;
     j.custom = custom;
     j.ppa = points_per_angle;
@@ -373,8 +393,8 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
                                 int threads, const double *knots, size_t nknots,
                                 est_eval_fn fn, const void *obj, btdf_report *r)
 {
-    return estimate_impl(p, ti_min, ti_max, test_angles, points_per_angle, seed, threads, knots,
-                         nknots, fn, NULL, obj, r);
+    return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         knots, nknots, fn, NULL, obj, r);
 }
 
 btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
@@ -382,16 +402,24 @@ btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_
                                  int threads, const double *knots, size_t nknots,
                                  est_angle_fn fn, const void *obj, btdf_report *r)
 {
-    return estimate_impl(p, ti_min, ti_max, test_angles, points_per_angle, seed, threads, knots,
-                         nknots, NULL, fn, obj, r);
+    return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         knots, nknots, NULL, fn, obj, r);
 }
 
 btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
                              size_t test_angles, size_t points_per_angle, uint64_t seed,
                              int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
-    return btdf_estimate_knots(p, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                               NULL, 0, fn, obj, r);
+    return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         NULL, 0, fn, NULL, obj, r);
+}
+
+btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
+                               size_t test_angles, size_t points_per_angle, uint64_t seed,
+                               int threads, est_eval_fn fn, const void *obj, btdf_report *r)
+{
+    return estimate_impl(p, 1, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         NULL, 0, fn, NULL, obj, r);
 }
 
 BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
@@ -425,8 +453,9 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
             knots[k] = t->s[k].ti;
         nk = t->ns;
     }
-    btdf_status st = btdf_estimate_knots(&t->p, ti_min, ti_max, test_angles, points_per_angle,
-                                         seed, threads, knots, nk, table_fn, t, r);
+    btdf_status st = estimate_impl(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
+                                   test_angles, points_per_angle, seed, threads, knots, nk,
+                                   table_fn, NULL, t, r);
     free(knots);
     if (st == BTDF_OK) {
         r->slices = t->ns;

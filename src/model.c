@@ -664,6 +664,15 @@ static double reflectance_one(double n, double s, double k0, double ti, int u_pa
     return vi / cti * (2.0 / M_PI) * sum;
 }
 
+double btdf_reflectance_coarse(const btdf_params *p, double ti)
+{
+    /* 4 x 3 panels, as btdf_transmittance_coarse: for the max(R, 0.01) floor */
+    double m = 1.0;
+    for (int c = 0; c < p->channels; c++)
+        m = fmin(m, reflectance_one(p->ior[c], p->smoothness, p->k0, ti, 4, 3));
+    return m;
+}
+
 BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *out)
 {
     if (btdf_params_check(p, NULL, 0) != BTDF_OK || !out)

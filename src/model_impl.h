@@ -583,4 +583,7 @@ void btdf_sincos_deg(double deg, double *s, double *c);
 /* min over channels of T(ti) from a coarse quadrature (about 1e-4 absolute). */
 double btdf_transmittance_coarse(const btdf_params *p, double ti);
 
+/* min over channels of R(ti) from the same coarse quadrature. */
+double btdf_reflectance_coarse(const btdf_params *p, double ti);
+
 #endif

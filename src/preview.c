@@ -194,6 +194,7 @@ typedef struct curve {
     int ch;
     double ti; /* radians */
     double peak, peak_to;
+    double peak_r, peak_tr; /* the reflection's (0 when it is not drawn) */
 } curve;
 
 /* rho |cos to| of channel ch in the plane of incidence; side +1 forward (phi = pi). */
@@ -202,6 +203,15 @@ static double polar_value(const curve *cv, double to, int side)
     double v = btdf_rho(cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0, cv->ti, to,
                         side > 0 ? M_PI : 0.0);
     return v * fabs(cos(to));
+}
+
+/* rho_r |cos tr| of channel ch in the plane of incidence; side +1 the specular side
+   (phi = pi). */
+static double polar_value_r(const curve *cv, double tr, int side)
+{
+    double v = btdf_rho_r(cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0, cv->ti, tr,
+                          side > 0 ? M_PI : 0.0);
+    return v * fabs(cos(tr));
 }
 
 /* Whether the segment (x0, y0)-(x1, y1) passes through box b. */
@@ -255,6 +265,13 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
         if (!(o->ti_deg[k] >= 0.0 && o->ti_deg[k] < 90.0))
             return say(BTDF_EINVAL, msg, msglen, "ti = %g degrees outside [0, 90)",
                        o->ti_deg[k]);
+    if (o->part != 0 && o->part != BTDF_PART_TRANSMISSION && o->part != BTDF_PART_REFLECTION &&
+        o->part != BTDF_PART_BOTH)
+        return say(BTDF_EINVAL, msg, msglen, "part %d: must be transmission (1), reflection (2) "
+                   "or both (3)", (int)o->part);
+    /* the reflection above the surface (reflection alone: the transmission is not drawn) */
+    int refl = o->part == BTDF_PART_REFLECTION || o->part == BTDF_PART_BOTH;
+    int trans = o->part != BTDF_PART_REFLECTION;
     int W = o->width ? o->width : 960, H = o->height ? o->height : 720;
     if (W < POLAR_MIN_W || H < POLAR_MIN_H)
         return say(BTDF_EINVAL, msg, msglen,
@@ -262,7 +279,7 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
                    H, POLAR_MIN_W, POLAR_MIN_H);
 
     curve cs[BTDF_PREVIEW_MAX_CURVES];
-    double vmax = 0.0;
+    double vmax = 0.0, vmax_r = 0.0;
     size_t i = 0;
     for (size_t m = 0; m < o->nmaterials; m++)
         for (int ch = 0; ch < o->materials[m].channels; ch++)
@@ -275,7 +292,7 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
                 cu->peak_to = M_PI;
                 /* Forward first: at to = 180 degrees both sides meet, and that peak is
                    not on the backward side. */
-                for (int side = 1; side >= -1; side -= 2)
+                for (int side = 1; side >= -1 && trans; side -= 2)
                     for (int j = 0; j <= POLAR_STEPS; j++) {
                         double to = M_PI / 2 + (M_PI / 2) * j / POLAR_STEPS;
                         double v = polar_value(cu, to, side);
@@ -284,14 +301,31 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
                             cu->peak_to = side > 0 ? to : -to;
                         }
                     }
+                /* the reflection's peak (tr in [0, 90), the specular side first) */
+                cu->peak_r = 0.0;
+                cu->peak_tr = 0.0;
+                for (int side = 1; side >= -1 && refl; side -= 2)
+                    for (int j = 0; j <= POLAR_STEPS; j++) {
+                        double tr = (M_PI / 2) * j / POLAR_STEPS;
+                        double v = polar_value_r(cu, tr, side);
+                        if (v > cu->peak_r) {
+                            cu->peak_r = v;
+                            cu->peak_tr = side > 0 ? tr : -tr;
+                        }
+                    }
                 vmax = cu->peak > vmax ? cu->peak : vmax;
+                vmax_r = cu->peak_r > vmax_r ? cu->peak_r : vmax_r;
             }
     /* Peaks more than 3 times apart would flatten the small lobes: then every curve is
-       scaled to its own peak, and the legend gives the peaks. */
-    double pmin = vmax;
-    for (i = 0; i < ncurves; i++)
+       scaled to its own peak, and the legend gives the peaks. The reflection (its peak
+       is 4e-3 of the transmission's for n = 1.5, s = 3, ti = 30) has its own scale. */
+    double pmin = vmax, pmin_r = vmax_r;
+    for (i = 0; i < ncurves; i++) {
         pmin = cs[i].peak < pmin ? cs[i].peak : pmin;
+        pmin_r = cs[i].peak_r < pmin_r ? cs[i].peak_r : pmin_r;
+    }
     int own = vmax > 0.0 && !(pmin * 3.0 >= vmax);
+    int own_r = vmax_r > 0.0 && !(pmin_r * 3.0 >= vmax_r);
     /* Colours: one per curve; when every material is R,G,B, the channel's own hue, darker
        for the second (material, ti) pair (8 curves allow at most two such pairs). */
     plot_rgb colour[BTDF_PREVIEW_MAX_CURVES];
@@ -311,6 +345,9 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     }
     int nt;
     double step = plot_ticks(own ? 1.0 : vmax, 4, &nt), rmax = step * nt;
+    int nt_r = 1;
+    double step_r = refl ? plot_ticks(own_r ? 1.0 : vmax_r, 4, &nt_r) : 1.0;
+    double rmax_r = step_r * nt_r;
 
     if (plot_canvas_init(c, W, H, white) != 0)
         return say(BTDF_ENOMEM, msg, msglen, "out of memory for a %d x %d picture", W, H);
@@ -320,8 +357,12 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     /* Title. */
     const char *title =
         o->title ? o->title
+        : !trans ? PLOT_RHO "r |cos " PLOT_THETA "r| in the plane of incidence: the reflection "
+                   "of the facets of Xu & Sun 2008, Eq. 25"
+        : refl   ? PLOT_RHO " |cos " PLOT_THETA "o| below the surface (Xu & Sun 2008, Eq. 25), "
+                   PLOT_RHO "r |cos " PLOT_THETA "r| of the same facets above it"
                  : PLOT_RHO " |cos " PLOT_THETA "o| in the plane of incidence (Xu & Sun 2008, "
-                            "Eq. 25)";
+                   "Eq. 25)";
     double th = para(c, m, m, title, title_size(c, title, fs, W - 2 * m), W - 2 * m, ink, 1);
     double top0 = m + th + 0.5 * m;
 
@@ -335,8 +376,17 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
         snprintf(lab[i], sizeof lab[i], "n = %.4g%s%s%s  s = %.4g  " PLOT_THETA "i = %.4g" PLOT_DEG,
                  cu->p->ior[cu->ch], *chn ? " (" : "", chn, *chn ? ")" : "", cu->p->smoothness,
                  cu->ti * DEG);
-        snprintf(peak[i], sizeof peak[i], "peak %.3g at %.1f" PLOT_DEG "%s", cu->peak,
-                 fabs(cu->peak_to) * DEG, cu->peak_to < 0 ? " back" : "");
+        if (!trans)
+            snprintf(peak[i], sizeof peak[i], "peak %.3g at %.1f" PLOT_DEG "%s", cu->peak_r,
+                     fabs(cu->peak_tr) * DEG, cu->peak_tr < 0 ? " back" : "");
+        else if (refl)
+            snprintf(peak[i], sizeof peak[i], "peak %.3g at %.1f" PLOT_DEG "%s, r %.3g at %.1f"
+                     PLOT_DEG "%s", cu->peak, fabs(cu->peak_to) * DEG,
+                     cu->peak_to < 0 ? " back" : "", cu->peak_r, fabs(cu->peak_tr) * DEG,
+                     cu->peak_tr < 0 ? " back" : "");
+        else
+            snprintf(peak[i], sizeof peak[i], "peak %.3g at %.1f" PLOT_DEG "%s", cu->peak,
+                     fabs(cu->peak_to) * DEG, cu->peak_to < 0 ? " back" : "");
         double w = plot_text_width(c, lab[i], fsS) + plot_text_width(c, "   ", fsS) +
                    plot_text_width(c, peak[i], fsS);
         lw_one = fmax(lw_one, w);
@@ -346,7 +396,7 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     double legend_h = ncurves * entry;
 
     /* Footer paragraph. */
-    char foot[600];
+    char foot[800];
     int same_k0 = 1;
     for (size_t k = 1; k < o->nmaterials; k++)
         same_k0 &= o->materials[k].k0 == o->materials[0].k0;
@@ -358,6 +408,15 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
              "through the mean surface, per material%s; " PLOT_RHO ": the BTDF without cosine "
              "factor; " PLOT_THETA "o from the upper normal; btdftab " BTDF_VERSION_STRING,
              own ? ", each curve divided by its own peak (peaks in the legend)" : "", k0s);
+    if (refl) { /* the upper half */
+        size_t fl = strlen(foot);
+        snprintf(foot + fl, sizeof foot - fl,
+                 "; above the surface: " PLOT_RHO "r |cos " PLOT_THETA "r|, the reflection of the "
+                 "same facets (1/sr), on its own linear scale%s (ticks above the surface line%s), "
+                 PLOT_THETA "r from the upper normal, dashed: the mirror direction",
+                 own_r ? ", each curve divided by its own peak" : "",
+                 trans ? "; the transmission's below it" : "");
+    }
     double foot_h = para(c, m, 0, foot, fsS, W - 2 * m, grey, 0);
 
     /* Geometry: upper band (legend, arrows, tick labels), lower half circle, labels. */
@@ -366,13 +425,19 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     double Rh = fmin((W / 2.0 - m - labw) / 0.87, W / 2.0 - m);
     double fixed = m + foot_h + 0.6 * m + 1.3 * lineS + top0; /* all but band and radius */
     double R = polar_radius(H, fixed, Rh, band0, &band);
+    if (refl) { /* a whole half circle above the surface, below the legend */
+        R = fmin(Rh, (H - fixed - band0) / 2.0);
+        band = band0 + R;
+    }
     /* The plot must stay large beside its texts: a radius of at least 0.28 of the
-       picture's smaller side (in 4:3 terms). */
-    double Rmin = 0.28 * fmin(W, H * 4.0 / 3.0);
+       picture's smaller side (in 4:3 terms), 0.19 with both halves. */
+    double rf = refl ? 0.19 : 0.28;
+    double Rmin = rf * fmin(W, H * 4.0 / 3.0);
     if (R < Rmin) {
         int Hn = H;
         while (Hn < BTDF_PREVIEW_MAX_SIDE &&
-               polar_radius(Hn, fixed, Rh, band0, &band) < 0.28 * fmin(W, Hn * 4.0 / 3.0))
+               (refl ? fmin(Rh, (Hn - fixed - band0) / 2.0)
+                     : polar_radius(Hn, fixed, Rh, band0, &band)) < rf * fmin(W, Hn * 4.0 / 3.0))
             Hn++;
         plot_canvas_free(c);
         return say(BTDF_EINVAL, msg, msglen,
@@ -405,20 +470,58 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
                   a < 90 ? 0.0 : 1.0, 0.3, t, fsS, grey);
     }
     plot_text(c, cx, cy + R + 0.2 * lineS, 0.5, 0.0, PLOT_THETA "o = 180" PLOT_DEG, fsS, grey);
+    if (refl) { /* the upper half: the reflection's circles, spokes and angles */
+        for (int k = 1; k <= nt_r; k++) {
+            cairo_new_path(c->cr);
+            cairo_arc(c->cr, cx, cy, R * k / nt_r, M_PI, 2.0 * M_PI);
+            cairo_set_source_rgb(c->cr, light.r / 255.0, light.g / 255.0, light.b / 255.0);
+            cairo_set_line_width(c->cr, 1.0);
+            cairo_stroke(c->cr);
+        }
+        for (int a = 15; a < 180; a += 15)
+            plot_line(c, cx, cy, cx + R * cos(a / DEG), cy - R * sin(a / DEG), 1.0, 0, light);
+        for (int a = 30; a < 180; a += 30) {
+            if (a == 90)
+                continue;
+            char t[16];
+            snprintf(t, sizeof t, "%d" PLOT_DEG, a < 90 ? 90 - a : a - 90);
+            plot_box b = plot_text_box(c, cx + (R + 0.3 * fsS) * cos(a / DEG),
+                                       cy - (R + 0.3 * fsS) * sin(a / DEG), a < 90 ? 0.0 : 1.0,
+                                       0.7, t, fsS);
+            if (!plot_text_collides(c, b, 1.0))
+                plot_text(c, cx + (R + 0.3 * fsS) * cos(a / DEG),
+                          cy - (R + 0.3 * fsS) * sin(a / DEG), a < 90 ? 0.0 : 1.0, 0.7, t, fsS,
+                          grey);
+        }
+        plot_box b = plot_text_box(c, cx, cy - R - 0.2 * lineS, 0.5, 1.0,
+                                   PLOT_THETA "r = 0" PLOT_DEG, fsS);
+        if (!plot_text_collides(c, b, 1.0))
+            plot_text(c, cx, cy - R - 0.2 * lineS, 0.5, 1.0, PLOT_THETA "r = 0" PLOT_DEG, fsS,
+                      grey);
+    }
     plot_line(c, 0, cy, W, cy, 2.0, 0, ink);
 
-    /* Radial scale above the surface, right of the centre. */
+    /* Radial scale above the surface, right of the centre; with the reflection, its
+       scale there and the transmission's below the line. */
     char tl[32];
-    for (int k = 1; k <= nt && (vmax > 0.0); k++) {
-        double x = cx + R * k / nt;
-        plot_tick_label(tl, sizeof tl, step * k, step);
-        double ax = x + plot_text_width(c, tl, fsS) / 2 > W - m ? 1.0 : 0.5;
-        plot_box b = plot_text_box(c, x, cy - 0.3 * fsS, ax, 1.0, tl, fsS);
-        plot_line(c, x, cy - 0.25 * fsS, x, cy + 0.25 * fsS, 1.2, 0, ink);
-        if (!plot_text_collides(c, b, 0.5 * fsS))
-            plot_text(c, x, cy - 0.3 * fsS, ax, 1.0, tl, fsS, ink);
+    for (int half = 0; half <= refl; half++) {
+        int below = half == 0 && refl; /* the transmission's ticks, under the line */
+        int n_h = half ? nt_r : nt;
+        double st_h = half ? step_r : step, vm_h = half ? vmax_r : (trans ? vmax : 0.0);
+        double yl = below ? cy + 0.3 * fsS : cy - 0.3 * fsS, ay = below ? 0.0 : 1.0;
+        for (int k = 1; k <= n_h && (vm_h > 0.0); k++) {
+            double x = cx + R * k / n_h;
+            plot_tick_label(tl, sizeof tl, st_h * k, st_h);
+            double ax = x + plot_text_width(c, tl, fsS) / 2 > W - m ? 1.0 : 0.5;
+            plot_box b = plot_text_box(c, x, yl, ax, ay, tl, fsS);
+            plot_line(c, x, below ? cy : cy - 0.25 * fsS, x, below ? cy + 0.25 * fsS : cy, 1.2,
+                      0, ink);
+            if (!plot_text_collides(c, b, 0.5 * fsS))
+                plot_text(c, x, yl, ax, ay, tl, fsS, ink);
+        }
     }
     (void)rmax;
+    (void)rmax_r;
 
     /* Snell directions: one dashed line per distinct (n, ti), in the curve's colour, or
        dark grey when several curves share it. */
@@ -431,7 +534,17 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
             shared |= same && j != i;
         }
         double sn = sin(cu->ti) / cu->p->ior[cu->ch]; /* n > 0: btdf_params_check passed */
-        if (seen || sn > 1.0) /* past the critical angle there is no refracted direction */
+        if (refl) { /* the mirror direction: tr = ti on the specular side */
+            int seen_r = 0, shared_r = 0;
+            for (size_t j = 0; j < ncurves; j++) {
+                seen_r |= cs[j].ti == cu->ti && j < i;
+                shared_r |= cs[j].ti == cu->ti && j != i;
+            }
+            if (!seen_r)
+                plot_line(c, cx, cy, cx + R * sin(cu->ti), cy - R * cos(cu->ti), 1.4, 5.0,
+                          shared_r ? grey : colour[i]);
+        }
+        if (seen || sn > 1.0 || !trans) /* past the critical angle: no refracted direction */
             continue;
         double tt = asin(sn);
         plot_line(c, cx, cy, cx + R * sin(tt), cy + R * cos(tt), 1.4, 5.0,
@@ -448,24 +561,33 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     for (i = 0; i < ncurves; i++) {
         const curve *cu = &cs[i];
         /* A curve with peak 0 has nothing to draw (and must not be divided by). */
-        double scale = own ? (cu->peak > 0.0 ? R / cu->peak : 0.0) : R / rmax; /* rmax > 0 */
-        if (!(scale > 0.0))
-            continue;
-        size_t np = 0;
-        for (int side = -1; side <= 1; side += 2)
-            for (int j = 0; j <= POLAR_STEPS; j++) {
-                int jj = side < 0 ? POLAR_STEPS - j : j; /* backward side in, forward out */
-                double to = M_PI / 2 + (M_PI / 2) * jj / POLAR_STEPS;
-                double r = polar_value(cu, to, side) * scale;
-                double x = cx + side * r * sin(to), y = cy - r * cos(to);
-                if (np > 0 && j != POLAR_STEPS &&
-                    fabs(x - xy[2 * np - 2]) + fabs(y - xy[2 * np - 1]) < 0.4)
-                    continue;
-                xy[2 * np] = x;
-                xy[2 * np + 1] = y;
-                np++;
-            }
-        plot_polyline(c, xy, np, 2.2, colour[i]);
+        /* the transmission below the surface, then the reflection above it, each on its
+           own scale */
+        for (int half = trans ? 0 : 1; half <= refl; half++) {
+            double pk = half ? cu->peak_r : cu->peak, rm = half ? rmax_r : rmax;
+            int own_h = half ? own_r : own;
+            /* rm > 0 (plot_ticks); a curve with peak 0 has nothing to draw */
+            double scale = own_h ? (pk > 0.0 ? R / pk : 0.0) : R / rm;
+            if (!(scale > 0.0))
+                continue;
+            size_t np = 0;
+            for (int side = -1; side <= 1; side += 2)
+                for (int j = 0; j <= POLAR_STEPS; j++) {
+                    int jj = side < 0 ? POLAR_STEPS - j : j; /* backward side in, forward out */
+                    double to = half ? (M_PI / 2) * (POLAR_STEPS - jj) / POLAR_STEPS
+                                     : M_PI / 2 + (M_PI / 2) * jj / POLAR_STEPS;
+                    double r = (half ? polar_value_r(cu, to, side) : polar_value(cu, to, side)) *
+                               scale;
+                    double x = cx + side * r * sin(to), y = cy - r * cos(to);
+                    if (np > 0 && j != POLAR_STEPS &&
+                        fabs(x - xy[2 * np - 2]) + fabs(y - xy[2 * np - 1]) < 0.4)
+                        continue;
+                    xy[2 * np] = x;
+                    xy[2 * np + 1] = y;
+                    np++;
+                }
+            plot_polyline(c, xy, np, 2.2, colour[i]);
+        }
     }
     free(xy);
     /* One arrow per distinct ti: in the curve's colour, or ink when curves share it. */
@@ -517,8 +639,10 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
         else
             plot_text(c, b.x1 + plot_text_width(c, "   ", fsS), y, 0, 0, peak[i], fsS, grey);
     }
-    if (!(vmax > 0.0))
+    if (trans && !(vmax > 0.0))
         plot_text(c, cx, cy + R / 2, 0.5, 0.5, "no transmission", fs, ink);
+    if (refl && !(vmax_r > 0.0))
+        plot_text(c, cx, cy - R / 2, 0.5, 0.5, "no reflection", fs, ink);
     para(c, m, H - m - foot_h, foot, fsS, W - 2 * m, grey, 1);
     return BTDF_OK;
 }

@@ -82,11 +82,19 @@ BTDF_API double btdf_rad_e_l1_checked(const btdf_report *rep)
     return e;
 }
 
-/* The tree's node budget: about 1 GB of nodes, far beyond any useful file. */
-#define RAD_MAX_NODES ((size_t)1 << 26)
-/* Internal check: its own seed and 4 times the reported estimate's angles, since e_L1
-   jumps at the tree's cell edges in theta_i and a max over few angles is noisy. */
+/* The tree's node budget: 2^25 nodes (384 MB while building), far beyond any useful file. */
+#define RAD_MAX_NODES ((size_t)1 << 23)
+/* The builder's own error estimate: its own seed, 192 light angles up to RAD_TI_CHECKED
+   (stratified) and 32 x 64 views each, stratified in projected solid angle. */
 #define RAD_CHECK_SEED 0x5ad1a7e5u
+#define RAD_CHECK_ANGLES 192
+#define RAD_CHECK_S 32
+#define RAD_CHECK_PHI 64
+/* Aim below the tolerance: the report is another, independent estimate. */
+#define RAD_AIM 0.85
+#define RAD_EDGE_DIV 64 /* ring radii j / 64: the r edges of level-7 cells */
+/* The final check of a cut tree, by the report's estimator with the builder's seed. */
+#define RAD_AIM_CHECK 0.92
 
 BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
                                     double tolerance, int threads, btdf_rad **out, char *msg,
@@ -95,8 +103,309 @@ BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
     return btdf_rad_build_progress(p, basis, tolerance, threads, NULL, NULL, out, msg, msglen);
 }
 
-/* Passes of a tensor-tree block, at most (the rounds of the eps search below). */
-#define RAD_TREE_PASSES 6
+/* ------------------------------------------------------------ probe estimate */
+
+static uint64_t rad_mix(uint64_t *x)
+{
+    uint64_t z = (*x += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+}
+
+static double rad_unif(uint64_t *x) { return (double)(rad_mix(x) >> 11) * (1.0 / 9007199254740992.0); }
+
+/* Stratified probes of one block as a render reads it: m light angles, kv views each
+   (stratified in sin^2 of the view's polar angle and its azimuth: equal projected solid
+   angle), with the tree coordinates of each (view, light) pair and Eq. 25 (or rho_r) for
+   the light. */
+typedef struct rad_probes {
+    size_t m, ns, nphi, kv;
+    double ti_max;
+    double *ti, *T, *fl; /* per angle: light angle, T (or R) of the light, max(T, 0.01) */
+    double *u0, *a, *b, *f;
+    const btdf_rad *r;
+    int k;
+    const rad_node *nodes; /* the tree under test */
+    btdf_ti_error *res;
+} rad_probes;
+
+static void rad_probes_free(rad_probes *pr)
+{
+    free(pr->ti);
+    free(pr->u0);
+    memset(pr, 0, sizeof *pr);
+}
+
+/* The view p and light q of block k (Radiance's frame) for the light at ti in its own
+   MODEL.md frame and a view at (to, phi) in it (to in [pi/2, pi] for a transmission
+   block, [0, pi/2] for a reflection block). */
+static void render_dirs(const btdf_rad *r, int k, double ti, double to, double phi, double p[3],
+                        double q[3])
+{
+    const rad_block *b = &r->b[k];
+    if (b->reflect) {
+        /* rho_r: the light at azimuth 0, phi = pi the specular plane (MODEL.md 8) */
+        double sg = b->side == BTDF_SIDE_ENTER ? -1.0 : 1.0;
+        q[0] = sin(ti);
+        q[1] = 0.0;
+        q[2] = sg * cos(ti);
+        p[0] = sin(to) * cos(phi);
+        p[1] = sin(to) * sin(phi);
+        p[2] = sg * cos(to);
+        return;
+    }
+    /* the light's MODEL.md frame: source at azimuth pi, so it travels towards +x */
+    q[0] = -sin(ti);
+    q[1] = 0.0;
+    q[2] = cos(ti);
+    p[0] = sin(to) * cos(phi - M_PI);
+    p[1] = sin(to) * sin(phi - M_PI);
+    p[2] = cos(to);
+    if (b->light == BTDF_SIDE_ENTER) {
+        /* light from -Z: its frame seen from Radiance's is turned by pi about x */
+        q[2] = -q[2];
+        p[1] = -p[1];
+        p[2] = -p[2];
+    }
+}
+
+static void tree_coords(const double p[3], const double q[3], double *u0, double *a, double *b);
+
+static void probe_angle(void *arg, size_t i)
+{
+    rad_probes *pr = arg;
+    const btdf_rad *r = pr->r;
+    const rad_block *b = &r->b[pr->k];
+    uint64_t z = RAD_CHECK_SEED ^ (0x51ed2701u * (uint64_t)(i + 1)) ^ ((uint64_t)pr->k << 40);
+    double ti = pr->ti[i];
+    for (size_t s = 0; s < pr->ns; s++) {
+        for (size_t ph = 0; ph < pr->nphi; ph++) {
+            size_t j = i * pr->kv + s * pr->nphi + ph;
+            double u1 = ((double)s + rad_unif(&z)) / (double)pr->ns;
+            double phi = 2.0 * M_PI * ((double)ph + rad_unif(&z)) / (double)pr->nphi;
+            double st = sqrt(u1), to = asin(st), f;
+            if (b->reflect) {
+                f = btdf_rho_r(b->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
+            } else {
+                to = M_PI - to;
+                f = btdf_rho(b->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
+            }
+            double pv[3], qv[3];
+            render_dirs(r, pr->k, ti, to, phi, pv, qv);
+            tree_coords(pv, qv, &pr->u0[j], &pr->a[j], &pr->b[j]);
+            pr->f[j] = f;
+        }
+    }
+}
+
+static btdf_status rad_probes_make(const btdf_rad *r, int k, double ti_max, size_t m, size_t ns,
+                                   size_t nphi, uint64_t seed, int threads, rad_probes *pr)
+{
+    memset(pr, 0, sizeof *pr);
+    pr->ti_max = ti_max;
+    /* e_L1 jumps where a light's ring passes from one cell to the next in r, at
+       r = j / 2^(L-1) for a cell of level L; a stratified set misses narrow peaks
+       there, so the builder's set (ti_max < pi/2) adds both sides of every level-7
+       edge up to ti_max. */
+    size_t extra = 0;
+    if (ti_max < M_PI / 2)
+        for (int j = 1; j < RAD_EDGE_DIV && asin((j + 1e-6) / RAD_EDGE_DIV) <= ti_max; j++)
+            extra += 2;
+    m += extra;
+    pr->m = m;
+    pr->ns = ns;
+    pr->nphi = nphi;
+    pr->kv = ns * nphi;
+    pr->r = r;
+    pr->k = k;
+    size_t n = m * pr->kv;
+    pr->ti = malloc(3 * m * sizeof *pr->ti);
+    pr->u0 = malloc(4 * n * sizeof *pr->u0);
+    if (!pr->ti || !pr->u0) {
+        rad_probes_free(pr);
+        return BTDF_ENOMEM;
+    }
+    pr->T = pr->ti + m;
+    pr->fl = pr->T + m;
+    pr->a = pr->u0 + n;
+    pr->b = pr->a + n;
+    pr->f = pr->b + n;
+    btdf_params q = r->p;
+    q.channels = 1;
+    q.ior[0] = r->b[k].n_light;
+    uint64_t z = seed;
+    for (size_t i = 0; i < m; i++) {
+        if (i < m - extra) {
+            pr->ti[i] = pr->ti_max * ((double)i + rad_unif(&z)) / (double)(m - extra);
+        } else {
+            size_t e = i - (m - extra);
+            pr->ti[i] = asin(((double)(e / 2 + 1) + (e % 2 ? 1e-6 : -1e-6)) / RAD_EDGE_DIV);
+        }
+        double v = 0.0;
+        btdf_status st = r->b[k].reflect ? btdf_reflectance(&q, pr->ti[i], &v)
+                                         : btdf_transmittance(&q, pr->ti[i], &v);
+        if (st != BTDF_OK) {
+            rad_probes_free(pr);
+            return st;
+        }
+        pr->T[i] = v;
+        pr->fl[i] = fmax(v, 0.01); /* MODEL.md section 6 floor */
+    }
+    btdf_parallel_for(threads, m, probe_angle, pr);
+    return BTDF_OK;
+}
+
+static void probe_error(void *arg, size_t i)
+{
+    rad_probes *pr = arg;
+    double l1 = 0.0, dmax = 0.0, fmaxv = 0.0, tf = 0.0;
+    for (size_t j = i * pr->kv; j < (i + 1) * pr->kv; j++) {
+        double v = rad_tree_lookup(pr->nodes, pr->u0[j], pr->a[j], pr->b[j]);
+        double d = fabs(v - pr->f[j]);
+        l1 += d;
+        tf += v;
+        dmax = fmax(dmax, d);
+        fmaxv = fmax(fmaxv, pr->f[j]);
+    }
+    double w = M_PI / (double)pr->kv; /* projected solid angle of one stratum */
+    btdf_ti_error *e = &pr->res[i];
+    e->ti = pr->ti[i];
+    e->T = pr->T[i];
+    e->T_table = w * tf;
+    e->e_l1 = w * l1 / pr->fl[i];
+    e->e_t = fabs(w * tf - pr->T[i]) / pr->fl[i];
+    /* e_max is defined where T >= 0.01 (MODEL.md 6); fmaxv > 0 there */
+    e->e_max = pr->T[i] >= 0.01 && fmaxv > 0.0 ? dmax / fmaxv : 0.0;
+}
+
+/* The errors of tree `nodes` at every probe angle into res[m]. */
+static void rad_probes_eval(rad_probes *pr, const rad_node *nodes, int threads,
+                            btdf_ti_error *res)
+{
+    pr->nodes = nodes;
+    pr->res = res;
+    btdf_parallel_for(threads, pr->m, probe_error, pr);
+}
+
+static double res_max_l1(const btdf_ti_error *res, size_t m)
+{
+    double e = 0.0;
+    for (size_t i = 0; i < m; i++)
+        e = fmax(e, res[i].e_l1);
+    return e;
+}
+
+/* Passes of a tensor-tree block, for the progress bar (growth steps). */
+#define RAD_TREE_PASSES 8
+
+/* Grows the tree of block k until the probe estimate's largest e_L1 is below
+   RAD_AIM * tolerance, then cuts it at the largest eps that still holds that. */
+static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress_fn progress,
+                                  void *user, char *msg, size_t msglen)
+{
+    rad_block *b = &r->b[k];
+    rad_probes pr;
+    btdf_status st = rad_probes_make(r, k, RAD_TI_CHECKED, RAD_CHECK_ANGLES, RAD_CHECK_S, RAD_CHECK_PHI,
+                                     RAD_CHECK_SEED, threads, &pr);
+    if (st != BTDF_OK)
+        return st;
+    btdf_ti_error *res = malloc(pr.m * sizeof *res);
+    rad_tb *t = res ? rad_tb_new(&r->p, b, threads) : NULL;
+    if (!t) {
+        free(res);
+        rad_probes_free(&pr);
+        return btdf_say(BTDF_ENOMEM, msg, msglen, "out of memory building the tensor tree");
+    }
+    double aim = RAD_AIM * r->tolerance;
+    /* A cell's share is about eps and a light's ring crosses some 10^2 to 10^4 cells:
+       start from eps = tolerance / 100 and refine as e_L1 ~ eps^(1/3) suggests. */
+    double eps = r->tolerance * 1e-2, e = 0.0;
+    int pass = 0;
+    for (;;) {
+        if (progress)
+            progress(user, "tensor tree, block", (size_t)(k * RAD_TREE_PASSES + pass),
+                     (size_t)((r->nblocks - k) * RAD_TREE_PASSES - pass));
+        st = rad_tb_grow(t, eps, RAD_MAX_NODES);
+        if (st == BTDF_ENOMEM)
+            break;
+        btdf_status se = rad_tb_extract(t, eps, b);
+        if (se != BTDF_OK) {
+            st = se;
+            break;
+        }
+        rad_probes_eval(&pr, b->nodes, threads, res);
+        e = res_max_l1(res, pr.m);
+        if (getenv("BTDF_RAD_DEBUG")) {
+            fprintf(stderr, "grow %s eps %.3g: %zu leaves, e_L1 max %.4g:", b->label, eps,
+                    b->leaves, e);
+            for (size_t i = 0; i < pr.m; i += 6)
+                fprintf(stderr, " %.0f:%.3g", res[i].ti * 180 / M_PI, res[i].e_l1);
+            fprintf(stderr, " %.1f:%.3g\n", res[pr.m - 1].ti * 180 / M_PI, res[pr.m - 1].e_l1);
+        }
+        if (e <= aim || st == BTDF_EBUDGET)
+            break;
+        double g = aim / e;
+        g = g * g * g;
+        eps *= g < 1.0 / 64 ? 1.0 / 64 : (g > 0.5 ? 0.5 : g);
+        if (pass < RAD_TREE_PASSES - 1)
+            pass++;
+    }
+    if (st == BTDF_OK) {
+        /* Cut: the largest eps (a factor 2^(1/8) apart) whose tree still meets the aim. */
+        double lo = eps, hi = 0.0;
+        for (int i = 0; i < 24; i++) {
+            double x = hi > 0.0 ? sqrt(lo * hi) : 2.0 * lo;
+            if (hi > 0.0 && hi / lo < 1.09)
+                break;
+            if (rad_tb_extract(t, x, b) != BTDF_OK)
+                break;
+            rad_probes_eval(&pr, b->nodes, threads, res);
+            double ex = res_max_l1(res, pr.m);
+            if (getenv("BTDF_RAD_DEBUG"))
+                fprintf(stderr, "cut %s eps %.3g: %zu leaves, e_L1 max %.4g\n", b->label, x,
+                        b->leaves, ex);
+            if (ex <= aim)
+                lo = x;
+            else
+                hi = x;
+        }
+        st = rad_tb_extract(t, lo, b);
+        /* The probes see e_L1 at fixed angles; it jumps where a light's ring enters the
+           next cell, and the report's estimate refines there. So check the cut tree
+           with that estimator too (its own seed) and cut finer while it misses. */
+        for (int i = 0; i < 6 && st == BTDF_OK; i++) {
+            btdf_report rep;
+            memset(&rep, 0, sizeof rep);
+            st = btdf_rad_report(r, k, 48, 4096, RAD_CHECK_SEED, threads, &rep);
+            double ec = btdf_rad_e_l1_checked(&rep);
+            btdf_report_clear(&rep);
+            if (getenv("BTDF_RAD_DEBUG"))
+                fprintf(stderr, "check %s eps %.3g: %zu leaves, e_L1 max %.4g\n", b->label, lo,
+                        b->leaves, ec);
+            if (st != BTDF_OK || ec <= RAD_AIM_CHECK * r->tolerance)
+                break;
+            lo *= 0.6;
+            if (lo < eps) { /* below what the tree was grown to: grow it further */
+                eps = lo;
+                st = rad_tb_grow(t, eps, RAD_MAX_NODES);
+                if (st != BTDF_OK)
+                    break;
+            }
+            st = rad_tb_extract(t, lo, b);
+        }
+    }
+    if (st == BTDF_EBUDGET) {
+        snprintf(msg, msglen, "%s: e_L1 %.3g above the tolerance %g with the node budget "
+                              "(%zu nodes)", b->label, e, r->tolerance, (size_t)RAD_MAX_NODES);
+    } else if (st != BTDF_OK) {
+        btdf_say(st, msg, msglen, "out of memory building the tensor tree");
+    }
+    rad_tb_free(t);
+    free(res);
+    rad_probes_free(&pr);
+    return st;
+}
 
 BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basis basis,
                                              double tolerance, int threads,
@@ -114,9 +423,9 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     }
     if ((unsigned)basis > RAD_BASIS_KLEMS_QUARTER)
         return BTDF_EINVAL;
-    if (basis == RAD_BASIS_TREE3 && !(tolerance >= 1e-4 && tolerance <= 0.5)) {
+    if (basis == RAD_BASIS_TREE3 && !(tolerance >= 1e-3 && tolerance <= 0.5)) {
         if (msg && msglen)
-            snprintf(msg, msglen, "tolerance %g: a tensor tree takes [1e-4, 0.5]", tolerance);
+            snprintf(msg, msglen, "tolerance %g: a tensor tree takes [1e-3, 0.5]", tolerance);
         return BTDF_EINVAL;
     }
     btdf_rad *r = calloc(1, sizeof *r);
@@ -127,7 +436,7 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     r->p = *p;
     r->tolerance = basis == RAD_BASIS_TREE3 ? tolerance : 0.0;
     r->kb = rad_klems(basis);
-    r->nblocks = 2;
+    r->nblocks = basis == RAD_BASIS_TREE3 ? 4 : 2;
     double n = p->ior[0];
     r->b[0].side = BTDF_SIDE_ENTER; /* radiance.h: what each block holds and why */
     r->b[0].label = "Transmission Front";
@@ -141,7 +450,22 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     r->b[1].scale = n * n;
     r->b[1].light = BTDF_SIDE_ENTER;
     r->b[1].n_light = n;
-    for (int k = 0; k < r->nblocks && st == BTDF_OK; k++) {
+    /* Reflection: p and q on one side, rho_r reciprocal: no swap, no scale. */
+    r->b[2].side = BTDF_SIDE_ENTER;
+    r->b[2].label = "Reflection Front";
+    r->b[2].reflect = 1;
+    r->b[2].n = n;
+    r->b[2].scale = 1.0;
+    r->b[2].light = BTDF_SIDE_ENTER;
+    r->b[2].n_light = n;
+    r->b[3].side = BTDF_SIDE_LEAVE;
+    r->b[3].label = "Reflection Back";
+    r->b[3].reflect = 1;
+    r->b[3].n = 1.0 / n;
+    r->b[3].scale = 1.0;
+    r->b[3].light = BTDF_SIDE_LEAVE;
+    r->b[3].n_light = 1.0 / n;
+    for (int k = 0; k < r->nblocks && (st == BTDF_OK || st == BTDF_EBUDGET); k++) {
         rad_block *b = &r->b[k];
         if (basis != RAD_BASIS_TREE3) {
             if (progress)
@@ -150,52 +474,8 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
             st = rad_klems_build(p, b->n, b->scale, r->kb, threads, b, msg, msglen);
             continue;
         }
-        /* The cell threshold eps sets the error: e_L1 grows about as eps^(1/3) (a cell
-           of side h on a smooth lobe holds a share ~ h^3, a slice ~ h^-2 cells). Start
-           from eps = 1e-4 (10 tolerance)^3 (measured: eps = 1e-4 gives e_L1 about 0.07 at
-           n = 1.5, s = 3), then move eps (damped) towards 0.6 * tolerance on an independent
-           estimate, at most 6 builds; keep the last build that met the tolerance. */
-        double eps = 1e-4 * pow(10.0 * tolerance, 3.0), good_eps = 0.0;
-        for (int round = 0; round < RAD_TREE_PASSES; round++) {
-            if (progress) /* a block may stop early: its passes left count as done then */
-                progress(user, k == 0 ? "tensor tree, front block, pass" : "tensor tree, back block, pass",
-                         (size_t)(k * RAD_TREE_PASSES + round),
-                         (size_t)((r->nblocks - k) * RAD_TREE_PASSES - round));
-            free(b->nodes);
-            b->nodes = NULL;
-            st = rad_tree_build(p, b->n, b->scale, eps, threads, RAD_MAX_NODES, b, msg,
-                                msglen);
-            if (st != BTDF_OK)
-                break;
-            btdf_report rep;
-            memset(&rep, 0, sizeof rep);
-            st = btdf_rad_report(r, k, 192, 4096, RAD_CHECK_SEED, threads, &rep);
-            double e = btdf_rad_e_l1_checked(&rep);
-            btdf_report_clear(&rep);
-            if (st != BTDF_OK)
-                break;
-            /* aim below the tolerance: the reported estimate has another seed */
-            if (e <= 0.85 * tolerance)
-                good_eps = eps;
-            if (e <= 0.85 * tolerance && e >= 0.4 * tolerance)
-                break; /* close enough: a smaller file would risk the tolerance */
-            double g = 0.6 * tolerance / fmax(e, 1e-12);
-            g = g * g; /* damped: the slope is near 1/3 but the estimate is noisy */
-            eps *= g < 1.0 / 64 ? 1.0 / 64 : (g > 64.0 ? 64.0 : g);
-            if (round == RAD_TREE_PASSES - 1) {
-                if (good_eps > 0.0) { /* the last build missed: go back to the good one */
-                    free(b->nodes);
-                    b->nodes = NULL;
-                    st = rad_tree_build(p, b->n, b->scale, good_eps, threads, RAD_MAX_NODES,
-                                        b, msg, msglen);
-                } else {
-                    if (msg && msglen)
-                        snprintf(msg, msglen, "%s: e_L1 %.3g above the tolerance %g after 6 "
-                                              "builds", b->label, e, tolerance);
-                    st = BTDF_EBUDGET;
-                }
-            }
-        }
+        btdf_status sk = rad_tree_block(r, k, threads, progress, user, msg, msglen);
+        st = sk != BTDF_OK ? sk : st;
     }
     r->seconds_build = btdf_now() - t0;
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
@@ -225,9 +505,10 @@ BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
     if (!r || k < 0 || k >= r->nblocks)
         return 0.0;
     const rad_block *b = &r->b[k];
-    /* block 0 (Transmission Front): p on -Z; block 1: p on +Z */
-    double sg = b->side == BTDF_SIDE_ENTER ? -1.0 : 1.0;
-    if (!(sg * p[2] > 0.0 && sg * q[2] < 0.0))
+    /* Transmission Front and Reflection Front: p on -Z; the Back blocks: p on +Z; q on
+       the other side (transmission) or the same (reflection) */
+    double sg = b->side == BTDF_SIDE_ENTER ? -1.0 : 1.0, sq = b->reflect ? sg : -sg;
+    if (!(sg * p[2] > 0.0 && sq * q[2] > 0.0))
         return 0.0;
     if (r->basis == RAD_BASIS_TREE3) {
         double u0, a, bb;
@@ -245,17 +526,10 @@ BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
 
 double btdf_rad_render(const btdf_rad *r, btdf_side light, double ti, double to, double phi)
 {
-    /* the light's MODEL.md frame: source at azimuth pi, so it travels towards +x */
-    double src[3] = {-sin(ti), 0.0, cos(ti)};
-    double view[3] = {sin(to) * cos(phi - M_PI), sin(to) * sin(phi - M_PI), cos(to)};
     int k = light == BTDF_SIDE_LEAVE ? 0 : 1; /* the block of the view's side */
-    if (light == BTDF_SIDE_ENTER) {
-        /* light from -Z: its frame seen from Radiance's is turned by pi about x */
-        src[2] = -src[2];
-        view[1] = -view[1];
-        view[2] = -view[2];
-    }
-    return btdf_rad_lookup(r, k, view, src);
+    double p[3], q[3];
+    render_dirs(r, k, ti, to, phi, p, q);
+    return btdf_rad_lookup(r, k, p, q);
 }
 
 typedef struct rad_est {
@@ -270,12 +544,69 @@ static void rad_est_fn(const void *obj, double ti, const double *q, double *out)
     out[0] = btdf_rad_render(e->r, e->light, ti, q[7], atan2(q[5], q[4]));
 }
 
+/* A reflection block's report: the probe estimate (stratified light angles over 0-90
+   degrees, views stratified in projected solid angle) against rho_r, since the
+   transmission estimator follows Eq. 25's lobe. */
+static btdf_status rad_reflect_report(const btdf_rad *r, int k, size_t test_angles,
+                                      size_t points_per_angle, uint64_t seed, int threads,
+                                      btdf_report *rep)
+{
+    double t0 = btdf_now();
+    size_t m = test_angles ? test_angles : 48, ppa = points_per_angle ? points_per_angle : 8192;
+    size_t ns = (size_t)sqrt((double)ppa / 2.0);
+    ns = ns < 4 ? 4 : ns;
+    rad_probes pr;
+    btdf_status st = rad_probes_make(r, k, M_PI / 2, m, ns, 2 * ns, seed, threads, &pr);
+    if (st != BTDF_OK)
+        return st;
+    memset(rep, 0, sizeof *rep);
+    rep->per_ti = malloc(m * sizeof *rep->per_ti);
+    if (!rep->per_ti) {
+        rad_probes_free(&pr);
+        return BTDF_ENOMEM;
+    }
+    if (r->basis == RAD_BASIS_TREE3) {
+        rad_probes_eval(&pr, r->b[k].nodes, threads, rep->per_ti);
+    } else {
+        rad_probes_free(&pr);
+        btdf_report_clear(rep);
+        return BTDF_EINVAL; /* Klems files hold no reflection blocks */
+    }
+    rep->test_angles = m;
+    rep->test_points = m * pr.kv;
+    for (size_t i = 0; i < m; i++) {
+        const btdf_ti_error *e = &rep->per_ti[i];
+        rep->e_l1_max = fmax(rep->e_l1_max, e->e_l1);
+        rep->e_l1_mean += e->e_l1 / (double)m;
+        rep->e_t_max = fmax(rep->e_t_max, e->e_t);
+        rep->e_t_mean += e->e_t / (double)m;
+        if (e->T >= 0.01) {
+            rep->e_max_max = fmax(rep->e_max_max, e->e_max);
+            rep->e_max_mean += e->e_max;
+            rep->e_max_angles++;
+        }
+    }
+    if (rep->e_max_angles)
+        rep->e_max_mean /= (double)rep->e_max_angles;
+    rad_probes_free(&pr);
+    rep->seconds_estimate = btdf_now() - t0;
+    rep->seconds_build = r->seconds_build;
+    rep->tolerance = r->tolerance;
+    rep->metric = BTDF_METRIC_L1;
+    rep->met = btdf_rad_e_l1_checked(rep) <= r->tolerance;
+    rep->slices = (size_t)r->b[k].depth;
+    rep->samples = r->b[k].leaves;
+    return BTDF_OK;
+}
+
 BTDF_API btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,
                                      size_t points_per_angle, uint64_t seed, int threads,
                                      btdf_report *rep)
 {
     if (!r || !rep || k < 0 || k >= r->nblocks)
         return BTDF_EINVAL;
+    if (r->b[k].reflect)
+        return rad_reflect_report(r, k, test_angles, points_per_angle, seed, threads, rep);
     btdf_params q = r->p;
     q.channels = 1;
     q.ior[0] = r->b[k].n_light;

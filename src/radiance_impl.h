@@ -13,12 +13,22 @@ double rad_u0_of_sin(double sin_ti);
 /* Radiance's tree descent: the leaf holding (u0, a, b); no interpolation. */
 double rad_tree_lookup(const rad_node *nodes, double u0, double a, double b);
 
-/* One adaptive tree for index n, values times scale (ttree.c): cells are split while
-   their share of a slice's e_L1 is above eps. BTDF_EBUDGET when max_nodes would be
-   passed. */
-btdf_status rad_tree_build(const btdf_params *p, double n, double scale, double eps,
-                           int threads, size_t max_nodes, rad_block *blk, char *msg,
-                           size_t msglen);
+/* The adaptive tree of one block (ttree.c): cells are split while their largest share
+   of one light's e_L1, as Radiance reads the block, is above eps. A builder grows the
+   tree to a threshold (again to a smaller one, keeping what it has) and cuts it at
+   any threshold at or above the last one. */
+typedef struct rad_tb rad_tb;
+rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, int threads);
+/* BTDF_EBUDGET when the builder would hold more than max_nodes nodes (it keeps what
+   it has: extracting at the same eps gives a valid, coarser tree). */
+btdf_status rad_tb_grow(rad_tb *t, double eps, size_t max_nodes);
+size_t rad_tb_nodes(const rad_tb *t);
+/* The tree cut at eps (>= the last grow's) into blk->nodes, nnodes, leaves, depth. */
+btdf_status rad_tb_extract(const rad_tb *t, double eps, rad_block *blk);
+void rad_tb_free(rad_tb *t);
+/* new, grow and extract at one eps. */
+btdf_status rad_tree_build(const btdf_params *p, double eps, int threads, size_t max_nodes,
+                           rad_block *blk, char *msg, size_t msglen);
 
 /* One Klems matrix for index n, values times scale (klems.c). */
 btdf_status rad_klems_build(const btdf_params *p, double n, double scale,

@@ -134,8 +134,52 @@ int facet_eval(double n, double s, double k0, const rho_in *a, double stn, doubl
     return 1;
 }
 
+int facet_eval_r(double n, double s, double k0, const rho_in *a, double stn, double ctn,
+                 double cpsi, double spsi, facet_geo *g)
+{
+    g->rho = 0.0;
+    g->weight = 0.0;
+    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
+    if (!(ca > 0.0))
+        return 0; /* the facet faces away from e_i */
+    double rx = 2.0 * ca * stn * cpsi - a->sin_ti, ry = 2.0 * ca * stn * spsi;
+    double rz = 2.0 * ca * ctn - a->cos_ti;
+    if (!(rz > 0.0))
+        return 0; /* mirrored into the lower hemisphere: no reflected direction */
+    double st = sqrt(rx * rx + ry * ry);
+    g->sin_to = st;
+    g->cos_to = rz;
+    /* e_r on the axis: phi is undefined and does not matter, take phi = 0. */
+    g->cos_phi = st > 0.0 ? rx / st : 1.0;
+    g->sin_phi = st > 0.0 ? ry / st : 0.0;
+    /* rho_r from the model's own evaluator at e_r's angles, not from this geometry */
+    g->rho = btdf_rho_r(n, s, k0, atan2(a->sin_ti, a->cos_ti), atan2(st, rz),
+                        atan2(g->sin_phi, g->cos_phi));
+    g->weight = rz * 4.0 * ca; /* d(omega_r) = 4 (e_i.h) d(omega_h) */
+    return 1;
+}
+
+int facet_of_r(double sti, double cti, double str, double ctr, double cph, double sph,
+               double *tn, double *psi, double *ca)
+{
+    double hx = sti + str * cph, hy = str * sph, hz = cti + ctr;
+    if (!(hz > 0.0))
+        return 0; /* both directions graze: no facet, and rho_r is 0 there */
+    hy = fabs(hy);
+    *ca = 0.5 * sqrt(hx * hx + hy * hy + hz * hz);
+    *tn = atan2(sqrt(hx * hx + hy * hy), hz);
+    *psi = atan2(hy, hx);
+    return 1;
+}
+
 int facet_of(double n, double sti, double cti, double sto, double cto, double cph,
              double sph, double *tn, double *psi)
+{
+    return facet_of_ca(n, sti, cti, sto, cto, cph, sph, tn, psi, NULL);
+}
+
+int facet_of_ca(double n, double sti, double cti, double sto, double cto, double cph,
+                double sph, double *tn, double *psi, double *ca_out)
 {
     double vx = sti + n * sto * cph, vy = n * sto * sph, vz = cti + n * cto;
     double sg = vz < 0.0 ? -1.0 : 1.0; /* h = sg v / |v| has h_z >= 0 */
@@ -146,6 +190,55 @@ int facet_of(double n, double sti, double cti, double sto, double cto, double cp
     double hx = sg * vx, hy = fabs(vy), hz = sg * vz;
     *tn = atan2(sqrt(hx * hx + hy * hy), hz);
     *psi = atan2(hy, hx);
+    if (ca_out) {
+        /* |v| > 0: vz != 0 was checked above */
+        double len = sqrt(hx * hx + hy * hy + hz * hz);
+        *ca_out = fmin(1.0, ca / len);
+    }
+    return 1;
+}
+
+double chi_shape(double n, double ca)
+{
+    if (!(ca > 0.0))
+        return 0.0; /* the facet faces away from e_i */
+    double sb2 = (1.0 - ca * ca) / (n * n); /* n > 0 (btdf_params_check) */
+    if (!(sb2 < 1.0))
+        return 0.0; /* total internal reflection on this facet */
+    double cb = sqrt(1.0 - sb2), d = ca + n * cb;
+    return cb * d * d;
+}
+
+double rule_factor(btdf_table_rule rule, double n, double ca)
+{
+    if (rule == BTDF_RULE_CHI)
+        return chi_shape(n, ca);
+    if (rule == BTDF_RULE_FRESNEL) /* the facet faces away from e_i: no reflection */
+        return ca > 0.0 ? bt_fresnel_r(n, n - 1.0, ca) : 0.0;
+    return 1.0;
+}
+
+/* The slices' own index for channel c (1/n for a reciprocal table). */
+static double slice_index(const btdf_table *t, int c)
+{
+    return t->kind == BTDF_TABLE_FACET_RECIPROCAL ? 1.0 / t->p.ior[c] : t->p.ior[c];
+}
+
+int slice_prepare(const btdf_table *t, tslice *s)
+{
+    free(s->geo);
+    s->geo = NULL;
+    if (t->rule == BTDF_RULE_PLAIN || t->kind == BTDF_TABLE_GRID)
+        return 1;
+    s->geo = malloc((2 * s->nr + s->nc) * sizeof(double));
+    if (!s->geo)
+        return 0;
+    for (size_t i = 0; i < s->nr; i++) {
+        s->geo[i] = sin(s->rows[i]);
+        s->geo[s->nr + i] = cos(s->rows[i]);
+    }
+    for (size_t j = 0; j < s->nc; j++)
+        s->geo[2 * s->nr + j] = cos(s->cols[j]);
     return 1;
 }
 
@@ -163,7 +256,7 @@ static size_t bracket(const double *a, size_t m, double x)
     return lo;
 }
 
-double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch)
+double slice_interp_red(const btdf_table *t, size_t k, double x, double y, int ch)
 {
     const tslice *s = &t->s[k];
     int nch = t->p.channels;
@@ -184,7 +277,32 @@ double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch)
     const double *V = s->vals;
     double f00 = V[(i * s->nc + j) * nch + ch], f01 = V[(i * s->nc + j1) * nch + ch];
     double f10 = V[(i1 * s->nc + j) * nch + ch], f11 = V[(i1 * s->nc + j1) * nch + ch];
+    if (s->geo) { /* BTDF_RULE_CHI, _FRESNEL: interpolate rho / K of each node */
+        double n = slice_index(t, ch), sti = sin(s->ti), cti = cos(s->ti);
+        const double *sn = s->geo, *cn = s->geo + s->nr, *cp = s->geo + 2 * s->nr;
+        btdf_table_rule rl = t->rule;
+        double k00 = rule_factor(rl, n, sn[i] * cp[j] * sti + cn[i] * cti);
+        double k01 = rule_factor(rl, n, sn[i] * cp[j1] * sti + cn[i] * cti);
+        double k10 = rule_factor(rl, n, sn[i1] * cp[j] * sti + cn[i1] * cti);
+        double k11 = rule_factor(rl, n, sn[i1] * cp[j1] * sti + cn[i1] * cti);
+        /* K = 0: the node's facet refracts nothing and its rho is 0; so is rho / K */
+        f00 = k00 > 0.0 ? f00 / k00 : 0.0;
+        f01 = k01 > 0.0 ? f01 / k01 : 0.0;
+        f10 = k10 > 0.0 ? f10 / k10 : 0.0;
+        f11 = k11 > 0.0 ? f11 / k11 : 0.0;
+    }
     return (1.0 - u) * ((1.0 - v) * f00 + v * f01) + u * ((1.0 - v) * f10 + v * f11);
+}
+
+double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch)
+{
+    double r = slice_interp_red(t, k, x, y, ch);
+    const tslice *s = &t->s[k];
+    if (!s->geo || r == 0.0)
+        return r;
+    double ti = s->ti;
+    double ca = sin(x) * cos(y) * sin(ti) + cos(x) * cos(ti); /* e_i . h of the slice */
+    return r * rule_factor(t->rule, slice_index(t, ch), ca);
 }
 
 double incident_factor(const btdf_params *p, double ti)
@@ -211,8 +329,69 @@ double blend_ti(double v0, double v1, double w, double g, double g0, double g1)
 
 const char *table_kind_name(btdf_table_kind k)
 {
-    return k == BTDF_TABLE_GRID ? "grid"
-                                : (k == BTDF_TABLE_FACET_RECIPROCAL ? "facet-reciprocal" : "facet");
+    return k == BTDF_TABLE_GRID                ? "grid"
+           : k == BTDF_TABLE_FACET_RECIPROCAL  ? "facet-reciprocal"
+           : k == BTDF_TABLE_FACET_REFLECTION  ? "facet-reflection"
+                                               : "facet";
+}
+
+BTDF_API const char *btdf_part_name(btdf_part part)
+{
+    return part == BTDF_PART_REFLECTION ? "reflection"
+           : part == BTDF_PART_BOTH     ? "both"
+                                        : "transmission";
+}
+
+BTDF_API int btdf_part_parse(const char *name, btdf_part *part)
+{
+    const btdf_part all[3] = {BTDF_PART_TRANSMISSION, BTDF_PART_REFLECTION, BTDF_PART_BOTH};
+    for (int i = 0; name && i < 3; i++)
+        if (!strcmp(name, btdf_part_name(all[i]))) {
+            *part = all[i];
+            return 1;
+        }
+    return 0;
+}
+
+BTDF_API const btdf_table *btdf_table_part(const btdf_table *t, btdf_part part)
+{
+    if (!t)
+        return NULL;
+    int r = kind_is_reflection(t->kind);
+    if (part == BTDF_PART_TRANSMISSION)
+        return r ? NULL : t;
+    if (part == BTDF_PART_REFLECTION)
+        return r ? t : t->refl;
+    return NULL;
+}
+
+BTDF_API btdf_part btdf_table_parts(const btdf_table *t)
+{
+    if (t && kind_is_reflection(t->kind))
+        return BTDF_PART_REFLECTION;
+    return t && t->refl ? BTDF_PART_BOTH : BTDF_PART_TRANSMISSION;
+}
+
+BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, char *msg,
+                                                  size_t msglen)
+{
+    if (!t || !r)
+        return BTDF_EINVAL;
+    const char *why = NULL;
+    if (kind_is_reflection(t->kind) || t->refl)
+        why = "the table is a reflection or holds one already";
+    else if (!kind_is_reflection(r->kind) || r->refl)
+        why = "the table to attach is not a reflection table";
+    else if (t->p.channels != r->p.channels || t->p.smoothness != r->p.smoothness ||
+             t->p.k0 != r->p.k0 || memcmp(t->p.ior, r->p.ior, sizeof t->p.ior) != 0)
+        why = "the two parts have different parameters";
+    if (why) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "%s", why);
+        return BTDF_EINVAL;
+    }
+    t->refl = r;
+    return BTDF_OK;
 }
 
 BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind)
@@ -222,9 +401,9 @@ BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind)
 
 int table_kind_parse(const char *name, btdf_table_kind *k)
 {
-    const btdf_table_kind all[3] = {BTDF_TABLE_FACET, BTDF_TABLE_GRID,
-                                    BTDF_TABLE_FACET_RECIPROCAL};
-    for (int i = 0; i < 3; i++)
+    const btdf_table_kind all[4] = {BTDF_TABLE_FACET, BTDF_TABLE_GRID,
+                                    BTDF_TABLE_FACET_RECIPROCAL, BTDF_TABLE_FACET_REFLECTION};
+    for (int i = 0; i < 4; i++)
         if (!strcmp(name, table_kind_name(all[i]))) {
             *k = all[i];
             return 1;
@@ -248,8 +427,9 @@ BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
     if (!out)
         return BTDF_EINVAL;
     if (kind != BTDF_TABLE_FACET && kind != BTDF_TABLE_GRID &&
-        kind != BTDF_TABLE_FACET_RECIPROCAL) {
-        set_msg(msg, msglen, "table kind: must be facet, grid or facet-reciprocal");
+        kind != BTDF_TABLE_FACET_RECIPROCAL && kind != BTDF_TABLE_FACET_REFLECTION) {
+        set_msg(msg, msglen,
+                "table kind: must be facet, grid, facet-reciprocal or facet-reflection");
         return BTDF_EINVAL;
     }
     btdf_status st = btdf_params_check(p, msg, msglen);
@@ -272,9 +452,11 @@ BTDF_API void btdf_table_free(btdf_table *t)
         free(t->s[k].rows);
         free(t->s[k].cols);
         free(t->s[k].vals);
+        free(t->s[k].geo);
     }
     free(t->s);
     btdf_report_clear(&t->check);
+    btdf_table_free(t->refl);
     free(t);
 }
 
@@ -291,6 +473,8 @@ btdf_status table_push_slice(btdf_table *t, tslice *s)
         t->cap = nc;
     }
     s->g = incident_factor(&t->p, s->ti);
+    if (!slice_prepare(t, s)) /* replaces any geo s had */
+        return BTDF_ENOMEM;
     t->s[t->ns++] = *s;
     t->check_valid = 0; /* the check was of the table without this slice */
     return BTDF_OK;
@@ -349,7 +533,7 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
         }
     }
     tslice s = {ti, nrows, ncols, malloc(nrows * sizeof(double)),
-                malloc(ncols * sizeof(double)), malloc(nv * nch * sizeof(double)), 0.0};
+                malloc(ncols * sizeof(double)), malloc(nv * nch * sizeof(double)), 0.0, NULL};
     if (!s.rows || !s.cols || !s.vals) {
         free(s.rows);
         free(s.cols);
@@ -366,6 +550,51 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
         free(s.vals);
     }
     return st;
+}
+
+BTDF_API btdf_status btdf_table_set_rule(btdf_table *t, btdf_table_rule rule, char *msg,
+                                         size_t msglen)
+{
+    if (!t)
+        return BTDF_EINVAL;
+    if (rule != BTDF_RULE_PLAIN && rule != BTDF_RULE_CHI && rule != BTDF_RULE_FRESNEL) {
+        set_msg(msg, msglen, "table rule: must be plain (0), chi (1) or fresnel (2)");
+        return BTDF_EINVAL;
+    }
+    if (t->ns > 0) {
+        set_msg(msg, msglen, "table rule: must be set before the first slice is added");
+        return BTDF_EINVAL;
+    }
+    if (rule == BTDF_RULE_CHI && (t->kind == BTDF_TABLE_GRID || kind_is_reflection(t->kind))) {
+        set_msg(msg, msglen, "table rule chi: only for facet and facet-reciprocal tables");
+        return BTDF_EINVAL;
+    }
+    if (rule == BTDF_RULE_FRESNEL && !kind_is_reflection(t->kind)) {
+        set_msg(msg, msglen, "table rule fresnel: only for facet-reflection tables");
+        return BTDF_EINVAL;
+    }
+    t->rule = rule;
+    return BTDF_OK;
+}
+
+BTDF_API btdf_table_rule btdf_table_get_rule(const btdf_table *t) { return t->rule; }
+
+BTDF_API const char *btdf_table_rule_name(btdf_table_rule rule)
+{
+    return rule == BTDF_RULE_CHI ? "chi" : rule == BTDF_RULE_FRESNEL ? "fresnel" : "plain";
+}
+
+BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule)
+{
+    if (!strcmp(name, "chi"))
+        *rule = BTDF_RULE_CHI;
+    else if (!strcmp(name, "fresnel"))
+        *rule = BTDF_RULE_FRESNEL;
+    else if (!strcmp(name, "plain"))
+        *rule = BTDF_RULE_PLAIN;
+    else
+        return 0;
+    return 1;
 }
 
 BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t) { return t->kind; }
@@ -439,18 +668,27 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
         g0 = t->s[k].g;
         g1 = t->s[k + 1].g;
     }
+    int chi = t->rule != BTDF_RULE_PLAIN && t->kind != BTDF_TABLE_GRID;
     for (int c = 0; c < nch; c++) {
-        double x, y, n = recip ? 1.0 / t->p.ior[c] : t->p.ior[c];
-        if (t->kind != BTDF_TABLE_GRID) {
-            if (!facet_of(n, sti, cti, sto, cto, cph, sph, &x, &y))
+        double x, y, ca = 1.0, n = recip ? 1.0 / t->p.ior[c] : t->p.ior[c];
+        if (t->kind == BTDF_TABLE_FACET_REFLECTION) {
+            if (!facet_of_r(sti, cti, sto, cto, cph, sph, &x, &y, &ca))
+                continue; /* both directions graze: rho_r is 0 */
+        } else if (t->kind != BTDF_TABLE_GRID) {
+            if (!facet_of_ca(n, sti, cti, sto, cto, cph, sph, &x, &y, &ca))
                 continue; /* no facet connects the two directions: exactly 0 */
         } else {
             x = to;
             y = phi_fold;
         }
-        double v = slice_interp(t, k, x, y, c);
+        /* CHI: the slices' reduced values rho / K are blended; the query's K restores rho */
+        double kq = chi ? rule_factor(t->rule, n, ca) : 1.0;
+        if (!(kq > 0.0))
+            continue; /* the query's facet refracts nothing: 0, as Eq. 25 */
+        double v = slice_interp_red(t, k, x, y, c);
         if (w > 0.0)
-            v = blend_ti(v, slice_interp(t, k + 1, x, y, c), w, g, g0, g1);
+            v = blend_ti(v, slice_interp_red(t, k + 1, x, y, c), w, g, g0, g1);
+        v *= kq;
         /* reciprocity factor (1/n')^2 = n^2 with n' = 1/n the table's own index */
         out[c] = recip ? t->p.ior[c] * t->p.ior[c] * v : v;
     }
@@ -461,7 +699,9 @@ BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, 
 {
     if (!t || !out)
         return BTDF_EINVAL;
-    if (!(ti >= 0.0 && ti <= M_PI / 2 && to >= M_PI / 2 && to <= M_PI && isfinite(phi)))
+    int refl = kind_is_reflection(t->kind); /* to is tr in [0, pi/2] */
+    if (!(ti >= 0.0 && ti <= M_PI / 2 && isfinite(phi) &&
+          (refl ? to >= 0.0 && to <= M_PI / 2 : to >= M_PI / 2 && to <= M_PI)))
         return BTDF_EDOMAIN;
     double f = fmod(fabs(phi), 2.0 * M_PI);
     if (f > M_PI)

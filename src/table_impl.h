@@ -13,10 +13,13 @@ typedef struct tslice {
     size_t nr, nc;
     double *rows, *cols, *vals; /* vals[(r * nc + c) * channels + ch] */
     double g;                   /* incident factor V(ti)/cos ti, set when the slice is added */
+    double *geo; /* BTDF_RULE_CHI facet slices: sin tn (nr), cos tn (nr), cos psi (nc) of the
+                    nodes, set when the slice is added; NULL otherwise */
 } tslice;
 
 struct btdf_table {
     btdf_table_kind kind;
+    btdf_table_rule rule; /* how slices interpolate: rho itself or rho / chi_shape */
     btdf_params p;
     size_t ns, cap;
     tslice *s;
@@ -27,7 +30,16 @@ struct btdf_table {
     double check_ti0, check_ti1;
     size_t check_angles, check_ppa;
     uint64_t check_seed;
+    /* A table holding both parts: the reflection (kind FACET_REFLECTION), owned. */
+    struct btdf_table *refl;
+    size_t build_evals; /* points where the builder evaluated Eq. 25, over all its passes */
 };
+
+/* 1 for the kinds that hold rho_r (MODEL.md section 8). */
+static inline int kind_is_reflection(btdf_table_kind k)
+{
+    return k == BTDF_TABLE_FACET_REFLECTION;
+}
 
 /* Refraction of e_i(ti) through the facet of tilt tn and azimuth psi (psi = 0 leans
    towards e_i). On success (1) fills the outgoing geometry and rho; 0 where the
@@ -41,13 +53,50 @@ typedef struct facet_geo {
 int facet_eval(double n, double s, double k0, const rho_in *a, double tn_sin, double tn_cos,
                double cpsi, double spsi, facet_geo *g);
 
+/* The same for reflection: the facet (tn, psi) mirrors e_i into e_r = 2 (e_i.h) h - e_i;
+   g gets e_r (sin_to, cos_to = cos tr > 0), rho_r, and weight = cos tr 4 (e_i.h), so
+   that cos tr d(omega_r) = weight d(omega_h). 0 where e_r would leave the upper
+   hemisphere (rho_r = 0 there). */
+int facet_eval_r(double n, double s, double k0, const rho_in *a, double tn_sin,
+                 double tn_cos, double cpsi, double spsi, facet_geo *g);
+
+/* The facet (tn, psi) that mirrors e_i into e_r (h along e_i + e_r) and its
+   ca = e_i.h = |e_i + e_r|/2; 0 if none (both grazing). */
+int facet_of_r(double sti, double cti, double str, double ctr, double cph, double sph,
+               double *tn, double *psi, double *ca);
+
 /* The facet (tn, psi) that refracts e_i into e_o for index n; 0 if none. */
 int facet_of(double n, double sti, double cti, double sto, double cto, double cph,
              double sph, double *tn, double *psi);
+/* The same, also giving ca = e_i . h of that facet. */
+int facet_of_ca(double n, double sti, double cti, double sto, double cto, double cph,
+                double sph, double *tn, double *psi, double *ca);
 
 /* Interpolates slice k of t at facet or grid coordinates (x = row coordinate,
-   y = col coordinate) for channel ch. 0 outside the node range. */
+   y = col coordinate) for channel ch: rho at the slice's own ti. 0 outside the node range. */
 double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch);
+
+/* The slice's reduced value at (x, y): under BTDF_RULE_CHI the bilinear interpolant of
+   rho / chi_shape at the nodes (chi_shape of the slice's own ti); under the plain rule
+   rho's. slice_interp is this times chi_shape at (x, y). */
+double slice_interp_red(const btdf_table *t, size_t k, double x, double y, int ch);
+
+/* The rule's reduction factor for a facet with cos a = ca (between e_i and h) and index
+   n: cb (ca + n cb)^2, cb = sqrt(1 - (1 - ca^2)/n^2) the refracted cosine. It is the
+   Jacobian chi = n^2 cb / (ca - n cb)^2 times the constant (n^2 - 1)^2 / n^2, since
+   ca - n cb = -(n^2 - 1)/(ca + n cb): chi's shape without its (n - 1)^-2 scale, so it
+   stays finite at n = 1. 0 where the facet refracts nothing (ca <= 0 or total internal
+   reflection). */
+double chi_shape(double n, double ca);
+
+/* The factor K a rule divides the nodes by: chi_shape for CHI, the facet's Fresnel
+   reflectance Fr(ca) (1 past the critical angle, > 0 for every ca > 0 and n != 1) for
+   FRESNEL, 1 for PLAIN; 0 where ca <= 0. */
+double rule_factor(btdf_table_rule rule, double n, double ca);
+
+/* Sets up s->geo for table t's rule (no-op for the plain rule and grid tables);
+   0 when out of memory. */
+int slice_prepare(const btdf_table *t, tslice *s);
 
 /* Eq. 25's incident factor V(ti)/cos ti (0 at grazing incidence). */
 double incident_factor(const btdf_params *p, double ti);
@@ -90,6 +139,11 @@ btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_
                                  size_t test_angles, size_t points_per_angle, uint64_t seed,
                                  int threads, const double *knots, size_t nknots,
                                  est_angle_fn fn, const void *obj, btdf_report *r);
+/* The same for an evaluation of the reflection: against rho_r (MODEL.md section 8)
+   over the upper hemisphere, relative to max(R(ti), 0.01); q holds tr for to. */
+btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
+                               size_t test_angles, size_t points_per_angle, uint64_t seed,
+                               int threads, est_eval_fn fn, const void *obj, btdf_report *r);
 
 /* Monotonic wall clock in seconds. */
 double btdf_now(void);

@@ -1,31 +1,41 @@
 /* SPDX-License-Identifier: MIT */
-/* ttree.c: the TensorTree3 of one transmission block, built for Radiance's lookup rule.
+/* ttree.c: the TensorTree3 of one block, built for Radiance's lookup rule.
  *
- * How Radiance reads a TensorTree3 (its BSDF library, bsdf_t.c, read for behaviour):
- *  - the incident direction s (pointing to the light) gives the first coordinate
- *    u0 = (0.5 - FTINY) - 0.5 sin(theta_s), FTINY = 1e-6: uniform in sin(theta), so
- *    the cells of one level are narrow in theta near normal incidence and wide near
- *    grazing; only u0 < 0.5 is ever used;
- *  - the outgoing direction is turned about z so that the light's horizontal direction
- *    of travel (-s_x, -s_y) lies along +x, and its (x, y) goes through the concentric
- *    square map: coordinates 1 and 2, in which area times pi is projected solid angle;
- *  - the tree is descended by halving every coordinate at each node (child bit d = upper
- *    half of coordinate d) down to a leaf, whose value is returned as it is: nearest
- *    cell, no interpolation (Radiance then perturbs it by at most 1.5e-4 relative).
- * So the best a leaf can hold is the average of the BTDF over its cell, and a cell must
- * be small where the BTDF changes within it, in u0 as in the outgoing square.
+ * How Radiance reads a TensorTree3 (its BSDF library, bsdf.c and bsdf_t.c, read for
+ * behaviour; checked against the library in tests/radiance.sh):
+ *  - SDevalBSDF(out, in) picks the block by the side of `in` and the tree is queried
+ *    with `in` as the incident direction: rtrace passes the view (the direction back
+ *    to the eye) as `in` and the light as `out`, so the tree's incident coordinate is
+ *    the VIEW p, and the light q is its outgoing coordinate;
+ *  - coordinate 0 is u0 = (0.5 - FTINY) - 0.5 sin(theta_p), FTINY = 1e-6: uniform in
+ *    sin(theta_p); only u0 < 0.5 is used (isotropic: rank 3, no azimuth of p);
+ *  - the light q is turned about z by -atan2(-p_y, -p_x) (p's horizontal direction of
+ *    travel to +x) and its (x, y) goes through the concentric square map (Shirley and
+ *    Chiu): coordinates 1 and 2, in which area times pi is projected solid angle;
+ *  - the tree is descended by halving every coordinate at each node (child bit d =
+ *    upper half of coordinate d) down to a leaf, whose value is returned as it is:
+ *    nearest cell, no interpolation (then perturbed by at most 1.5e-4 relative).
  *
- * The builder: every cell is sampled at 4 x 4 x 4 midpoints and holds their mean. Its
- * share of the e_L1 (MODEL.md 6) of an incident slice it covers is
- *   pi * area(a, b) * (mean |rho - value| at that slice) / max(T(ti), 0.01),
- * pi * area being projected solid angle; the largest over its 4 slices is compared with
- * a threshold eps and the cell is split into 8 while above it. Equal shares (rather than
- * equal error densities) give the fewest cells for a given sum in every slice: cells
- * stay large where little energy moves, small where the lobe is steep, and near grazing
- * incidence, where the BTDF changes fast in u0 but carries little energy, the octree's
- * splitting of all three coordinates at once stays affordable. The caller chooses eps
- * so that an independent estimate of e_L1 meets the tolerance.
+ * What the error measures (MODEL.md 6) in these coordinates: e_L1 is taken per LIGHT
+ * direction, over the views. A light at polar angle ti sits at Chebyshev radius
+ * r = sin(ti) of the square, max(|2a - 1|, |2b - 1|) = r (the concentric map takes
+ * circles to squares), and the views sweep u0 (the view's polar angle) and the
+ * position along that square ring (the view's azimuth). With d(mu) = sin tp d(sin tp)
+ * d(phi_p), the view's projected solid angle, and dr dphi = pi da db / r:
+ *   e_L1(r) = integral over u0 and the ring of |rho - value| d(mu) / max(T(ti), 0.01).
+ * So a cell of the tree adds to the e_L1 of every light whose ring crosses it, by
+ *   its share(r) = integral over the cell at ring r of |rho - value| d(mu) / floor(r).
+ *
+ * The builder: every cell is sampled at 4 x 4 x 4 midpoints; the leaf holds their mean
+ * weighted by sin(tp) (the projected-solid-angle average, so each light's transmittance
+ * is kept). Its samples are sorted into 4 bins of r, each bin's share estimated as
+ * above (averaged over the bin's rings), and the largest share is the cell's `contrib`.
+ * A cell is split while contrib > eps. Since that rule looks at a cell alone, the tree
+ * for a larger eps is the tree for a smaller one cut where contrib <= eps: one build,
+ * grown in steps (rad_tb_grow), can be cut (rad_tb_extract) at any eps above, so the
+ * caller searches eps against an error estimate without evaluating cells again.
  */
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -35,7 +45,7 @@
 
 #define RAD_FTINY 1e-6 /* Radiance's FTINY in double builds, in u0 */
 #define NS 4           /* samples per cell and dimension */
-#define NT_GRID 1025   /* nodes of the floor max(T, 0.01) over u0 in [0, 0.5] */
+#define NR_GRID 129    /* nodes of the floor max(T, 0.01) over the ring radius r in [0, 1] */
 
 void rad_square_to_disk(double a, double b, double *x, double *y)
 {
@@ -107,28 +117,37 @@ double rad_tree_lookup(const rad_node *nodes, double u0, double a, double b)
 
 /* ---------------------------------------------------------------- builder */
 
+typedef struct tb_node {
+    int32_t child; /* first of 8 children, or -1 */
+    float v;       /* the leaf value exactly as written to the file */
+    float contrib; /* the cell's largest share of one light's e_L1 (see the top) */
+} tb_node;
+
 typedef struct tt_ctx {
     double n, s, k0, scale;
-    double eps;                /* largest share of a slice's e_L1 one cell may hold */
-    double tfloor[NT_GRID];    /* max(T, 0.01) at u0 = 0.5 k / (NT_GRID - 1) */
+    int reflect;              /* 1: rho_r(n) (reciprocal, no scale); 0: scale rho(n; p -> q) */
+    double rfloor[NR_GRID];   /* max(T or R of the light, 0.01) at r = k / (NR_GRID - 1) */
     int min_level, max_level;
-    size_t max_nodes;          /* per task */
 } tt_ctx;
 
 typedef struct tt_buf {
-    rad_node *v;
-    size_t n, cap;
+    tb_node *v;
+    size_t n, cap, max;
     int depth;
     int budget_hit, nomem;
 } tt_buf;
 
 static int32_t buf_alloc(tt_buf *b, size_t count)
 {
+    if (b->n + count > b->max || b->n + count > (size_t)INT32_MAX) {
+        b->budget_hit = 1;
+        return -1;
+    }
     if (b->n + count > b->cap) {
         size_t cap = b->cap ? 2 * b->cap : 64;
         while (cap < b->n + count)
             cap *= 2;
-        rad_node *v = realloc(b->v, cap * sizeof *v);
+        tb_node *v = realloc(b->v, cap * sizeof *v);
         if (!v) {
             b->nomem = 1;
             return -1;
@@ -136,49 +155,90 @@ static int32_t buf_alloc(tt_buf *b, size_t count)
         b->v = v;
         b->cap = cap;
     }
-    if (b->n + count > (size_t)INT32_MAX) {
-        b->budget_hit = 1;
-        return -1;
-    }
     int32_t first = (int32_t)b->n;
     for (size_t i = 0; i < count; i++) {
         b->v[b->n + i].child = -1;
         b->v[b->n + i].v = 0.0f;
+        b->v[b->n + i].contrib = 0.0f;
     }
     b->n += count;
     return first;
 }
 
-/* The smallest floor max(T, 0.01) over u0 in [lo, hi]. */
-static double floor_min(const tt_ctx *c, double lo, double hi)
+/* The floor at ring radius x, linear between the grid's nodes. */
+static double floor_at(const tt_ctx *c, double x)
 {
-    double scale = (double)(NT_GRID - 1) / 0.5;
-    long i0 = (long)floor(lo * scale), i1 = (long)ceil(hi * scale);
-    if (i0 < 0)
-        i0 = 0;
-    if (i1 > NT_GRID - 1)
-        i1 = NT_GRID - 1;
-    double m = 1e300;
-    for (long i = i0; i <= i1; i++)
-        m = fmin(m, c->tfloor[i]);
-    return m < 1e300 ? m : 0.01;
+    double t = fmin(fmax(x, 0.0), 1.0) * (NR_GRID - 1);
+    long i = (long)t;
+    if (i >= NR_GRID - 1)
+        return c->rfloor[NR_GRID - 1];
+    double w = t - (double)i;
+    return (1.0 - w) * c->rfloor[i] + w * c->rfloor[i + 1];
 }
 
-/* Leaf values are stored as the file writes them (6 significant digits, FLT_DIG, so the
-   text reads back to this very float in Radiance), so the object and the file agree. */
+/* The smallest floor over ring radii [lo, hi]: the ends and the nodes between. */
+static double floor_min(const tt_ctx *c, double lo, double hi)
+{
+    double m = fmin(floor_at(c, lo), floor_at(c, hi));
+    long i0 = (long)ceil(fmax(lo, 0.0) * (NR_GRID - 1)), i1 = (long)floor(fmin(hi, 1.0) * (NR_GRID - 1));
+    for (long i = i0; i <= i1; i++)
+        m = fmin(m, c->rfloor[i]);
+    return m;
+}
+
+/* Leaf values carry 4 significant digits (relative rounding <= 5e-4, which moves an
+   e_L1 by at most 5e-4 of the energy the file holds: a twentieth of the smallest
+   tolerance, 1e-2), and are stored as the file writes them, so the object and the
+   file agree: the text reads back to this very float in Radiance. */
 static float file_value(double v)
 {
     char t[32];
-    snprintf(t, sizeof t, "%.6g", v);
+    snprintf(t, sizeof t, "%.4g", v);
     return (float)strtod(t, NULL);
 }
 
-static void tt_cell(const tt_ctx *c, tt_buf *b, int32_t node, int level, uint32_t i0,
-                    uint32_t i1, uint32_t i2)
+/* Distance from 0 to [lo, hi] and the largest |x| on it. */
+static double dist0(double lo, double hi) { return lo > 0.0 ? lo : (hi < 0.0 ? -hi : 0.0); }
+static double absmax(double lo, double hi) { return fmax(fabs(lo), fabs(hi)); }
+
+/* rho_r (MODEL.md section 8) for the view e_i = (st, 0, ct) and the light at disk
+   point r (cos phi, sin phi) of the tree (phi = pi: specular), with the shadowing
+   factors vi = V(ti), vr = V(tr) given: Fr D V V / (4 cos ti cos tr) with the
+   half vector h = e_i + e_r, cos a = |h| / 2, tan^2 tn = (h_x^2 + h_y^2) / h_z^2. */
+static double rho_r_cell(const tt_ctx *c, double st, double ct, double vi, double r,
+                         double cph, double sph, double vr)
 {
-    double h = ldexp(1.0, -level), f[NS][NS * NS];
+    double cr = sqrt(fmax(0.0, 1.0 - r * r));
+    double hx = st + r * cph, hy = r * sph, hz = ct + cr; /* hz > 0: both cosines >= 0 */
+    double rxy2 = hx * hx + hy * hy, hz2 = hz * hz, u2 = rxy2 + hz2;
+    if (!(ct > 0.0 && cr > 0.0 && hz2 > 0.0))
+        return 0.0; /* grazing: rho_r -> 0 (shadowing), and no 1/0 */
+    double sec2 = u2 / hz2;
+    double fr = bt_fresnel_r(c->n, c->n - 1.0, 0.5 * sqrt(u2));
+    double v = c->s * c->s / (16.0 * M_PI) * fr * exp(-0.25 * c->s * c->s * rxy2 / hz2) *
+               sec2 * sec2 * vi * vr / (ct * cr);
+    return v >= DBL_MIN ? v : 0.0;
+}
+
+/* The largest over the r bins of sum |f - v| ws: a cell's share of one light's e_L1. */
+static double tt_binmax(double f[NS][NS * NS], double ws[NS][NS * NS], const int *bin, double v)
+{
+    double e[NS] = {0.0}, m = 0.0;
+    for (int i = 0; i < NS; i++)
+        for (int k = 0; k < NS * NS; k++)
+            e[bin[k]] += fabs(f[i][k] - v) * ws[i][k];
+    for (int q = 0; q < NS; q++)
+        m = fmax(m, e[q]);
+    return m;
+}
+
+/* Samples cell (level, i0, i1, i2): its value and its contrib. */
+static void tt_eval(const tt_ctx *c, tb_node *nd, int level, uint32_t i0, uint32_t i1,
+                    uint32_t i2)
+{
+    double h = ldexp(1.0, -level), f[NS][NS * NS], rr[NS * NS];
     rho_out ro[NS * NS];
-    double cph[NS * NS], sph[NS * NS];
+    double cph[NS * NS], sph[NS * NS], vr[NS * NS];
     for (int j = 0; j < NS; j++) {
         for (int k = 0; k < NS; k++) {
             double a = ((double)i1 + (j + 0.5) / NS) * h, bb = ((double)i2 + (k + 0.5) / NS) * h;
@@ -186,53 +246,93 @@ static void tt_cell(const tt_ctx *c, tt_buf *b, int32_t node, int level, uint32_
             rad_square_to_disk(a, bb, &x, &y);
             double r2 = fmin(1.0, x * x + y * y), r = sqrt(r2);
             int m = j * NS + k;
-            rho_out_init(&ro[m], r, -sqrt(1.0 - r2), c->s, c->k0);
+            rr[m] = r;
+            if (!c->reflect)
+                rho_out_init(&ro[m], r, -sqrt(1.0 - r2), c->s, c->k0);
+            else /* a midpoint has r < 1: cos > 0 */
+                vr[m] = shadow_v(r / sqrt(1.0 - r2), c->s, c->k0);
             /* phi = psi + pi, psi the azimuth of (x, y); any phi at the centre r = 0 */
             cph[m] = r > 0.0 ? -x / r : 1.0;
             sph[m] = r > 0.0 ? -y / r : 0.0;
         }
     }
-    double sum = 0.0;
+    double sp[NS], sum = 0.0, wsum = 0.0;
     for (int i = 0; i < NS; i++) {
         double u0 = ((double)i0 + (i + 0.5) / NS) * h;
         double st = fmin(1.0, fmax(0.0, 1.0 - 2.0 * (u0 + RAD_FTINY)));
-        rho_in ri;
-        rho_in_init(&ri, st, sqrt(1.0 - st * st), c->s, c->k0);
-        for (int m = 0; m < NS * NS; m++) {
-            f[i][m] = c->scale * rho_kernel(c->n, c->s, &ri, &ro[m], cph[m], sph[m]);
-            sum += f[i][m];
-        }
-    }
-    double v = sum / (NS * NS * NS);
-    b->v[node].v = file_value(v);
-    if (level > b->depth)
-        b->depth = level;
-    int split = level < c->min_level;
-    if (!split && level < c->max_level) {
-        double fl = floor_min(c, (double)i0 * h, ((double)i0 + 1.0) * h), dmax = 0.0;
-        for (int i = 0; i < NS; i++) {
-            double dev = 0.0;
+        sp[i] = st;
+        if (c->reflect) {
+            double ct = sqrt(1.0 - st * st);
+            double vi = shadow_v(st / ct, c->s, c->k0); /* ct > 0 below u0 = 0.5 - FTINY */
             for (int m = 0; m < NS * NS; m++)
-                dev += fabs(f[i][m] - v);
-            dmax = fmax(dmax, dev / (NS * NS));
+                f[i][m] = rho_r_cell(c, st, ct, vi, rr[m], cph[m], sph[m], vr[m]);
+        } else {
+            rho_in ri;
+            rho_in_init(&ri, st, sqrt(1.0 - st * st), c->s, c->k0);
+            for (int m = 0; m < NS * NS; m++)
+                f[i][m] = c->scale * rho_kernel(c->n, c->s, &ri, &ro[m], cph[m], sph[m]);
         }
-        /* The cell's share of the e_L1 of the slices it covers (pi * area = projected
-           solid angle); split while it is above the threshold. */
-        split = M_PI * h * h * dmax / fl > c->eps;
+        double row = 0.0;
+        for (int m = 0; m < NS * NS; m++)
+            row += f[i][m];
+        sum += st * row;
+        wsum += st * NS * NS;
     }
-    if (!split)
-        return;
-    if (b->n + 8 > c->max_nodes) {
-        b->budget_hit = 1;
-        return;
+    /* wsum = 0 only if every sample has sin tp = 0, which midpoints below u0 = 0.5 never
+       do; the plain mean then */
+    double mean = wsum > 0.0 ? sum / wsum : 0.0;
+    /* The cell's ring radii: the Chebyshev norm of (2a - 1, 2b - 1) over the cell. */
+    double alo = 2.0 * i1 * h - 1.0, blo = 2.0 * i2 * h - 1.0;
+    double rmin = fmax(dist0(alo, alo + 2.0 * h), dist0(blo, blo + 2.0 * h));
+    double rmax = fmax(absmax(alo, alo + 2.0 * h), absmax(blo, blo + 2.0 * h));
+    double dr = (rmax - rmin) / NS; /* > 0: a cell of side 2h spans 2h in one coordinate */
+    /* one sample: d(u0) d(a) d(b) = (h / NS)^3; d(mu) dr = 2 sin tp d(u0) pi da db / r,
+       so its weight in the mean e_L1 of the rings of its bin is ws / (dr floor) */
+    double w = 2.0 * M_PI * pow(h / NS, 3.0) / dr, ws[NS][NS * NS], fl[NS];
+    int bin[NS * NS];
+    double lo = 1e300, hi = 0.0;
+    for (int q = 0; q < NS; q++) {
+        double r0 = rmin + q * dr;
+        fl[q] = floor_min(c, r0, r0 + dr);
     }
-    int32_t ch = buf_alloc(b, 8);
-    if (ch < 0)
-        return;
-    b->v[node].child = ch;
-    for (int n = 0; n < 8; n++)
-        tt_cell(c, b, ch + n, level + 1, 2 * i0 + (n & 1), 2 * i1 + ((n >> 1) & 1),
-                2 * i2 + ((n >> 2) & 1));
+    for (int m = 0; m < NS * NS; m++) {
+        int q = (int)((rr[m] - rmin) / dr);
+        bin[m] = q < 0 ? 0 : (q >= NS ? NS - 1 : q);
+    }
+    for (int i = 0; i < NS; i++) {
+        for (int m = 0; m < NS * NS; m++) {
+            /* r >= h / NS at a midpoint (the centre is a cell corner): no 1/0 */
+            ws[i][m] = w * sp[i] / fmax(rr[m], 1e-300) / fl[bin[m]];
+            lo = fmin(lo, f[i][m]);
+            hi = fmax(hi, f[i][m]);
+        }
+    }
+    /* The leaf value: the one whose largest bin share is smallest (convex in v, so a
+       golden-section search over [min f, max f]); it equals the mean for a lobe that
+       is linear over the cell, and near grazing light, where the floor max(T, 0.01)
+       of the outer rings is far below the inner ones', it leans towards the outer. */
+    double x0 = lo, x1 = hi, g = 0.5 * (sqrt(5.0) - 1.0);
+    double ya = x1 - g * (x1 - x0), yb = x0 + g * (x1 - x0);
+    double ea = tt_binmax(f, ws, bin, ya), eb = tt_binmax(f, ws, bin, yb);
+    for (int it = 0; it < 40 && x1 - x0 > 1e-6 * (hi > 0.0 ? hi : 1.0); it++) {
+        if (ea <= eb) {
+            x1 = yb;
+            yb = ya;
+            eb = ea;
+            ya = x1 - g * (x1 - x0);
+            ea = tt_binmax(f, ws, bin, ya);
+        } else {
+            x0 = ya;
+            ya = yb;
+            ea = eb;
+            yb = x0 + g * (x1 - x0);
+            eb = tt_binmax(f, ws, bin, yb);
+        }
+    }
+    double v = hi > lo ? 0.5 * (x0 + x1) : mean;
+    nd->v = file_value(v);
+    double cmax = tt_binmax(f, ws, bin, nd->v);
+    nd->contrib = (float)fmin(cmax, 3e38);
 }
 
 typedef struct tt_job {
@@ -240,7 +340,31 @@ typedef struct tt_job {
     int level;           /* level of the task cells */
     uint32_t n0, n1, n2; /* task cells per dimension (u0 < 0.5, b < 0.5 only) */
     tt_buf *bufs;
+    double eps;          /* rad_tb_grow's threshold */
 } tt_job;
+
+/* Splits, below node k, every leaf whose contrib is above eps, again and again. */
+static void tt_grow(const tt_job *j, tt_buf *b, int32_t k, int level, uint32_t i0,
+                    uint32_t i1, uint32_t i2)
+{
+    if (level > b->depth)
+        b->depth = level;
+    if (b->v[k].child < 0) {
+        if (!(b->v[k].contrib > j->eps) || level >= j->c->max_level || b->budget_hit)
+            return;
+        int32_t ch = buf_alloc(b, 8);
+        if (ch < 0)
+            return;
+        b->v[k].child = ch;
+        for (int n = 0; n < 8; n++)
+            tt_eval(j->c, &b->v[ch + n], level + 1, 2 * i0 + (n & 1), 2 * i1 + ((n >> 1) & 1),
+                    2 * i2 + ((n >> 2) & 1));
+    }
+    int32_t ch = b->v[k].child;
+    for (int n = 0; n < 8; n++)
+        tt_grow(j, b, ch + n, level + 1, 2 * i0 + (n & 1), 2 * i1 + ((n >> 1) & 1),
+                2 * i2 + ((n >> 2) & 1));
+}
 
 static void tt_task(void *arg, size_t t)
 {
@@ -248,27 +372,161 @@ static void tt_task(void *arg, size_t t)
     uint32_t i2 = (uint32_t)(t % j->n2), i1 = (uint32_t)((t / j->n2) % j->n1);
     uint32_t i0 = (uint32_t)(t / ((size_t)j->n2 * j->n1));
     tt_buf *b = &j->bufs[t];
-    if (buf_alloc(b, 1) < 0)
+    if (b->n == 0) {
+        if (buf_alloc(b, 1) < 0)
+            return;
+        tt_eval(j->c, &b->v[0], j->level, i0, i1, i2);
+    }
+    tt_grow(j, b, 0, j->level, i0, i1, i2);
+}
+
+struct rad_tb {
+    tt_ctx c;
+    tt_job j;
+    size_t ntask;
+    int threads;
+};
+
+rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, int threads)
+{
+    rad_tb *t = calloc(1, sizeof *t);
+    if (!t)
+        return NULL;
+    tt_ctx *c = &t->c;
+    c->n = blk->n;
+    c->s = p->smoothness;
+    c->k0 = p->k0;
+    c->scale = blk->scale;
+    c->reflect = blk->reflect;
+    /* Start where a cell is no wider than the lobe (about 2/s rad in facet slope). */
+    int lv = 3 + (int)ceil(log2(fmax(1.0, p->smoothness / 2.0)));
+    c->min_level = lv < 3 ? 3 : (lv > 6 ? 6 : lv);
+    c->max_level = 18;
+    btdf_params q = *p;
+    q.channels = 1;
+    q.ior[0] = blk->n_light;
+    for (int i = 0; i < NR_GRID; i++) {
+        double r = (double)i / (NR_GRID - 1), v = 0.0;
+        if (blk->reflect)
+            btdf_reflectance(&q, asin(r), &v);
+        else
+            btdf_transmittance(&q, asin(r), &v);
+        c->rfloor[i] = fmax(v, 0.01); /* MODEL.md section 6 floor */
+    }
+    t->threads = threads;
+    t->j.c = c;
+    t->j.level = c->min_level;
+    t->j.n0 = 1u << (t->j.level - 1);
+    t->j.n1 = 1u << t->j.level;
+    t->j.n2 = 1u << (t->j.level - 1);
+    t->ntask = (size_t)t->j.n0 * t->j.n1 * t->j.n2;
+    t->j.bufs = calloc(t->ntask, sizeof *t->j.bufs);
+    if (!t->j.bufs) {
+        free(t);
+        return NULL;
+    }
+    return t;
+}
+
+void rad_tb_free(rad_tb *t)
+{
+    if (!t)
         return;
-    tt_cell(j->c, b, 0, j->level, i0, i1, i2);
+    for (size_t k = 0; k < t->ntask; k++)
+        free(t->j.bufs[k].v);
+    free(t->j.bufs);
+    free(t);
+}
+
+size_t rad_tb_nodes(const rad_tb *t)
+{
+    size_t n = 0;
+    for (size_t k = 0; k < t->ntask; k++)
+        n += t->j.bufs[k].n;
+    return n;
+}
+
+btdf_status rad_tb_grow(rad_tb *t, double eps, size_t max_nodes)
+{
+    /* Each task may use what the others leave: checked in total below. */
+    size_t used = rad_tb_nodes(t);
+    for (size_t k = 0; k < t->ntask; k++)
+        t->j.bufs[k].max = t->j.bufs[k].n + (max_nodes > used ? max_nodes - used : 0);
+    t->j.eps = eps;
+    btdf_parallel_for(t->threads, t->ntask, tt_task, &t->j);
+    int nomem = 0, hit = 0;
+    for (size_t k = 0; k < t->ntask; k++) {
+        nomem |= t->j.bufs[k].nomem || !t->j.bufs[k].v;
+        hit |= t->j.bufs[k].budget_hit;
+    }
+    if (nomem)
+        return BTDF_ENOMEM;
+    return hit || rad_tb_nodes(t) > max_nodes ? BTDF_EBUDGET : BTDF_OK;
 }
 
 typedef struct tt_out {
-    tt_buf dst;
+    rad_node *v;
+    size_t n, cap;
+    int depth, nomem;
+    double eps;
     const tt_job *j;
 } tt_out;
 
-static void copy_sub(tt_out *o, const tt_buf *src, int32_t si, int mirror, int32_t di)
+static int32_t out_alloc(tt_out *o, size_t count)
 {
-    o->dst.v[di].v = src->v[si].v;
-    if (src->v[si].child < 0)
+    if (o->n + count > o->cap) {
+        size_t cap = o->cap ? 2 * o->cap : 1024;
+        while (cap < o->n + count)
+            cap *= 2;
+        rad_node *v = realloc(o->v, cap * sizeof *v);
+        if (!v || cap > (size_t)INT32_MAX) {
+            if (v)
+                o->v = v;
+            o->nomem = 1;
+            return -1;
+        }
+        o->v = v;
+        o->cap = cap;
+    }
+    int32_t first = (int32_t)o->n;
+    for (size_t i = 0; i < count; i++) {
+        o->v[o->n + i].child = -1;
+        o->v[o->n + i].v = 0.0f;
+    }
+    o->n += count;
+    return first;
+}
+
+/* Children of node di that are 8 leaves of one value (all zero where no light goes,
+   say) read the same as one leaf: fold them (they are the last 8 nodes written). */
+static void fold(tt_out *o, int32_t di)
+{
+    int32_t ch = o->v[di].child;
+    if (ch < 0 || (size_t)ch + 8 != o->n)
         return;
-    int32_t ch = buf_alloc(&o->dst, 8);
+    for (int n = 0; n < 8; n++)
+        if (o->v[ch + n].child >= 0 || o->v[ch + n].v != o->v[ch].v)
+            return;
+    o->v[di].v = o->v[ch].v;
+    o->v[di].child = -1;
+    o->n -= 8;
+}
+
+static void copy_sub(tt_out *o, const tt_buf *src, int32_t si, int mirror, int32_t di,
+                     int level)
+{
+    o->v[di].v = src->v[si].v;
+    o->depth = level > o->depth ? level : o->depth;
+    if (src->v[si].child < 0 || !(src->v[si].contrib > o->eps))
+        return;
+    int32_t ch = out_alloc(o, 8);
     if (ch < 0)
         return;
-    o->dst.v[di].child = ch;
+    o->v[di].child = ch;
     for (int n = 0; n < 8; n++)
-        copy_sub(o, src, src->v[si].child + (mirror ? (n ^ 4) : n), mirror, ch + n);
+        copy_sub(o, src, src->v[si].child + (mirror ? (n ^ 4) : n), mirror, ch + n,
+                 level + 1);
+    fold(o, di);
 }
 
 /* Lays the tree out from the root: full levels above the task cells, placeholders for
@@ -280,108 +538,59 @@ static void assemble(tt_out *o, int32_t di, int level, uint32_t i0, uint32_t i1,
         int mirror = i2 >= j->n2;
         uint32_t m2 = mirror ? 2 * j->n2 - 1 - i2 : i2;
         size_t t = ((size_t)i0 * j->n1 + i1) * j->n2 + m2;
-        copy_sub(o, &j->bufs[t], 0, mirror, di);
+        copy_sub(o, &j->bufs[t], 0, mirror, di, level);
         return;
     }
-    int32_t ch = buf_alloc(&o->dst, 8);
+    int32_t ch = out_alloc(o, 8);
     if (ch < 0)
         return;
-    o->dst.v[di].child = ch;
+    o->v[di].child = ch;
     for (int n = 0; n < 8; n++) {
         uint32_t c0 = 2 * i0 + (n & 1), c1 = 2 * i1 + ((n >> 1) & 1), c2 = 2 * i2 + ((n >> 2) & 1);
         if (level == 0 && (n & 1))
             continue; /* u0 >= 0.5 is never looked up: a { 0 } placeholder */
         assemble(o, ch + n, level + 1, c0, c1, c2);
     }
+    fold(o, di);
 }
 
-btdf_status rad_tree_build(const btdf_params *p, double n, double scale, double eps,
-                           int threads,
-                           size_t max_nodes, rad_block *blk, char *msg, size_t msglen)
+btdf_status rad_tb_extract(const rad_tb *t, double eps, rad_block *blk)
 {
-    tt_ctx *c = calloc(1, sizeof *c);
-    if (!c)
-        return BTDF_ENOMEM;
-    c->n = n;
-    c->s = p->smoothness;
-    c->k0 = p->k0;
-    c->eps = eps;
-    c->scale = scale;
-    /* Start where a cell is no wider than the lobe (about 2/s rad in facet slope). */
-    int lv = 3 + (int)ceil(log2(fmax(1.0, p->smoothness / 2.0)));
-    c->min_level = lv < 3 ? 3 : (lv > 6 ? 6 : lv);
-    c->max_level = 16;
-    btdf_params q = *p;
-    q.channels = 1;
-    q.ior[0] = n;
-    for (int i = 0; i < NT_GRID; i++) {
-        double u0 = 0.5 * i / (NT_GRID - 1), T;
-        double st = fmin(1.0, fmax(0.0, 1.0 - 2.0 * (u0 + RAD_FTINY)));
-        btdf_transmittance(&q, asin(st), &T);
-        c->tfloor[i] = fmax(scale * T, 0.01); /* MODEL.md section 6 floor */
-    }
-    tt_job j;
-    j.c = c;
-    j.level = c->min_level;
-    j.n0 = 1u << (j.level - 1);
-    j.n1 = 1u << j.level;
-    j.n2 = 1u << (j.level - 1);
-    size_t ntask = (size_t)j.n0 * j.n1 * j.n2;
-    c->max_nodes = max_nodes; /* per task; the total is checked when assembling */
-    j.bufs = calloc(ntask, sizeof *j.bufs);
-    if (!j.bufs) {
-        free(c);
-        return BTDF_ENOMEM;
-    }
-    btdf_parallel_for(threads, ntask, tt_task, &j);
-    int nomem = 0, hit = 0, depth = 0;
-    size_t total = 1, used = 0;
-    for (size_t t = 0; t < ntask; t++) {
-        used += j.bufs[t].n;
-        nomem |= j.bufs[t].nomem || !j.bufs[t].v;
-        hit |= j.bufs[t].budget_hit;
-        depth = j.bufs[t].depth > depth ? j.bufs[t].depth : depth;
-        total += 2 * j.bufs[t].n + 8;
-    }
-    hit |= used > max_nodes;
     tt_out o;
     memset(&o, 0, sizeof o);
-    o.j = &j;
-    btdf_status st = BTDF_OK;
-    if (nomem) {
-        st = BTDF_ENOMEM;
-    } else {
-        o.dst.v = malloc(total * sizeof *o.dst.v);
-        o.dst.cap = o.dst.v ? total : 0;
-        if (!o.dst.v || buf_alloc(&o.dst, 1) < 0) {
-            st = BTDF_ENOMEM;
-        } else {
-            assemble(&o, 0, 0, 0, 0, 0);
-            if (o.dst.nomem || o.dst.budget_hit)
-                st = BTDF_ENOMEM;
-        }
+    o.j = &t->j;
+    o.eps = eps;
+    if (out_alloc(&o, 1) >= 0)
+        assemble(&o, 0, 0, 0, 0, 0);
+    if (o.nomem) {
+        free(o.v);
+        return BTDF_ENOMEM;
     }
-    for (size_t t = 0; t < ntask; t++)
-        free(j.bufs[t].v);
-    free(j.bufs);
-    free(c);
-    if (st != BTDF_OK) {
-        free(o.dst.v);
-        if (msg && msglen)
-            snprintf(msg, msglen, "out of memory building the tensor tree");
-        return st;
-    }
-    blk->nodes = o.dst.v;
-    blk->nnodes = o.dst.n;
+    free(blk->nodes);
+    blk->nodes = o.v;
+    blk->nnodes = o.n;
     blk->leaves = 0;
-    for (size_t i = 0; i < o.dst.n; i++)
-        blk->leaves += o.dst.v[i].child < 0;
-    blk->depth = depth;
-    if (hit) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "tensor tree node budget (%zu) reached at depth %d",
-                     max_nodes, depth);
-        return BTDF_EBUDGET;
-    }
+    for (size_t i = 0; i < o.n; i++)
+        blk->leaves += o.v[i].child < 0;
+    blk->depth = o.depth;
     return BTDF_OK;
+}
+
+btdf_status rad_tree_build(const btdf_params *p, double eps, int threads, size_t max_nodes,
+                           rad_block *blk, char *msg, size_t msglen)
+{
+    rad_tb *t = rad_tb_new(p, blk, threads);
+    if (!t)
+        return btdf_say(BTDF_ENOMEM, msg, msglen, "out of memory building the tensor tree");
+    btdf_status st = rad_tb_grow(t, eps, max_nodes);
+    if (st == BTDF_OK || st == BTDF_EBUDGET) {
+        btdf_status se = rad_tb_extract(t, eps, blk);
+        st = se != BTDF_OK ? se : st;
+    }
+    rad_tb_free(t);
+    if (st == BTDF_ENOMEM)
+        return btdf_say(st, msg, msglen, "out of memory building the tensor tree");
+    if (st == BTDF_EBUDGET)
+        return btdf_say(st, msg, msglen, "tensor tree node budget (%zu) reached", max_nodes);
+    return st;
 }

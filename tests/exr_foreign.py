@@ -29,35 +29,50 @@ CASES = [
     ["--ior", "0.6666667", "-s", "6", "--theta-i", "0:60"],  # reciprocal kind
     ["--ior", "1.5", "-s", "3", "--grid", "7,46,37"],  # grid: 46 rows, 37 columns
     ["--ior", "1.5", "-s", "3", "--grid", "3,17,5", "--theta-o", "95:170"],
+    # the reflection (its own kind), and both parts in one file (the reflection's parts
+    # after the transmission's, btdf.part = "reflection" on each)
+    ["--ior", "1.5", "-s", "3", "--part", "reflection", "--tolerance", "1e-2"],
+    ["--ior", "1.5", "-s", "3", "--part", "both", "--tolerance", "1e-2"],
+    ["--ior", "0.6666667", "-s", "6", "--part", "both", "--theta-i", "30:50",
+     "--tolerance", "1e-2"],
+    ["--ior", "1.5,1.51,1.52", "-s", "6", "--part", "both", "--tolerance", "1e-2",
+     "--theta-i", "0:40"],
 ]
 
 
 def read_csv(path):
-    """Slices in file order: (ti, rows, cols, values[nrows, ncols, channels])."""
+    """Slices in file order: (part, ti, rows, cols, values[nrows, ncols, channels]); part
+    is the row's last column in a file holding both parts, else the file's own."""
     slices = {}
     order = []
     nch = None
+    part_col = False
+    own = "transmission"
     with open(path) as f:
         for line in f:
+            if line.startswith("# kind: facet-reflection"):
+                own = "reflection"
             if line.startswith("#"):
                 continue
             if line.startswith("theta_i_deg"):
                 nch = 3 if "rho_r" in line else 1
+                part_col = line.rstrip("\n").endswith(",part")
                 continue
             c = line.rstrip("\n").split(",")
+            part = c.pop() if part_col else own
             ti, row, col = float(c[-3]), float(c[-2]), float(c[-1])
             vals = [float(v) for v in c[3:3 + nch]]
-            if ti not in slices:
-                slices[ti] = {}
-                order.append(ti)
-            slices[ti][(row, col)] = vals
+            if (part, ti) not in slices:
+                slices[(part, ti)] = {}
+                order.append((part, ti))
+            slices[(part, ti)][(row, col)] = vals
     out = []
-    for ti in order:
-        nodes = slices[ti]
+    for key in order:
+        nodes = slices[key]
         rows = sorted({r for r, _ in nodes})
         cols = sorted({c for _, c in nodes})
         v = np.array([[nodes[(r, c)] for c in cols] for r in rows], dtype=np.float64)
-        out.append((ti, rows, cols, v))
+        out.append((key[0], key[1], rows, cols, v))
     return out, nch
 
 
@@ -74,8 +89,11 @@ def check(tool, args, work):
     if len(f.parts) != len(slices):
         return "%d parts, %d slices in the CSV" % (len(f.parts), len(slices))
     names = ["Y"] if nch == 1 else ["R", "G", "B"]
-    for k, (part, (ti, rows, cols, v)) in enumerate(zip(f.parts, slices)):
+    for k, (part, (which, ti, rows, cols, v)) in enumerate(zip(f.parts, slices)):
         h = part.header
+        if h.get("btdf.part", "transmission") != which:
+            return "part %d: btdf.part %r, the CSV's slice is of the %s" % (
+                k, h.get("btdf.part"), which)
         if float(np.asarray(h["btdf.ti"]).ravel()[0]) != ti:
             return "part %d: btdf.ti differs from the CSV" % k
         if [float(x) for x in h["btdf.rows"].split()] != rows or \

@@ -1,11 +1,13 @@
 #!/bin/sh
 # SPDX-License-Identifier: MIT
 # mitsuba.sh: the Mitsuba 3 plugin (python/btdftab_mitsuba) checked in a venv with
-# mitsuba from PyPI: eval against btdf_table_eval, chi-square tests of the sampling, the
-# mean sampled weight against T(ti), and a render of a rough face against the analytic
-# mode. Runs scalar_rgb always, llvm_ad_rgb when an LLVM 16 or newer is installed
-# (Debian 12: apt-get install libllvm19; Dr.Jit's LLVM backend cannot compile its
-# min/max with the LLVM 15 of Debian 12's default llvm package).
+# mitsuba from PyPI: eval against btdf_table_eval (transmission) and btdf_eval_r
+# (reflection), chi-square tests of the sampling (each lobe and both together), the mean
+# sampled weight against T(ti) and R(ti) + T(ti) on both sides, a white-furnace render,
+# and a render of a rough face against the analytic mode. Runs scalar_rgb always,
+# llvm_ad_rgb when an LLVM 16 or newer is installed (Debian 12: apt-get install
+# libllvm19; Dr.Jit's LLVM backend cannot compile its min/max with the LLVM 15 of
+# Debian 12's default llvm package).
 # Usage: sh tests/mitsuba.sh [BUILD_DIR]   (default build). Ends with "N passed, N failed".
 # MITSUBA_VENV names the venv to create or reuse (default: a temporary folder).
 set -u

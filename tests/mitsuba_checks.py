@@ -3,7 +3,7 @@
 tests/mitsuba.sh in a venv with mitsuba from PyPI:
 
     python tests/mitsuba_checks.py VARIANT TABLE_DIR [--render OUT_DIR] [--render-only]
-        [--repeats N]
+        [--repeats N] [--part both|transmission]
 
 TABLE_DIR holds the tables tests/mitsuba.sh writes with btdftab. Prints one "ok" or
 "not ok" line per check, the measured figures, and "N passed, N failed" last.
@@ -25,6 +25,7 @@ VARIANT, TABLES = sys.argv[1], sys.argv[2]
 RENDER_DIR = sys.argv[sys.argv.index("--render") + 1] if "--render" in sys.argv else None
 REPEATS = int(sys.argv[sys.argv.index("--repeats") + 1]) if "--repeats" in sys.argv else 3
 RENDER_ONLY = "--render-only" in sys.argv  # the timing of docs/mitsuba3.md
+PART = sys.argv[sys.argv.index("--part") + 1] if "--part" in sys.argv else "both"
 mi.set_variant(VARIANT)
 import btdftab_mitsuba  # noqa: E402  (registers the plugin)
 from btdftab_mitsuba import libbtdf  # noqa: E402
@@ -142,7 +143,7 @@ def f32(v):
 def eval_check(label, fname, back_name=None, pairs=10000, seed=1):
     front = libbtdf.Table(tab(fname))
     back = libbtdf.Table(tab(back_name)) if back_name else None
-    kw = {"filename": tab(fname)}
+    kw = {"filename": tab(fname), "part": "transmission"}
     if back_name:
         kw["filename_back"] = tab(back_name)
     b = bsdf(**kw)
@@ -186,7 +187,7 @@ def eval_check(label, fname, back_name=None, pairs=10000, seed=1):
     if back is not None:
         # The back table is what answers from behind: it differs from the front table
         # read by reciprocity by the two tables' errors, not by nothing.
-        one = bsdf(filename=tab(fname))
+        one = bsdf(filename=tab(fname), part="transmission")
         idx = [i for i in range(len(wis)) if wis[i][2] < 0]
         w1 = [wis[i] for i in idx]
         w2 = [wos[i] for i in idx]
@@ -199,34 +200,43 @@ def eval_check(label, fname, back_name=None, pairs=10000, seed=1):
 
 
 def analytic_check(pairs=10000, seed=2):
-    """Mode analytic against btdf_eval (Eq. 25 of libbtdf), both sides."""
-    for n, s in ((1.5, 3.0), (1.0 / 1.5, 6.0), (1.5, 100.0)):
-        b = bsdf(mode="analytic", ior=str(n), smoothness=s)
+    """Mode analytic against btdf_eval (Eq. 25 of libbtdf), both sides; part = both
+    evaluates both lobes in one pass (model.rho_any), part = transmission Eq. 25 alone."""
+    for n, s, part in ((1.5, 3.0, "transmission"), (1.0 / 1.5, 6.0, "transmission"),
+                       (1.5, 100.0, "transmission"), (1.5, 3.0, "both"),
+                       (1.0 / 1.5, 6.0, "both"), (1.5, 100.0, "both")):
+        b = bsdf(mode="analytic", ior=str(n), smoothness=s, part=part)
         p = libbtdf.make_params(n, s)
         pb = libbtdf.make_params(1.0 / n, s)
         rng = random.Random(seed)
         wis = [f32(rand_dir(rng, i % 2 == 0)) for i in range(pairs)]
         wos = [rand_dir(rng, w[2] < 0) for w in wis]
-        lobe = sampled_dirs(b, wis[pairs // 2:], rng)
+        lobe = sampled_dirs(bsdf(mode="analytic", ior=str(n), smoothness=s,
+                                 part="transmission"), wis[pairs // 2:], rng)
         wos = [f32(w) for w in wos[:pairs // 2] + lobe]
-        got = eval_many(b, mi.TransportMode.Importance, wis, wos)
-        max_rel = 0.0
-        bad = 0
-        for a, c, g in zip(wis, wos, got):
-            if a[2] * c[2] >= 0:
-                continue
-            flip = lambda v: [v[0], v[1], -v[2]]  # noqa: E731
-            ref = (libbtdf.rho(p, *angles(a, c)) if a[2] > 0
-                   else libbtdf.rho(pb, *angles(flip(a), flip(c))))[0] * abs(c[2])
-            d = abs(g[0] - ref)
-            if ref >= FLT_MIN:
-                max_rel = max(max_rel, d / ref)
-            # Eq. 25 in double in both, then two float roundings; at s = 100 the lobe's
-            # exponent s^2 tan^2/4 amplifies double rounding of the angles, measured < 1e-9.
-            if d > 2.0 * EPS32 * ref + FLT_MIN:
-                bad += 1
-        check(bad == 0, "analytic mode = btdf_eval, n = %.4g, s = %g: max rel diff %.3g"
-              % (n, s, max_rel))
+        flip = lambda v: [v[0], v[1], -v[2]]  # noqa: E731
+        for mode, mname in ((mi.TransportMode.Importance, "importance"),
+                            (mi.TransportMode.Radiance, "radiance")):
+            got = eval_many(b, mode, wis, wos)
+            max_rel = 0.0
+            bad = 0
+            for a, c, g in zip(wis, wos, got):
+                if a[2] * c[2] >= 0:
+                    continue
+                # light arrives along src: wi in importance mode, wo in radiance mode
+                src, dst = (c, a) if mode == mi.TransportMode.Radiance else (a, c)
+                ref = (libbtdf.rho(p, *angles(src, dst)) if src[2] > 0
+                       else libbtdf.rho(pb, *angles(flip(src), flip(dst))))[0] * abs(c[2])
+                d = abs(g[0] - ref)
+                if ref >= FLT_MIN:
+                    max_rel = max(max_rel, d / ref)
+                # Eq. 25 in double in both, then two float roundings; at s = 100 the
+                # lobe's exponent s^2 tan^2/4 amplifies double rounding of the angles,
+                # measured < 1e-9.
+                if d > 2.0 * EPS32 * ref + FLT_MIN:
+                    bad += 1
+            check(bad == 0, "analytic mode = btdf_eval, part = %s, %s mode, n = %.4g, "
+                  "s = %g: max rel diff %.3g" % (part, mname, n, s, max_rel))
 
 
 # ---------------------------------------------------------------------------------
@@ -247,8 +257,9 @@ def wi_of(deg, side=1.0):
 class ZoomDomain:
     """Directions within a cone around `center`, by gnomonic coordinates (x, y) in
     [-r, r]^2: w = normalize(x e1 + y e2 + center), d(omega) = dx dy / (1+x^2+y^2)^1.5.
-    For s = 100 the lobe is about 0.4 degrees wide, below the sphere's 1.8-degree cells
-    at res = 101, where the trapezoid rule cannot integrate the pdf over a cell."""
+    For s = 100 the lobe is about 0.4 degrees wide, below the sphere's cells at res = 101
+    (50 x 101 over phi x cos theta: 7.2 degrees by 0.02), where the trapezoid rule
+    cannot integrate the pdf over a cell."""
 
     def __init__(self, center, r):
         self.e3 = mi.ScalarVector3f(center)
@@ -271,7 +282,13 @@ class ZoomDomain:
     def wrap(self, sf, pf):
         def sample(u, *a):
             wo, w = sf(u, *a)
-            # weight-0 samples add nothing to the histogram; put them inside the domain
+            # Samples outside the cone (the other lobe, when both are sampled) are not
+            # counted, as the pdf is integrated over the cone alone: weight 0. Weight-0
+            # samples add nothing to the histogram; put them inside the domain.
+            l3 = dr.dot(wo, self.e3)
+            xy = self.map_backward(wo)
+            inside = (l3 > 0.0) & (dr.abs(xy.x) <= self.r) & (dr.abs(xy.y) <= self.r)
+            w = dr.select(inside, w, 0.0)
             return dr.select(w > 0.0, wo, mi.Vector3f(self.e3)), w
 
         def pdf(w, *a):
@@ -280,9 +297,40 @@ class ZoomDomain:
         return sample, pdf
 
 
-def chi2_one(fname, wi, zoom=None, distort=False):
+def pdf_adapter(d, wi):
+    """Like mitsuba.chi2.BSDFAdapter, but a sample counts where the plugin gives it a
+    pdf > 0, not where its weight is nonzero: at grazing exits the shadowing V(t)
+    underflows float (t within 0.2 degrees of the horizon at s = 3), the weight is 0
+    although the direction was drawn, and dropping those samples (2072 of 10^6 for
+    light from behind at 70 degrees, one run) would make the histogram miss what the
+    pdf holds."""
+    plugin = mi.load_dict(d)
+    ctx = mi.BSDFContext()
+
+    def si_of(n):
+        si = dr.zeros(mi.SurfaceInteraction3f, n)
+        si.wi = mi.Vector3f(wi)
+        return si
+
+    def sample(u, *a):
+        bs, _ = plugin.sample(ctx, si_of(dr.width(u)), u[0], mi.Vector2f(u[1], u[2]))
+        return bs.wo, dr.select(bs.pdf > 0.0, mi.Float(1.0), mi.Float(0.0))
+
+    def pdf(wo, *a):
+        return plugin.pdf(ctx, si_of(dr.width(wo)), wo)
+    return sample, pdf
+
+
+def chi2_one(fname, wi, zoom=None, distort=False, part="transmission", extra=None):
     from mitsuba.chi2 import BSDFAdapter, ChiSquareTest, SphericalDomain
-    sf, pf = BSDFAdapter("btdftab", {"type": "btdftab", "filename": tab(fname)}, wi=wi)
+    d = {"type": "btdftab", "part": part}
+    if fname:
+        d["filename"] = tab(fname)
+    d.update(extra or {})
+    if part == "transmission":  # as measured before both lobes existed
+        sf, pf = BSDFAdapter("btdftab", d, wi=wi)
+    else:
+        sf, pf = pdf_adapter(d, wi)
     if distort:
         pf0 = pf
         pf = lambda w, *a: pf0(w, *a) * dr.select(w.y > 0.0, 1.1, 0.9)  # noqa: E731
@@ -309,7 +357,7 @@ def chi2_checks():
             check(ok, "chi2: n = %.4g, s = %g, ti = %g deg, p-value %.3g (1e6 samples, %s)%s"
                   % (n, s, deg, chi.p_value,
                      "101 x 101 cells over 0.15 rad around the refracted direction" if zoom
-                     else "101 x 202 cells over the sphere",
+                     else "50 x 101 cells (phi, cos theta) over the sphere",
                      "" if ok else ": " + chi.messages.strip()))
     # the other side of the (1.5, 3) table: light from behind, by reciprocity
     chi = chi2_one("f15.exr", wi_of(45.0, -1.0))
@@ -343,6 +391,7 @@ def weight_checks(count):
                                                        "smoothness": s}, 0.0),
                                          ("table", {"filename": tab(fname)},
                                           e_t * max(T, 0.01))):
+                kw = dict(kw, part="transmission")
                 b = bsdf(**kw)
                 for tm, scale in ((mi.TransportMode.Importance, 1.0),
                                   (mi.TransportMode.Radiance, 1.0 / (n * n))):
@@ -388,6 +437,306 @@ def mean_weight(b, mode, wi, count, seed):
 
 
 # ---------------------------------------------------------------------------------
+# 2b. the reflection of the same facets, and both lobes sampled together (part = both,
+#     the default): eval against btdf_eval_r, the mean weight against R + T, chi-square
+# ---------------------------------------------------------------------------------
+def inv_params(ior, s, k0):
+    return (libbtdf.make_params(ior, s, k0),
+            libbtdf.make_params([1.0 / n for n in ior], s, k0))
+
+
+def eval_r_check(label, kw, pairs=10000, seed=3):
+    """eval at same-side pairs = btdf_eval_r (n in front, 1/n behind) times |cos wo|."""
+    b = bsdf(**kw)  # part = both: the default
+    lobe_b = bsdf(**dict(kw, part="reflection"))
+    if "filename" in kw:
+        t = libbtdf.Table(kw["filename"])
+        ior, s, k0 = t.ior, t.smoothness, t.k0
+    else:
+        ior = [float(x) for x in kw["ior"].split(",")]
+        s, k0 = kw["smoothness"], 0.7
+    pf, pb = inv_params(ior, s, k0)
+    rng = random.Random(seed)
+    wis = [f32(rand_dir(rng, i % 2 == 0)) for i in range(pairs)]  # half from behind
+    wos = [rand_dir(rng, w[2] > 0) for w in wis]  # the same side
+    lobe = sampled_dirs(lobe_b, wis[pairs // 2:], rng)  # the second half: in the lobe
+    wos = [f32(w) for w in wos[:pairs // 2] + lobe]
+    keep = [i for i in range(pairs) if wis[i][2] * wos[i][2] > 0]
+    wis = [wis[i] for i in keep]
+    wos = [wos[i] for i in keep]
+    flip = lambda v: [v[0], v[1], -v[2]]  # noqa: E731
+    refs = []
+    for a, c in zip(wis, wos):
+        r = (libbtdf.rho_r(pf, *angles(a, c)) if a[2] > 0
+             else libbtdf.rho_r(pb, *angles(flip(a), flip(c))))
+        refs.append([x * abs(c[2]) for x in r])
+    for mode, mname in ((mi.TransportMode.Importance, "importance"),
+                        (mi.TransportMode.Radiance, "radiance")):
+        got = eval_many(b, mode, wis, wos)
+        max_rel, peak = [0.0, 0.0], [0.0, 0.0]
+        bad = 0
+        for a, g, ref in zip(wis, got, refs):
+            side = 0 if a[2] > 0 else 1
+            for ch in range(3):
+                r = ref[min(ch, len(ref) - 1)]
+                d = abs(g[ch] - r)
+                peak[side] = max(peak[side], r)
+                if r >= FLT_MIN:
+                    max_rel[side] = max(max_rel[side], d / r)
+                # as for the transmission: rho_r in double, then two float roundings
+                if d > 2.0 * EPS32 * r + FLT_MIN:
+                    bad += 1
+        check(bad == 0 and min(peak) > 0.0,
+              "reflection eval = btdf_eval_r |cos wo|, %s, %s mode, %d same-side pairs; "
+              "light in front / behind: max rel diff %.3g / %.3g (values >= FLT_MIN), "
+              "peak %.4g / %.4g; %d beyond 2 eps32 |ref| + FLT_MIN"
+              % (label, mname, len(wis), max_rel[0], max_rel[1], peak[0], peak[1], bad))
+
+
+def component_checks():
+    """Mitsuba's context selects one lobe: component 0 is the reflection, 1 the
+    transmission; the type mask likewise."""
+    b = bsdf(mode="analytic", ior="1.5", smoothness=3.0)
+    t = math.radians(40.0)
+    wi = [math.sin(t), 0.0, math.cos(t)]
+    wr = [-0.5, 0.1, math.sqrt(1.0 - 0.26)]
+    wt = [-0.3, 0.1, -math.sqrt(1.0 - 0.1)]
+    res = {}
+    for name, comp, mask in (("all", None, None), ("component 0", 0, None),
+                             ("component 1", 1, None),
+                             ("GlossyReflection", None, mi.BSDFFlags.GlossyReflection),
+                             ("GlossyTransmission", None, mi.BSDFFlags.GlossyTransmission)):
+        ctx = mi.BSDFContext()
+        if comp is not None:
+            ctx.component = comp
+        if mask is not None:
+            ctx.type_mask = mask
+        vals = []
+        for wo in (wr, wt):
+            si = dr.zeros(mi.SurfaceInteraction3f)
+            si.wi = mi.Vector3f(wi)
+            v = b.eval(ctx, si, mi.Vector3f(wo))
+            p = b.pdf(ctx, si, mi.Vector3f(wo))
+            vals.append((float(dr.ravel(v)[0]) if JIT else float(v[0]),
+                         float(dr.ravel(p)[0]) if JIT else float(p)))
+        res[name] = vals
+    ok = (all(x > 0 for x in res["all"][0] + res["all"][1])
+          and res["component 0"][0][0] == res["all"][0][0]
+          and res["component 0"][1] == (0.0, 0.0)
+          and res["component 1"][1][0] == res["all"][1][0]
+          and res["component 1"][0] == (0.0, 0.0)
+          and res["GlossyReflection"][0] == res["component 0"][0]
+          and res["GlossyTransmission"][1] == res["component 1"][1]
+          and res["component 0"][0][1] > res["all"][0][1]
+          and res["component 1"][1][1] > res["all"][1][1])
+    check(ok and b.component_count() == 2 and
+          mi.has_flag(b.flags(), mi.BSDFFlags.GlossyReflection) and
+          mi.has_flag(b.flags(), mi.BSDFFlags.GlossyTransmission),
+          "components: reflection (0) and transmission (1) selectable by index and type "
+          "mask; (eval, pdf) all / reflection pair %s, transmission pair %s; component 0: "
+          "%s; component 1: %s" % (res["all"][0], res["all"][1], res["component 0"],
+                                   res["component 1"]))
+    bt = bsdf(mode="analytic", ior="1.5", smoothness=3.0, part="transmission")
+    check(bt.component_count() == 1 and not mi.has_flag(bt.flags(),
+                                                        mi.BSDFFlags.GlossyReflection),
+          "part = transmission: one component, GlossyTransmission (today's surface)")
+
+
+def mean_weights(b, mode, wi, count, seed):
+    """Per channel (mean, standard error) of the sampled weight."""
+    ctx = mi.BSDFContext(mode)
+    if JIT:
+        si = dr.zeros(mi.SurfaceInteraction3f, count)
+        si.wi = mi.Vector3f(wi)
+        rng = mi.PCG32(size=count, initstate=seed)
+        _, w = b.sample(ctx, si, rng.next_float32(), mi.Point2f(rng.next_float32(),
+                                                                   rng.next_float32()))
+        out = []
+        for c in range(3):
+            x = mi.Float64(w[c])
+            m = float(dr.mean(x)[0])
+            m2 = float(dr.mean(x * x)[0])
+            out.append((m, math.sqrt(max(m2 - m * m, 0.0) / count)))
+        return out
+    rng = random.Random(seed)
+    si = dr.zeros(mi.SurfaceInteraction3f)
+    si.wi = mi.Vector3f(wi)
+    acc, acc2 = [0.0] * 3, [0.0] * 3
+    for _ in range(count):
+        _, w = b.sample(ctx, si, rng.random(), mi.Point2f(rng.random(), rng.random()))
+        for c in range(3):
+            acc[c] += float(w[c])
+            acc2[c] += float(w[c]) ** 2
+    out = []
+    for c in range(3):
+        m = acc[c] / count
+        out.append((m, math.sqrt(max(acc2[c] / count - m * m, 0.0) / count)))
+    return out
+
+
+# (label, plugin parameters, n, s, angles from the front, angles from behind); behind
+# means index 1/n, total internal reflection past 41.8 degrees for n = 1.5.
+ALBEDO_CASES = [
+    ("analytic", {"mode": "analytic", "ior": "1.5", "smoothness": 3.0}, [1.5], 3.0,
+     [0.0, 30.0, 60.0, 80.0], [0.0, 30.0, 45.0, 60.0, 80.0]),
+    ("analytic", {"mode": "analytic", "ior": "1.5", "smoothness": 100.0}, [1.5], 100.0,
+     [0.0, 60.0], [30.0, 60.0]),
+    ("analytic", {"mode": "analytic", "ior": "0.6666667", "smoothness": 6.0},
+     [0.6666667], 6.0, [20.0, 60.0], [20.0, 60.0]),
+    ("analytic, 3 channels", {"mode": "analytic", "ior": "1.51,1.52,1.53",
+                              "smoothness": 3.0}, [1.51, 1.52, 1.53], 3.0, [45.0], [30.0]),
+    ("table + back table", {"filename": "f15.exr", "filename_back": "f15back.exr"}, [1.5],
+     3.0, [30.0, 60.0], [30.0, 60.0]),
+]
+
+
+def albedo_checks(count):
+    """The mean sampled weight of both lobes against R(ti) + T(ti) (importance mode) and
+    R + T/n^2 (radiance mode), light in front (index n) and behind (1/n)."""
+    for label, kw, ior, s, front, behind in ALBEDO_CASES:
+        kw = dict(kw)
+        e_t = [0.0, 0.0]
+        if "filename" in kw:
+            e_t = [report_of(kw["filename"])["e_t"]["max"],
+                   report_of(kw["filename_back"])["e_t"]["max"]]
+            kw["filename"] = tab(kw["filename"])
+            kw["filename_back"] = tab(kw["filename_back"])
+        b = bsdf(**kw)
+        pf, pb = inv_params(ior, s, 0.7)
+        for side, p, degs in ((1.0, pf, front), (-1.0, pb, behind)):
+            ns = ior if side > 0 else [1.0 / n for n in ior]
+            etab = e_t[0] if side > 0 else e_t[1]
+            for deg in (degs if JIT else degs[:1]):
+                R = libbtdf.reflectance(p, math.radians(deg))
+                T = libbtdf.transmittance(p, math.radians(deg))
+                for tm in ((mi.TransportMode.Importance, mi.TransportMode.Radiance)
+                           if JIT else (mi.TransportMode.Importance,)):
+                    rad = tm == mi.TransportMode.Radiance
+                    res = mean_weights(b, tm, wi_of(deg, side), count, seed=11 + int(deg))
+                    worst = 0.0
+                    ok = True
+                    txt = []
+                    for c in range(len(ior)):
+                        sc = 1.0 / (ns[c] * ns[c]) if rad else 1.0
+                        want = R[c] + T[c] * sc
+                        mean, err = res[c]
+                        # 4 standard errors, the quadratures' errors (T 1e-6, R 1e-8),
+                        # and for a table its reported e_T on the transmitted part
+                        tol = 4.0 * err + 1.01e-6 + etab * max(T[c], 0.01) * sc
+                        ok &= abs(mean - want) <= tol
+                        worst = max(worst, abs(mean - want) / tol)
+                        txt.append("%.6f +- %.1g vs R + T%s = %.6f + %.6f = %.6f "
+                                   "(allowed %.2g)" % (mean, err, "/n^2" if rad else "",
+                                                       R[c], T[c] * sc, want, tol))
+                    check(ok, "albedo, %s, n = %s, s = %g, light %s, ti = %g, %s mode: %s"
+                          % (label, "/".join("%.4g" % n for n in ns), s,
+                             "in front" if side > 0 else "behind", deg,
+                             "radiance" if rad else "importance", "; ".join(txt)))
+    # The reflection alone (part = reflection) against R: the lobe without the choice.
+    b = bsdf(mode="analytic", ior="1.5", smoothness=3.0, part="reflection")
+    pf, pb = inv_params([1.5], 3.0, 0.7)
+    for side, p, deg in ((1.0, pf, 60.0), (-1.0, pb, 30.0), (-1.0, pb, 60.0)):
+        R = libbtdf.reflectance(p, math.radians(deg))[0]
+        mean, err = mean_weights(b, mi.TransportMode.Importance, wi_of(deg, side),
+                                 count, seed=5)[0]
+        tol = 4.0 * err + 1e-8
+        check(abs(mean - R) <= tol, "part = reflection, n = %.4g, s = 3, ti = %g: mean "
+              "weight %.6f +- %.1g vs R = %.6f (allowed %.2g)"
+              % (1.5 if side > 0 else 1 / 1.5, deg, mean, err, R, tol))
+
+
+def chi2_both_checks():
+    """Chi-square tests of both lobes sampled together (part = both): the pdf of the
+    lobe choice (the facet's Fresnel) must match the sampler on the whole sphere."""
+    tests = [("f15.exr", None, 1.0, d, None) for d in (0.0, 30.0, 60.0, 80.0)]
+    tests += [("f15.exr", None, -1.0, d, None) for d in (20.0, 45.0, 70.0)]
+    tests += [("r066s6.exr", None, 1.0, d, None) for d in (30.0, 60.0)]
+    tests += [("f3.exr", None, 1.0, 45.0, None)]
+    # s = 100: 101 x 101 cells within 0.15 rad of the mirror direction (the reflection
+    # lobe; the transmitted samples fall outside and are not counted)
+    for d in (0.0, 60.0):
+        t = math.radians(d)
+        tests.append((None, {"mode": "analytic", "ior": "1.5", "smoothness": 100.0}, 1.0, d,
+                      ZoomDomain([-math.sin(t), 0.0, math.cos(t)], 0.15)))
+    ntests = len(tests) + 1
+    for fname, extra, side, deg, zoom in tests:
+        chi = chi2_one(fname, wi_of(deg, side), zoom, part="both", extra=extra)
+        ok = chi.run(0.01, test_count=ntests, quiet=True)
+        check(ok, "chi2, both lobes: %s, light %s, ti = %g deg, p-value %.3g%s"
+              % (fname or "analytic n = 1.5, s = 100 (0.15 rad around the mirror "
+                 "direction)", "in front" if side > 0 else "behind", deg, chi.p_value,
+                 "" if ok else ": " + chi.messages.strip()))
+    # Negative control: a reflection pdf 20% too high must be rejected.
+    from mitsuba.chi2 import ChiSquareTest, SphericalDomain
+    sf, pf = pdf_adapter({"type": "btdftab", "filename": tab("f15.exr")}, wi_of(60.0))
+    chi = ChiSquareTest(domain=SphericalDomain(), sample_func=sf,
+                        pdf_func=lambda w, *a: pf(w, *a) * dr.select(w.z > 0.0, 1.2, 1.0),
+                        sample_dim=3, sample_count=1000000, res=101, ires=8)
+    ok = not chi.run(0.01, test_count=ntests, quiet=True)
+    check(ok, "chi2 rejects a reflection pdf scaled by 1.2 (n = 1.5, s = 3, ti = 60): "
+          "p-value %.3g" % chi.p_value)
+
+
+def finite_checks(count):
+    """No NaN or inf, nor a negative value, from eval, pdf and sample, over random
+    directions and the edge cases: grazing (z = 0, +-1e-7), the axis, wo = wi, wo = -wi."""
+    rng = random.Random(9)
+    wis, wos = [], []
+    edge = [[1.0, 0.0, 0.0], [1.0, 0.0, 1e-7], [1.0, 0.0, -1e-7], [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0], [0.6, 0.0, 0.8], [-0.6, 0.0, -0.8], [0.0, 1.0, 0.0]]
+    for a in edge:
+        for c in edge:
+            wis.append(a)
+            wos.append(c)
+            wis.append(a)
+            wos.append([-x for x in a])
+    while len(wis) < count:
+        wis.append(unit([rng.gauss(0, 1) for _ in range(3)]))
+        wos.append(unit([rng.gauss(0, 1) for _ in range(3)]))
+    u = [(rng.random(), rng.random(), rng.random()) for _ in wis]
+    u[:8] = [(0.0, 0.0, 0.0), (0.999999, 0.999999, 0.999999), (0.5, 0.0, 0.5),
+             (0.5, 0.999999, 0.0), (0.0, 0.5, 0.5), (0.3, 0.5, 1e-7), (0.9, 1e-7, 0.5),
+             (0.1, 0.5, 0.999999)]
+    for label, kw in (("analytic 1.5, s = 3", {"mode": "analytic", "ior": "1.5",
+                                               "smoothness": 3.0}),
+                      ("analytic 1.5, s = 100", {"mode": "analytic", "ior": "1.5",
+                                                 "smoothness": 100.0}),
+                      ("analytic 1.001, s = 1000", {"mode": "analytic", "ior": "1.001",
+                                                    "smoothness": 1000.0}),
+                      ("analytic 0.5, s = 0.5", {"mode": "analytic", "ior": "0.5",
+                                                 "smoothness": 0.5}),
+                      ("table f15.exr", {"filename": tab("f15.exr")}),
+                      ("table f3.exr", {"filename": tab("f3.exr")})):
+        b = bsdf(**kw)
+        bad = total = 0
+        for tm in (mi.TransportMode.Importance, mi.TransportMode.Radiance):
+            ctx = mi.BSDFContext(tm)
+            if JIT:
+                si = dr.zeros(mi.SurfaceInteraction3f, len(wis))
+                si.wi = mi.Vector3f(*[[w[i] for w in wis] for i in range(3)])
+                wo = mi.Vector3f(*[[w[i] for w in wos] for i in range(3)])
+                v = b.eval(ctx, si, wo)
+                p = b.pdf(ctx, si, wo)
+                bs, w = b.sample(ctx, si, mi.Float([x[0] for x in u]),
+                                 mi.Point2f([x[1] for x in u], [x[2] for x in u]))
+                arrs = [v[0], v[1], v[2], p, bs.pdf, w[0], w[1], w[2]]
+                vals = [x for a in arrs for x in a.numpy().tolist()]
+            else:
+                vals = []
+                for a, c, x in list(zip(wis, wos, u))[:500]:
+                    si = dr.zeros(mi.SurfaceInteraction3f)
+                    si.wi = mi.Vector3f(a)
+                    v = b.eval(ctx, si, mi.Vector3f(c))
+                    bs, w = b.sample(ctx, si, x[0], mi.Point2f(x[1], x[2]))
+                    vals += [float(v[0]), float(b.pdf(ctx, si, mi.Vector3f(c))),
+                             float(bs.pdf), float(w[0])]
+            bad += sum(1 for x in vals if not (math.isfinite(x) and x >= 0.0))
+            total += len(vals)
+        check(bad == 0, "finite and >= 0: eval, pdf, sample of %s (part = both), both "
+              "transport modes, %d values; %d not" % (label, total, bad))
+
+
+# ---------------------------------------------------------------------------------
 # 3. a render: a rough face lit from behind (the paper's Fig. 11 set-up)
 # ---------------------------------------------------------------------------------
 def scene(bsdf_dict, res, spp):
@@ -427,8 +776,9 @@ def render_checks(res, spp, repeats):
     e_max = report_of("face.csv")["e_max"]["max"]
     n = libbtdf.Table(face).ior[0]
     s = libbtdf.Table(face).smoothness
-    sc_t = scene({"type": "btdftab", "filename": face}, res, spp)
-    sc_a = scene({"type": "btdftab", "filename": face, "mode": "analytic"}, res, spp)
+    sc_t = scene({"type": "btdftab", "filename": face, "part": PART}, res, spp)
+    sc_a = scene({"type": "btdftab", "filename": face, "mode": "analytic", "part": PART},
+                 res, spp)
     # roughdielectric: the normal faces the medium of index 1/n (the light's side)
     sc_r = scene({"type": "roughdielectric", "distribution": "beckmann", "alpha": 2.0 / s,
                   "int_ior": 1.0, "ext_ior": 1.0 / n, "sample_visible": True}, res, spp)
@@ -473,6 +823,50 @@ def render_checks(res, spp, repeats):
                                  write_async=False)
 
 
+def furnace_checks(res, spp):
+    """A white furnace through Mitsuba's path tracer: an orthographic camera sees a large
+    btdftab plane at incidence ti, radiance 1 in every direction, one bounce
+    (max_depth = 2; emitter sampling and BSDF sampling weighted by MIS, so eval and pdf
+    both enter). Each pixel estimates R(ti) + T(ti)/n^2 (radiance mode: camera paths),
+    with n the index ratio seen from the camera's side; flipping the plane's normal puts
+    the camera behind (1/n, total internal reflection past 41.8 degrees)."""
+    n, s = 1.5, 3.0
+    for side, deg in ((1.0, 0.0), (1.0, 60.0), (-1.0, 30.0), (-1.0, 60.0)):
+        t = math.radians(deg)
+        sc = {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": 2, "hide_emitters": True},
+            "sensor": {"type": "orthographic",
+                       "to_world": mi.ScalarTransform4f().look_at(
+                           origin=[5.0 * math.sin(t), 0.0, 5.0 * math.cos(t)],
+                           target=[0, 0, 0], up=[0, 1, 0]),
+                       "film": {"type": "hdrfilm", "width": res, "height": res,
+                                "rfilter": {"type": "box"}},
+                       "sampler": {"type": "independent", "sample_count": spp}},
+            "plane": {"type": "rectangle", "flip_normals": side < 0,
+                      "to_world": mi.ScalarTransform4f().scale([20.0, 20.0, 1.0]),
+                      "bsdf": {"type": "btdftab", "mode": "analytic", "ior": n,
+                               "smoothness": s}},
+            "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
+        }
+        img = mi.render(mi.load_dict(sc), spp=spp, seed=1)
+        a = img.numpy()[..., 0].astype("float64").ravel()
+        mean = float(a.mean())
+        err = float(a.std()) / math.sqrt(len(a))  # pixels are independent estimates
+        ns = n if side > 0 else 1.0 / n
+        p = libbtdf.make_params(ns, s)
+        R = libbtdf.reflectance(p, t)[0]
+        T = libbtdf.transmittance(p, t)[0]
+        want = R + T / (ns * ns)
+        tol = 4.0 * err + 1.01e-6  # 4 standard errors, the quadratures' errors
+        check(abs(mean - want) <= tol and all(map(math.isfinite, a)),
+              "white furnace render (path, max_depth 2, %dx%d, %d spp), n = %.4g, s = %g, "
+              "camera %s at %g deg: mean pixel %.6f +- %.1g vs R + T/n^2 = %.6f + %.6f = "
+              "%.6f (|diff| %.2g, allowed %.2g)"
+              % (res, res, spp, ns, s, "in front" if side > 0 else "behind", deg, mean, err,
+                 R, T / (ns * ns), want, abs(mean - want), tol))
+
+
 def xml_check():
     b = mi.load_string('<bsdf version="3.0.0" type="btdftab"><string name="filename" '
                        'value="%s"/></bsdf>' % tab("f15.exr"))
@@ -483,6 +877,7 @@ def error_checks():
     for kw, want in (({}, "needs 'filename'"), ({"filename": tab("nonexistent.exr")},
                                                 "nonexistent.exr"),
                      ({"mode": "fast", "filename": tab("f15.exr")}, "mode 'fast'"),
+                     ({"part": "glass", "filename": tab("f15.exr")}, "part 'glass'"),
                      ({"filename": tab("f15.exr"), "filename_back": tab("f15.exr")},
                       "needs n =")):
         try:
@@ -511,14 +906,30 @@ if __name__ == "__main__":
     eval_check("facet n = 1.5 + back table facet-reciprocal n = 0.6667", "f15.exr",
                back_name="f15back.exr")
     analytic_check()
+    eval_r_check("analytic n = 1.5, s = 3", {"mode": "analytic", "ior": "1.5",
+                                              "smoothness": 3.0})
+    eval_r_check("analytic n = 0.6667, s = 6", {"mode": "analytic", "ior": "0.6666667",
+                                                 "smoothness": 6.0})
+    eval_r_check("analytic n = 1.5, s = 100", {"mode": "analytic", "ior": "1.5",
+                                                "smoothness": 100.0})
+    eval_r_check("analytic n = 1.01, s = 3 (Fr about 2.5e-5)",
+                 {"mode": "analytic", "ior": "1.01", "smoothness": 3.0})
+    eval_r_check("table f15.exr (reflection from the model)", {"filename": tab("f15.exr")})
+    eval_r_check("table f3.exr, 3 channels", {"filename": tab("f3.exr")})
+    component_checks()
+    finite_checks(20000 if JIT else 500)
     error_checks()
     xml_check()
     if JIT:
         chi2_checks()
+        chi2_both_checks()
         weight_checks(1000000)
+        albedo_checks(1000000)
+        furnace_checks(64, 64)
         render_checks(256, 64, REPEATS)
     else:
         weight_checks(10000)
+        albedo_checks(10000)
         render_checks(32, 4, 1)
     print("# %.1f s" % (time.time() - t0))
     print("%d passed, %d failed" % (passed, failed))

@@ -73,7 +73,7 @@ static btdf_table *make_table(int channels, btdf_table_kind kind, int round_valu
 static btdf_status write_exr(const btdf_table *t, const char *path, const btdf_write_opts *w,
                              char *msg, size_t msglen)
 {
-    btdf_write_opts none = {NULL, NULL};
+    btdf_write_opts none = {NULL, NULL, NULL};
     btdf_output_ctx c = {.table = t, .opts = w ? w : &none};
     return btdf_format_exr.write_path(&c, path, msg, msglen);
 }
@@ -131,6 +131,7 @@ static void test_round_trip(void **state)
         fail_msg("read: %s", msg);
     const btdf_params *a = btdf_table_get_params(f->table), *b = btdf_table_get_params(back);
     assert_int_equal(btdf_table_get_kind(back), btdf_table_get_kind(f->table));
+    assert_int_equal(btdf_table_get_rule(back), btdf_table_get_rule(f->table));
     assert_int_equal(b->channels, a->channels);
     for (int ch = 0; ch < a->channels; ch++)
         assert_true(b->ior[ch] == a->ior[ch]);
@@ -180,7 +181,7 @@ static void test_attributes(void **state)
     rep.test_angles = 2;
     rep.per_ti = per;
     rep.met = 1;
-    btdf_write_opts w = {&rep, "btdftab -o x.exr --s 3.3"};
+    btdf_write_opts w = {&rep, "btdftab -o x.exr --s 3.3", NULL};
     char msg[300] = "";
     assert_int_equal(write_exr(f->table, f->path, &w, msg, sizeof msg), BTDF_OK);
 
@@ -493,6 +494,10 @@ static void test_built_sweep(void **state)
                 temp_path(path, sizeof path, "built");
                 assert_int_equal(write_exr(t, path, NULL, msg, sizeof msg), BTDF_OK);
                 raw_chunks += check_file_equals_float(t, path);
+                btdf_table *back = NULL; /* the builder's rule comes back with the file */
+                assert_int_equal(btdf_format_exr.read_path(path, &back, msg, sizeof msg), BTDF_OK);
+                assert_int_equal(btdf_table_get_rule(back), BTDF_RULE_CHI);
+                btdf_table_free(back);
                 files++;
                 remove(path);
                 btdf_table_free(t);

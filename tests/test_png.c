@@ -191,6 +191,83 @@ static void test_polar(void **state)
     free(p.px);
 }
 
+/* POLAR with the reflection: its lobe above the surface where MODEL.md section 8 puts
+   it, on its own scale (its peak is 1e-3 of the transmission's here), the transmission
+   still below. */
+static void test_polar_reflection(void **state)
+{
+    (void)state;
+    btdf_params m;
+    btdf_params_default(&m);
+    m.ior[0] = 1.4;
+    m.smoothness = 3.0;
+    double ti = 30.0;
+    btdf_preview_opts o;
+    btdf_preview_opts_default(&o);
+    o.kind = BTDF_PREVIEW_POLAR;
+    o.materials = &m;
+    o.nmaterials = 1;
+    o.ti_deg = &ti;
+    o.nti = 1;
+    o.part = BTDF_PART_BOTH;
+    picture p = write_and_read(&o, "polar-both");
+    double sy = 0.0;
+    int n = 0;
+    for (int y = 0; y < p.h; y++)
+        if (at(&p, 2, y)[0] < 100 && at(&p, p.w - 3, y)[0] < 100) {
+            sy += y + 0.5;
+            n++;
+        }
+    assert_true(n >= 1 && n <= 4);
+    double cx = p.w / 2.0, cy = sy / n;
+    /* the reflection's peak in the plane, specular side */
+    double best = 0.0, peak_tr = 0.0;
+    for (int j = 0; j <= 9000; j++) {
+        double tr = (M_PI / 2) * j / 9000.0;
+        double v = btdf_rho_r(1.4, 3.0, 0.7, ti * M_PI / 180, tr, M_PI) * cos(tr);
+        if (v > best) {
+            best = v;
+            peak_tr = tr;
+        }
+    }
+    /* the farthest curve pixel along the peak's ray, above the surface */
+    double ux = sin(peak_tr), uy = -cos(peak_tr), r0 = 0.0;
+    for (int y = 0; y < (int)cy - 3; y++)
+        for (int x = 0; x < p.w; x++) {
+            double dx = x + 0.5 - cx, dy = y + 0.5 - cy;
+            double along = dx * ux + dy * uy, across = fabs(dx * uy - dy * ux);
+            if (along > 0 && across <= 1.2 && near(at(&p, x, y), curve0, 40))
+                r0 = fmax(r0, along);
+        }
+    assert_true(r0 > 100); /* on its own scale the small lobe is large */
+    double k = (r0 - 1.1) / best;
+    for (int q = 1; q <= 3; q++) { /* further out on the specular side, as rho_r says */
+        double tr = peak_tr + q * 6 * M_PI / 180;
+        double r = k * btdf_rho_r(1.4, 3.0, 0.7, ti * M_PI / 180, tr, M_PI) * cos(tr);
+        if (!colour_near(&p, cx + r * sin(tr), cy - r * cos(tr), 2, curve0, 40))
+            fail_msg("no curve within 2 px of rho_r's point at tr = %.1f deg, r = %.1f px",
+                     tr * 180 / M_PI, r);
+    }
+    /* and the transmission below the surface, as without the reflection */
+    double pt = 0.0, peak_to = M_PI;
+    for (int j = 0; j <= 9000; j++) {
+        double to = M_PI / 2 + M_PI / 2 * j / 9000.0;
+        if (lobe(&m, ti, to) > pt) {
+            pt = lobe(&m, ti, to);
+            peak_to = to;
+        }
+    }
+    assert_true(ray_extent(&p, cx, cy, peak_to, curve0) > 100);
+    free(p.px);
+    /* a bad part is refused */
+    o.part = (btdf_part)9;
+    unsigned char *rgb = NULL;
+    int w = 0, h = 0;
+    char msg[256] = "";
+    assert_int_equal(btdf_preview_render(&o, &rgb, &w, &h, msg, sizeof msg), BTDF_EINVAL);
+    assert_non_null(strstr(msg, "part 9"));
+}
+
 /* An R,G,B material is three curves, each in its channel's hue. */
 static void test_polar_rgb(void **state)
 {
@@ -613,8 +690,9 @@ static void test_errors(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_polar),         cmocka_unit_test(test_polar_rgb),
-        cmocka_unit_test(test_montage),       cmocka_unit_test(test_render),
+        cmocka_unit_test(test_polar),         cmocka_unit_test(test_polar_reflection),
+        cmocka_unit_test(test_polar_rgb),     cmocka_unit_test(test_montage),
+        cmocka_unit_test(test_render),
         cmocka_unit_test(test_deterministic), cmocka_unit_test(test_layout),
         cmocka_unit_test(test_ticks),         cmocka_unit_test(test_errors),
     };

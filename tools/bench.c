@@ -87,8 +87,8 @@ static void eval_slice(void *arg, size_t i)
 }
 
 typedef struct result {
-    double tb, te, e_l1, e_max, e_t, peak_mib;
-    size_t samples;
+    double tb, te, e_l1, e_max, e_t, peak_mib, cpu;
+    size_t samples, evals, slices;
     int status;
 } result;
 
@@ -120,6 +120,8 @@ static int run_child(const btdf_table_opts *o, result *res)
             r.e_max = rep.e_max_max;
             r.e_t = rep.e_t_max;
             r.samples = btdf_table_node_count(t);
+            r.slices = btdf_table_slice_count(t);
+            r.evals = t->build_evals;
             btdf_report_clear(&rep);
             btdf_table_free(t);
         }
@@ -135,7 +137,68 @@ static int run_child(const btdf_table_opts *o, result *res)
     if (wait4(pid, &wst, 0, &ru) < 0 || got != (ssize_t)sizeof *res)
         return 0;
     res->peak_mib = (double)ru.ru_maxrss / 1024.0;
+    res->cpu = (double)ru.ru_utime.tv_sec + 1e-6 * (double)ru.ru_utime.tv_usec +
+               (double)ru.ru_stime.tv_sec + 1e-6 * (double)ru.ru_stime.tv_usec;
     return 1;
+}
+
+/* The program named `name` beside this one into path; 0 when there is none. */
+static int beside(const char *name, char *path, size_t len)
+{
+    ssize_t m = readlink("/proc/self/exe", path, len - 64);
+    if (m <= 0)
+        return 0;
+    path[m] = 0;
+    char *slash = strrchr(path, '/');
+    if (!slash)
+        return 0;
+    snprintf(slash + 1, 64, "%s", name);
+    return access(path, X_OK) == 0;
+}
+
+/* The dense e_L1 max of btdf-densescan for the same request (it builds the same table:
+   the build is deterministic); NaN when the program is missing or says nothing. */
+static double dense_l1(const btdf_table_opts *o)
+{
+    char prog[4096], cmd[4400], line[1024];
+    if (!beside("btdf-densescan", prog, sizeof prog))
+        return NAN;
+    snprintf(cmd, sizeof cmd, "'%s' --ior %.17g -s %.17g --tolerance %.17g --theta-i %.17g:%.17g",
+             prog, o->params.ior[0], o->params.smoothness, o->tolerance,
+             o->ti_min * 180.0 / M_PI, o->ti_max * 180.0 / M_PI);
+    FILE *f = popen(cmd, "r");
+    if (!f)
+        return NAN;
+    double d = NAN;
+    while (fgets(line, sizeof line, f)) {
+        const char *q = strstr(line, " dense ");
+        if (q)
+            d = strtod(q + 7, NULL);
+    }
+    pclose(f);
+    return d;
+}
+
+/* One row of the n-near-1 comparison: the median of reps builds, and the dense scan. */
+static void run_near(const char *label, btdf_table_opts *o, int reps)
+{
+    double tb[9], cpu[9], pk[9];
+    result r;
+    memset(&r, 0, sizeof r);
+    for (int k = 0; k < reps; k++) {
+        if (!run_child(o, &r))
+            return;
+        tb[k] = r.tb;
+        cpu[k] = r.cpu;
+        pk[k] = r.peak_mib;
+    }
+    double d = dense_l1(o);
+    printf("%s,%.9g,%g,%g,%.0f:%.0f,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.4g,%.4g,%s\n", label,
+           o->params.ior[0], o->params.smoothness, o->tolerance, o->ti_min * 180.0 / M_PI,
+           o->ti_max * 180.0 / M_PI, r.slices, r.samples, r.evals, median(tb, reps),
+           median(cpu, reps), median(pk, reps), r.e_l1, d,
+           r.status == BTDF_OK ? "ok" : "budget");
+    fflush(stdout);
 }
 
 static void run(FILE *out, const char *method, const char *label, btdf_table_opts *o, int reps)
@@ -512,7 +575,10 @@ static const char usage[] =
     "Prints the machine, then CSV rows of timings and errors (docs/benchmarks.md).\n"
     "  SECTION  all (default), sweep (adaptive and uniform tables: error against run\n"
     "           time for four materials), scaling (work against the range and the\n"
-    "           channels asked), api (the public evaluation entry points beside the\n"
+    "           channels asked), tolerances (1.5/3 over 0:90 at 1e-1 to 1e-4),\n"
+    "           fullrange (other materials over 0:90), nearone (n = 1.5, 1.0001, 0.9999,\n"
+    "           1.00001 at s = 3, 1e-3, 0:80, with btdf-densescan's error), api (the\n"
+    "           public evaluation entry points beside the\n"
     "           internal kernel, at least 5 runs), or throughput (Eq. 25 evaluations\n"
     "           per second), or bsdf (.bsdf builds: time, bytes, nodes, series\n"
     "           length and measured error for s = 3, 20, 100, 1000)\n"
@@ -529,7 +595,8 @@ int main(int argc, char **argv)
     char *end = NULL;
     long r = argc > 2 ? strtol(argv[2], &end, 10) : 3;
     if (strcmp(what, "all") && strcmp(what, "sweep") && strcmp(what, "scaling") &&
-        strcmp(what, "api") && strcmp(what, "throughput") && strcmp(what, "bsdf")) {
+        strcmp(what, "api") && strcmp(what, "throughput") && strcmp(what, "tolerances") &&
+        strcmp(what, "fullrange") && strcmp(what, "nearone") && strcmp(what, "bsdf")) {
         fprintf(stderr, "btdf-bench: unknown section '%s'\n%s", what, usage);
         return 2;
     }
@@ -601,6 +668,22 @@ int main(int argc, char **argv)
                 o.tolerance = k ? 1e-3 : 1e-2;
                 run(stdout, "adaptive", more[c].label, &o, reps);
             }
+        }
+    }
+    if (!strcmp(what, "all") || !strcmp(what, "nearone")) {
+        /* n near 1 beside n = 1.5: s = 3, ti 0:80, tolerance 1e-3, default budget. nodes:
+           the table's; evaluations: Eq. 25 points the builder computed (all passes,
+           dropped candidates too); cpu: the build and its check, all threads. */
+        printf("case,n,s,tolerance,ti_deg,slices,nodes,evaluations,seconds_wall,"
+               "seconds_cpu,peak_rss_mib,e_l1_reported,e_l1_dense,status\n");
+        const double ns[] = {1.5, 1.0001, 0.9999, 1.00001};
+        for (int c = 0; c < 4; c++) {
+            btdf_table_opts o;
+            btdf_table_opts_default(&o);
+            o.params.ior[0] = ns[c];
+            o.params.smoothness = 3.0;
+            o.ti_max = 80.0 * M_PI / 180.0;
+            run_near("near-one", &o, reps);
         }
     }
     if (!strcmp(what, "all") || !strcmp(what, "scaling")) {

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""bench_radiance.py BTDFTAB [OUTDIR]: btdftab's Radiance BSDF files against Radiance's own
+"""bench_radiance.py BTDFTAB [OUTDIR [GROUPS]]: btdftab's Radiance BSDF files against Radiance's own
 bsdf2ttree (-t3 -g 5/6/7) and bsdf2klems, all given Eq. 25 (n = 1.5, s = 3, k0 = 0.7),
 side by side in one run. Needs pyradiance (Radiance's programs and BSDF library).
 
@@ -10,8 +10,14 @@ over N = 96 x 96 view directions stratified in projected solid angle (midpoints 
 phi), at 17 incident angles 2.5, 7.5, ..., 82.5 deg (light azimuth 17 deg), T by the same
 sum over Eq. 25. The query takes the block of the view's side with the view as incident
 (radiance.h), so the .cal function gives rho for light from its second vector to its
-first. Prints a table; timings are wall clock on a shared machine (one run, not medians).
+first. Prints a table: wall and CPU seconds (the children's user + system time) of one
+run each on a shared machine, not medians; the file's size and the bytes of its
+"Transmission Back" block (the one block bsdf2ttree writes for this function, light
+entering), so that files with more blocks compare fairly. GROUPS: a comma list of
+"radiance" (bsdf2ttree, bsdf2klems) and "btdftab" (default both).
 """
+import re
+import resource
 import math
 import os
 import subprocess
@@ -100,9 +106,24 @@ def e_l1(xml):
     return out
 
 
+def block_bytes(xml, label="Transmission Back"):
+    """Bytes of the ScatteringData of the block with that WavelengthDataDirection."""
+    text = open(xml, encoding="utf-8", errors="replace").read()
+    for blk in re.findall(r"<WavelengthDataBlock>(.*?)</WavelengthDataBlock>", text, re.S):
+        if re.search(r"<WavelengthDataDirection>\s*%s\s*<" % label, blk):
+            m = re.search(r"<ScatteringData>(.*?)</ScatteringData>", blk, re.S)
+            return len(m.group(1).encode()) if m else 0
+    return 0
+
+
+def cpu_children():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def run(cmd, out_path, cwd):
     t0 = time.time()
-    if out_path.endswith(".xml") and cmd[0].endswith("btdftab"):
+    if out_path.endswith(".xml") and "btdftab" in os.path.basename(cmd[0]):
         subprocess.run(cmd, check=True, cwd=cwd)
     else:
         with open(out_path, "wb") as f:
@@ -119,35 +140,42 @@ def main():
     env_path = os.path.dirname(rbin("bsdf2ttree"))
     os.environ["PATH"] = env_path + os.pathsep + os.environ["PATH"]
     os.environ["RAYPATH"] = ".:" + os.path.join(os.path.dirname(pyradiance.__file__), "lib")
+    groups = (sys.argv[3] if len(sys.argv) > 3 else "radiance,btdftab").split(",")
     jobs = []
-    for g in (5, 6, 7):
+    for g in (5, 6, 7) if "radiance" in groups else ():
         jobs.append(("bsdf2ttree -t3 -g %d" % g,
                      [rbin("bsdf2ttree"), "-t3", "-g", str(g), "-f", "rough.cal", "rough"],
                      "b2t_g%d.xml" % g))
-    jobs.append(("bsdf2klems", [rbin("bsdf2klems"), "-f", "rough.cal", "rough"], "b2k.xml"))
-    for tol in (0.2, 0.1):
+    if "radiance" in groups:
+        jobs.append(("bsdf2klems", [rbin("bsdf2klems"), "-f", "rough.cal", "rough"], "b2k.xml"))
+    for tol in (0.5, 0.2, 0.1) if "btdftab" in groups else ():
         jobs.append(("btdftab tree3 --tolerance %g" % tol,
                      [btdftab, "tabulate", "-q", "--basis", "tree3", "--tolerance", str(tol),
                       "-o", "bt_t%g.xml" % tol], "bt_t%g.xml" % tol))
-    jobs.append(("btdftab klems-full",
-                 [btdftab, "tabulate", "-q", "--basis", "klems-full", "-o", "bt_kf.xml"],
-                 "bt_kf.xml"))
+    if "btdftab" in groups:
+        jobs.append(("btdftab klems-full",
+                     [btdftab, "tabulate", "-q", "--basis", "klems-full", "-o", "bt_kf.xml"],
+                     "bt_kf.xml"))
     rows = []
     for name, cmd, out in jobs:
         path = os.path.join(wd, out)
+        c0 = cpu_children()
         secs = run(cmd, path, wd)
+        cpu = cpu_children() - c0
         e = e_l1(path)
-        rows.append((name, secs, os.path.getsize(path), e))
-        print("%-30s %8.1f s %10d B  e_L1 enter max %.3g mean %.3g; leave max %.3g mean %.3g" %
-              (name, secs, os.path.getsize(path), e["enter"][0], e["enter"][1], e["leave"][0],
-               e["leave"][1]), flush=True)
-    print("\n| tool | wall time (s) | file size (bytes) | e_L1 max, light entering | "
-          "e_L1 max, light leaving | e_L1 mean (entering / leaving) |")
-    print("| --- | --- | --- | --- | --- | --- |")
-    for name, secs, size, e in rows:
-        print("| %s | %.1f | %d | %.3g | %.3g | %.3g / %.3g |" % (name, secs, size, e["enter"][0],
-                                                              e["leave"][0], e["enter"][1],
-                                                              e["leave"][1]))
+        bb = block_bytes(path)
+        rows.append((name, secs, cpu, os.path.getsize(path), bb, e))
+        print("%-30s %8.1f s %8.1f CPU-s %10d B (block %d B)  e_L1 enter max %.3g mean %.3g; "
+              "leave max %.3g mean %.3g" %
+              (name, secs, cpu, os.path.getsize(path), bb, e["enter"][0], e["enter"][1],
+               e["leave"][0], e["leave"][1]), flush=True)
+    print("\n| tool | wall (s) | CPU (s) | file (bytes) | Transmission Back (bytes) | "
+          "e_L1 entering max / mean | e_L1 leaving max / mean |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for name, secs, cpu, size, bb, e in rows:
+        print("| %s | %.1f | %.1f | %d | %d | %.3g / %.3g | %.3g / %.3g |" %
+              (name, secs, cpu, size, bb, e["enter"][0], e["enter"][1], e["leave"][0],
+               e["leave"][1]))
     return 0
 
 

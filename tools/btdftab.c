@@ -172,8 +172,9 @@ typedef struct cli {
     unsigned char given[OPT_COUNT]; /* how often each option was given */
     btdf_params p;
     int threads, quiet, force, best_effort, sides, reflection, dry_run, shard_k, shard_n;
-    int part; /* --part: 1 transmission, 2 reflection, 3 both; 0 not given */
     btdf_rad_basis basis;
+    btdf_part part; /* --part: a table's lobes (default transmission); a .bsdf's blocks
+                       (default both when not given) */
     const char *table, *out, *report;
     btdf_table_opts o; /* tolerance, metric, grid, max_samples */
     size_t mib;
@@ -196,6 +197,7 @@ static void cli_defaults(cli *c)
     memset(c, 0, sizeof *c);
     btdf_params_default(&c->p);
     btdf_table_opts_default(&c->o);
+    c->part = BTDF_PART_TRANSMISSION;
     c->mib = 256;
     c->ti1 = 90.0;
     c->to0 = 90.0;
@@ -213,9 +215,8 @@ static int apply(cli *c, const opt_hit *h)
     case OPT_K0: return parse_double("--k0", v, &c->p.k0);
     case OPT_TABLE: c->table = v; return 1;
     case OPT_PART:
-        if (!strcmp(v, "transmission") || !strcmp(v, "reflection") || !strcmp(v, "both")) {
-            c->reflection = v[0] == 'r';
-            c->part = v[0] == 't' ? 1 : v[0] == 'r' ? 2 : 3;
+        if (btdf_part_parse(v, &c->part)) {
+            c->reflection = c->part == BTDF_PART_REFLECTION;
             return 1;
         }
         fail(EXIT_USAGE, "--part: '%s': must be transmission, reflection or both", v);
@@ -530,13 +531,11 @@ static int cmd_eval(const cli *c)
     if (c->table && (GIVEN(c, OPT_IOR) || GIVEN(c, OPT_SMOOTHNESS) || GIVEN(c, OPT_K0)))
         return fail(EXIT_USAGE, "--ior, --smoothness and --k0 do not apply with --table "
                                 "(the table gives the material)");
-    if (c->part == 3)
-        return fail(EXIT_USAGE, "--part both: eval prints one part: must be transmission or "
+    if (c->part == BTDF_PART_BOTH)
+        return fail(EXIT_USAGE, "--part both: eval reads one part at a time, transmission or "
                                 "reflection");
-    if (c->reflection && c->table)
-        return fail(EXIT_USAGE, "--part reflection: evaluates the model only; tables and "
-                                ".bsdf files hold the transmission");
     btdf_input in = {NULL, NULL};
+    const btdf_table *tpart = NULL; /* the part of in.table that is evaluated */
     double ti_range[2] = {0.0, 90.0}; /* degrees */
     if (c->table) {
         char msg[512];
@@ -545,7 +544,20 @@ static int cmd_eval(const cli *c)
             return fail(1, "%s: %s", c->table, msg);
         if (in.table) {
             p = *btdf_table_get_params(in.table);
-            table_ti_range(in.table, ti_range);
+            tpart = btdf_table_part(in.table, c->reflection ? BTDF_PART_REFLECTION
+                                                            : BTDF_PART_TRANSMISSION);
+            if (!tpart) {
+                int holds = (int)btdf_table_parts(in.table);
+                btdf_table_free(in.table);
+                return fail(1, "%s: the table holds the %s only; give --part %s",
+                            c->table, btdf_part_name((btdf_part)holds),
+                            btdf_part_name((btdf_part)holds));
+            }
+            table_ti_range(tpart, ti_range);
+        } else if (c->reflection) {
+            btdf_scatfun_free(in.scatfun);
+            return fail(1, "%s: --part reflection: eval reads the transmission of a .bsdf (its "
+                           "reflection blocks are for renderers)", c->table);
         } else {
             p.channels = btdf_scatfun_channels(in.scatfun);
             if (!(btdf_scatfun_sides(in.scatfun) & BTDF_SIDE_ENTER)) {
@@ -607,11 +619,11 @@ static int cmd_eval(const cli *c)
             break;
         }
         double ti = v[0] * M_PI / 180.0, to = v[1] * M_PI / 180.0, phi = v[2] * M_PI / 180.0;
-        if (c->reflection) {
+        if (tpart) {
+            btdf_table_eval(tpart, ti, to, phi, out);
+        } else if (c->reflection) {
             for (int ch = 0; ch < p.channels; ch++)
                 out[ch] = btdf_rho_r_deg(p.ior[ch], p.smoothness, p.k0, v[0], v[1], v[2]);
-        } else if (in.table) {
-            btdf_table_eval(in.table, ti, to, phi, out);
         } else if (in.scatfun) {
             /* light entering through the top (index n), as pbrt-v3 would read it */
             btdf_scatfun_eval(in.scatfun, ti, to, phi, out);
@@ -675,9 +687,68 @@ static int cmd_albedo(const cli *c)
 /* tabulate                                                                  */
 /* ------------------------------------------------------------------------- */
 
-static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
-                        const btdf_report *r, const char *provenance)
+/* The numbers of one part's report, as "key": value lines at the given indent. */
+static void json_part(FILE *f, const char *ind, btdf_table_kind kind, const btdf_report *r)
 {
+    int refl = kind == BTDF_TABLE_FACET_REFLECTION;
+    fprintf(f, "%s\"part\": \"%s\",\n%s\"kind\": \"%s\",\n", ind,
+            refl ? "reflection" : "transmission", ind, btdf_table_kind_name(kind));
+    fprintf(f, "%s\"met\": %s,\n%s\"slices\": %zu,\n%s\"samples\": %zu,\n", ind,
+            r->met ? "true" : "false", ind, r->slices, ind, r->samples);
+    fprintf(f, "%s\"test_angles\": %zu,\n%s\"test_points\": %zu,\n", ind, r->test_angles, ind,
+            r->test_points);
+    fprintf(f, "%s\"seconds_estimate\": %.6f,\n", ind, r->seconds_estimate);
+    fprintf(f, "%s\"e_l1\": {\"max\": %.6g, \"mean\": %.6g},\n", ind, r->e_l1_max, r->e_l1_mean);
+    fprintf(f, "%s\"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n", ind,
+            r->e_max_max, r->e_max_mean, r->e_max_angles);
+    fprintf(f, "%s\"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n", ind, r->e_t_max, r->e_t_mean);
+    fprintf(f, "%s\"per_theta_i\": [\n", ind);
+    for (size_t k = 0; k < r->test_angles; k++) {
+        const btdf_ti_error *e = &r->per_ti[k];
+        fprintf(f,
+                "%s  {\"theta_i_deg\": %.6f, \"%s\": %.9g, \"%s_table\": %.9g, \"e_l1\": %.6g, "
+                "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
+                ind, e->ti * 180 / M_PI, refl ? "R" : "T", e->T, refl ? "R" : "T", e->T_table,
+                e->e_l1, e->e_t, e->e_max, k + 1 < r->test_angles ? "," : "");
+    }
+    fprintf(f, "%s]", ind);
+}
+
+/* r2: the reflection's report of a table holding both parts, or NULL. */
+static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
+                        const btdf_report *r, const char *provenance, const btdf_report *r2)
+{
+    if (kind == BTDF_TABLE_FACET_REFLECTION || r2) {
+        /* reflection or both: one object per part, under "parts" */
+        fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
+                BTDF_VERSION_STRING);
+        for (const char *s = provenance; *s; s++) {
+            if (*s == '"' || *s == '\\')
+                fputc('\\', f);
+            if ((unsigned char)*s >= 0x20)
+                fputc(*s, f);
+        }
+        fprintf(f, "\",\n  \"ior\": [");
+        for (int c = 0; c < o->params.channels; c++)
+            fprintf(f, "%s%s", c ? ", " : "", num(o->params.ior[c]));
+        fprintf(f, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n", num(o->params.smoothness),
+                num(o->params.k0));
+        fprintf(f, "  \"theta_i_deg\": [%s, %s],\n", num(o->ti_min * 180 / M_PI),
+                num(o->ti_max * 180 / M_PI));
+        fprintf(f, "  \"tolerance\": %s,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
+                num(r->tolerance), r->metric == BTDF_METRIC_MAX ? "max" : "l1",
+                r->met && (!r2 || r2->met) ? "true" : "false");
+        fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"peak_bytes\": %zu,\n",
+                r->seconds_build, r->peak_bytes);
+        fprintf(f, "  \"parts\": [\n    {\n");
+        json_part(f, "      ", kind, r);
+        if (r2) {
+            fprintf(f, "\n    },\n    {\n");
+            json_part(f, "      ", BTDF_TABLE_FACET_REFLECTION, r2);
+        }
+        fprintf(f, "\n    }\n  ]\n}\n");
+        return;
+    }
     fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n", BTDF_VERSION_STRING);
     fprintf(f, "  \"command\": \"");
     for (const char *s = provenance; *s; s++) {
@@ -722,14 +793,14 @@ static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
 
 /* The JSON report, written like every output: atomically. */
 static int write_report(const char *path, const btdf_table_opts *o, btdf_table_kind kind,
-                        const btdf_report *r, const char *prov)
+                        const btdf_report *r, const char *prov, const btdf_report *r2)
 {
     char *buf = NULL;
     size_t len = 0;
     FILE *f = open_memstream(&buf, &len);
     if (!f)
         return fail(1, "%s: out of memory", path);
-    json_report(f, o, kind, r, prov);
+    json_report(f, o, kind, r, prov, r2);
     int bad = fclose(f) != 0;
     char msg[512] = "";
     btdf_status st = bad ? BTDF_ENOMEM : btdf_write_buffer(path, ".json", buf, len, msg, sizeof msg);
@@ -764,7 +835,7 @@ static int tabulate_series(const cli *c, const char *prov)
        each only when given (the format has its own budgets otherwise) */
     /* --side picks the light's sides, --part the parts: light from above has T_ENTER
        and R_TOP, light from below T_LEAVE and R_BOTTOM (btdf_scatfun_block) */
-    int sides = c->sides ? c->sides : BTDF_SIDE_BOTH, part = c->part ? c->part : 3;
+    int sides = c->sides ? c->sides : BTDF_SIDE_BOTH, part = GIVEN(c, OPT_PART) ? (int)c->part : 3;
     int blocks = ((part & 1) ? sides : 0) | ((part & 2) ? sides << 2 : 0);
     return run_series_ex(prog, c->out, &c->p, c->o.tolerance, blocks, c->threads, c->quiet,
                          c->best_effort, prov, c->report,
@@ -772,7 +843,7 @@ static int tabulate_series(const cli *c, const char *prov)
                          GIVEN(c, OPT_MAX_MEMORY) ? c->mib << 20 : 0, &pr);
 }
 
-/* A Radiance .xml is built from Eq. 25 directly, both transmission blocks. */
+/* A Radiance .xml is built from Eq. 25 (and rho_r) directly: all its blocks. */
 static int tabulate_radiance(const cli *c, const char *prov)
 {
     static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
@@ -808,14 +879,16 @@ static int cmd_tabulate(cli *c, const char *prov)
         if (!btdf_format_find(out, &fi))
             return fail(EXIT_USAGE, "%s: unknown output format: use %s", out,
                         btdf_format_list());
+        /* an .xml holds every block (both parts, light from either side) */
+        if (fi.needs == BTDF_NEEDS_RADIANCE && c->part != BTDF_PART_TRANSMISSION)
+            return fail(EXIT_USAGE, "%s: --part %s applies to .csv, .exr and .bsdf; an .xml "
+                                    "holds both parts, light from either side", out,
+                        btdf_part_name(c->part));
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
+        if (fi.needs == BTDF_NEEDS_RADIANCE)
+            return tabulate_radiance(c, prov);
     }
-    if (c->part)
-        return fail(EXIT_USAGE, "%s: --part applies to .bsdf output (and to eval)",
-                    out ? out : "tabulate");
-    if (out && strcmp(out, "-") && fi.needs == BTDF_NEEDS_RADIANCE)
-        return tabulate_radiance(c, prov);
     if (GIVEN(c, OPT_BASIS))
         return fail(EXIT_USAGE, "--basis applies to .xml output only");
     btdf_table_opts o = c->o;
@@ -848,6 +921,10 @@ static int cmd_tabulate(cli *c, const char *prov)
     if ((GIVEN(c, OPT_THETA_O) || GIVEN(c, OPT_PHI)) && o.kind != BTDF_TABLE_GRID)
         return fail(EXIT_USAGE, "--theta-o and --phi apply to --grid tables (an adaptive table "
                                 "covers every outgoing direction)");
+    if (c->part != BTDF_PART_TRANSMISSION && o.kind == BTDF_TABLE_GRID)
+        return fail(EXIT_USAGE, "--part %s: --grid tables hold the transmission only; the "
+                                "reflection is tabulated adaptively (drop --grid)",
+                    btdf_part_name(c->part));
     if ((GIVEN(c, OPT_TOLERANCE) || GIVEN(c, OPT_METRIC)) && o.kind == BTDF_TABLE_GRID)
         return fail(EXIT_USAGE, "--tolerance and --metric apply to adaptive tables and .bsdf, "
                                 "not to --grid (a grid has the spacing it is given)");
@@ -892,6 +969,7 @@ static int cmd_tabulate(cli *c, const char *prov)
     o.phi_min = c->ph0 * M_PI / 180.0;
     o.phi_max = c->ph1 * M_PI / 180.0;
     o.max_bytes = c->mib << 20;
+    o.part = c->part;
     char msg[512] = "";
     btdf_table *t = NULL;
     /* A progress bar on a terminal (run.h): the build, the estimate, the writes. */
@@ -912,63 +990,90 @@ static int cmd_tabulate(cli *c, const char *prov)
         run_progress_end(&pr);
         return fail(st == BTDF_EBUDGET ? EXIT_BUDGET : 1, "%s", msg[0] ? msg : btdf_strerror(st));
     }
-    btdf_report r;
-    memset(&r, 0, sizeof r);
+    /* One report per part: the table's own, and the reflection of a table holding both. */
     int estimated = o.estimate != BTDF_ESTIMATE_NONE;
-    if (estimated) {
-        /* For an adaptive table this is the builder's own check (the same request
-           returns it): the report and the builder's verdict cannot differ. */
-        int fast = o.estimate == BTDF_ESTIMATE_FAST;
-        btdf_status es = btdf_table_estimate(t, o.ti_min, o.ti_max, fast ? 16 : 0,
-                                             fast ? 2048 : 0, REPORT_SEED, o.threads, &r);
-        if (es != BTDF_OK) {
-            run_progress_end(&pr);
-            btdf_table_free(t);
-            return fail(1, "error estimate: %s", btdf_strerror(es));
+    int nparts = btdf_table_parts(t) == BTDF_PART_BOTH ? 2 : 1;
+    const btdf_table *pt[2] = {t, btdf_table_part(t, BTDF_PART_REFLECTION)};
+    btdf_report rs[2];
+    memset(rs, 0, sizeof rs);
+    btdf_report r; /* the first part's, filled below */
+    char lines[2][640];
+    lines[0][0] = lines[1][0] = '\0';
+    int met_all = 1;
+    double e_worst = 0.0;
+    for (int k = 0; k < nparts; k++) {
+        btdf_report *rk = &rs[k];
+        if (estimated) {
+            /* For an adaptive table this is the builder's own check (the same request
+               returns it): the report and the builder's verdict cannot differ. */
+            int fast = o.estimate == BTDF_ESTIMATE_FAST;
+            btdf_status es = btdf_table_estimate(pt[k], o.ti_min, o.ti_max, fast ? 16 : 0,
+                                                 fast ? 2048 : 0, REPORT_SEED, o.threads, rk);
+            if (es != BTDF_OK) {
+                run_progress_end(&pr);
+                btdf_report_clear(&rs[0]);
+                btdf_table_free(t);
+                return fail(1, "error estimate: %s", btdf_strerror(es));
+            }
+        } else {
+            rk->slices = btdf_table_slice_count(pt[k]);
+            rk->samples = btdf_table_node_count(pt[k]);
         }
-    } else {
-        r.slices = btdf_table_slice_count(t);
-        r.samples = btdf_table_node_count(t);
+        rk->seconds_build = t1 - t0;
+        rk->peak_bytes = peak_rss();
+        rk->tolerance = o.kind == BTDF_TABLE_GRID ? 0.0 : o.tolerance;
+        rk->metric = o.metric;
+        double e = o.metric == BTDF_METRIC_MAX ? rk->e_max_max : rk->e_l1_max;
+        rk->met = o.kind == BTDF_TABLE_GRID || !estimated ? 1 : e <= o.tolerance;
+        met_all &= rk->met;
+        e_worst = fmax(e_worst, e);
+        /* "table" as before for the transmission alone; the part's name otherwise */
+        int refl = btdf_table_get_kind(pt[k]) == BTDF_TABLE_FACET_REFLECTION;
+        const char *what = c->part == BTDF_PART_TRANSMISSION ? "table"
+                           : refl                            ? "reflection table"
+                                                             : "transmission table";
+        char *line = lines[k];
+        if (estimated) {
+            char emax[96];
+            if (rk->e_max_angles)
+                snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", rk->e_max_max,
+                         rk->e_max_mean);
+            else
+                snprintf(emax, sizeof emax, "e_max n/a (%s < 0.01 at every test angle)",
+                         refl ? "R" : "T");
+            snprintf(line, sizeof lines[k],
+                     "%s: %s: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
+                     "(%s, %zu angles, %zu points%s); e_L1 max %.3g mean %.3g; %s; "
+                     "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
+                     prog, what, rk->slices, rk->samples, rk->seconds_build,
+                     rk->seconds_estimate, o.estimate == BTDF_ESTIMATE_FAST ? "fast" : "full",
+                     rk->test_angles, rk->test_points,
+                     rk->estimate_in_build ? "; the builder's last check, inside the tabulation"
+                                           : "",
+                     rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max, rk->e_t_mean,
+                     (double)rk->peak_bytes / 1048576.0,
+                     o.kind == BTDF_TABLE_GRID ? ""
+                                               : (rk->met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+        } else {
+            snprintf(line, sizeof lines[k],
+                     "%s: %s: %zu slices, %zu samples; tabulation %.3f s; error not estimated "
+                     "(--estimate none); peak memory %.1f MiB",
+                     prog, what, rk->slices, rk->samples, rk->seconds_build,
+                     (double)rk->peak_bytes / 1048576.0);
+        }
     }
-    run_progress_end(&pr); /* the report line below replaces the bar */
-    r.seconds_build = t1 - t0;
-    r.peak_bytes = peak_rss();
-    r.tolerance = o.kind == BTDF_TABLE_GRID ? 0.0 : o.tolerance;
-    r.metric = o.metric;
-    double e = o.metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max;
-    r.met = o.kind == BTDF_TABLE_GRID || !estimated ? 1 : e <= o.tolerance;
-    char line[640];
-    if (estimated) {
-        char emax[96];
-        if (r.e_max_angles)
-            snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", r.e_max_max, r.e_max_mean);
-        else
-            snprintf(emax, sizeof emax, "e_max n/a (T < 0.01 at every test angle)");
-        snprintf(line, sizeof line,
-                 "%s: table: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
-                 "(%s, %zu angles, %zu points%s); e_L1 max %.3g mean %.3g; %s; "
-                 "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
-                 prog, r.slices, r.samples, r.seconds_build, r.seconds_estimate,
-                 o.estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", r.test_angles,
-                 r.test_points,
-                 r.estimate_in_build ? "; the builder's last check, inside the tabulation" : "", r.e_l1_max, r.e_l1_mean, emax, r.e_t_max, r.e_t_mean,
-                 (double)r.peak_bytes / 1048576.0,
-                 o.kind == BTDF_TABLE_GRID ? "" : (r.met ? "; tolerance met" : "; TOLERANCE NOT MET"));
-    } else {
-        snprintf(line, sizeof line,
-                 "%s: table: %zu slices, %zu samples; tabulation %.3f s; error not estimated "
-                 "(--estimate none); peak memory %.1f MiB",
-                 prog, r.slices, r.samples, r.seconds_build, (double)r.peak_bytes / 1048576.0);
-    }
+    r = rs[0];
     int code = 0;
     if (!estimated && msg[0])
         fprintf(stderr, "%s: %s\n", prog, msg); /* the budget stopped the unchecked pass */
-    if (o.kind != BTDF_TABLE_GRID && !r.met) {
-        if (!c->quiet)
-            fprintf(stderr, "%s; total %.3f s\n", line, run_now() - t0);
-        line[0] = '\0'; /* printed */
+    if (o.kind != BTDF_TABLE_GRID && !met_all) {
+        for (int k = 0; k < nparts; k++) {
+            if (!c->quiet)
+                fprintf(stderr, "%s; total %.3f s\n", lines[k], run_now() - t0);
+            lines[k][0] = '\0'; /* printed */
+        }
         fprintf(stderr, "%s: %s: the table reached %s error %.3g, above the tolerance %g%s%s\n",
-                prog, out ? out : "table", o.metric == BTDF_METRIC_MAX ? "max" : "L1", e,
+                prog, out ? out : "table", o.metric == BTDF_METRIC_MAX ? "max" : "L1", e_worst,
                 o.tolerance, msg[0] ? ": " : "", msg);
         if (!c->best_effort) {
             fprintf(stderr, "%s: nothing written; %s, loosen --tolerance, or pass "
@@ -984,7 +1089,8 @@ static int cmd_tabulate(cli *c, const char *prov)
         snprintf(prov2, sizeof prov2, "%s; error not estimated", prov ? prov : "btdftab");
         prov = prov2;
     }
-    btdf_write_opts w = {estimated ? &r : NULL, prov};
+    btdf_write_opts w = {estimated ? &r : NULL, prov,
+                         estimated && nparts == 2 ? &rs[1] : NULL};
     /* The table, its pictures and its report appear together or not at all. */
     btdf_outputs_begin();
     if (code == 0 && out) {
@@ -1012,7 +1118,8 @@ static int cmd_tabulate(cli *c, const char *prov)
             code = fail(1, "%s: %s", c->previews[k].path, msg[0] ? msg : btdf_strerror(st));
     }
     if (code == 0 && c->report)
-        code = write_report(c->report, &o, btdf_table_get_kind(t), &r, prov);
+        code = write_report(c->report, &o, btdf_table_get_kind(t), &r, prov,
+                            nparts == 2 ? &rs[1] : NULL);
     if (code == 0) {
         st = btdf_outputs_commit(msg, sizeof msg);
         if (st != BTDF_OK)
@@ -1021,9 +1128,11 @@ static int cmd_tabulate(cli *c, const char *prov)
         btdf_outputs_abort();
     }
     /* The one-line report, last: the total covers tabulation, estimate and writing. */
-    if (!c->quiet && line[0])
-        fprintf(stderr, "%s; total %.3f s\n", line, run_now() - t0);
-    btdf_report_clear(&r);
+    for (int k = 0; k < nparts; k++)
+        if (!c->quiet && lines[k][0])
+            fprintf(stderr, "%s; total %.3f s\n", lines[k], run_now() - t0);
+    btdf_report_clear(&rs[0]);
+    btdf_report_clear(&rs[1]);
     btdf_table_free(t);
     return code;
 }
@@ -1075,6 +1184,7 @@ static int cmd_polar(const cli *c)
     po.nti = na;
     po.width = c->pic_w;
     po.height = c->pic_h;
+    po.part = c->part;
     char msg[512] = "";
     btdf_output what = {NULL, NULL, &po, NULL, NULL, NULL};
     btdf_status st = btdf_write(&what, c->out, msg, sizeof msg);

@@ -3,6 +3,7 @@
 /*
  * Usage: btdf-densescan [--ior N[,G,B]] [-s S] [--k0 K] [--tolerance E] [--metric l1|max]
  *                       [--theta-i A:B] [--step DEG] [--nu N] [--npsi N] [--threads N]
+ *                       [--part transmission|reflection|both]
  *
  * Builds the table as btdftab tabulate does, takes the library's error report
  * (btdf_table_estimate, the tool's seed), and scans the incidence range on a grid of
@@ -16,17 +17,21 @@
  *  - the outgoing direction of each facet by refraction written out here, and the
  *    measure |cos to| d(cos to) d(phi) by a numerical Jacobian (central differences) of
  *    that map, not by the closed form the library uses;
- *  - for n < 1 (the facet measure diverges at the critical angle) a midpoint rule
+ *  - for n <= 1/1.01 (the facet measure diverges at the critical angle) a midpoint rule
  *    over (cos to, phi) with twice the counts instead;
  *  - T by the same rule (so the floor max(T, 0.01) is this program's own), e_max as
  *    max |rho~ - rho| / max rho over the points, where T >= 0.01 (MODEL.md section 6).
- * Prints one line: the reported max, the dense max and where, their ratio, whether the
- * report said "met" and whether the dense max is above the tolerance.
- *
  * With --bsdf FILE (a written .bsdf of the material given by --ior, -s, --k0) it scans
  * that file instead, through btdf_scatfun_eval_side for one transmission block
  * (--block enter, the default, or leave: index 1/n), against btdf_scatfun_report for
  * that block with the seed btdftab tabulate uses; --tolerance is then the file's.
+ * The reflection (--part reflection, MODEL.md section 8) is scanned the same way: the
+ * mirror direction of each facet written out here, its measure cos tr d(cos tr) d(phi)
+ * by the same numerical Jacobian (the mirror map's measure is bounded for every n, so
+ * the facet rule serves n < 1 too), rho_r by btdf_rho_r and R by the same rule.
+ * --part both builds one table holding both parts and scans each.
+ * Prints one line per part: the reported max, the dense max and where, their ratio,
+ * whether the report said "met" and whether the dense max is above the tolerance.
  */
 #include <math.h>
 #include <pthread.h>
@@ -50,6 +55,7 @@ typedef struct scan {
     btdf_side side;
     const btdf_params *p;
     int nu, npsi;
+    int refl; /* 1: t is a reflection table, scanned against rho_r */
 } scan;
 
 typedef struct ang_err {
@@ -90,8 +96,34 @@ static void eval_under_test(const scan *sc, double ti, double to, double ph, dou
     }
 }
 
+/* The mirror direction of light from (ti, azimuth 0) on facet (tn, psi), or 0 when the
+   facet is back-facing or mirrors the light into the lower medium. */
+static int reflect_dir(double ti, double tn, double psi, double *mu, double *phi)
+{
+    double ix = sin(ti), iz = cos(ti);
+    double mx = sin(tn) * cos(psi), my = sin(tn) * sin(psi), mz = cos(tn);
+    double c = ix * mx + iz * mz;
+    if (!(c > 0.0))
+        return 0;
+    double rx = 2.0 * c * mx - ix, ry = 2.0 * c * my, rz = 2.0 * c * mz - iz;
+    double len = sqrt(rx * rx + ry * ry + rz * rz);
+    if (!(len > 0.0) || !(rz > 0.0))
+        return 0;
+    *mu = rz / len;
+    *phi = atan2(ry, rx);
+    return 1;
+}
+
+/* Through the facet: refraction for the transmission, the mirror for the reflection. */
+static int facet_dir(int refl, double n, double ti, double tn, double psi, double *mu,
+                     double *phi)
+{
+    return refl ? reflect_dir(ti, tn, psi, mu, phi) : refract_dir(n, ti, tn, psi, mu, phi);
+}
+
 static void one_angle(const scan *sc, double ti, ang_err *out)
 {
+    int refl = sc->refl;
     const btdf_params *p = sc->p;
     double s = p->smoothness, du = U_MAX / sc->nu, dpsi = M_PI / sc->npsi;
     out->ti = ti;
@@ -100,8 +132,12 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
         double n = p->ior[c], T = 0.0, l1 = 0.0, dmax = 0.0, vmax = 0.0;
         /* n < 1: the facet map's measure diverges at the critical angle, which a product
            rule cannot integrate; the outgoing hemisphere is smooth there, and the lobes
-           of light leaving the dense side are wide (the cases scanned have s <= 100). */
-        for (int im = 0; n < 1.0 && im < 2 * sc->nu; im++) {
+           of light leaving the dense side are wide (the cases scanned have s <= 100).
+           Except near n = 1 (1/n - 1 < 0.01): the lobe is about 2 (1/n - 1)/s rad wide,
+           a few cells of the (cos to, phi) grid at most; there the facets' Fresnel factor
+           falls to 0 well before the critical angle, and the facet rule is used. */
+        int out_rule = !refl && n < 1.0 && 1.0 / n - 1.0 >= 0.01;
+        for (int im = 0; out_rule && im < 2 * sc->nu; im++) {
             double dmu = 1.0 / (2 * sc->nu), mu = -(im + 0.5) * dmu, to = acos(mu);
             for (int ip = 0; ip < 2 * sc->npsi; ip++) {
                 double dph = M_PI / (2 * sc->npsi), ph = (ip + 0.5) * dph, tab[3] = {0, 0, 0};
@@ -114,26 +150,28 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
                 vmax = fmax(vmax, rho);
             }
         }
-        for (int iu = 0; n >= 1.0 && iu < sc->nu; iu++) {
+        for (int iu = 0; !out_rule && iu < sc->nu; iu++) {
             double u = (iu + 0.5) * du;
             double hu = 1e-6 * fmax(1.0, u);
             for (int ip = 0; ip < sc->npsi; ip++) {
                 double psi = (ip + 0.5) * dpsi, hp = 1e-6;
                 double mu, phi, m1, p1, m2, p2, m3, p3, m4, p4;
-                if (!refract_dir(n, ti, atan(2.0 * u / s), psi, &mu, &phi))
+                if (!facet_dir(refl, n, ti, atan(2.0 * u / s), psi, &mu, &phi))
                     continue;
-                if (!refract_dir(n, ti, atan(2.0 * (u + hu) / s), psi, &m1, &p1) ||
-                    !refract_dir(n, ti, atan(2.0 * (u - hu) / s), psi, &m2, &p2) ||
-                    !refract_dir(n, ti, atan(2.0 * u / s), psi + hp, &m3, &p3) ||
-                    !refract_dir(n, ti, atan(2.0 * u / s), psi - hp, &m4, &p4))
+                if (!facet_dir(refl, n, ti, atan(2.0 * (u + hu) / s), psi, &m1, &p1) ||
+                    !facet_dir(refl, n, ti, atan(2.0 * (u - hu) / s), psi, &m2, &p2) ||
+                    !facet_dir(refl, n, ti, atan(2.0 * u / s), psi + hp, &m3, &p3) ||
+                    !facet_dir(refl, n, ti, atan(2.0 * u / s), psi - hp, &m4, &p4))
                     continue; /* at the edge of the reachable set: a null set */
                 double dmu_du = (m1 - m2) / (2 * hu), dmu_dp = (m3 - m4) / (2 * hp);
                 double dph_du = remainder(p1 - p2, 2 * M_PI) / (2 * hu);
                 double dph_dp = remainder(p3 - p4, 2 * M_PI) / (2 * hp);
                 double jac = fabs(dmu_du * dph_dp - dmu_dp * dph_du);
-                double w = -mu * jac * du * dpsi * 2.0;
+                double w = fabs(mu) * jac * du * dpsi * 2.0;
                 double to = acos(mu), ph = fabs(phi);
-                double rho = btdf_rho(n, s, p->k0, ti, to, ph), tab[3] = {0, 0, 0};
+                double rho = refl ? btdf_rho_r(n, s, p->k0, ti, to, ph)
+                                  : btdf_rho(n, s, p->k0, ti, to, ph);
+                double tab[3] = {0, 0, 0};
                 eval_under_test(sc, ti, to, ph, tab);
                 double d = fabs(tab[c] - rho);
                 T += rho * w;
@@ -188,6 +226,10 @@ static int parse_range(const char *v, double *a, double *b)
     return sscanf(v, "%lf:%lf", a, b) == 2 && *a >= 0 && *b <= 90 && *a < *b;
 }
 
+static int scan_part(const btdf_table *t, const btdf_scatfun *f, btdf_side side, int refl,
+                     const btdf_table_opts *op, double a, double b, double step, int nu,
+                     int npsi, int threads, int dump);
+
 int main(int argc, char **argv)
 {
     btdf_table_opts o;
@@ -196,6 +238,7 @@ int main(int argc, char **argv)
     int nu = 256, npsi = 192, threads = 2, dump = 0;
     const char *bsdf = NULL;
     btdf_side side = BTDF_SIDE_ENTER;
+    btdf_part part = BTDF_PART_TRANSMISSION;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!v) {
@@ -242,6 +285,12 @@ int main(int argc, char **argv)
             side = v[0] == 'e' ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE;
         } else if (!strcmp(k, "--threads")) {
             threads = atoi(v);
+        } else if (!strcmp(k, "--part")) {
+            if (!btdf_part_parse(v, &part)) {
+                fprintf(stderr, "btdf-densescan: --part %s: transmission, reflection or both\n",
+                        v);
+                return 2;
+            }
         } else {
             fprintf(stderr, "btdf-densescan: unknown option %s\n", k);
             return 2;
@@ -253,39 +302,70 @@ int main(int argc, char **argv)
     }
     o.ti_min = a * M_PI / 180;
     o.ti_max = b * M_PI / 180;
+    o.part = part;
     char msg[512] = "";
-    btdf_table *t = NULL;
-    btdf_scatfun *f = NULL;
-    btdf_report r;
-    memset(&r, 0, sizeof r);
-    btdf_params truth = o.params; /* the scanned block's index: 1/n for light leaving */
     if (bsdf) {
+        /* a .bsdf's transmission block (--block), against its own report */
+        btdf_scatfun *f = NULL;
+        if (part != BTDF_PART_TRANSMISSION) {
+            fprintf(stderr, "btdf-densescan: --bsdf scans a transmission block; --part "
+                            "does not apply\n");
+            return 2;
+        }
         if (btdf_scatfun_read(bsdf, &f, msg, sizeof msg) != BTDF_OK) {
             fprintf(stderr, "btdf-densescan: %s: %s\n", bsdf, msg);
             return 1;
         }
+        int bad = scan_part(NULL, f, side, 0, &o, a, b, step, nu, npsi, threads, dump);
+        btdf_scatfun_free(f);
+        return bad;
+    }
+    btdf_table *tab = NULL;
+    btdf_status st = btdf_table_build(&o, &tab, msg, sizeof msg);
+    if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        fprintf(stderr, "btdf-densescan: build: %s\n", msg);
+        return 1;
+    }
+    int bad = 0;
+    for (int pk = 0; pk < 2; pk++) {
+        btdf_part want = pk == 0 ? BTDF_PART_TRANSMISSION : BTDF_PART_REFLECTION;
+        const btdf_table *t = btdf_table_part(tab, want);
+        if (!t)
+            continue;
+        bad |= scan_part(t, NULL, BTDF_SIDE_ENTER, pk == 1, &o, a, b, step, nu, npsi, threads,
+                         dump);
+    }
+    btdf_table_free(tab);
+    return bad;
+}
+
+/* Scans one part (of the table t, or the block side of the file f) against its report;
+   0, or 1 when something failed. */
+static int scan_part(const btdf_table *t, const btdf_scatfun *f, btdf_side side, int refl,
+                     const btdf_table_opts *op, double a, double b, double step, int nu,
+                     int npsi, int threads, int dump)
+{
+    btdf_table_opts o = *op;
+    btdf_report r;
+    memset(&r, 0, sizeof r);
+    btdf_params truth = o.params; /* the scanned block's index: 1/n for light leaving */
+    if (f) {
         if (side == BTDF_SIDE_LEAVE)
             for (int c = 0; c < truth.channels; c++)
                 truth.ior[c] = 1.0 / truth.ior[c]; /* ior > 0: a file was built with it */
         if (btdf_scatfun_report(f, &o.params, side, 0, 0, REPORT_SEED, 0, &r) != BTDF_OK) {
-            fprintf(stderr, "btdf-densescan: %s: report failed (channels or block)\n", bsdf);
+            fprintf(stderr, "btdf-densescan: report failed (channels or block)\n");
             return 1;
         }
-    } else {
-        btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-        if (st != BTDF_OK && st != BTDF_EBUDGET) {
-            fprintf(stderr, "btdf-densescan: build: %s\n", msg);
-            return 1;
-        }
-        if (btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, 0, &r) != BTDF_OK) {
-            fprintf(stderr, "btdf-densescan: estimate failed\n");
-            return 1;
-        }
+    } else if (btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, 0, &r) !=
+               BTDF_OK) {
+        fprintf(stderr, "btdf-densescan: estimate failed\n");
+        return 1;
     }
     int is_max = o.metric == BTDF_METRIC_MAX;
     double reported = is_max ? r.e_max_max : r.e_l1_max;
     int met = reported <= o.tolerance;
-    scan sc = {t, f, side, &truth, nu, npsi};
+    scan sc = {t, f, side, &truth, nu, npsi, refl};
     size_t n0 = (size_t)floor((b - a) / step) + 1, cap = n0 + 1 + 5 * 27;
     double *ti = malloc(cap * sizeof *ti);
     ang_err *res = malloc(cap * sizeof *res);
@@ -336,19 +416,21 @@ int main(int argc, char **argv)
     double tdev = 0.0;
     for (size_t k = 0; k < n; k++) {
         double T[3];
-        btdf_transmittance(&truth, res[k].ti, T);
+        if (refl)
+            btdf_reflectance(&truth, res[k].ti, T);
+        else
+            btdf_transmittance(&truth, res[k].ti, T);
         if (T[0] >= 0.01)
             tdev = fmax(tdev, fabs(res[k].T - T[0]) / T[0]);
     }
-    printf("n %s%g s %g theta-i %g:%g tol %g %s: reported %.4g (%s, %zu angles), dense %.4g at "
-           "%.3f deg (%zu angles), dense/reported %.3f, %s; quadrature T within %.1e\n",
-           o.params.channels == 3 ? "RGB " : "", o.params.ior[0], o.params.smoothness, a, b,
+    printf("%sn %s%g s %g theta-i %g:%g tol %g %s: reported %.4g (%s, %zu angles), dense %.4g at "
+           "%.3f deg (%zu angles), dense/reported %.3f, %s; quadrature %s within %.1e\n",
+           refl ? "reflection: " : "", o.params.channels == 3 ? "RGB " : "", o.params.ior[0], o.params.smoothness, a, b,
            o.tolerance, is_max ? "max" : "l1", reported, met ? "met" : "NOT met", r.test_angles,
            dense, res[w].ti * 180 / M_PI, n, reported > 0 ? dense / reported : 0.0,
-           met && dense > o.tolerance ? "DENSE ABOVE TOLERANCE" : "consistent", tdev);
+           met && dense > o.tolerance ? "DENSE ABOVE TOLERANCE" : "consistent",
+           refl ? "R" : "T", tdev);
     btdf_report_clear(&r);
-    btdf_table_free(t);
-    btdf_scatfun_free(f);
     free(ti);
     free(res);
     return 0;

@@ -30,6 +30,8 @@
  *   theta_i = 0:90             ; optional incidence range, degrees
  *   tolerance = 1e-3           ; optional
  *   metric = l1                ; optional, l1 or max
+ *   part = both                ; optional: the lobes the enter/leave tables hold,
+ *                              ; transmission (default), reflection or both
  *   enter = a.csv a.exr m.png  ; tables for light entering (index n): .csv .exr .png
  *   leave = b.exr              ; tables for light leaving (index 1/n)
  *   bsdf = glass.bsdf          ; a renderer file (SCATFUN v1)
@@ -55,17 +57,19 @@ typedef struct material {
     double ti0, ti1, tol;
     btdf_metric metric;
     int sides; /* btdf_side */
+    btdf_part part; /* of the enter and leave tables */
     int has_ior, has_s;
     char *enter[MAX_OUTPUTS], *leave[MAX_OUTPUTS], *bsdf[MAX_OUTPUTS];
     int nenter, nleave, nbsdf;
     int line;          /* of the [name] header */
-    int key_line[10];  /* of each key (KEYS order), 0 if not given */
+    int key_line[11];  /* of each key (KEYS order), 0 if not given */
 } material;
 
 /* The keys of a section, in the order of material.key_line. */
-static const char *const KEYS[10] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
-                                     "metric",  "sides",      "enter", "leave",   "bsdf"};
-enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF };
+static const char *const KEYS[11] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
+                                     "metric",  "sides",      "enter", "leave",   "bsdf",
+                                     "part"};
+enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF, K_PART };
 
 typedef struct manifest {
     material m[MAX_MATERIALS];
@@ -131,7 +135,7 @@ static int check_not_empty(manifest *mf)
     if (mf->n == 0)
         return 1;
     material *m = &mf->m[mf->n - 1];
-    for (int k = 0; k < 10; k++)
+    for (int k = 0; k < 11; k++)
         if (m->key_line[k])
             return 1;
     snprintf(mf->why, sizeof mf->why, "material [%s] is empty (no keys)", m->name);
@@ -166,6 +170,7 @@ static int on_entry(void *user, const char *section, const char *key, const char
         m->tol = 1e-3;
         m->metric = BTDF_METRIC_L1;
         m->sides = BTDF_SIDE_BOTH;
+        m->part = BTDF_PART_TRANSMISSION;
         m->line = line;
         return 1;
     }
@@ -173,12 +178,12 @@ static int on_entry(void *user, const char *section, const char *key, const char
         return set_why(mf, "'%.100s' before any [material] section%s", key, "");
     material *m = &mf->m[mf->n - 1];
     int ki = -1;
-    for (int k = 0; k < 10; k++)
+    for (int k = 0; k < 11; k++)
         if (!strcmp(key, KEYS[k]))
             ki = k;
     if (ki < 0)
         return set_why(mf, "unknown key '%.100s' (known: ior, smoothness, k0, theta_i, tolerance, "
-                           "metric, sides, enter, leave, bsdf)%s", key, "");
+                           "metric, part, sides, enter, leave, bsdf)%s", key, "");
     if (m->key_line[ki]) {
         snprintf(mf->why, sizeof mf->why, "'%s' given twice in [%s] (first at line %d)", key,
                  m->name, m->key_line[ki]);
@@ -241,6 +246,10 @@ static int on_entry(void *user, const char *section, const char *key, const char
             return 0;
         if (!(m->ti0 >= 0 && m->ti0 <= m->ti1 && m->ti1 <= 90))
             return set_why(mf, "theta_i '%.100s': need 0 <= A <= B <= 90 degrees%s", value, "");
+    } else if (ki == K_PART) {
+        if (!btdf_part_parse(value, &m->part))
+            return set_why(mf, "part '%.100s': must be transmission, reflection or both%s", value,
+                           "");
     } else if (ki == K_SIDES) {
         if (!(m->sides = run_parse_side(value)))
             return set_why(mf, "sides '%.100s': must be enter, leave or both%s", value, "");
@@ -289,6 +298,10 @@ static void stamp_text(char *buf, size_t len, const material *m, const btdf_para
                  "\nsmoothness %.17g\nk0 %.17g\ntheta_i %.17g %.17g\ntolerance %.17g\n"
                  "metric %d\nsides %d\n",
                  p->smoothness, p->k0, m->ti0, m->ti1, m->tol, (int)m->metric, m->sides);
+    /* only when not the transmission: the stamps written before the key existed hold */
+    size_t used = strlen(buf);
+    if (m->part == BTDF_PART_REFLECTION || m->part == BTDF_PART_BOTH)
+        snprintf(buf + used, len - used, "part %s\n", btdf_part_name(m->part));
 }
 
 /* .NAME.btdftab-stamp beside the output; for a name too long for that to fit in 255
@@ -509,6 +522,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     o.ti_max = m->ti1 * M_PI / 180.0;
     o.tolerance = m->tol;
     o.metric = m->metric;
+    o.part = m->part;
     o.threads = mo->threads;
     o.progress = run_progress_cb;
     o.progress_user = &pr;
@@ -522,20 +536,34 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
                 msg[0] ? msg : btdf_strerror(st));
         return st == BTDF_EBUDGET ? 3 : 1;
     }
-    btdf_report r;
-    memset(&r, 0, sizeof r);
-    btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, &r);
+    /* one report per part the table holds (the reflection of a table holding both
+       second) */
+    btdf_report rs[2];
+    memset(rs, 0, sizeof rs);
+    const btdf_table *pt[2] = {t, btdf_table_part(t, BTDF_PART_REFLECTION)};
+    int nparts = btdf_table_parts(t) == BTDF_PART_BOTH ? 2 : 1, met = 1;
+    for (int q = 0; q < nparts; q++) {
+        btdf_report *rq = &rs[q];
+        btdf_table_estimate(pt[q], o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, rq);
+        rq->tolerance = o.tolerance;
+        rq->metric = o.metric;
+        rq->met = (o.metric == BTDF_METRIC_MAX ? rq->e_max_max : rq->e_l1_max) <= o.tolerance;
+        met &= rq->met;
+    }
     run_progress_end(&pr);
-    r.tolerance = o.tolerance;
-    r.metric = o.metric;
-    r.met = (o.metric == BTDF_METRIC_MAX ? r.e_max_max : r.e_l1_max) <= o.tolerance;
-    if (!mo->quiet)
-        fprintf(stderr, "%s: %s (%s): %zu slices, %zu samples; e_L1 max %.3g, e_max max %.3g, "
-                        "e_T max %.3g%s\n",
-                mo->prog, m->name, side, r.slices, r.samples, r.e_l1_max, r.e_max_max,
-                r.e_t_max, r.met ? "" : "; TOLERANCE NOT MET");
+    btdf_report r = rs[0];
+    for (int q = 0; q < nparts && !mo->quiet; q++) {
+        const char *pn = m->part == BTDF_PART_TRANSMISSION ? ""
+                         : btdf_table_get_kind(pt[q]) == BTDF_TABLE_FACET_REFLECTION
+                             ? " reflection"
+                             : " transmission";
+        fprintf(stderr, "%s: %s (%s)%s: %zu slices, %zu samples; e_L1 max %.3g, e_max max "
+                        "%.3g, e_T max %.3g%s\n",
+                mo->prog, m->name, side, pn, rs[q].slices, rs[q].samples, rs[q].e_l1_max,
+                rs[q].e_max_max, rs[q].e_t_max, rs[q].met ? "" : "; TOLERANCE NOT MET");
+    }
     int code = 0;
-    if (!r.met && !mo->best_effort) {
+    if (!met && !mo->best_effort) {
         fprintf(stderr, "%s: %s (%s): nothing written (tolerance %g not met)\n", mo->prog,
                 m->name, side, o.tolerance);
         code = 3;
@@ -554,7 +582,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         btdf_preview_opts_default(&po);
         po.kind = BTDF_PREVIEW_MONTAGE;
         po.table = t;
-        btdf_write_opts w = {&r, prov};
+        btdf_write_opts w = {&r, prov, nparts == 2 ? &rs[1] : NULL};
         btdf_output what = {t, NULL, &po, &w, NULL, NULL};
         st = btdf_write(&what, outs[k], msg, sizeof msg);
         if (st != BTDF_OK) {
@@ -567,7 +595,8 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         }
     }
     run_progress_end(&pr);
-    btdf_report_clear(&r);
+    btdf_report_clear(&rs[0]);
+    btdf_report_clear(&rs[1]);
     btdf_table_free(t);
     return code;
 }
@@ -647,6 +676,7 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
             o.ti_max = m->ti1 * M_PI / 180.0;
             o.tolerance = m->tol;
             o.metric = m->metric;
+            o.part = m->part;
             if (btdf_table_opts_check(&o, msg, sizeof msg) != BTDF_OK) {
                 snprintf(why, whylen, "material [%s]: %.400s", m->name, msg);
                 return !strncmp(msg, "tolerance", 9) ? line_of(m, K_TOL)

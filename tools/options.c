@@ -22,10 +22,16 @@ const opt_def opt_table[] = {
      "the material, so --ior, --smoothness and --k0 do not apply"},
     {OPT_PART, "part", 0, "P", 0, CMD_EVAL,
      "transmission (default), or reflection: rows TI TR PHI with theta_r in [0, 90],\n"
-     "phi = 180 the specular plane; the model only (not with --table)"},
+     "phi = 180 the specular plane; of the model, or of a --table that holds it"},
+    {OPT_PART, "part", 0, "P", 0, CMD_POLAR,
+     "transmission (default: the lobe below the surface), reflection (rho_r |cos\n"
+     "theta_r| above it) or both, like the paper's figures of both halves"},
     {OPT_PART, "part", 0, "P", 0, CMD_TABULATE,
-     ".bsdf only: both (default: transmission and reflection of the interface, four\n"
-     "blocks), transmission (the file as before: no reflection) or reflection"},
+     "the lobes a .csv/.exr table holds: transmission (default), reflection (theta_r in\n"
+     "[0, 90], nodes around the mirror direction) or both (one file, each part meeting\n"
+     "the tolerance with the whole budget); a .bsdf's blocks: both (default: four\n"
+     "blocks), transmission (the two transmission blocks) or reflection; not for .xml\n"
+     "(it holds both parts)"},
     {OPT_OUTPUT, "output", 'o', "FILE", 0, CMD_TABULATE,
      ".csv, .exr, .png (a montage), .bsdf (pbrt-v3/Mitsuba tabulated) or .xml\n"
      "(Radiance/WINDOW BSDF); the last two are built from Eq. 25 directly; '-' writes\n"

@@ -369,8 +369,10 @@ static void rad_json(FILE *f, const btdf_rad *x, const btdf_params *p, const btd
         const btdf_report *r = &rep[k];
         btdf_rad_block_info b;
         btdf_rad_block(x, k, &b);
-        fprintf(f, "   {\"label\": \"%s\", \"side\": \"%s\", \"n\": %.17g,\n", b.label,
-                b.light == BTDF_SIDE_ENTER ? "enter" : "leave", b.n_light);
+        int refl = strncmp(b.label, "Reflection", 10) == 0;
+        fprintf(f, "   {\"label\": \"%s\", \"side\": \"%s\", \"reflection\": %s, \"n\": %.17g,\n",
+                b.label, b.light == BTDF_SIDE_ENTER ? "enter" : "leave", refl ? "true" : "false",
+                b.n_light);
         fprintf(f, "    \"values\": %zu, \"depth\": %d, \"tolerance\": %.9g, \"met\": %s,\n",
                 b.values, b.depth, r->tolerance, r->met ? "true" : "false");
         fprintf(f, "    \"seconds_estimate\": %.6f, \"test_angles\": %zu, \"test_points\": %zu,\n",
@@ -391,11 +393,14 @@ static void rad_json(FILE *f, const btdf_rad *x, const btdf_params *p, const btd
         }
         /* Probes [theta_p, phi_p, theta_q, phi_q, value, rho]: degrees (theta from +Z,
            phi from +X) in Radiance's frame; p on the block's side (the view), q the
-           light; value is what Radiance's lookup gives, rho Eq. 25 for light from q to
-           p. Half spread over the hemisphere, half near the straight-through direction. */
+           light (on the other side, or for a reflection block the same); value is what
+           Radiance's lookup gives, rho Eq. 25 (or rho_r) for light from q to p. Half
+           spread over the hemisphere, half near the straight-through (or specular)
+           direction. */
         fprintf(f, "    ],\n    \"probes\": [\n");
         uint64_t z = 0x9e3779b97f4a7c15ull * (uint64_t)(k + 1);
-        double sg = b.light == BTDF_SIDE_LEAVE ? -1.0 : 1.0; /* p's side */
+        /* p's side: the view's; for reflection the light's side too */
+        double sg = (b.light == BTDF_SIDE_LEAVE) != refl ? -1.0 : 1.0;
         for (int i = 0; i < RAD_PROBES; i++) {
             double u[4];
             for (int d = 0; d < 4; d++) {
@@ -411,15 +416,18 @@ static void rad_json(FILE *f, const btdf_rad *x, const btdf_params *p, const btd
                 tq = floor(fmin(89.0, tp * (0.7 + 0.6 * u[2])) * 1e4 + 0.5) / 1e4;
                 pq = floor((pp + 180.0 + 40.0 * (u[3] - 0.5)) * 1e4 + 0.5) / 1e4;
             }
-            double th_p = sg > 0 ? tp : 180.0 - tp, th_q = sg > 0 ? 180.0 - tq : tq;
+            double th_p = sg > 0 ? tp : 180.0 - tp;
+            double th_q = (sg > 0) != refl ? 180.0 - tq : tq;
             double pv[3] = {sin(th_p * d2r) * cos(pp * d2r), sin(th_p * d2r) * sin(pp * d2r),
                             cos(th_p * d2r)};
             double qv[3] = {sin(th_q * d2r) * cos(pq * d2r), sin(th_q * d2r) * sin(pq * d2r),
                             cos(th_q * d2r)};
             double v = btdf_rad_lookup(x, k, pv, qv);
             /* Eq. 25 for the light at q in its own frame (rho depends on cos phi only) */
-            double truth = btdf_rho(b.n_light, p->smoothness, p->k0, tq * d2r,
-                                    (180.0 - tp) * d2r, (pp - pq) * d2r);
+            double truth = refl ? btdf_rho_r(b.n_light, p->smoothness, p->k0, tq * d2r,
+                                             tp * d2r, (pp - pq) * d2r)
+                                : btdf_rho(b.n_light, p->smoothness, p->k0, tq * d2r,
+                                           (180.0 - tp) * d2r, (pp - pq) * d2r);
             fprintf(f, "     [%.4f, %.4f, %.4f, %.4f, %.9g, %.9g]%s\n", th_p, pp, th_q, pq, v,
                     truth, i + 1 < RAD_PROBES ? "," : "");
         }
@@ -496,7 +504,7 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
     }
     if (code == 0) { /* the file and its report appear together or not at all */
         btdf_outputs_begin();
-        btdf_write_opts w = {NULL, prov};
+        btdf_write_opts w = {NULL, prov, NULL};
         btdf_output what = {NULL, NULL, NULL, &w, NULL, x};
         st = btdf_write(&what, path, msg, sizeof msg);
         if (st == BTDF_OK && report)

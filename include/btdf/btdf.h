@@ -223,14 +223,52 @@ BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *o
  * and multiplies the result by the query's; a slice where that factor is 0 (ti = 90
  * deg) holds zeros, and its neighbour's divided value stands in for it. Outside the
  * slices' ti range the table gives 0.
+ *
+ * Facet tables have one of two rules for what is interpolated (btdf_table_rule):
+ *  BTDF_RULE_PLAIN: rho itself, as above (every table written before the rule had a
+ *    name, and the default of btdf_table_new).
+ *  BTDF_RULE_CHI: rho / K, K = cb (ca + n cb)^2, where ca = e_i.h at the slice's own ti
+ *    for each node (0 where ca <= 0: the facet refracts nothing, and so does the node)
+ *    and cb = sqrt(1 - (1 - ca^2)/n^2); the blend in ti is of those reduced values (each
+ *    also divided by its slice's incident factor), and the result is multiplied by the
+ *    query's K (its own ca) and incident factor. K is the Jacobian chi of Eq. 25 times
+ *    (n^2 - 1)^2 / n^2: rho / K is smooth in facet space for every n, while rho grows
+ *    like ca^3 / (n - 1)^2 near n = 1. btdf_table_build makes CHI tables.
+ *
+ * Reflection (MODEL.md section 8) has a kind of its own:
+ *  BTDF_TABLE_FACET_REFLECTION: slices hold rho_r at facet normals (tn, psi) like
+ *    FACET, for the facet h = (e_i + e_r)/|e_i + e_r| that mirrors e_i into e_r; tn = 0
+ *    is the mirror direction (tr = ti, phi = pi), the centre of the specular lobe. The
+ *    rule is FACET's with K = Fr(ca) (BTDF_RULE_FRESNEL, ca = e_i.h = |e_i + e_r|/2):
+ *    bilinear in (tn, |psi|) of rho_r / Fr, linear in ti after dividing by V(ti)/cos ti
+ *    (the incident factor rho_r shares with rho), times the query's Fr. For this kind
+ *    btdf_table_eval's `to` is the reflected polar angle tr in [0, pi/2].
  */
 typedef enum {
     BTDF_TABLE_FACET = 0,
     BTDF_TABLE_GRID = 1,
-    BTDF_TABLE_FACET_RECIPROCAL = 2
+    BTDF_TABLE_FACET_RECIPROCAL = 2,
+    BTDF_TABLE_FACET_REFLECTION = 3
 } btdf_table_kind;
 
+/* Which lobes of the interface a table holds: its transmission (Eq. 25), its
+   reflection (MODEL.md section 8), or both, each a table of its own kind, with the
+   reflection attached to the transmission table (btdf_table_part). */
+typedef enum {
+    BTDF_PART_TRANSMISSION = 1,
+    BTDF_PART_REFLECTION = 2,
+    BTDF_PART_BOTH = 3
+} btdf_part;
+
+/* "transmission", "reflection", "both"; parse returns 0 for an unknown name. */
+BTDF_API const char *btdf_part_name(btdf_part part);
+BTDF_API int btdf_part_parse(const char *name, btdf_part *part);
+
 typedef struct btdf_table btdf_table;
+
+/* FRESNEL: the rule of reflection tables, CHI's with K = Fr(ca), the facet's Fresnel
+   reflectance (1 past the critical angle): rho_r / Fr is smooth where Fr has its kink. */
+typedef enum { BTDF_RULE_PLAIN = 0, BTDF_RULE_CHI = 1, BTDF_RULE_FRESNEL = 2 } btdf_table_rule;
 
 /* A read-only view of slice k. values[(r * ncols + c) * channels + ch]. */
 typedef struct btdf_slice {
@@ -277,6 +315,9 @@ typedef struct btdf_table_opts {
     btdf_progress_fn progress; /* may be NULL (the default) */
     void *progress_user;       /* passed to progress */
     btdf_estimate_mode estimate; /* FACET: the builder's check (default FULL) */
+    btdf_part part;         /* which lobes (default TRANSMISSION; REFLECTION and BOTH
+                               need kind FACET); each part is refined to the tolerance
+                               and has the whole budget to itself */
 } btdf_table_opts;
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o);
@@ -303,6 +344,28 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
                                           const double *cols, const double *values,
                                           char *msg, size_t msglen);
 
+/* The table of one part: t itself when it is that part, the reflection attached to a
+   transmission table for REFLECTION, NULL when t does not hold it (BOTH: NULL). */
+BTDF_API const btdf_table *btdf_table_part(const btdf_table *t, btdf_part part);
+/* Which parts t holds: TRANSMISSION, REFLECTION or BOTH. */
+BTDF_API btdf_part btdf_table_parts(const btdf_table *t);
+/* Attaches r, a FACET_REFLECTION table of the same parameters, to the transmission
+   table t, which takes ownership of it (readers of files holding both parts).
+   BTDF_EINVAL when t is not a transmission table, already holds a reflection, or the
+   parameters differ; r is then not taken. */
+BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, char *msg,
+                                                  size_t msglen);
+
+/* The interpolation rule (above). set_rule only on a table with no slices yet and of a
+   facet kind (grid tables are plain): BTDF_EINVAL otherwise, saying why. */
+BTDF_API btdf_status btdf_table_set_rule(btdf_table *t, btdf_table_rule rule, char *msg,
+                                         size_t msglen);
+BTDF_API btdf_table_rule btdf_table_get_rule(const btdf_table *t);
+/* "plain", "chi" or "fresnel", as files name the rules; parse gives 0 for an unknown
+   name. */
+BTDF_API const char *btdf_table_rule_name(btdf_table_rule rule);
+BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule);
+
 BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t);
 BTDF_API const btdf_params *btdf_table_get_params(const btdf_table *t);
 BTDF_API size_t btdf_table_slice_count(const btdf_table *t);
@@ -311,7 +374,10 @@ BTDF_API size_t btdf_table_node_count(const btdf_table *t);
 /* BTDF_EINVAL if k is out of range. */
 BTDF_API btdf_status btdf_table_slice(const btdf_table *t, size_t k, btdf_slice *out);
 
-/* rho~ per channel into out[channels]. Same domain rules as btdf_eval. */
+/* rho~ per channel into out[channels]. Same domain rules as btdf_eval; for a
+   FACET_REFLECTION table, rho_r~ with `to` the reflected angle tr in [0, pi/2] (the
+   rules of btdf_eval_r). A table holding both parts evaluates its transmission here:
+   btdf_table_part gives the reflection. */
 BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, double phi,
                                      double *out);
 
@@ -321,7 +387,8 @@ BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, 
 
 typedef struct btdf_ti_error {
     double ti;                   /* radians */
-    double T, T_table;           /* true and tabulated transmittance (channel 0) */
+    double T, T_table;           /* true and tabulated transmittance (channel 0);
+                                    R and R~ for a reflection table */
     double e_l1, e_t, e_max;     /* worst channel; e_max = 0 where T < 0.01 */
 } btdf_ti_error;
 
@@ -350,7 +417,10 @@ typedef struct btdf_report {
    where the per-angle error or T changes fast (per_ti lists them all, by ti; the means
    are over the stratified angles). A table the builder checked with the same request
    returns that check. Frees nothing in *r first: pass a
-   zeroed report and call btdf_report_clear after. */
+   zeroed report and call btdf_report_clear after. A FACET_REFLECTION table is
+   measured against rho_r over the upper hemisphere, with R(ti) in place of T(ti)
+   (e_L1 and e_T relative to max(R, 0.01)); a table holding both parts is measured on
+   its transmission: estimate btdf_table_part(t, BTDF_PART_REFLECTION) for the other. */
 BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
                                          size_t test_angles, size_t points_per_angle,
                                          uint64_t seed, int threads, btdf_report *r);
@@ -367,6 +437,8 @@ typedef enum { BTDF_SIDE_ENTER = 1, BTDF_SIDE_LEAVE = 2, BTDF_SIDE_BOTH = 3 } bt
 typedef struct btdf_write_opts {
     const btdf_report *report; /* error report stored with the table, may be NULL */
     const char *provenance;    /* e.g. the command line, may be NULL */
+    const btdf_report *report_reflection; /* a table holding both parts: the report of
+                                             its reflection, may be NULL */
 } btdf_write_opts;
 
 /* Writes t to path in the format its extension names (.csv, .exr). The file is
@@ -384,7 +456,8 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
 /* 1 if files of this extension (".exr", "exr") can be written by this build. */
 BTDF_API int btdf_format_available(const char *ext);
 
-/* The name of a table kind as files record it: "facet", "facet-reciprocal", "grid". */
+/* The name of a table kind as files record it: "facet", "facet-reciprocal", "grid",
+   "facet-reflection". */
 BTDF_API const char *btdf_table_kind_name(btdf_table_kind kind);
 
 #ifdef __cplusplus

@@ -62,6 +62,10 @@ typedef struct btdf_preview_opts {
                                       over that many decades below each row's maximum */
     double zoom;                   /* RENDER: 0 or 1 the whole face (the paper's); Z in
                                       (1, 1000]: the central 1/Z of it, for narrow lobes */
+    btdf_part part;                /* POLAR: 0 or TRANSMISSION the lobe below the surface;
+                                      REFLECTION or BOTH also rho_r |cos tr| of the same
+                                      facets (MODEL.md section 8) above it, mirrored like the
+                                      paper's figures of both halves, on the same scale */
 } btdf_preview_opts;
 
 /* Zeroes o and sets kind = POLAR. Defaults when width/height are 0: POLAR 960 x 720;

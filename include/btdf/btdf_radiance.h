@@ -20,7 +20,9 @@ extern "C" {
  * surface in air). Eq. 25 is not reciprocal in that plain sense
  * (rho(n; q -> p) = n^2 rho(1/n; p -> q)), so each block holds what a render needs:
  *   block 0 "Transmission Front" (p on -Z; light from +Z, leaving the dense side, 1/n);
- *   block 1 "Transmission Back"  (p on +Z; light from -Z, entering it, index n).
+ *   block 1 "Transmission Back"  (p on +Z; light from -Z, entering it, index n);
+ *   block 2 "Reflection Front"   (p and light on -Z, outside: rho_r(n)), tree3 only;
+ *   block 3 "Reflection Back"    (p and light on +Z, inside: rho_r(1/n)), tree3 only.
  * The BSDF material's surface normal (+Z) points into the dense medium.
  */
 typedef struct btdf_rad btdf_rad;
@@ -36,11 +38,11 @@ typedef enum {
 BTDF_API int btdf_rad_basis_parse(const char *s, btdf_rad_basis *b);
 BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b);
 
-/* Builds both transmission blocks for one channel. tree3: leaf averages whose e_L1
-   (MODEL.md 6) as Radiance reads them meets tolerance ([1e-4, 0.5]) for incidence up
-   to BTDF_RAD_TI_CHECKED_DEG, checked by an estimate of its own; Klems: exact patch
-   averages (tolerance ignored). threads: 0 = all cores; the result does not depend on
-   it. BTDF_OK; BTDF_EBUDGET when the tolerance could not be met (*out holds the best
+/* Builds the blocks for one channel. tree3: the two transmission and two reflection
+   blocks, leaves whose e_L1 (MODEL.md 6) as Radiance reads them meets tolerance
+   ([1e-3, 0.5]) for light up to BTDF_RAD_TI_CHECKED_DEG, checked by estimates of its
+   own; Klems: the two transmission blocks, exact patch averages (tolerance ignored).
+   threads: 0 = all cores; the result does not depend on it. BTDF_OK; BTDF_EBUDGET when the tolerance could not be met (*out holds the best
    file); BTDF_EINVAL (parameters, more than one channel, tolerance); BTDF_ENOMEM. */
 #define BTDF_RAD_TI_CHECKED_DEG 80.0
 BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
@@ -73,8 +75,8 @@ BTDF_API double btdf_rad_seconds_build(const btdf_rad *r);
 BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
                                 const double q[3]);
 
-/* The error (MODEL.md 6) of what a render gets from block k against Eq. 25 for the
-   light it serves, at test_angles incidences over 0-90 deg (0 = 48) with about
+/* The error (MODEL.md 6) of what a render gets from block k against Eq. 25 (rho_r
+   for a reflection block, R for T) for the light it serves, at test_angles incidences over 0-90 deg (0 = 48) with about
    points_per_angle points (0 = 8192). rep->met: the tolerance holds up to
    BTDF_RAD_TI_CHECKED_DEG. Clear rep with btdf_report_clear. */
 BTDF_API btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,

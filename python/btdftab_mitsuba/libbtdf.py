@@ -19,6 +19,9 @@ KIND_FACET_RECIPROCAL = 2
 KIND_NAMES = {KIND_FACET: "facet", KIND_GRID: "grid",
               KIND_FACET_RECIPROCAL: "facet-reciprocal"}
 MAX_CHANNELS = 3
+# How facet slices interpolate (btdf/btdf.h, btdf_table_rule): rho itself, or rho / K.
+RULE_PLAIN = 0
+RULE_CHI = 1
 
 
 class BtdfError(RuntimeError):
@@ -99,6 +102,8 @@ def _declare(lib):
     lib.btdf_table_free.argtypes = [tp]
     lib.btdf_table_get_kind.restype = ctypes.c_int
     lib.btdf_table_get_kind.argtypes = [tp]
+    lib.btdf_table_get_rule.restype = ctypes.c_int
+    lib.btdf_table_get_rule.argtypes = [tp]
     lib.btdf_table_get_params.restype = ctypes.POINTER(_Params)
     lib.btdf_table_get_params.argtypes = [tp]
     lib.btdf_table_slice_count.restype = ctypes.c_size_t
@@ -115,6 +120,11 @@ def _declare(lib):
                               ctypes.c_double, dp]
     lib.btdf_transmittance.restype = ctypes.c_int
     lib.btdf_transmittance.argtypes = [ctypes.POINTER(_Params), ctypes.c_double, dp]
+    lib.btdf_eval_r.restype = ctypes.c_int
+    lib.btdf_eval_r.argtypes = [ctypes.POINTER(_Params), ctypes.c_double, ctypes.c_double,
+                                ctypes.c_double, dp]
+    lib.btdf_reflectance.restype = ctypes.c_int
+    lib.btdf_reflectance.argtypes = [ctypes.POINTER(_Params), ctypes.c_double, dp]
 
 
 def _check(status, what, msg=None):
@@ -152,6 +162,7 @@ class Table:
         self._h = h
         self.path = path
         self.kind = lib.btdf_table_get_kind(h)
+        self.rule = lib.btdf_table_get_rule(h)
         p = lib.btdf_table_get_params(h).contents
         self.channels = p.channels
         self.ior = [p.ior[c] for c in range(p.channels)]
@@ -216,4 +227,18 @@ def transmittance(params, ti):
     """btdf_transmittance: T(ti) per channel."""
     out = (ctypes.c_double * MAX_CHANNELS)()
     _check(library().btdf_transmittance(ctypes.byref(params), ti, out), "btdf_transmittance")
+    return [out[c] for c in range(params.channels)]
+
+
+def rho_r(params, ti, tr, phi):
+    """btdf_eval_r: the reflection rho_r per channel (MODEL.md section 8)."""
+    out = (ctypes.c_double * MAX_CHANNELS)()
+    _check(library().btdf_eval_r(ctypes.byref(params), ti, tr, phi, out), "btdf_eval_r")
+    return [out[c] for c in range(params.channels)]
+
+
+def reflectance(params, ti):
+    """btdf_reflectance: R(ti) per channel."""
+    out = (ctypes.c_double * MAX_CHANNELS)()
+    _check(library().btdf_reflectance(ctypes.byref(params), ti, out), "btdf_reflectance")
     return [out[c] for c in range(params.channels)]

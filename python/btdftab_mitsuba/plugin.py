@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """The `btdftab` BSDF of Mitsuba 3: a rough dielectric interface that transmits by
-Eq. 25 of Xu & Sun (2008), from a btdftab table or from the formula itself.
+Eq. 25 of Xu & Sun (2008), from a btdftab table or from the formula itself, and
+reflects by the companion term of the same facets (MODEL.md section 8).
 
 Frame: Mitsuba's local z is the shape normal, the "front" side. A table describes light
 arriving on the front side, with its index n = (index behind) / (index in front), as
@@ -12,8 +13,11 @@ Transport: the plugin stores the physical BTDF rho(light from a -> b). In radian
 (camera paths) light arrives along wo and leaves along wi, so eval gives
 rho(wo -> wi) |cos wo|; in importance mode rho(wi -> wo) |cos wo|.
 
-Reflection: the model's reflection part is not in any table yet; directions on the
-same side give 0 and the plugin declares no reflection component.
+Reflection: rho_r = Fr D V(ti) V(tr) / (4 cos ti cos tr), evaluated from the model
+(index n for light arriving in front, 1/n from behind, with total internal reflection
+on the facets), in both modes: the tables hold transmission only. It is reciprocal, so
+both transport modes give rho_r |cos wo|. `part` = both (default), transmission (the
+transmission-only surface of earlier releases) or reflection.
 """
 import math
 
@@ -21,7 +25,7 @@ import drjit as dr
 import mitsuba as mi
 
 from . import libbtdf
-from .model import TableRule, rho_eq25
+from .model import TableRule, rho_any, rho_eq25, rho_r
 
 _classes = {}
 
@@ -43,8 +47,8 @@ def _to_float(x):
 
 
 def _angles(a, b):
-    """(sti, cti, sto, cto, cph, sph) in double for a (z >= 0) and b (z <= 0), the
-    directions normalised; phi is the azimuth of b relative to a."""
+    """(sti, cti, sto, cto, cph, sph) in double for a (z >= 0) and b (either side; cto
+    keeps b's sign), the directions normalised; phi is the azimuth of b relative to a."""
     ax, ay, az = _f64(a.x), _f64(a.y), _f64(a.z)
     bx, by, bz = _f64(b.x), _f64(b.y), _f64(b.z)
     la = dr.sqrt(ax * ax + ay * ay + az * az)
@@ -90,6 +94,11 @@ def _make_class():
             if mi.is_polarized:
                 raise RuntimeError("btdftab: polarized variants are not supported "
                                    "(variant %s)" % mi.variant())
+            part = props.get("part", "both")
+            if part not in ("both", "transmission", "reflection"):
+                raise ValueError("btdftab: part '%s': must be 'both', 'transmission' or "
+                                 "'reflection'" % part)
+            self.part = part
             mode = props.get("mode", "table")
             if mode not in ("table", "analytic"):
                 raise ValueError("btdftab: mode '%s': must be 'table' or 'analytic'" % mode)
@@ -143,9 +152,24 @@ def _make_class():
             visible = bool(props.get("sample_visible", False))
             self.distr = mi.MicrofacetDistribution(mi.MicrofacetType.Beckmann, 2.0 / self.s,
                                                    visible)
-            flags = (mi.BSDFFlags.GlossyTransmission | mi.BSDFFlags.FrontSide
-                     | mi.BSDFFlags.BackSide)
-            self.m_components = [flags]
+            # Components as Mitsuba's roughdielectric declares them: reflection first,
+            # then transmission (non-symmetric: it scales radiance by n^2).
+            self.has_r = part != "transmission"
+            self.has_t = part != "reflection"
+            sides = mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
+            comps = []
+            self.ci_r = self.ci_t = -1
+            if self.has_r:
+                self.ci_r = len(comps)
+                comps.append(mi.BSDFFlags.GlossyReflection | sides)
+            if self.has_t:
+                self.ci_t = len(comps)
+                comps.append(mi.BSDFFlags.GlossyTransmission | sides
+                             | mi.BSDFFlags.NonSymmetric)
+            self.m_components = comps
+            flags = comps[0]
+            for c in comps[1:]:
+                flags = flags | c
             self.m_flags = flags
 
         # --- the physical BTDF ------------------------------------------------------
@@ -172,6 +196,23 @@ def _make_class():
             vals = self.front.eval(*_angles(a, b), active=active)
             return [dr.select(front, v, v / (n * n)) for v, n in zip(vals, self.ior)]
 
+        def _rho_r(self, a, b, active):
+            """rho_r per channel (double) for a and b on the same side; symmetric."""
+            front = a.z > 0.0
+            ang = _angles(dr.select(front, a, _flip(a)), dr.select(front, b, _flip(b)))
+            out = []
+            for n in self.ior:
+                ns = dr.select(front, _f64(n), _f64(1.0 / n))  # double, not float
+                out.append(dr.select(active, rho_r(ns, self.s, self.k0, *ang), 0.0))
+            return out
+
+        def _enabled(self, ctx):
+            """(reflection, transmission) enabled by the context and the part."""
+            en_r = self.has_r and ctx.is_enabled(mi.BSDFFlags.GlossyReflection, self.ci_r)
+            en_t = self.has_t and ctx.is_enabled(mi.BSDFFlags.GlossyTransmission,
+                                                 self.ci_t)
+            return bool(en_r), bool(en_t)
+
         def _spectrum(self, vals):
             if self.channels == 1:
                 return mi.UnpolarizedSpectrum(_to_float(vals[0]))
@@ -179,16 +220,35 @@ def _make_class():
 
         # --- Mitsuba interface ----------------------------------------------------------
         def eval(self, ctx, si, wo, active=True):
-            if not ctx.is_enabled(mi.BSDFFlags.GlossyTransmission, 0):
-                return dr.zeros(mi.Spectrum)
+            en_r, en_t = self._enabled(ctx)
+            value = dr.zeros(mi.Spectrum)
+            if not (en_r or en_t):
+                return value
             wi = si.wi
-            trans = active & (wi.z * wo.z < 0.0)
-            if ctx.mode == mi.TransportMode.Radiance:
-                vals = self._rho(wo, wi, trans)  # light arrives along wo
-            else:
-                vals = self._rho(wi, wo, trans)
-            value = self._spectrum(vals) * dr.abs(wo.z)
-            return dr.select(trans, value, 0.0)
+            if en_t and en_r and self.mode == "analytic":
+                # Both lobes in one pass (rho_any): D and the shadowing once per query.
+                # rho_r is reciprocal, so the transport mode's order serves both.
+                src, dst = (wo, wi) if ctx.mode == mi.TransportMode.Radiance else (wi, wo)
+                front = src.z > 0.0
+                ang = _angles(dr.select(front, src, _flip(src)),
+                              dr.select(front, dst, _flip(dst)))
+                vals = []
+                for n in self.ior:
+                    ns = dr.select(front, _f64(n), _f64(1.0 / n))  # double, not float
+                    vals.append(dr.select(active, rho_any(ns, self.s, self.k0, *ang), 0.0))
+                return dr.select(active, self._spectrum(vals) * dr.abs(wo.z), value)
+            if en_t:
+                trans = active & (wi.z * wo.z < 0.0)
+                if ctx.mode == mi.TransportMode.Radiance:
+                    vals = self._rho(wo, wi, trans)  # light arrives along wo
+                else:
+                    vals = self._rho(wi, wo, trans)
+                value = dr.select(trans, self._spectrum(vals) * dr.abs(wo.z), value)
+            if en_r:
+                refl = active & (wi.z * wo.z > 0.0)
+                vals = self._rho_r(wi, wo, refl)  # reciprocal: either transport mode
+                value = dr.select(refl, self._spectrum(vals) * dr.abs(wo.z), value)
+            return value
 
         def _pdf_one(self, wi_, wo_, n):
             """Density of wo_ when a facet is drawn from the visible Beckmann normals of
@@ -203,7 +263,25 @@ def _make_class():
             den = cim + n * com  # = +-|v|, nonzero where ok
             den = dr.select(ok, den, 1.0)
             jac = n * n * dr.abs(com) / (den * den)  # Walter et al. 2007, Eq. 17
-            return dr.select(ok, self.distr.pdf(wi_, m) * jac, 0.0)
+            return dr.select(ok, self.distr.pdf(wi_, m) * jac, 0.0), cim
+
+        def _pdf_r(self, wi_, wo_):
+            """(density of wo_ reflected off a facet drawn for wi_, cos of wi_ to the
+            facet): both above the surface, h = (wi_ + wo_)/|wi_ + wo_|."""
+            h = wi_ + wo_
+            l2 = dr.squared_norm(h)
+            ok = (l2 > 0.0) & (wi_.z > 0.0) & (wo_.z > 0.0)
+            h = h * dr.rsqrt(dr.select(ok, l2, 1.0))  # |h| = 0 only where masked out
+            cim = dr.dot(wi_, h)
+            ok &= cim > 0.0
+            jac = 1.0 / (4.0 * dr.select(ok, cim, 1.0))  # Walter et al. 2007, Eq. 14
+            return dr.select(ok, self.distr.pdf(wi_, h) * jac, 0.0), cim
+
+        @staticmethod
+        def _fresnel(cim, n):
+            """The facet's Fresnel reflectance (float, Mitsuba's), the probability of
+            choosing the reflection when both lobes are sampled."""
+            return mi.fresnel(cim, n)[0]
 
         def _side(self, wi):
             sg = dr.select(wi.z < 0.0, -1.0, 1.0)
@@ -211,47 +289,80 @@ def _make_class():
             return sg, front
 
         def pdf(self, ctx, si, wo, active=True):
-            if not ctx.is_enabled(mi.BSDFFlags.GlossyTransmission, 0):
-                return mi.Float(0.0) if _jit() else 0.0
+            en_r, en_t = self._enabled(ctx)
+            zero = mi.Float(0.0) if _jit() else 0.0
+            if not (en_r or en_t):
+                return zero
+            both = en_r and en_t  # then the lobe is chosen by the facet's Fresnel
             wi = si.wi
             sg, front = self._side(wi)
             wi_ = mi.Vector3f(wi.x, wi.y, wi.z * sg)
             wo_ = mi.Vector3f(wo.x, wo.y, wo.z * sg)
-            p = 0.0
-            for n in self.ior:
-                p = p + self._pdf_one(wi_, wo_, dr.select(front, n, 1.0 / n))
-            p = p / self.channels  # one channel's index is drawn uniformly
-            return dr.select(active & (wi.z * wo.z < 0.0), p, 0.0)
+            out = zero
+            if en_t:
+                p = 0.0
+                for n in self.ior:
+                    ns = dr.select(front, n, 1.0 / n)
+                    pc, cim = self._pdf_one(wi_, wo_, ns)
+                    if both:
+                        pc = pc * (1.0 - self._fresnel(cim, ns))
+                    p = p + pc
+                p = p / self.channels  # one channel's index is drawn uniformly
+                out = dr.select(active & (wi.z * wo.z < 0.0), p, out)
+            if en_r:
+                p, cim = self._pdf_r(wi_, wo_)
+                if both:
+                    f = 0.0
+                    for n in self.ior:
+                        f = f + self._fresnel(cim, dr.select(front, n, 1.0 / n))
+                    p = p * (f / self.channels)
+                out = dr.select(active & (wi.z * wo.z > 0.0), p, out)
+            return out
 
         def eval_pdf(self, ctx, si, wo, active=True):
             return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
             bs = dr.zeros(mi.BSDFSample3f)
-            if not ctx.is_enabled(mi.BSDFFlags.GlossyTransmission, 0):
+            en_r, en_t = self._enabled(ctx)
+            if not (en_r or en_t):
                 return bs, dr.zeros(mi.Spectrum)
             wi = si.wi
             sg, front = self._side(wi)
             wi_ = mi.Vector3f(wi.x, wi.y, wi.z * sg)
             n = self.ior[0]
+            u = sample1
             if self.channels == 3:  # draw the channel whose facets refract the ray
                 c = dr.minimum(mi.UInt32(sample1 * 3.0), 2) if _jit() else min(int(sample1 * 3), 2)
                 n = dr.select(c == 0, self.ior[0], dr.select(c == 1, self.ior[1], self.ior[2]))
+                u = sample1 * 3.0 - c  # what is left of sample1 chooses the lobe
             n = dr.select(front, n, 1.0 / n)
             m, _ = self.distr.sample(wi_, sample2)
             cim = dr.dot(wi_, m)
+            # The lobe: reflection with the facet's Fresnel reflectance (pdf() uses the
+            # same), always or never when one lobe alone is enabled (u < 1 <= 2).
+            if en_r and en_t:
+                reflect = u < self._fresnel(cim, n)
+            else:
+                reflect = u < (2.0 if en_r else -1.0)
+            ok = active & (wi.z != 0.0) & (cim > 0.0)
+            # transmission: refraction through m; s2 >= 1 is total internal reflection
             inv = 1.0 / n
             s2 = inv * inv * (1.0 - cim * cim)
-            ok = active & (wi.z != 0.0) & (cim > 0.0) & (s2 < 1.0)  # else total reflection
             ct = dr.sqrt(dr.maximum(1.0 - s2, 0.0))
-            wo_ = -inv * wi_ + (inv * cim - ct) * m
-            ok &= wo_.z < 0.0
+            wt_ = -inv * wi_ + (inv * cim - ct) * m
+            # reflection: the mirror image of wi_ about m
+            wr_ = 2.0 * cim * m - wi_
+            wo_ = dr.select(reflect, wr_, wt_)
+            ok &= dr.select(reflect, wr_.z > 0.0, (s2 < 1.0) & (wt_.z < 0.0))
             wo = dr.normalize(mi.Vector3f(wo_.x, wo_.y, wo_.z * sg))
             bs.wo = dr.select(ok, wo, mi.Vector3f(0.0, 0.0, -1.0) * sg)
             bs.pdf = dr.select(ok, self.pdf(ctx, si, bs.wo, ok), 0.0)
-            bs.eta = dr.select(ok, n, 1.0)
-            bs.sampled_component = mi.UInt32(0)
-            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyTransmission)
+            bs.eta = dr.select(ok & _not(reflect), n, 1.0)
+            bs.sampled_component = dr.select(reflect, mi.UInt32(max(self.ci_r, 0)),
+                                             mi.UInt32(max(self.ci_t, 0)))
+            bs.sampled_type = dr.select(reflect, mi.UInt32(+mi.BSDFFlags.GlossyReflection),
+                                        mi.UInt32(+mi.BSDFFlags.GlossyTransmission))
             ok &= bs.pdf > 0.0
             value = self.eval(ctx, si, bs.wo, ok) / dr.select(ok, bs.pdf, 1.0)
             return bs, dr.select(ok, value, 0.0)
@@ -263,8 +374,9 @@ def _make_class():
             pass
 
         def to_string(self):
-            return ("btdftab[mode=%s, n=%s, s=%g, k0=%g, files=%s]"
-                    % (self.mode, self.ior, self.s, self.k0, self.files or "none"))
+            return ("btdftab[mode=%s, part=%s, n=%s, s=%g, k0=%g, files=%s]"
+                    % (self.mode, self.part, self.ior, self.s, self.k0,
+                       self.files or "none"))
 
     return BtdftabBSDF
 
