@@ -1368,7 +1368,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         P[j] = to_float_node(sin((double)(j + 1) * M_PI / (2.0 * (double)K0)));
     P[K0 - 1] = POLE_NODE;
     size_t K = K0;
-    int tighten = 0, local = 0;
+    int tighten = 0, local = 0, stall = 0;
+    double last_err = HUGE_VAL; /* the previous measurement, for stall */
     const char *limit = "node"; /* which budget stopped refinement */
     st = BTDF_OK;
     for (int pass = 0;; pass++) {
@@ -1495,7 +1496,11 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                 st = BTDF_OK;
                 break;
             }
-            if (nmark > 0 && local < LOCAL_ROUNDS && !c.capped) {
+            /* Splits that do not lower the error (two measurements in a row above 0.9 of
+               the one before) point at the series, not at the nodes: tighten. */
+            stall = e > 0.9 * last_err ? stall + 1 : 0;
+            last_err = e;
+            if (nmark > 0 && local < LOCAL_ROUNDS && stall < 2 && !c.capped) {
                 local++;
                 nsplit = nmark; /* on to the insertion below */
             } else {
@@ -1505,6 +1510,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                     break;
                 }
                 c.budget *= 0.5;
+                stall = 0;
+                last_err = HUGE_VAL;
                 free(split);
                 free_state(&c); /* every series and check depends on the budget */
                 continue;       /* same nodes, tighter series and checks */
