@@ -312,13 +312,14 @@ typedef struct build_ctx {
     size_t K;
     double *P;
     double *full; /* 2K + 2 */
-    double (*Tn)[NBLK][4]; /* Tn[r][side][stored channel]: max(T, floor) at node r */
+    double (*Tn)[NBLK][8]; /* Tn[r][side][0..2]: the DIRECT norm per stored channel at node
+                              r, [4..6]: the ADJOINT norm (norms_at) */
     int want[NBLK];
     pair *pairs[NBLK]; /* [block][r * K + c] */
     /* checks */
     size_t nint;    /* intervals = K: [0, P0], [P0, P1], ... */
     double *mid;    /* nint midpoints */
-    double (*Tm)[NBLK][4]; /* norms at midpoints */
+    double (*Tm)[NBLK][8]; /* norms at midpoints */
     double *errc[NBLK];    /* [block][r * nint + j]: column check errors (already normalised) */
     double *errr[NBLK];    /* [block][j]: row check errors (normalised, mu-integrated) */
     double *gapr[NBLK];    /* [block][j * K + col]: row check gap at one column */
@@ -618,9 +619,10 @@ static size_t truncate_len_measured(const build_ctx *c, build_ws *w, size_t N, s
 static int keep_series(build_ctx *c, build_ws *w, int side, size_t N, const double *norm,
                        pair *pr)
 {
+    (void)side; /* every block: the bound first, then the measured tail */
     size_t S = c->nmax + 1;
     size_t m = truncate_len(c, w->a, S, N, norm, share_trunc(c));
-    if (blk_refl[side] && m > 0)
+    if (m > 0)
         m = truncate_len_measured(c, w, N, m, norm, share_trunc(c));
     free(pr->a);
     pr->a = NULL;
@@ -639,6 +641,9 @@ static int keep_series(build_ctx *c, build_ws *w, int side, size_t N, const doub
     return 0;
 }
 
+static void pair_norm(const build_ctx *c, int side, const double *ns, const double *nf,
+                      double *out);
+
 /* One slow row of one side: the series of every pair (r, c). */
 static void job_row(void *vctx, void *vws, size_t idx)
 {
@@ -648,11 +653,12 @@ static void job_row(void *vctx, void *vws, size_t idx)
     size_t r = idx % c->K;
     if (!c->want[side])
         return;
-    const double *norm = c->Tn[r][side];
+    double norm[3];
     for (size_t col = 0; col < c->K; col++) {
         pair *pr = &c->pairs[side][r * c->K + col];
         if (pr->done)
             continue;
+        pair_norm(c, side, c->Tn[r][side], c->Tn[col][side], norm);
         size_t N = converge(c, w, side, c->P[r], c->P[col], norm, share_alias(c));
         if (N == 0 || keep_series(c, w, side, N, norm, pr))
             goto oom;
@@ -750,11 +756,12 @@ static void job_colcheck(void *vctx, void *vws, size_t idx)
         return;
     size_t S = c->nmax + 1;
     size_t nfull = 2 * c->K + 2;
-    const double *norm = c->Tn[r][side];
+    double norm[3];
     for (size_t j = 0; j < c->nint; j++) {
         if (c->okc[side][r * c->nint + j])
             continue; /* same row, same stencil, same budget as last pass */
         double x = c->mid[j];
+        pair_norm(c, side, c->Tn[r][side], c->Tm[j][side], norm);
         size_t N = converge(c, w, side, c->P[r], x, norm, share_alias(c));
         if (N == 0 || keep_series(c, w, side, N, norm, &c->pcol[side][r * c->K + j]))
             goto oom;
@@ -770,7 +777,8 @@ static void job_colcheck(void *vctx, void *vws, size_t idx)
                     add_pair(c, side, r, (size_t)h, wt[b], w->ia, S, &mlen);
             }
         }
-        c->errc[side][r * c->nint + j] = l1_gap(c, w, N, mlen, norm);
+        /* relative to the DIRECT norm; the ADJOINT reading rescales (adj_ratio) */
+        c->errc[side][r * c->nint + j] = l1_gap(c, w, N, mlen, c->Tn[r][side]);
     }
     return;
 oom:
@@ -792,7 +800,7 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
     size_t S = c->nmax + 1;
     size_t nfull = 2 * c->K + 2;
     double x = c->mid[j];
-    const double *norm = c->Tm[j][side];
+    double norm[3];
     long off;
     double wt[4];
     int ok = cr_weights(c->full, nfull, x, &off, wt);
@@ -805,6 +813,7 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
             total += 0.5 * (hi - lo) * *gap;
             continue;
         }
+        pair_norm(c, side, c->Tm[j][side], c->Tn[col][side], norm);
         size_t N = converge(c, w, side, x, c->P[col], norm, share_alias(c));
         if (N == 0 || keep_series(c, w, side, N, norm, &c->prow[side][j * c->K + col]))
             goto oom;
@@ -817,7 +826,7 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
                     add_pair(c, side, (size_t)h, col, wt[a], w->ia, S, &mlen);
             }
         }
-        *gap = l1_gap(c, w, N, mlen, norm);
+        *gap = l1_gap(c, w, N, mlen, c->Tm[j][side]); /* DIRECT norm, as errc */
         total += 0.5 * (hi - lo) * *gap;
     }
     c->errr[side][j] = total;
@@ -828,9 +837,19 @@ oom:
     pthread_mutex_unlock(&c->lock);
 }
 
-/* max(T, floor) per stored channel for slow cosine mu in one block (max(R, floor) for
-   a reflection block), times the block's fold factor, so that every check relative
-   to it measures the unfolded error. */
+/* The norms of one block at cosine mu (a node or a midpoint), in the stored values'
+   units, per stored channel:
+   out[0..2], DIRECT (the slow index is the light's): max(T, floor) for the light at
+     mu (max(R, floor) for a reflection block), times the block's fold factor, so
+     that an error relative to it is the unfolded error;
+   out[4..6], ADJOINT (the fast index is the light's, pbrt-v3's radiance mode, what a
+     path tracer's camera rays read): the error of light at mu, integrated over the
+     camera's slow index, is (e^2/mu) times the integral of |error of the stored value|
+     cos(camera), with e^2 the radiance factor (1/eta^2 for T_ENTER, whose light comes
+     from below, eta^2 for T_LEAVE, 1 for reflection) and normalised by max(T', floor)
+     of that light (T' of the other side's index; R of the same block for
+     reflection). So one pair's series may err by max(T', floor) mu / e^2 in the
+     stored units; cos(camera) <= 1 leaves a factor 2 of margin. */
 static void norms_at(const build_ctx *c, int side, double mu, double *out)
 {
     btdf_params q = *c->p;
@@ -851,6 +870,48 @@ static void norms_at(const build_ctx *c, int side, double mu, double *out)
         out[1] = fmax(T[0], T_FLOOR) * fo[0];
         out[2] = fmax(T[2], T_FLOOR) * fo[2];
     }
+    /* the adjoint light's index: the other transmission block's, or this block's */
+    double e2 = 1.0, eta = c->p->ior[c->nc == 3 ? 1 : 0]; /* the header's eta */
+    if (!blk_refl[side]) {
+        int other = side == BLK_T_ENTER ? BLK_T_LEAVE : BLK_T_ENTER;
+        for (int k = 0; k < c->nc; k++)
+            q.ior[k] = c->ior[other][k];
+        if (btdf_transmittance(&q, ti, T) != BTDF_OK)
+            T[0] = T[1] = T[2] = 0.0;
+        e2 = side == BLK_T_ENTER ? 1.0 / (eta * eta) : eta * eta; /* eta > 0 (checked) */
+    }
+    /* mu >= the first node or midpoint > 0; the floor keeps the norm positive should
+       a node ever sit on the grazing cosine 0 */
+    double w = fmax(mu, 1e-9) / e2;
+    if (c->nst == 1) {
+        out[4] = fmax(T[0], T_FLOOR) * w;
+    } else {
+        out[4] = fmax(LUM_R * T[0] + LUM_G * T[1] + LUM_B * T[2], T_FLOOR) * w;
+        out[5] = fmax(T[0], T_FLOOR) * w;
+        out[6] = fmax(T[2], T_FLOOR) * w;
+    }
+}
+
+/* The norm of the series at (slow node with norms ns, fast node with norms nf): it
+   must serve both readings, DIRECT (relative to the slow node's light) and ADJOINT
+   (relative to the fast node's light), so the smaller of the two. A three-channel
+   transmission block is read ADJOINT only: its fold makes the DIRECT reading off by
+   (n_c/n_G)^2 by design (build_impl). */
+static void pair_norm(const build_ctx *c, int side, const double *ns, const double *nf,
+                      double *out)
+{
+    for (int k = 0; k < c->nst; k++)
+        out[k] = c->nst == 3 && !blk_refl[side] ? nf[4 + k] : fmin(ns[k], nf[4 + k]);
+}
+
+/* A gap measured relative to the slow node's DIRECT norms ns, times this, bounds it
+   relative to the fast node's ADJOINT norms nf (the worst channel of each). */
+static double adj_ratio(const build_ctx *c, const double *ns, const double *nf)
+{
+    double r = 0.0;
+    for (int k = 0; k < c->nst; k++)
+        r = fmax(r, ns[k] / nf[4 + k]); /* norms > 0 (norms_at) */
+    return r;
 }
 
 static void free_pair_array(pair **pp, size_t count)
@@ -942,7 +1003,7 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
     pair *np[NBLK][3] = {{NULL}};
     double *ne[NBLK] = {NULL}, *ng[NBLK] = {NULL};
     unsigned char *noc[NBLK] = {NULL}, *nor[NBLK] = {NULL};
-    double(*tn)[NBLK][4] = calloc(KQ, sizeof *tn), (*tm)[NBLK][4] = calloc(KQ, sizeof *tm);
+    double(*tn)[NBLK][8] = calloc(KQ, sizeof *tn), (*tm)[NBLK][8] = calloc(KQ, sizeof *tm);
     unsigned char *htn = calloc(KQ, 1), *htm = calloc(KQ, 1);
     int ok = map && qn && same && sten && tn && tm && htn && htm;
     for (int s = 0; s < NBLK && ok; s++) {
@@ -1432,14 +1493,32 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         }
         size_t nsplit = 0;
         double endr = 1.0;
+        /* The checks bound both readings of every block (norms_at): DIRECT, the light
+           in the slow index, integrates the error over the fast one; ADJOINT, the light
+           in the fast index, over the slow one. One interval check serves both with the
+           axes swapped: the fast-midpoint gaps (errc) summed along a row are the DIRECT
+           error there, summed down a column of rows the ADJOINT error of the light at
+           that midpoint; the slow-midpoint gaps (gapr) the other way round. A
+           three-channel transmission block is read ADJOINT only (pair_norm). */
+        double *ea = calloc(K, sizeof *ea);
+        if (!ea) {
+            free(split);
+            st = BTDF_ENOMEM;
+            goto done;
+        }
         int rowbad = 0; /* once a row fails, also split the ones close to failing */
-        for (int s = 0; s < NBLK; s++)
-            for (size_t j = 0; c.want[s] && j < K; j++)
-                rowbad |= c.errr[s][j] > share_row(&c);
         for (int s = 0; s < NBLK; s++) {
             if (!c.want[s])
                 continue;
-            for (size_t r = 0; r < K; r++) {
+            int direct = !(c.nst == 3 && !blk_refl[s]);
+            for (size_t j = 0; direct && j < K; j++)
+                rowbad |= c.errr[s][j] > share_row(&c);
+        }
+        for (int s = 0; s < NBLK; s++) {
+            if (!c.want[s])
+                continue;
+            int direct = !(c.nst == 3 && !blk_refl[s]);
+            for (size_t r = 0; direct && r < K; r++) {
                 double sum = 0.0;
                 for (size_t j = 0; j < K; j++) {
                     double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
@@ -1453,14 +1532,46 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                         split[j] = 1;
                 }
             }
-            for (size_t j = 0; j < K; j++)
+            for (size_t j = 0; direct && j < K; j++)
                 if (c.errr[s][j] > share_row(&c) && j == K - 1)
                     /* error ~ the last interval's angle: aim at half the share */
                     endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / c.errr[s][j]));
-            for (size_t j = 0; j < K; j++)
+            for (size_t j = 0; direct && j < K; j++)
                 if (c.errr[s][j] > (rowbad ? 0.7 : 1.0) * share_row(&c))
                     split[j] = 1;
+            /* ADJOINT, light at fast node col: the slow-midpoint gaps down the column */
+            for (size_t col = 0; col < K; col++) {
+                double sum = 0.0;
+                for (size_t j = 0; j < K; j++) {
+                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
+                    /* the camera's cosine, the slow midpoint's: the ADJOINT integral's
+                       weight (norms_at) */
+                    ea[j] = wid * c.mid[j] * c.gapr[s][j * K + col] *
+                            adj_ratio(&c, c.Tm[j][s], c.Tn[col][s]);
+                    sum += ea[j];
+                }
+                if (sum <= share_col(&c))
+                    continue;
+                for (size_t j = 0; j < K; j++)
+                    if (ea[j] > share_col(&c) / (double)K)
+                        split[j] = 1;
+            }
+            /* ADJOINT, light at fast midpoint j: the fast-midpoint gaps over the rows */
+            for (size_t j = 0; j < K; j++) {
+                double tot = 0.0;
+                for (size_t r = 0; r < K; r++) {
+                    double lo = r == 0 ? 0.0 : P[r - 1], hi = r + 1 < K ? P[r + 1] : P[r];
+                    tot += 0.5 * (hi - lo) * P[r] * c.errc[s][r * K + j] *
+                           adj_ratio(&c, c.Tn[r][s], c.Tm[j][s]);
+                }
+                if (tot > share_row(&c)) {
+                    split[j] = 1;
+                    if (j == K - 1)
+                        endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / tot));
+                }
+            }
         }
+        free(ea);
         for (size_t j = 0; j < K; j++)
             nsplit += split[j];
         if (progress) /* K nodes checked, nsplit intervals to split */
@@ -1953,21 +2064,16 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
                                btdf_report *r);
-btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
-                               size_t angles, size_t ppa, uint64_t seed, int threads,
-                               btdf_report *r)
+/* One reading of a file against the truth: btdf_scatfun_eval_side's side names the
+   light's side in both modes (DIRECT reads that block, ADJOINT the block whose fast
+   index holds that light: the other transmission block, the same reflection block). */
+static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, int b,
+                                  btdf_scatfun_mode mode, size_t angles, size_t ppa,
+                                  uint64_t seed, int threads, btdf_report *r)
 {
-    int b = (int)side;
+    mis_obj m = {f, (btdf_side)b, mode};
+    int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
     int below = b == BTDF_SCATFUN_T_LEAVE || b == BTDF_SCATFUN_R_BOTTOM;
-    mis_obj m = {f, side, BTDF_SCATFUN_DIRECT};
-    if (f->channels == 3 && (b == BTDF_SCATFUN_T_ENTER || b == BTDF_SCATFUN_T_LEAVE)) {
-        /* the fold is right on pbrt's radiance path: this block is what a camera on its
-           slow side sees of light from the other side, ADJOINT of that light's side */
-        m.side = (btdf_side)(b == BTDF_SCATFUN_T_ENTER ? BTDF_SCATFUN_T_LEAVE
-                                                       : BTDF_SCATFUN_T_ENTER);
-        m.mode = BTDF_SCATFUN_ADJOINT;
-        below = b == BTDF_SCATFUN_T_ENTER; /* the light comes from below */
-    }
     btdf_params q = *p;
     if (below)
         for (int k = 0; k < q.channels; k++)
@@ -1985,13 +2091,103 @@ btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf
             knots[nk++] = acos(f->xd[i]); /* ascending in ti as mu descends */
     knots[nk++] = M_PI / 2;
     btdf_status st;
-    if (b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM)
+    if (refl)
         st = btdf_estimate_angles(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
                                   refl_angle, &m, r);
     else
         st = btdf_estimate_knots(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
                                  mis_eval, &m, r);
     free(knots);
+    return st;
+}
+
+static int cmp_ti(const void *a, const void *b)
+{
+    double x = ((const btdf_ti_error *)a)->ti, y = ((const btdf_ti_error *)b)->ti;
+    return x < y ? -1 : x > y;
+}
+
+/* r := the worse of r and o at every test angle (angles both tested: the larger of each
+   error; the others: kept as they are), the statistics recomputed over the union. */
+static btdf_status merge_reports(btdf_report *r, btdf_report *o)
+{
+    size_t n = r->test_angles + o->test_angles;
+    btdf_ti_error *u = malloc((n ? n : 1) * sizeof *u);
+    if (!u)
+        return BTDF_ENOMEM;
+    memcpy(u, r->per_ti, r->test_angles * sizeof *u);
+    memcpy(u + r->test_angles, o->per_ti, o->test_angles * sizeof *u);
+    qsort(u, n, sizeof *u, cmp_ti);
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (m > 0 && u[m - 1].ti == u[i].ti) {
+            btdf_ti_error *a = &u[m - 1];
+            if (u[i].e_l1 > a->e_l1)
+                a->T_table = u[i].T_table, a->e_l1 = u[i].e_l1;
+            a->e_t = fmax(a->e_t, u[i].e_t);
+            a->e_max = fmax(a->e_max, u[i].e_max);
+        } else {
+            u[m++] = u[i];
+        }
+    }
+    double l1 = 0, t = 0, mx = 0;
+    size_t nmx = 0;
+    r->e_l1_max = r->e_t_max = r->e_max_max = 0.0;
+    for (size_t i = 0; i < m; i++) {
+        r->e_l1_max = fmax(r->e_l1_max, u[i].e_l1);
+        r->e_t_max = fmax(r->e_t_max, u[i].e_t);
+        l1 += u[i].e_l1;
+        t += u[i].e_t;
+        if (u[i].T >= T_FLOOR) { /* where e_max is defined (btdf_ti_error) */
+            r->e_max_max = fmax(r->e_max_max, u[i].e_max);
+            mx += u[i].e_max;
+            nmx++;
+        }
+    }
+    r->e_l1_mean = m ? l1 / (double)m : 0.0;
+    r->e_t_mean = m ? t / (double)m : 0.0;
+    r->e_max_mean = nmx ? mx / (double)nmx : 0.0;
+    r->e_max_angles = nmx;
+    r->test_points += o->test_points;
+    r->seconds_estimate += o->seconds_estimate;
+    free(r->per_ti);
+    r->per_ti = u;
+    r->test_angles = m;
+    return BTDF_OK;
+}
+
+btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
+                               size_t angles, size_t ppa, uint64_t seed, int threads,
+                               btdf_report *r);
+/* The report of one block, as renderers read it: light tracers (pbrt-v3's importance
+   mode, DIRECT: the light in the slow index) and path tracers' camera rays (radiance
+   mode, ADJOINT: the light in the fast index) read the same stored series along
+   different axes and with different norms, so both readings are measured and the worse
+   kept at every test angle. A three-channel transmission block's fold is right on the
+   radiance path only (build_impl): there the light side's report is that block's
+   ADJOINT reading. */
+btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
+                               size_t angles, size_t ppa, uint64_t seed, int threads,
+                               btdf_report *r)
+{
+    int b = (int)side;
+    int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
+    /* the other transmission block, which ADJOINT reads for this side's light */
+    int tb = b == BTDF_SCATFUN_T_ENTER ? BTDF_SCATFUN_T_LEAVE : BTDF_SCATFUN_T_ENTER;
+    int has_adj = refl || (f->sides & tb) != 0;
+    if (f->channels == 3 && !refl)
+        /* a file of this one block: its ADJOINT reading is the other side's light */
+        return report_reading(f, p, has_adj ? b : tb, BTDF_SCATFUN_ADJOINT, angles, ppa, seed,
+                              threads, r);
+    btdf_status st = report_reading(f, p, b, BTDF_SCATFUN_DIRECT, angles, ppa, seed, threads, r);
+    if (st != BTDF_OK || !has_adj)
+        return st;
+    btdf_report o;
+    memset(&o, 0, sizeof o);
+    st = report_reading(f, p, b, BTDF_SCATFUN_ADJOINT, angles, ppa, seed, threads, &o);
+    if (st == BTDF_OK)
+        st = merge_reports(r, &o);
+    free(o.per_ti);
     return st;
 }
 

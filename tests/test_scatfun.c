@@ -621,6 +621,62 @@ static void test_colour_fold(void **state)
     btdf_scatfun_free(f);
 }
 
+/* The report reads every transmission block both ways a renderer does: DIRECT (the light
+   in the slow index, pbrt-v3's importance mode) and ADJOINT (the light in the fast
+   index, the radiance mode of a path tracer's camera rays). Spoil by half the series of
+   the leave block at one grazing fast node (about 87 deg): DIRECT, light from below,
+   integrates over that index with the norm of light inside the glass (T near 0.9 inside
+   the critical cone), so it hardly notices; ADJOINT reads the column as light from
+   above at 87 deg, whose transmittance is about 0.03, so the enter side's report must
+   see it. (A report reading DIRECT only passed files whose path-traced error was 3 to 6
+   times their tolerance.) */
+static void test_report_reads_adjoint(void **state)
+{
+    (void)state;
+    unsigned char *b = malloc(fx.len);
+    assert_non_null(b);
+    memcpy(b, fx.bytes, fx.len);
+    uint32_t n = u32_at(b, 12);
+    size_t base = 64 + 4 * (size_t)n + 12 * (size_t)n * n; /* nBases = 1, no parameters */
+    const float *x = btdf_scatfun_nodes(fx.f);
+    uint32_t o = 0; /* the leave block's fast node nearest mu = -0.05 */
+    for (uint32_t k = 0; k + 1 < n / 2; k++)
+        if (fabs(x[k] + 0.05f) < fabs(x[o] + 0.05f))
+            o = k;
+    size_t spoilt = 0;
+    for (uint32_t i = 0; i + 1 < n / 2; i++) {
+        size_t off, m;
+        assert_int_equal(btdf_scatfun_pair(fx.f, i, o, &off, &m), BTDF_OK);
+        for (size_t k = 0; k < m; k++, spoilt++)
+            put_f32_at(b, base + 4 * (off + k), 1.5f * f32_at(b, base + 4 * (off + k)));
+    }
+    assert_true(spoilt > 0 && x[o] < -0.03f && x[o] > -0.07f);
+    btdf_scatfun *g = NULL;
+    char msg[256];
+    assert_int_equal(btdf_scatfun_read_mem(b, fx.len, &g, msg, sizeof msg), BTDF_OK);
+    btdf_report good, bad, dir;
+    memset(&good, 0, sizeof good);
+    memset(&bad, 0, sizeof bad);
+    memset(&dir, 0, sizeof dir);
+    assert_int_equal(btdf_scatfun_report(fx.f, &fx.p, BTDF_SIDE_ENTER, 8, 4096, 5, 2, &good),
+                     BTDF_OK);
+    assert_int_equal(btdf_scatfun_report(g, &fx.p, BTDF_SIDE_ENTER, 8, 4096, 5, 2, &bad),
+                     BTDF_OK);
+    assert_int_equal(btdf_scatfun_report(g, &fx.p, BTDF_SIDE_LEAVE, 8, 4096, 5, 2, &dir),
+                     BTDF_OK);
+    fprintf(stderr, "spoilt the leave block's column at mu_f = %g: enter side e_L1 %g as "
+                    "built, %g spoilt; leave side %g\n", (double)x[o], good.e_l1_max,
+            bad.e_l1_max, dir.e_l1_max);
+    assert_true(good.e_l1_max <= TOL);
+    assert_true(bad.e_l1_max > 5 * TOL); /* seen by the ADJOINT reading */
+    assert_true(dir.e_l1_max <= TOL);    /* unseen by the DIRECT one */
+    free(good.per_ti);
+    free(bad.per_ti);
+    free(dir.per_ti);
+    btdf_scatfun_free(g);
+    free(b);
+}
+
 static void test_bad_arguments(void **state)
 {
     (void)state;
@@ -676,6 +732,7 @@ int main(void)
         cmocka_unit_test(test_bad_arguments),
         cmocka_unit_test(test_four_blocks),
         cmocka_unit_test(test_colour_fold),
+        cmocka_unit_test(test_report_reads_adjoint),
     };
     return cmocka_run_group_tests_name("scatfun", tests, setup, teardown);
 }
