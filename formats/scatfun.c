@@ -79,9 +79,16 @@ static const char *default_meta(const btdf_scatfun *f, char *buf, size_t len)
     if (!f->built)
         return "";
     const btdf_params *p = &f->params;
+    /* transmission-only files keep the words they always had */
+    char words[64];
     const char *sides = f->sides == BTDF_SIDE_BOTH    ? "both"
                         : f->sides == BTDF_SIDE_ENTER ? "enter"
-                                                      : "leave";
+                        : f->sides == BTDF_SIDE_LEAVE ? "leave"
+                                                      : words;
+    snprintf(words, sizeof words, "%s%s%s%s", f->sides & BTDF_SCATFUN_T_ENTER ? "T_enter " : "",
+             f->sides & BTDF_SCATFUN_T_LEAVE ? "T_leave " : "",
+             f->sides & BTDF_SCATFUN_R_TOP ? "R_top " : "",
+             f->sides & BTDF_SCATFUN_R_BOTTOM ? "R_bottom" : "");
     if (p->channels == 3)
         snprintf(buf, len,
                  "{\"generator\": \"btdftab %s\", \"model\": \"Xu & Sun 2008 Eq. 25\", "
@@ -319,9 +326,13 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
             continue;
         double ms = f->nodes[i / n], mf = f->nodes[i % n];
         if (ms > 0 && mf > 0)
-            f->sides |= BTDF_SIDE_ENTER;
+            f->sides |= BTDF_SCATFUN_T_ENTER;
         else if (ms < 0 && mf < 0)
-            f->sides |= BTDF_SIDE_LEAVE;
+            f->sides |= BTDF_SCATFUN_T_LEAVE;
+        else if (ms > 0 && mf < 0)
+            f->sides |= BTDF_SCATFUN_R_TOP;
+        else if (ms < 0 && mf > 0)
+            f->sides |= BTDF_SCATFUN_R_BOTTOM;
     }
     *out = f;
     return BTDF_OK;
@@ -415,7 +426,11 @@ BTDF_API btdf_status btdf_scatfun_info(const btdf_scatfun *f, FILE *out)
     ok &= fprintf(out, "eta               %.9g\n", (double)f->eta) > 0;
     ok &= fprintf(out, "alpha             %.6g %.6g\n", (double)f->alpha[0], (double)f->alpha[1]) > 0;
     ok &= fprintf(out, "sides             %s%s%s\n", f->sides & BTDF_SIDE_ENTER ? "enter " : "",
-                  f->sides & BTDF_SIDE_LEAVE ? "leave" : "", f->sides ? "" : "none") > 0;
+                  f->sides & BTDF_SIDE_LEAVE ? "leave" : "",
+                  f->sides & BTDF_SCATFUN_TRANSMISSION ? "" : "none") > 0;
+    ok &= fprintf(out, "reflection        %s%s%s\n", f->sides & BTDF_SCATFUN_R_TOP ? "top " : "",
+                  f->sides & BTDF_SCATFUN_R_BOTTOM ? "bottom" : "",
+                  f->sides & BTDF_SCATFUN_REFLECTION ? "" : "none") > 0;
     ok &= fprintf(out, "coefficients      %u floats\n", f->ncoeffs) > 0;
     ok &= fprintf(out, "mMax              %u\n", f->mmax) > 0;
     ok &= fprintf(out, "pairs             %zu, %zu with a series, %zu empty\n", nn, nz, nn - nz) > 0;
@@ -468,9 +483,13 @@ BTDF_API int btdf_scatfun_sides(const btdf_scatfun *f)
             if (f->offsets[2 * ((size_t)i * f->n + o) + 1] == 0)
                 continue;
             if (f->nodes[i] > 0.0f && f->nodes[o] > 0.0f)
-                sides |= BTDF_SIDE_ENTER;
+                sides |= BTDF_SCATFUN_T_ENTER;
             else if (f->nodes[i] < 0.0f && f->nodes[o] < 0.0f)
-                sides |= BTDF_SIDE_LEAVE;
+                sides |= BTDF_SCATFUN_T_LEAVE;
+            else if (f->nodes[i] > 0.0f && f->nodes[o] < 0.0f)
+                sides |= BTDF_SCATFUN_R_TOP;
+            else if (f->nodes[i] < 0.0f && f->nodes[o] > 0.0f)
+                sides |= BTDF_SCATFUN_R_BOTTOM;
         }
     return sides;
 }

@@ -27,6 +27,8 @@ typedef struct est_job {
     est_eval_fn fn;       /* the evaluation under test */
     const void *obj;
     const double *ti;     /* the test angles */
+    est_angle_fn custom;  /* a whole per-angle estimate instead of est_angle's, or NULL */
+    size_t ppa;           /* points per angle asked for (for custom) */
     size_t nu, npsi, nmu, nphi;
     uint64_t seed;
     btdf_ti_error *res;
@@ -81,6 +83,12 @@ static void est_angle(void *arg, size_t k)
     uint64_t bits;
     memcpy(&bits, &ti, sizeof bits);
     uint64_t rng = j->seed ^ (0xa0761d6478bd642full * (bits | 1u));
+    if (j->custom) {
+        memset(&j->res[k], 0, sizeof j->res[k]);
+        j->res[k].ti = ti;
+        j->points[k] = j->custom(j->obj, p, ti, rng, j->ppa, &j->res[k]);
+        return;
+    }
     double sti = sin(ti), cti = cos(ti), s = p->smoothness;
     rho_in a;
     rho_in_init(&a, sti, cti, s, p->k0);
@@ -230,13 +238,13 @@ static double ratio(double a, double b, double fl)
     return a > b ? a / b : b / a;
 }
 
-static btdf_status estimate_knots(const btdf_params *p, int refl, double ti_min,
-                                  double ti_max, size_t test_angles, size_t points_per_angle,
-                                  uint64_t seed, int threads, const double *knots,
-                                  size_t nknots, est_eval_fn fn, const void *obj,
-                                  btdf_report *r)
+static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
+                                 double ti_max, size_t test_angles, size_t points_per_angle,
+                                 uint64_t seed, int threads, const double *knots,
+                                 size_t nknots, est_eval_fn fn, est_angle_fn custom,
+                                 const void *obj, btdf_report *r)
 {
-    if (!p || !fn || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
+    if (!p || !(fn || custom) || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
         return BTDF_EINVAL;
     if (test_angles == 0)
         test_angles = 48;
@@ -250,6 +258,8 @@ static btdf_status estimate_knots(const btdf_params *p, int refl, double ti_min,
     j.p = p;
     j.refl = refl;
     j.fn = fn;
+    j.custom = custom;
+    j.ppa = points_per_angle;
     j.obj = obj;
     j.npsi = 32;
     j.nu = (points_per_angle + 31) / 32;
@@ -378,20 +388,38 @@ static btdf_status estimate_knots(const btdf_params *p, int refl, double ti_min,
     return BTDF_OK;
 }
 
+btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_max,
+                                size_t test_angles, size_t points_per_angle, uint64_t seed,
+                                int threads, const double *knots, size_t nknots,
+                                est_eval_fn fn, const void *obj, btdf_report *r)
+{
+    return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         knots, nknots, fn, NULL, obj, r);
+}
+
+btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
+                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
+                                 int threads, const double *knots, size_t nknots,
+                                 est_angle_fn fn, const void *obj, btdf_report *r)
+{
+    return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         knots, nknots, NULL, fn, obj, r);
+}
+
 btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
                              size_t test_angles, size_t points_per_angle, uint64_t seed,
                              int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
-    return estimate_knots(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                          NULL, 0, fn, obj, r);
+    return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         NULL, 0, fn, NULL, obj, r);
 }
 
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
                                size_t test_angles, size_t points_per_angle, uint64_t seed,
                                int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
-    return estimate_knots(p, 1, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                          NULL, 0, fn, obj, r);
+    return estimate_impl(p, 1, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         NULL, 0, fn, NULL, obj, r);
 }
 
 BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
@@ -425,9 +453,9 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
             knots[k] = t->s[k].ti;
         nk = t->ns;
     }
-    btdf_status st = estimate_knots(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
-                                    test_angles, points_per_angle, seed, threads, knots, nk,
-                                    table_fn, t, r);
+    btdf_status st = estimate_impl(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
+                                   test_angles, points_per_angle, seed, threads, knots, nk,
+                                   table_fn, NULL, t, r);
     free(knots);
     if (st == BTDF_OK) {
         r->slices = t->ns;

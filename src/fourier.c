@@ -143,17 +143,27 @@ static void fft_free(fftbuf *b)
     memset(b, 0, sizeof *b);
 }
 
-/* In-place forward complex FFT of length L (a power of two) on b->re, b->im. */
-static void fft(fftbuf *b, size_t L)
+/* In-place forward complex FFT of length L (a power of two) on b->re, b->im. The
+   twiddles are kept for the largest length the buffer holds and read with a stride
+   for shorter ones (the builder alternates lengths; recomputing them per call cost a
+   tenth of a build). Powers of two scale exactly, so the values are the same. */
+static void twiddles(fftbuf *b, size_t L)
 {
-    if (b->twl != L) {
-        for (size_t k = 0; k < L / 2; k++) {
-            double a = -2.0 * M_PI * (double)k / (double)L;
+    if (!(b->twl >= L && b->twl % L == 0)) {
+        size_t T = b->cap % L == 0 ? b->cap : L;
+        for (size_t k = 0; k < T / 2; k++) {
+            double a = -2.0 * M_PI * (double)k / (double)T;
             b->twr[k] = cos(a);
             b->twi[k] = sin(a);
         }
-        b->twl = L;
+        b->twl = T;
     }
+}
+
+static void fft(fftbuf *b, size_t L)
+{
+    twiddles(b, L);
+    size_t g = b->twl / L; /* L >= 1; twl is a multiple of L */
     double *re = b->re, *im = b->im;
     for (size_t i = 1, j = 0; i < L; i++) {
         size_t bit = L >> 1;
@@ -166,7 +176,7 @@ static void fft(fftbuf *b, size_t L)
         }
     }
     for (size_t len = 2; len <= L; len <<= 1) {
-        size_t half = len / 2, step = L / len;
+        size_t half = len / 2, step = L / len * g;
         for (size_t s = 0; s < L; s += len) {
             for (size_t k = 0; k < half; k++) {
                 double wr = b->twr[k * step], wi = b->twi[k * step];
@@ -178,6 +188,43 @@ static void fft(fftbuf *b, size_t L)
                 im[p] += xi;
             }
         }
+    }
+}
+
+/* Real parts of the DFT X[k] = sum_j x[j] e^(-2 pi i j k / L), k = 0..L/2, of a real
+   sequence x[0..L-1] in b->re (L a power of two >= 4), into b->re[0..L/2], by one
+   complex FFT of length L/2: z[n] = x[2n] + i x[2n+1] gives Z, and with
+   E_k = (Z_k + conj Z_(H-k)) / 2, O_k = (Z_k - conj Z_(H-k)) / 2i, X_k = E_k + W^k O_k,
+   W = e^(-2 pi i / L). Half the work of transforming x as a complex sequence. */
+static void fft_real(fftbuf *b, size_t L)
+{
+    size_t H = L / 2;
+    twiddles(b, L); /* a table for L serves H too */
+    double *re = b->re, *im = b->im;
+    for (size_t n = 0; n < H; n++) { /* re[2n], re[2n+1] are read before re[n] is written */
+        double e = re[2 * n], o = re[2 * n + 1];
+        re[n] = e;
+        im[n] = o;
+    }
+    fft(b, H);
+    size_t g = b->twl / L; /* a multiple of L (twiddles above; fft keeps it) */
+    double z0r = re[0], z0i = im[0];
+    re[0] = z0r + z0i; /* k = 0: E = Re Z_0, O = Im Z_0 */
+    re[H] = z0r - z0i; /* k = H: W^H = -1 */
+    for (size_t k = 1; k <= H / 2; k++) {
+        size_t q = H - k;
+        double ar = re[k], ai = im[k], br = re[q], bi = im[q];
+        /* W^k = c - i s with c = cos(2 pi k / L), s = sin(2 pi k / L) */
+        double c = b->twr[k * g], sn = -b->twi[k * g];
+        double sr = 0.5 * (ar + br), si = 0.5 * (ai + bi), dr = 0.5 * (ar - br);
+        /* Re X_k = Re E_k + c Re O_k + s Im O_k with Re O_k = (ai + bi) / 2 and
+           Im O_k = -(ar - br) / 2; for X_(H-k), W^(H-k) = -c - i s, Re O = (ai + bi) / 2
+           and Im O = (ar - br) / 2 */
+        double xk = sr + c * si - sn * dr;
+        double xq = sr - c * si + sn * dr;
+        re[k] = xk;
+        if (q != k)
+            re[q] = xq;
     }
 }
 
@@ -196,7 +243,7 @@ static int dct_forward(fftbuf *b, const double *x, size_t N, double *a)
         b->re[L - j] = x[j];
         b->im[L - j] = 0.0;
     }
-    fft(b, L);
+    fft_real(b, L);
     a[0] = b->re[0] / (double)L;
     for (size_t k = 1; k < N; k++)
         a[k] = b->re[k] / (double)N;
@@ -211,7 +258,7 @@ static int dct_inverse(fftbuf *b, const double *a, size_t m, size_t N, double *y
     if (fft_reserve(b, L))
         return -1;
     for (size_t k = 0; k < L; k++)
-        b->re[k] = b->im[k] = 0.0;
+        b->re[k] = 0.0;
     for (size_t k = 0; k < m && k <= N; k++) {
         if (k == 0 || k == N) {
             b->re[k] = a[k];
@@ -220,32 +267,30 @@ static int dct_inverse(fftbuf *b, const double *a, size_t m, size_t N, double *y
             b->re[L - k] = 0.5 * a[k];
         }
     }
-    fft(b, L);
+    fft_real(b, L);
     for (size_t j = 0; j <= N; j++)
         y[j] = b->re[j];
     return 0;
-}
-
-/* sum_{k < m} a_k cos(k phi) from cos phi by the Chebyshev recurrence. */
-static double series_at_f(const float *a, size_t m, double c)
-{
-    if (m == 0)
-        return 0.0;
-    double sum = a[0], ck_1 = 1.0, ck = c;
-    for (size_t k = 1; k < m; k++) {
-        sum += (double)a[k] * ck;
-        double nx = 2.0 * c * ck - ck_1;
-        ck_1 = ck;
-        ck = nx;
-    }
-    return sum;
 }
 
 /* ------------------------------------------------------------------------- */
 /* Building: per-pair series and adaptive elevation nodes                    */
 /* ------------------------------------------------------------------------- */
 
-enum { SIDE_ENTER = 0, SIDE_LEAVE = 1 };
+/* The four blocks of a full dielectric interface, in pbrt-v3's convention (slow index
+   mu_s = wo.z, fast index mu_f = -wi.z):
+     T_ENTER  mu_s > 0, mu_f > 0: transmission, light entering (index n);
+     T_LEAVE  mu_s < 0, mu_f < 0: transmission, light leaving (index 1/n);
+     R_TOP    mu_s > 0, mu_f < 0: reflection back into the upper medium (index n);
+     R_BOTTOM mu_s < 0, mu_f > 0: reflection inside the dense medium (index 1/n,
+              total internal reflection included).
+   Every block is built on the half-node grid in (|mu_s|, |mu_f|). */
+enum { BLK_T_ENTER = 0, BLK_T_LEAVE = 1, BLK_R_TOP = 2, BLK_R_BOTTOM = 3, NBLK = 4 };
+static const int blk_refl[NBLK] = {0, 0, 1, 1};
+static const int blk_slow_neg[NBLK] = {0, 1, 0, 1}; /* mu_s < 0 */
+static const int blk_fast_neg[NBLK] = {0, 1, 1, 0}; /* mu_f < 0 */
+static const int blk_mask[NBLK] = {BTDF_SCATFUN_T_ENTER, BTDF_SCATFUN_T_LEAVE,
+                                   BTDF_SCATFUN_R_TOP, BTDF_SCATFUN_R_BOTTOM};
 
 typedef struct pair {
     double *a; /* nst * m coefficients, channel-major (Y, R, B) */
@@ -257,26 +302,30 @@ typedef struct build_ctx {
     const btdf_params *p;
     int nc;        /* model channels */
     int nst;       /* stored channels: 1, or 3 (Y, R, B) */
-    double ior[2][3]; /* per side and channel */
+    double ior[NBLK][3];  /* per block and channel */
+    double fold[NBLK][3]; /* per block and model channel: the factor folded into the stored
+                             values so pbrt-v3's single-eta radiance path is right for
+                             every channel (1 for one channel and for reflection) */
     size_t nmin, nmax; /* phi sample counts (powers of two) */
     double budget; /* current target for e_L1 */
     /* half nodes P[0..K-1] ascending, P[K-1] = 1, and the full node list */
     size_t K;
     double *P;
     double *full; /* 2K + 2 */
-    double (*Tn)[2][4]; /* Tn[r][side][stored channel]: max(T, floor) at node r */
-    int want[2];
-    pair *pairs[2]; /* [side][r * K + c] */
+    double (*Tn)[NBLK][8]; /* Tn[r][side][0..2]: the DIRECT norm per stored channel at node
+                              r, [4..6]: the ADJOINT norm (norms_at) */
+    int want[NBLK];
+    pair *pairs[NBLK]; /* [block][r * K + c] */
     /* checks */
     size_t nint;    /* intervals = K: [0, P0], [P0, P1], ... */
     double *mid;    /* nint midpoints */
-    double (*Tm)[2][4]; /* norms at midpoints */
-    double *errc[2];    /* [side][r * nint + j]: column check errors (already normalised) */
-    double *errr[2];    /* [side][j]: row check errors (normalised, mu-integrated) */
-    double *gapr[2];    /* [side][j * K + col]: row check gap at one column */
-    unsigned char *okc[2], *okr[2]; /* errc / gapr entries carried from the last pass */
-    pair *pcol[2];      /* [side][r * K + j]: series at (P[r], mid[j]), a future pair */
-    pair *prow[2];      /* [side][j * K + col]: series at (mid[j], P[col]) */
+    double (*Tm)[NBLK][8]; /* norms at midpoints */
+    double *errc[NBLK];    /* [block][r * nint + j]: column check errors (already normalised) */
+    double *errr[NBLK];    /* [block][j]: row check errors (normalised, mu-integrated) */
+    double *gapr[NBLK];    /* [block][j * K + col]: row check gap at one column */
+    unsigned char *okc[NBLK], *okr[NBLK]; /* errc / gapr entries carried from the last pass */
+    pair *pcol[NBLK];      /* [block][r * K + j]: series at (P[r], mid[j]), a future pair */
+    pair *prow[NBLK];      /* [block][j * K + col]: series at (mid[j], P[col]) */
     unsigned char *hasTn, *hasTm; /* norms carried from the last pass */
     int oom, capped;    /* flags raised by workers */
     pthread_mutex_t lock;
@@ -344,16 +393,25 @@ static void build_ws_free(void *vw)
     free(w);
 }
 
-/* Stored channel values of g = rho * mu_f at one azimuth, from the model channels. */
-static void stored_values(const build_ctx *c, int side, const rho_in *ri, const rho_out *ro,
-                          double mu_f, double cph, double sph, double *out)
+/* Stored channel values of g = rho * |mu_f| (rho_r * |mu_f| for a reflection block) at
+   one azimuth, from the model channels, each times the block's fold factor. */
+static void stored_values(const build_ctx *c, int b, const rho_in *ri, const rho_out *ro,
+                          const bt_ir *ir, double mu_f, double cph, double sph, double *out)
 {
     double v[3];
-    for (int k = 0; k < c->nc; k++)
-        v[k] = rho_kernel(c->ior[side][k], c->p->smoothness, ri, ro, cph, sph) * mu_f;
+    for (int k = 0; k < c->nc; k++) {
+        double n = c->ior[b][k];
+        if (blk_refl[b])
+            /* h2 = (1 + cos phi)/2 = sin^2(phi_d/2), MODEL.md 8's azimuth part */
+            v[k] = bt_rho_r(n, n - 1.0, c->p->smoothness, ir, 0.5 * (1.0 + cph), sph) * mu_f;
+        else
+            v[k] = rho_kernel(n, c->p->smoothness, ri, ro, cph, sph) * mu_f;
+    }
     if (c->nst == 1) {
         out[0] = v[0];
     } else {
+        for (int k = 0; k < 3; k++)
+            v[k] *= c->fold[b][k];
         out[0] = LUM_R * v[0] + LUM_G * v[1] + LUM_B * v[2];
         out[1] = v[0];
         out[2] = v[2];
@@ -361,22 +419,34 @@ static void stored_values(const build_ctx *c, int side, const rho_in *ri, const 
 }
 
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
-   j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones). */
-static void sample_grid(const build_ctx *c, const build_ws *w, int side, double mu_s,
+   j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones).
+   mu_s, mu_f are the block's cosines as magnitudes, in [0, 1]. */
+static void sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_s,
                         double mu_f, size_t N, size_t stride, size_t step, size_t phase,
                         double *x)
 {
     rho_in ri;
     rho_out ro;
+    bt_ir ir;
+    memset(&ri, 0, sizeof ri); /* only the block's kind of geometry is used */
+    memset(&ro, 0, sizeof ro);
+    memset(&ir, 0, sizeof ir);
     /* |mu| <= 1 holds for every node and midpoint, so the sqrt arguments are >= 0;
        fmax guards rounding. */
-    rho_in_init(&ri, sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), mu_s, c->p->smoothness, c->p->k0);
-    rho_out_init(&ro, sqrt(fmax(0.0, 1.0 - mu_f * mu_f)), -mu_f, c->p->smoothness, c->p->k0);
+    double ss = sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), sf = sqrt(fmax(0.0, 1.0 - mu_f * mu_f));
+    if (blk_refl[b]) {
+        /* ti = acos mu_s, tr = acos mu_f, both in [0, pi/2] */
+        double ti = atan2(ss, mu_s), tr = atan2(sf, mu_f);
+        bt_ir_rad(&ir, ti, tr, c->p->smoothness, c->p->k0);
+    } else {
+        rho_in_init(&ri, ss, mu_s, c->p->smoothness, c->p->k0);
+        rho_out_init(&ro, sf, -mu_f, c->p->smoothness, c->p->k0);
+    }
     double v[3];
     size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
     for (size_t j = phase; j <= N; j += step) {
         /* phi_d = j pi / N; phi = pi - phi_d, so cos phi = -cos phi_d. */
-        stored_values(c, side, &ri, &ro, mu_f, -w->cosg[j * g], w->sing[j * g], v);
+        stored_values(c, b, &ri, &ro, &ir, mu_f, -w->cosg[j * g], w->sing[j * g], v);
         for (int k = 0; k < c->nst; k++)
             x[k * stride + j] = v[k];
     }
@@ -425,6 +495,24 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
         }
         double worst = 0.0;
         for (int k = 0; k < c->nst; k++) {
+            if (blk_refl[side]) {
+                /* Reflection below the dense side has cusps in phi where facets start
+                   to reflect totally (Fresnel ~ 1 - sqrt), so its coefficients decay
+                   like k^-1.5 and the bound below would double the grid to its cap.
+                   The measured L1 over the circle of the coarse series against the
+                   new samples is the error itself, not a bound. */
+                if (dct_inverse(&w->fb, w->a + k * S, N + 1, N2, w->y))
+                    return 0;
+                double sum = 0.0;
+                for (size_t j = 0; j <= N2; j++) {
+                    double d = fabs(w->y[j] - w->x[k * S + j]);
+                    sum += (j == 0 || j == N2) ? 0.5 * d : d;
+                }
+                /* trapezoid over [0, pi] doubled for the circle; norm >= T_FLOOR */
+                double d = 2.0 * sum * M_PI / (double)N2 / norm[k];
+                if (d > worst)
+                    worst = d;
+            }
             if (dct_forward(&w->fb, w->x + k * S, N2, w->a2 + k * S))
                 return 0;
             /* |integral over the circle of sum d_k cos k phi| <= 2 pi sum |d_k| */
@@ -434,7 +522,7 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
             for (size_t q = N + 1; q <= N2; q++)
                 d += fabs(w->a2[k * S + q]);
             d = 2.0 * M_PI * d / norm[k]; /* norm >= T_FLOOR > 0 */
-            if (d > worst)
+            if (d > worst && !blk_refl[side])
                 worst = d;
             memcpy(w->a + k * S, w->a2 + k * S, (N2 + 1) * sizeof(double));
         }
@@ -470,16 +558,72 @@ static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t
     return m;
 }
 
+/* Shares of the current budget for the node checks. Each check bounds one
+   interpolation direction at interval midpoints by the triangle inequality, and files
+   that passed checks at 0.35 each measured 2 to 8 times below the tolerance (the
+   nodes were set by the worst midpoint of every row), so the checks take 0.7 each;
+   what decides is the file's own measurement below, not the checks.
+   That measurement accepts a file at ACCEPT_SHARE of the tolerance (the final report
+   uses other test angles and finds other maxima, so a margin); test angles above
+   MARK_SHARE of it get their elevation interval split, for at most LOCAL_ROUNDS
+   rounds, before the shares are halved and everything recomputed. */
+#define SHARE_CHECK 0.7
+#define ACCEPT_SHARE 0.75
+#define MARK_SHARE 0.5
+#define LOCAL_ROUNDS 24
+/* Each measurement after a local round uses the next seed: a file is accepted on test
+   angles its splits were not chosen from (one fixed seed let the splits fit its
+   angles: s = 20 at 1e-3 passed 0.75e-3 on them and measured 1.45e-3 on others). */
+#define QUICK_SEED 0x5ca7f00dULL
+/* The first azimuth grid has at least NMIN_PHI intervals over [0, pi] (8 s for narrow
+   lobes); converge() doubles it until the coefficients settle. */
+#define NMIN_PHI 32.0
+
 static double share_alias(const build_ctx *c) { return 0.05 * c->budget; }
 static double share_trunc(const build_ctx *c) { return 0.10 * c->budget; }
-static double share_col(const build_ctx *c) { return 0.35 * c->budget; }
-static double share_row(const build_ctx *c) { return 0.35 * c->budget; }
+static double share_col(const build_ctx *c) { return SHARE_CHECK * c->budget; }
+static double share_row(const build_ctx *c) { return SHARE_CHECK * c->budget; }
 
 /* Keeps the truncated series of the converged coefficients in w->a as pair pr. */
-static int keep_series(build_ctx *c, build_ws *w, size_t N, const double *norm, pair *pr)
+/* For a reflection block: the shortest length m <= m0 whose dropped tail, measured as
+   the L1 over the circle of the tail series on the grid of N (not bounded by 4 sum
+   |a_q|, far too pessimistic for the k^-1.5 decay of a cusp), costs at most eps_trunc
+   in every stored channel. Bisection: the measured tail shrinks with m. */
+static size_t truncate_len_measured(const build_ctx *c, build_ws *w, size_t N, size_t m0,
+                                    const double *norm, double eps_trunc)
 {
+    size_t S = c->nmax + 1, lo = 0, hi = m0; /* hi passes (the bound holds there) */
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2, q;
+        int pass = 1;
+        for (int k = 0; k < c->nst && pass; k++) {
+            /* tail coefficients a_q for q >= mid, in w->ia */
+            for (q = 0; q <= N; q++)
+                w->ia[q] = q >= mid ? w->a[k * S + q] : 0.0;
+            if (dct_inverse(&w->fb, w->ia, N + 1, N, w->y))
+                return m0;
+            double sum = 0.0;
+            for (size_t j = 0; j <= N; j++)
+                sum += (j == 0 || j == N) ? 0.5 * fabs(w->y[j]) : fabs(w->y[j]);
+            /* trapezoid over [0, pi] doubled for the circle; norm >= T_FLOOR */
+            pass = 2.0 * sum * M_PI / (double)N / norm[k] <= eps_trunc;
+        }
+        if (pass)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    return hi;
+}
+
+static int keep_series(build_ctx *c, build_ws *w, int side, size_t N, const double *norm,
+                       pair *pr)
+{
+    (void)side; /* every block: the bound first, then the measured tail */
     size_t S = c->nmax + 1;
     size_t m = truncate_len(c, w->a, S, N, norm, share_trunc(c));
+    if (m > 0)
+        m = truncate_len_measured(c, w, N, m, norm, share_trunc(c));
     free(pr->a);
     pr->a = NULL;
     pr->m = (uint32_t)m;
@@ -497,6 +641,9 @@ static int keep_series(build_ctx *c, build_ws *w, size_t N, const double *norm, 
     return 0;
 }
 
+static void pair_norm(const build_ctx *c, int side, const double *ns, const double *nf,
+                      double *out);
+
 /* One slow row of one side: the series of every pair (r, c). */
 static void job_row(void *vctx, void *vws, size_t idx)
 {
@@ -506,13 +653,14 @@ static void job_row(void *vctx, void *vws, size_t idx)
     size_t r = idx % c->K;
     if (!c->want[side])
         return;
-    const double *norm = c->Tn[r][side];
+    double norm[3];
     for (size_t col = 0; col < c->K; col++) {
         pair *pr = &c->pairs[side][r * c->K + col];
         if (pr->done)
             continue;
+        pair_norm(c, side, c->Tn[r][side], c->Tn[col][side], norm);
         size_t N = converge(c, w, side, c->P[r], c->P[col], norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, pr))
+        if (N == 0 || keep_series(c, w, side, N, norm, pr))
             goto oom;
     }
     return;
@@ -522,12 +670,22 @@ oom:
     pthread_mutex_unlock(&c->lock);
 }
 
-/* Full node index -> half index r, or -1 for the two zero nodes and the other side. */
-static long half_index(const build_ctx *c, long idx, int side)
+/* Full node index -> half index r on the positive half (nodes > 0), or -1 for the two
+   zero nodes and the negative half. */
+static long half_pos(const build_ctx *c, long idx)
 {
     long K = (long)c->K;
-    if (side == SIDE_ENTER)
-        return idx >= K + 2 ? idx - (K + 2) : -1;
+    return idx >= K + 2 ? idx - (K + 2) : -1;
+}
+
+/* Full node index -> half index r of its magnitude and its sign (1: negative), or -1
+   for the two zero nodes. */
+static long half_any(const build_ctx *c, long idx, int *neg)
+{
+    long K = (long)c->K;
+    *neg = idx <= K - 1;
+    if (idx >= K + 2)
+        return idx - (K + 2);
     return idx >= 0 && idx <= K - 1 ? K - 1 - idx : -1;
 }
 
@@ -541,6 +699,25 @@ static void add_pair(const build_ctx *c, int side, size_t r, size_t col, double 
             ia[k * S + q] += wgt * pr->a[(size_t)k * pr->m + q];
     if (pr->m > *mlen)
         *mlen = pr->m;
+}
+
+/* Zeroes ia (stride S per channel) over the longest series of the stencil at off with
+   weights wt: the fixed index is the row `fixed` (along = 1, stencil over columns) or
+   the column (along = 0, stencil over rows). l1_gap reads no further than that. */
+static void zero_stencil(const build_ctx *c, double *ia, size_t S, int side, size_t fixed,
+                         long off, const double *wt, int along)
+{
+    size_t top = 0;
+    for (int b = 0; b < 4; b++) {
+        long h = half_pos(c, off + b);
+        if (h < 0 || wt[b] == 0.0)
+            continue;
+        size_t idx = along ? fixed * c->K + (size_t)h : (size_t)h * c->K + fixed;
+        if (c->pairs[side][idx].m > top)
+            top = c->pairs[side][idx].m;
+    }
+    for (int k = 0; k < c->nst; k++)
+        memset(ia + (size_t)k * S, 0, top * sizeof *ia);
 }
 
 /* L1 over the circle, per stored channel relative to norm, of (interpolated series
@@ -579,28 +756,29 @@ static void job_colcheck(void *vctx, void *vws, size_t idx)
         return;
     size_t S = c->nmax + 1;
     size_t nfull = 2 * c->K + 2;
-    const double *norm = c->Tn[r][side];
+    double norm[3];
     for (size_t j = 0; j < c->nint; j++) {
         if (c->okc[side][r * c->nint + j])
             continue; /* same row, same stencil, same budget as last pass */
         double x = c->mid[j];
+        pair_norm(c, side, c->Tn[r][side], c->Tm[j][side], norm);
         size_t N = converge(c, w, side, c->P[r], x, norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, &c->pcol[side][r * c->K + j]))
+        if (N == 0 || keep_series(c, w, side, N, norm, &c->pcol[side][r * c->K + j]))
             goto oom;
         long off;
         double wt[4];
-        for (size_t q = 0; q < (size_t)c->nst * S; q++)
-            w->ia[q] = 0.0;
         size_t mlen = 0;
         /* the positive-half stencil; the negative half is its mirror image */
         if (cr_weights(c->full, nfull, x, &off, wt)) {
+            zero_stencil(c, w->ia, S, side, r, off, wt, 1);
             for (int b = 0; b < 4; b++) {
-                long h = half_index(c, off + b, SIDE_ENTER);
+                long h = half_pos(c, off + b);
                 if (h >= 0 && wt[b] != 0.0)
                     add_pair(c, side, r, (size_t)h, wt[b], w->ia, S, &mlen);
             }
         }
-        c->errc[side][r * c->nint + j] = l1_gap(c, w, N, mlen, norm);
+        /* relative to the DIRECT norm; the ADJOINT reading rescales (adj_ratio) */
+        c->errc[side][r * c->nint + j] = l1_gap(c, w, N, mlen, c->Tn[r][side]);
     }
     return;
 oom:
@@ -622,7 +800,7 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
     size_t S = c->nmax + 1;
     size_t nfull = 2 * c->K + 2;
     double x = c->mid[j];
-    const double *norm = c->Tm[j][side];
+    double norm[3];
     long off;
     double wt[4];
     int ok = cr_weights(c->full, nfull, x, &off, wt);
@@ -635,20 +813,20 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
             total += 0.5 * (hi - lo) * *gap;
             continue;
         }
+        pair_norm(c, side, c->Tm[j][side], c->Tn[col][side], norm);
         size_t N = converge(c, w, side, x, c->P[col], norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, N, norm, &c->prow[side][j * c->K + col]))
+        if (N == 0 || keep_series(c, w, side, N, norm, &c->prow[side][j * c->K + col]))
             goto oom;
-        for (size_t q = 0; q < (size_t)c->nst * S; q++)
-            w->ia[q] = 0.0;
         size_t mlen = 0;
         if (ok) {
+            zero_stencil(c, w->ia, S, side, col, off, wt, 0);
             for (int a = 0; a < 4; a++) {
-                long h = half_index(c, off + a, SIDE_ENTER);
+                long h = half_pos(c, off + a);
                 if (h >= 0 && wt[a] != 0.0)
                     add_pair(c, side, (size_t)h, col, wt[a], w->ia, S, &mlen);
             }
         }
-        *gap = l1_gap(c, w, N, mlen, norm);
+        *gap = l1_gap(c, w, N, mlen, c->Tm[j][side]); /* DIRECT norm, as errc */
         total += 0.5 * (hi - lo) * *gap;
     }
     c->errr[side][j] = total;
@@ -659,7 +837,19 @@ oom:
     pthread_mutex_unlock(&c->lock);
 }
 
-/* max(T, floor) per stored channel for slow cosine mu on one side. */
+/* The norms of one block at cosine mu (a node or a midpoint), in the stored values'
+   units, per stored channel:
+   out[0..2], DIRECT (the slow index is the light's): max(T, floor) for the light at
+     mu (max(R, floor) for a reflection block), times the block's fold factor, so
+     that an error relative to it is the unfolded error;
+   out[4..6], ADJOINT (the fast index is the light's, pbrt-v3's radiance mode, what a
+     path tracer's camera rays read): the error of light at mu, integrated over the
+     camera's slow index, is (e^2/mu) times the integral of |error of the stored value|
+     cos(camera), with e^2 the radiance factor (1/eta^2 for T_ENTER, whose light comes
+     from below, eta^2 for T_LEAVE, 1 for reflection) and normalised by max(T', floor)
+     of that light (T' of the other side's index; R of the same block for
+     reflection). So one pair's series may err by max(T', floor) mu / e^2 in the
+     stored units; cos(camera) <= 1 leaves a factor 2 of margin. */
 static void norms_at(const build_ctx *c, int side, double mu, double *out)
 {
     btdf_params q = *c->p;
@@ -667,15 +857,61 @@ static void norms_at(const build_ctx *c, int side, double mu, double *out)
         q.ior[k] = c->ior[side][k];
     double T[3] = {0, 0, 0};
     /* acos of a value in [0, 1] is in [0, pi/2], the accepted range */
-    if (btdf_transmittance(&q, acos(fmin(1.0, fmax(0.0, mu))), T) != BTDF_OK)
+    double ti = acos(fmin(1.0, fmax(0.0, mu)));
+    if ((blk_refl[side] ? btdf_reflectance(&q, ti, T) : btdf_transmittance(&q, ti, T)) !=
+        BTDF_OK)
         T[0] = T[1] = T[2] = 0.0;
     if (c->nst == 1) {
         out[0] = fmax(T[0], T_FLOOR);
     } else {
-        out[0] = fmax(LUM_R * T[0] + LUM_G * T[1] + LUM_B * T[2], T_FLOOR);
-        out[1] = fmax(T[0], T_FLOOR);
-        out[2] = fmax(T[2], T_FLOOR);
+        const double *fo = c->fold[side];
+        out[0] = fmax(LUM_R * T[0] * fo[0] + LUM_G * T[1] * fo[1] + LUM_B * T[2] * fo[2],
+                      T_FLOOR);
+        out[1] = fmax(T[0], T_FLOOR) * fo[0];
+        out[2] = fmax(T[2], T_FLOOR) * fo[2];
     }
+    /* the adjoint light's index: the other transmission block's, or this block's */
+    double e2 = 1.0, eta = c->p->ior[c->nc == 3 ? 1 : 0]; /* the header's eta */
+    if (!blk_refl[side]) {
+        int other = side == BLK_T_ENTER ? BLK_T_LEAVE : BLK_T_ENTER;
+        for (int k = 0; k < c->nc; k++)
+            q.ior[k] = c->ior[other][k];
+        if (btdf_transmittance(&q, ti, T) != BTDF_OK)
+            T[0] = T[1] = T[2] = 0.0;
+        e2 = side == BLK_T_ENTER ? 1.0 / (eta * eta) : eta * eta; /* eta > 0 (checked) */
+    }
+    /* mu >= the first node or midpoint > 0; the floor keeps the norm positive should
+       a node ever sit on the grazing cosine 0 */
+    double w = fmax(mu, 1e-9) / e2;
+    if (c->nst == 1) {
+        out[4] = fmax(T[0], T_FLOOR) * w;
+    } else {
+        out[4] = fmax(LUM_R * T[0] + LUM_G * T[1] + LUM_B * T[2], T_FLOOR) * w;
+        out[5] = fmax(T[0], T_FLOOR) * w;
+        out[6] = fmax(T[2], T_FLOOR) * w;
+    }
+}
+
+/* The norm of the series at (slow node with norms ns, fast node with norms nf): it
+   must serve both readings, DIRECT (relative to the slow node's light) and ADJOINT
+   (relative to the fast node's light), so the smaller of the two. A three-channel
+   transmission block is read ADJOINT only: its fold makes the DIRECT reading off by
+   (n_c/n_G)^2 by design (build_impl). */
+static void pair_norm(const build_ctx *c, int side, const double *ns, const double *nf,
+                      double *out)
+{
+    for (int k = 0; k < c->nst; k++)
+        out[k] = c->nst == 3 && !blk_refl[side] ? nf[4 + k] : fmin(ns[k], nf[4 + k]);
+}
+
+/* A gap measured relative to the slow node's DIRECT norms ns, times this, bounds it
+   relative to the fast node's ADJOINT norms nf (the worst channel of each). */
+static double adj_ratio(const build_ctx *c, const double *ns, const double *nf)
+{
+    double r = 0.0;
+    for (int k = 0; k < c->nst; k++)
+        r = fmax(r, ns[k] / nf[4 + k]); /* norms > 0 (norms_at) */
+    return r;
 }
 
 static void free_pair_array(pair **pp, size_t count)
@@ -692,7 +928,7 @@ static void free_pair_array(pair **pp, size_t count)
 static void free_state(build_ctx *c)
 {
     size_t KK = c->K * c->K;
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         free_pair_array(&c->pairs[s], KK);
         free_pair_array(&c->pcol[s], KK);
         free_pair_array(&c->prow[s], KK);
@@ -718,7 +954,7 @@ static void free_state(build_ctx *c)
 static int ensure_state(build_ctx *c)
 {
     size_t K = c->K, KK = K * K;
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         if (!c->pairs[s])
             c->pairs[s] = calloc(KK, sizeof(pair));
         if (!c->pcol[s])
@@ -764,13 +1000,13 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
     size_t K = c->K, KK2 = KQ * KQ;
     size_t *map = malloc(K * sizeof *map), *qn = malloc(K * sizeof *qn);
     unsigned char *same = malloc(K), *sten = malloc(K);
-    pair *np[2][3] = {{NULL}};
-    double *ne[2] = {NULL}, *ng[2] = {NULL};
-    unsigned char *noc[2] = {NULL}, *nor[2] = {NULL};
-    double(*tn)[2][4] = calloc(KQ, sizeof *tn), (*tm)[2][4] = calloc(KQ, sizeof *tm);
+    pair *np[NBLK][3] = {{NULL}};
+    double *ne[NBLK] = {NULL}, *ng[NBLK] = {NULL};
+    unsigned char *noc[NBLK] = {NULL}, *nor[NBLK] = {NULL};
+    double(*tn)[NBLK][8] = calloc(KQ, sizeof *tn), (*tm)[NBLK][8] = calloc(KQ, sizeof *tm);
     unsigned char *htn = calloc(KQ, 1), *htm = calloc(KQ, 1);
     int ok = map && qn && same && sten && tn && tm && htn && htm;
-    for (int s = 0; s < 2 && ok; s++) {
+    for (int s = 0; s < NBLK && ok; s++) {
         for (int k = 0; k < 3; k++)
             ok &= (np[s][k] = calloc(KK2, sizeof(pair))) != NULL;
         ok &= (ne[s] = calloc(KK2, sizeof(double))) != NULL;
@@ -779,7 +1015,7 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
         ok &= (nor[s] = calloc(KK2, 1)) != NULL;
     }
     if (!ok) {
-        for (int s = 0; s < 2; s++) {
+        for (int s = 0; s < NBLK; s++) {
             for (int k = 0; k < 3; k++)
                 free(np[s][k]);
             free(ne[s]);
@@ -801,7 +1037,7 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
     }
     for (size_t j = 0; j < K; j++)
         sten[j] = same[j] && (j == 0 || same[j - 1]) && (j + 1 >= K || same[j + 1]);
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         pair *pp = c->pairs[s], *pc = c->pcol[s], *pr = c->prow[s];
         for (size_t r = 0; r < K; r++)
             for (size_t col = 0; col < K; col++) {
@@ -856,7 +1092,7 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
         }
     }
     free_state(c); /* the moved series were detached above */
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         c->pairs[s] = np[s][0];
         c->pcol[s] = np[s][1];
         c->prow[s] = np[s][2];
@@ -901,7 +1137,7 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
 {
     size_t K = c->K, n = 2 * K + 2;
     size_t total = 0, mmax = 0;
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         if (!c->want[s])
             continue;
         for (size_t i = 0; i < K * K; i++) {
@@ -947,13 +1183,11 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     for (size_t i = 0; i < n; i++) {
         for (size_t o = 0; o < n; o++) {
             const pair *pr = NULL;
-            for (int s = 0; s < 2 && !pr; s++) {
-                if (!c->want[s])
-                    continue;
-                long hi = half_index(c, (long)i, s), ho = half_index(c, (long)o, s);
-                if (hi >= 0 && ho >= 0)
+            int ni, no;
+            long hi = half_any(c, (long)i, &ni), ho = half_any(c, (long)o, &no);
+            for (int s = 0; s < NBLK && !pr && hi >= 0 && ho >= 0; s++)
+                if (c->want[s] && blk_slow_neg[s] == ni && blk_fast_neg[s] == no)
                     pr = &c->pairs[s][(size_t)hi * K + (size_t)ho];
-            }
             size_t m = pr ? pr->m : 0;
             f->offsets[2 * (i * n + o)] = (uint32_t)pos;
             f->offsets[2 * (i * n + o) + 1] = (uint32_t)m;
@@ -985,7 +1219,9 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     free(cd);
     f->built = 1;
     f->params = *c->p;
-    f->sides = (c->want[0] ? BTDF_SIDE_ENTER : 0) | (c->want[1] ? BTDF_SIDE_LEAVE : 0);
+    f->sides = 0;
+    for (int s = 0; s < NBLK; s++)
+        f->sides |= c->want[s] ? blk_mask[s] : 0;
     *out = f;
     return BTDF_OK;
 }
@@ -1012,14 +1248,31 @@ static size_t pow2_at_least(double v)
     return p;
 }
 
-/* Error estimate of one side with a fixed sample (for the build's own loop). */
-static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads)
+/* Error estimate of one side with a fixed sample (for the build's own loop): the
+   file's own evaluation, the default report's density, a seed of the builder's. Test
+   angles whose e_L1 exceeds mark_at get their elevation interval marked in split
+   (half nodes P[0..K-1]; both sides share them); *nmark counts new marks. */
+static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads,
+                       uint64_t seed, const double *P, size_t K, double mark_at,
+                       unsigned char *split, size_t *nmark)
 {
     btdf_report r;
     memset(&r, 0, sizeof r);
     /* as dense as the default report (narrow lobes need it), on other points */
-    if (btdf_scatfun_report(f, p, side, 24, 8192, 0x5ca7f00dULL, threads, &r) != BTDF_OK)
+    if (btdf_scatfun_report(f, p, side, 24, 8192, seed, threads, &r) != BTDF_OK)
         return HUGE_VAL;
+    for (size_t k = 0; split && k < r.test_angles; k++) {
+        double mu = cos(r.per_ti[k].ti);
+        size_t j = 0; /* interval j is (P[j-1], P[j]], P[-1] = 0 */
+        while (j + 1 < K && P[j] < mu)
+            j++;
+        if (!(r.per_ti[k].e_l1 > mark_at))
+            continue;
+        if (!split[j]) {
+            split[j] = 1;
+            ++*nmark;
+        }
+    }
     free(r.per_ti);
     return r.e_l1_max;
 }
@@ -1029,7 +1282,7 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
 static size_t state_bytes(const build_ctx *c)
 {
     size_t KK = c->K * c->K, b = 0;
-    for (int s = 0; s < 2; s++) {
+    for (int s = 0; s < NBLK; s++) {
         if (!c->want[s])
             continue;
         const pair *arr[3] = {c->pairs[s], c->pcol[s], c->prow[s]};
@@ -1059,9 +1312,11 @@ BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
         return st;
     if (!(tolerance >= 1e-6 && tolerance <= 0.5))
         return scatfun_say(msg, msglen, BTDF_EINVAL, "tolerance %g: must lie in [1e-6, 0.5]", tolerance);
-    if (side < BTDF_SIDE_ENTER || side > BTDF_SIDE_BOTH)
-        return scatfun_say(msg, msglen, BTDF_EINVAL, "side %d: must be 1 (enter), 2 (leave) or 3 (both)",
-                   (int)side);
+    if ((int)side < 1 || (int)side > BTDF_SCATFUN_ALL)
+        return scatfun_say(msg, msglen, BTDF_EINVAL,
+                           "blocks %d: must be a mask of 1 (transmission entering), 2 "
+                           "(transmission leaving), 4 (reflection on top), 8 (reflection "
+                           "below), from 1 to 15", (int)side);
     return BTDF_OK;
 }
 
@@ -1132,14 +1387,30 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
     c.nc = p->channels;
     c.nst = p->channels == 3 ? 3 : 1;
     for (int k = 0; k < c.nc; k++) {
-        c.ior[SIDE_ENTER][k] = p->ior[k];
-        c.ior[SIDE_LEAVE][k] = 1.0 / p->ior[k]; /* ior >= BTDF_IOR_MIN > 0 (checked) */
+        c.ior[BLK_T_ENTER][k] = c.ior[BLK_R_TOP][k] = p->ior[k];
+        /* ior >= BTDF_IOR_MIN > 0 (checked) */
+        c.ior[BLK_T_LEAVE][k] = c.ior[BLK_R_BOTTOM][k] = 1.0 / p->ior[k];
     }
-    c.want[SIDE_ENTER] = (side & BTDF_SIDE_ENTER) != 0;
-    c.want[SIDE_LEAVE] = (side & BTDF_SIDE_LEAVE) != 0;
+    for (int b = 0; b < NBLK; b++) {
+        c.want[b] = ((int)side & blk_mask[b]) != 0;
+        for (int k = 0; k < 3; k++)
+            c.fold[b][k] = 1.0;
+    }
+    if (c.nc == 3) {
+        /* pbrt-v3 scales transmission by e^2 with the header's one eta = n_G: reading
+           T_LEAVE for light from above gives n_G^2 rho_c(1/n_c; o->i), and the truth is
+           n_c^2 rho_c(1/n_c; o->i) (reciprocity), so that block carries (n_c/n_G)^2;
+           T_ENTER read for light from below gives rho_c(n_c; o->i)/n_G^2 against
+           rho_c(n_c; o->i)/n_c^2, so it carries (n_G/n_c)^2. Reflection has no factor. */
+        for (int k = 0; k < 3; k++) {
+            double q = p->ior[k] / p->ior[1]; /* ior > 0 (checked) */
+            c.fold[BLK_T_LEAVE][k] = q * q;
+            c.fold[BLK_T_ENTER][k] = 1.0 / (q * q);
+        }
+    }
     /* The lobe spans about 2/s rad of facet tilt; a first azimuth grid of about 8 s
        points puts several samples across it, so no lobe falls between samples. */
-    c.nmin = pow2_at_least(fmax(64.0, 8.0 * p->smoothness));
+    c.nmin = pow2_at_least(fmax(NMIN_PHI, 8.0 * p->smoothness));
     if (c.nmin > BTDF_SCATFUN_MAX_PHI / 2)
         c.nmin = BTDF_SCATFUN_MAX_PHI / 2;
     c.nmax = BTDF_SCATFUN_MAX_PHI;
@@ -1158,7 +1429,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         P[j] = to_float_node(sin((double)(j + 1) * M_PI / (2.0 * (double)K0)));
     P[K0 - 1] = POLE_NODE;
     size_t K = K0;
-    int tighten = 0;
+    int tighten = 0, local = 0, stall = 0;
+    double last_err = HUGE_VAL; /* the previous measurement, for stall */
     const char *limit = "node"; /* which budget stopped refinement */
     st = BTDF_OK;
     for (int pass = 0;; pass++) {
@@ -1174,7 +1446,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         for (size_t j = 0; j < K; j++) {
             /* checked where a split would put the node, so check series become pairs */
             c.mid[j] = to_float_node(split_point(P, K, j, 0.5));
-            for (int s = 0; s < 2; s++) {
+            for (int s = 0; s < NBLK; s++) {
                 if (!c.want[s])
                     continue;
                 if (!c.hasTn[j])
@@ -1184,12 +1456,12 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             }
             c.hasTn[j] = c.hasTm[j] = 1;
         }
-        if (btdf_parallel_for_ws(threads, 2 * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
+        if (btdf_parallel_for_ws(threads, NBLK * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
             st = BTDF_ENOMEM;
             goto done;
         }
         size_t total = 0;
-        for (int s = 0; s < 2; s++)
+        for (int s = 0; s < NBLK; s++)
             for (size_t i = 0; c.want[s] && i < K * K; i++)
                 total += c.pairs[s][i].m * (size_t)c.nst;
         if (total > max_coeffs) {
@@ -1202,8 +1474,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             st = BTDF_EBUDGET;
             break;
         }
-        if (btdf_parallel_for_ws(threads, 2 * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
-            btdf_parallel_for_ws(threads, 2 * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
+        if (btdf_parallel_for_ws(threads, NBLK * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
+            btdf_parallel_for_ws(threads, NBLK * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
             c.oom) {
             st = BTDF_ENOMEM;
             goto done;
@@ -1221,14 +1493,32 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         }
         size_t nsplit = 0;
         double endr = 1.0;
+        /* The checks bound both readings of every block (norms_at): DIRECT, the light
+           in the slow index, integrates the error over the fast one; ADJOINT, the light
+           in the fast index, over the slow one. One interval check serves both with the
+           axes swapped: the fast-midpoint gaps (errc) summed along a row are the DIRECT
+           error there, summed down a column of rows the ADJOINT error of the light at
+           that midpoint; the slow-midpoint gaps (gapr) the other way round. A
+           three-channel transmission block is read ADJOINT only (pair_norm). */
+        double *ea = calloc(K, sizeof *ea);
+        if (!ea) {
+            free(split);
+            st = BTDF_ENOMEM;
+            goto done;
+        }
         int rowbad = 0; /* once a row fails, also split the ones close to failing */
-        for (int s = 0; s < 2; s++)
-            for (size_t j = 0; c.want[s] && j < K; j++)
-                rowbad |= c.errr[s][j] > share_row(&c);
-        for (int s = 0; s < 2; s++) {
+        for (int s = 0; s < NBLK; s++) {
             if (!c.want[s])
                 continue;
-            for (size_t r = 0; r < K; r++) {
+            int direct = !(c.nst == 3 && !blk_refl[s]);
+            for (size_t j = 0; direct && j < K; j++)
+                rowbad |= c.errr[s][j] > share_row(&c);
+        }
+        for (int s = 0; s < NBLK; s++) {
+            if (!c.want[s])
+                continue;
+            int direct = !(c.nst == 3 && !blk_refl[s]);
+            for (size_t r = 0; direct && r < K; r++) {
                 double sum = 0.0;
                 for (size_t j = 0; j < K; j++) {
                     double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
@@ -1242,20 +1532,56 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                         split[j] = 1;
                 }
             }
-            for (size_t j = 0; j < K; j++)
+            for (size_t j = 0; direct && j < K; j++)
                 if (c.errr[s][j] > share_row(&c) && j == K - 1)
                     /* error ~ the last interval's angle: aim at half the share */
                     endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / c.errr[s][j]));
-            for (size_t j = 0; j < K; j++)
+            for (size_t j = 0; direct && j < K; j++)
                 if (c.errr[s][j] > (rowbad ? 0.7 : 1.0) * share_row(&c))
                     split[j] = 1;
+            /* ADJOINT, light at fast node col: the slow-midpoint gaps down the column */
+            for (size_t col = 0; col < K; col++) {
+                double sum = 0.0;
+                for (size_t j = 0; j < K; j++) {
+                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
+                    /* the camera's cosine, the slow midpoint's: the ADJOINT integral's
+                       weight (norms_at) */
+                    ea[j] = wid * c.mid[j] * c.gapr[s][j * K + col] *
+                            adj_ratio(&c, c.Tm[j][s], c.Tn[col][s]);
+                    sum += ea[j];
+                }
+                if (sum <= share_col(&c))
+                    continue;
+                for (size_t j = 0; j < K; j++)
+                    if (ea[j] > share_col(&c) / (double)K)
+                        split[j] = 1;
+            }
+            /* ADJOINT, light at fast midpoint j: the fast-midpoint gaps over the rows */
+            for (size_t j = 0; j < K; j++) {
+                double tot = 0.0;
+                for (size_t r = 0; r < K; r++) {
+                    double lo = r == 0 ? 0.0 : P[r - 1], hi = r + 1 < K ? P[r + 1] : P[r];
+                    tot += 0.5 * (hi - lo) * P[r] * c.errc[s][r * K + j] *
+                           adj_ratio(&c, c.Tn[r][s], c.Tm[j][s]);
+                }
+                if (tot > share_row(&c)) {
+                    split[j] = 1;
+                    if (j == K - 1)
+                        endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / tot));
+                }
+            }
         }
+        free(ea);
         for (size_t j = 0; j < K; j++)
             nsplit += split[j];
         if (progress) /* K nodes checked, nsplit intervals to split */
             progress(user, tighten ? "series (tighter)" : "elevation nodes", K, nsplit);
         if (nsplit == 0) {
-            /* The node checks pass: measure the file itself and tighten if needed. */
+            /* The node checks pass: measure the file itself. Where it misses, split the
+               elevation intervals of the test angles that miss (the checks run at
+               interval midpoints only; the report hunts for the worst angles), keeping
+               every series; only when that finds nothing to split, halve the shares
+               and recompute everything. */
             btdf_scatfun *f = NULL;
             st = assemble(&c, &f, msg, msglen);
             if (st != BTDF_OK) {
@@ -1263,10 +1589,12 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                 goto done;
             }
             double e = 0.0;
-            for (int s = 0; s < 2; s++)
+            size_t nmark = 0;
+            for (int s = 0; s < NBLK; s++)
                 if (c.want[s])
-                    e = fmax(e, quick_l1(f, p, s == 0 ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE,
-                                         threads));
+                    e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
+                                         QUICK_SEED + (uint64_t)local, P, K,
+                                         MARK_SHARE * tolerance, split, &nmark));
             if (e < best_err) {
                 btdf_scatfun_free(best);
                 best = f;
@@ -1274,20 +1602,31 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             } else {
                 btdf_scatfun_free(f);
             }
-            if (e <= tolerance && !c.capped) {
+            if (e <= ACCEPT_SHARE * tolerance && !c.capped) {
                 free(split);
                 st = BTDF_OK;
                 break;
             }
-            if (++tighten > 6 || c.capped) {
+            /* Splits that do not lower the error (two measurements in a row above 0.9 of
+               the one before) point at the series, not at the nodes: tighten. */
+            stall = e > 0.9 * last_err ? stall + 1 : 0;
+            last_err = e;
+            if (nmark > 0 && local < LOCAL_ROUNDS && stall < 2 && !c.capped) {
+                local++;
+                nsplit = nmark; /* on to the insertion below */
+            } else {
+                if (++tighten > 6 || c.capped) {
+                    free(split);
+                    st = BTDF_EBUDGET;
+                    break;
+                }
+                c.budget *= 0.5;
+                stall = 0;
+                last_err = HUGE_VAL;
                 free(split);
-                st = BTDF_EBUDGET;
-                break;
+                free_state(&c); /* every series and check depends on the budget */
+                continue;       /* same nodes, tighter series and checks */
             }
-            c.budget *= 0.5;
-            free(split);
-            free_state(&c); /* every series and check depends on the budget */
-            continue; /* same nodes, tighter series and checks */
         }
         if (K + nsplit > BTDF_SCATFUN_MAX_HALF_NODES) {
             limit = "node";
@@ -1338,10 +1677,11 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             btdf_status a = assemble(&c, &f, msg, msglen);
             if (a == BTDF_OK) {
                 double e = 0.0;
-                for (int s = 0; s < 2; s++)
+                for (int s = 0; s < NBLK; s++)
                     if (c.want[s])
-                        e = fmax(e, quick_l1(f, p, s == 0 ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE,
-                                             threads));
+                        e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
+                                             QUICK_SEED + (uint64_t)local, NULL, 0, 0.0, NULL,
+                                             NULL));
                 if (e < best_err || !best) {
                     btdf_scatfun_free(best);
                     best = f;
@@ -1394,9 +1734,13 @@ int scatfun_nodes_d(btdf_scatfun *f)
     return 0;
 }
 
-/* Stored-channel series values (Y, R, B or one channel) at (mu_s, mu_f, cos phi_d). */
+/* Stored-channel series values (Y, R, B or one channel) at (mu_s, mu_f, cos phi_d).
+   The same sum as pbrt-v3's (weights times the cosine series of the 16 stencil
+   pairs), arranged for speed: cos(k phi) comes from the Chebyshev recurrence once, in
+   chunks, and each pair's series is a dot product with that chunk, instead of one
+   serial recurrence per pair. Only the order of the additions differs. */
 static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, double mu_f,
-                       double cphi, double *val)
+                       double cphi, double rk, double *val)
 {
     long os, of;
     double ws[4], wf[4];
@@ -1404,6 +1748,9 @@ static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, doub
         val[k] = 0.0;
     if (!cr_weights(x, f->n, mu_s, &os, ws) || !cr_weights(x, f->n, mu_f, &of, wf))
         return 0;
+    double pw[16];
+    uint32_t poff[16], pm[16], mtop = 0;
+    int np = 0;
     for (int a = 0; a < 4; a++) {
         long i = os + a;
         if (ws[a] == 0.0 || i < 0 || i >= (long)f->n)
@@ -1413,10 +1760,40 @@ static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, doub
             if (wf[b] == 0.0 || o < 0 || o >= (long)f->n)
                 continue;
             size_t e = 2 * ((size_t)i * f->n + (size_t)o);
-            uint32_t off = f->offsets[e], m = f->offsets[e + 1];
-            double w = ws[a] * wf[b];
-            for (uint32_t k = 0; k < f->channels; k++)
-                val[k] += w * series_at_f(f->coeffs + off + (size_t)k * m, m, cphi);
+            if (f->offsets[e + 1] == 0)
+                continue;
+            pw[np] = ws[a] * wf[b];
+            poff[np] = f->offsets[e];
+            pm[np] = f->offsets[e + 1];
+            if (pm[np] > mtop)
+                mtop = pm[np];
+            np++;
+        }
+    }
+    enum { CHUNK = 256 };
+    double ck[CHUNK];
+    /* rk^k cos(k phi): u_{k+1} = 2 rk c u_k - rk^2 u_{k-1}, from u_0 = 1 and
+       u_{-1} = cos(-phi) / rk, written so that rk = 1 is the plain recurrence */
+    double c_prev = cphi, c_cur = 1.0, rc = rk * cphi, r2 = rk * rk;
+    for (uint32_t q0 = 0; q0 < mtop; q0 += CHUNK) {
+        uint32_t len = mtop - q0 < CHUNK ? mtop - q0 : CHUNK;
+        for (uint32_t t = 0; t < len; t++) {
+            ck[t] = c_cur;
+            double nx = q0 + t == 0 ? rc : 2.0 * rc * c_cur - r2 * c_prev;
+            c_prev = c_cur;
+            c_cur = nx;
+        }
+        for (int e = 0; e < np; e++) {
+            if (pm[e] <= q0)
+                continue;
+            uint32_t l = pm[e] - q0 < len ? pm[e] - q0 : len;
+            for (uint32_t k = 0; k < f->channels; k++) {
+                const float *a = f->coeffs + poff[e] + (size_t)k * pm[e] + q0;
+                double sum = 0.0;
+                for (uint32_t t = 0; t < l; t++)
+                    sum += (double)a[t] * ck[t];
+                val[k] += pw[e] * sum;
+            }
         }
     }
     return 1;
@@ -1435,8 +1812,18 @@ static void stored_to_out(uint32_t channels, const double *val, double *out)
     out[2] = B;
 }
 
+static btdf_status eval_mu_rk(const btdf_scatfun *f, double mu_s, double mu_f,
+                              double cos_phi_d, int radiance, double rk, double *out);
+
 BTDF_API btdf_status btdf_scatfun_eval_mu(const btdf_scatfun *f, double mu_s, double mu_f,
                                           double cos_phi_d, int radiance, double *out)
+{
+    return eval_mu_rk(f, mu_s, mu_f, cos_phi_d, radiance, 1.0, out);
+}
+
+/* btdf_scatfun_eval_mu with harmonic k scaled by rk^k (rk = 1: as pbrt-v3 reads). */
+static btdf_status eval_mu_rk(const btdf_scatfun *f, double mu_s, double mu_f,
+                              double cos_phi_d, int radiance, double rk, double *out)
 {
     if (!f || !out || !isfinite(mu_s) || !isfinite(mu_f) || !isfinite(cos_phi_d))
         return BTDF_EINVAL;
@@ -1444,7 +1831,7 @@ BTDF_API btdf_status btdf_scatfun_eval_mu(const btdf_scatfun *f, double mu_s, do
         out[k] = 0.0;
     double val[3];
     double cphi = fmin(1.0, fmax(-1.0, cos_phi_d));
-    int ok = eval_stored(f, f->xd, mu_s, mu_f, cphi, val);
+    int ok = eval_stored(f, f->xd, mu_s, mu_f, cphi, rk, val);
     /* f = value / |mu_f|: at mu_f = 0 (grazing) the stored value is 0 too; return 0. */
     if (!ok || !(fabs(mu_f) > 0.0))
         return BTDF_OK;
@@ -1463,21 +1850,27 @@ BTDF_API btdf_status btdf_scatfun_eval_mu(const btdf_scatfun *f, double mu_s, do
     return BTDF_OK;
 }
 
-/* (mu_s, mu_f, radiance) of a side and mode for angles in MODEL.md's frame. */
+/* (mu_s, mu_f, radiance) of a block and mode for angles in MODEL.md's frame; to is
+   the transmitted angle in [pi/2, pi] or, for reflection, tr in [0, pi/2]. */
 static void side_mus(btdf_side side, btdf_scatfun_mode mode, double ti, double to,
                      double *mu_s, double *mu_f, int *radiance)
 {
-    double ci = cos(ti), co = -cos(to); /* both >= 0 in range */
-    if (side == BTDF_SIDE_ENTER) {
-        if (mode == BTDF_SCATFUN_DIRECT)
-            *mu_s = ci, *mu_f = co, *radiance = 0;
-        else
-            *mu_s = -co, *mu_f = -ci, *radiance = 1;
-    } else {
-        if (mode == BTDF_SCATFUN_DIRECT)
-            *mu_s = -ci, *mu_f = -co, *radiance = 0;
-        else
-            *mu_s = co, *mu_f = ci, *radiance = 1;
+    double ci = cos(ti), co = fabs(cos(to)); /* both >= 0 in range */
+    int adj = mode == BTDF_SCATFUN_ADJOINT;
+    *radiance = adj;
+    switch ((int)side) {
+    case BTDF_SCATFUN_T_ENTER:
+        *mu_s = adj ? -co : ci, *mu_f = adj ? -ci : co;
+        break;
+    case BTDF_SCATFUN_T_LEAVE:
+        *mu_s = adj ? co : -ci, *mu_f = adj ? ci : -co;
+        break;
+    case BTDF_SCATFUN_R_TOP: /* the camera's direction in the slow index for ADJOINT */
+        *mu_s = adj ? co : ci, *mu_f = adj ? -ci : -co;
+        break;
+    default: /* BTDF_SCATFUN_R_BOTTOM */
+        *mu_s = adj ? -co : -ci, *mu_f = adj ? ci : co;
+        break;
     }
 }
 
@@ -1487,11 +1880,15 @@ BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side sid
 {
     if (!f || !out)
         return BTDF_EINVAL;
-    if (side != BTDF_SIDE_ENTER && side != BTDF_SIDE_LEAVE)
+    int b = (int)side;
+    if (b != BTDF_SCATFUN_T_ENTER && b != BTDF_SCATFUN_T_LEAVE && b != BTDF_SCATFUN_R_TOP &&
+        b != BTDF_SCATFUN_R_BOTTOM)
         return BTDF_EINVAL;
     if (mode != BTDF_SCATFUN_DIRECT && mode != BTDF_SCATFUN_ADJOINT)
         return BTDF_EINVAL;
-    if (!(ti >= 0.0 && ti <= M_PI / 2) || !(to >= M_PI / 2 && to <= M_PI) || !isfinite(phi))
+    int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
+    int to_ok = refl ? (to >= 0.0 && to <= M_PI / 2) : (to >= M_PI / 2 && to <= M_PI);
+    if (!(ti >= 0.0 && ti <= M_PI / 2) || !to_ok || !isfinite(phi))
         return BTDF_EDOMAIN;
     double ms, mf;
     int rad;
@@ -1499,10 +1896,26 @@ BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side sid
     /* Within 0.02 deg of the normal (|mu| above the outermost node, 1 - 2^-24 in files
        this library writes) read the outermost node: a renderer gives 0 there, the model
        has no such gap (docs/scatfun.md, "Views on the normal"). */
-    ms = fmin(f->xd[f->n - 1], fmax(f->xd[0], ms));
-    mf = fmin(f->xd[f->n - 1], fmax(f->xd[0], mf));
-    /* phi = pi is forward, phi_d = 0: cos phi_d = -cos phi */
-    return btdf_scatfun_eval_mu(f, ms, mf, -cos(phi), rad, out);
+    /* Inside that cap harmonic k is scaled by (sin theta / sin theta_node)^k for each
+       direction in it: near the normal the k-th Fourier term of a BSDF goes like
+       sin^k of each angle (it is smooth in the direction vectors), so the outermost
+       node's series, stored at 0.0198 deg, is carried to the view's angle instead of
+       read unchanged (which would turn the lobe about the normal by that angle: an
+       e_L1 of 1.4e-3 at normal incidence for s = 3). */
+    double rk = 1.0, top = f->xd[f->n - 1], bot = f->xd[0];
+    double sn_top = sqrt(fmax(0.0, 1.0 - top * top)), sn_bot = sqrt(fmax(0.0, 1.0 - bot * bot));
+    if (ms > top && sn_top > 0.0)
+        rk *= sqrt(fmax(0.0, 1.0 - ms * ms)) / sn_top; /* sn_top > 0: nodes inside (-1, 1) */
+    if (ms < bot && sn_bot > 0.0)
+        rk *= sqrt(fmax(0.0, 1.0 - ms * ms)) / sn_bot;
+    if (mf > top && sn_top > 0.0)
+        rk *= sqrt(fmax(0.0, 1.0 - mf * mf)) / sn_top;
+    if (mf < bot && sn_bot > 0.0)
+        rk *= sqrt(fmax(0.0, 1.0 - mf * mf)) / sn_bot;
+    ms = fmin(top, fmax(bot, ms));
+    mf = fmin(top, fmax(bot, mf));
+    /* phi = pi is forward (specular), phi_d = 0: cos phi_d = -cos phi */
+    return eval_mu_rk(f, ms, mf, -cos(phi), rad, rk, out);
 }
 
 BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double to,
@@ -1517,32 +1930,265 @@ BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double 
 
 typedef struct mis_obj {
     const btdf_scatfun *f;
-    btdf_side side;
+    btdf_side side; /* the block evaluated (eval_side's side) */
+    btdf_scatfun_mode mode;
 } mis_obj;
 
 static void mis_eval(const void *obj, double ti, const double *q, double *out)
 {
     const mis_obj *m = obj;
     double phi = atan2(q[5], q[4]);
-    if (btdf_scatfun_eval_side(m->f, m->side, BTDF_SCATFUN_DIRECT, ti, q[7], phi, out) !=
-        BTDF_OK)
+    if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, q[7], phi, out) != BTDF_OK)
         for (uint32_t k = 0; k < m->f->channels; k++)
             out[k] = 0.0;
+}
+
+/* splitmix64, as the tables' estimator uses (one stream per test angle) */
+static double refl_unif(uint64_t *x)
+{
+    uint64_t z = (*x += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+#define U_EST_R 7.0 /* facet slopes beyond u = 7 hold exp(-49) of the distribution */
+
+/* d(omega_h) of a stratum of facet slopes around u (tan tn = 2u/s) stratified in
+   w = 1 - exp(-u^2) and psi, doubled for the mirror half: (2/s^2) e^{u^2} q^{-3/2}. */
+static double refl_h_measure(double u, double s, double dw, double dpsi)
+{
+    double rr = 2.0 * u / s, q = 1.0 + rr * rr;
+    return (2.0 / (s * s)) * exp(u * u) / (q * sqrt(q)) * dw * dpsi * 2.0;
+}
+
+/*
+ * One incident angle of a reflection block: integral of |rho_r~ - rho_r| cos tr d(omega_r)
+ * over the upper hemisphere of the block's side, by two sample sets combined by the
+ * balance heuristic, as the tables' estimator does for transmission:
+ *  A: facet normals h stratified in w = 1 - exp(-u^2) (tan th = 2u/s) and psi in
+ *     [0, pi], reflected: e_r = 2 (e_i.h) h - e_i, d(omega_r) = 4 (e_i.h) d(omega_h);
+ *  B: reflected directions stratified in (cos tr, phi), phi in [0, pi].
+ * Both cover the half phi in [0, pi] and count twice (rho_r is even in phi). The
+ * norm is max(R(ti), 0.01) (MODEL.md sections 6 and 8).
+ */
+static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint64_t rng,
+                         size_t ppa, btdf_ti_error *res)
+{
+    const mis_obj *m = obj;
+    double s = p->smoothness, sti = sin(ti), cti = cos(ti);
+    const size_t npsi = 32, nu = (ppa + 31) / 32, nmu = 64, nphi = 64;
+    double wmax = -expm1(-U_EST_R * U_EST_R);
+    double dw = wmax / (double)nu, dpsi = M_PI / (double)npsi;
+    double dmu = 1.0 / (double)nmu, dphi = M_PI / (double)nphi;
+    double R[BTDF_MAX_CHANNELS], tab[BTDF_MAX_CHANNELS];
+    if (btdf_reflectance(p, ti, R) != BTDF_OK)
+        for (int c = 0; c < p->channels; c++)
+            R[c] = 0.0;
+    size_t pts = 0;
+    for (int c = 0; c < p->channels; c++) {
+        double n = p->ior[c], l1 = 0.0, sgn = 0.0, dmax = 0.0, vmax = 0.0;
+        for (size_t iu = 0; iu < nu; iu++) {
+            for (size_t ip = 0; ip < npsi; ip++) {
+                double w = wmax * ((double)iu + refl_unif(&rng)) / (double)nu;
+                double psi = M_PI * ((double)ip + refl_unif(&rng)) / (double)npsi;
+                double u = sqrt(-log1p(-w)); /* w < 1: finite */
+                double rr = 2.0 * u / s;     /* s > 0 (checked) */
+                double cth = 1.0 / sqrt(1.0 + rr * rr), sth = rr * cth;
+                double hx = sth * cos(psi), hy = sth * sin(psi), hz = cth;
+                double ca = sti * hx + cti * hz; /* e_i = (sin ti, 0, cos ti) */
+                pts++;
+                if (!(ca > 0.0))
+                    continue; /* the facet faces away: no reflection from it */
+                double rx = 2.0 * ca * hx - sti, ry = 2.0 * ca * hy, rz = 2.0 * ca * hz - cti;
+                if (!(rz > 0.0))
+                    continue; /* reflected into the other medium: rho_r is 0 there */
+                double tr = atan2(sqrt(rx * rx + ry * ry), rz), phi = atan2(ry, rx);
+                double va = rz * 4.0 * ca * refl_h_measure(u, s, dw, dpsi);
+                double vb = rz * dmu * dphi * 2.0;
+                double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
+                if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, tab) != BTDF_OK)
+                    tab[c] = 0.0;
+                double d = tab[c] - rho, wgt = va * vb / (va + vb); /* va, vb > 0 */
+                l1 += fabs(d) * wgt;
+                sgn += d * wgt;
+                dmax = fmax(dmax, fabs(d));
+                vmax = fmax(vmax, rho);
+            }
+        }
+        for (size_t im = 0; im < nmu; im++) {
+            for (size_t ip = 0; ip < nphi; ip++) {
+                double mu = ((double)im + refl_unif(&rng)) / (double)nmu; /* cos tr */
+                double ph = M_PI * ((double)ip + refl_unif(&rng)) / (double)nphi;
+                double sr = sqrt(fmax(0.0, 1.0 - mu * mu));
+                double rx = sr * cos(ph), ry = sr * sin(ph), rz = mu;
+                double vb = mu * dmu * dphi * 2.0, share = vb;
+                pts++;
+                /* the facet that reflects e_i into e_r: h = (e_i + e_r)/|e_i + e_r| */
+                double ux = sti + rx, uy = ry, uz = cti + rz;
+                double ul = sqrt(ux * ux + uy * uy + uz * uz);
+                if (uz > 0.0 && ul > 0.0) {
+                    double ca = (sti * ux + cti * uz) / ul;
+                    double u = 0.5 * s * sqrt(ux * ux + uy * uy) / uz; /* tan th = |u_xy|/u_z */
+                    if (u < U_EST_R && ca > 0.0) {
+                        double va = rz * 4.0 * ca * refl_h_measure(u, s, dw, dpsi);
+                        if (va > 0.0)
+                            share = va * vb / (va + vb);
+                    }
+                }
+                double tr = atan2(sr, mu), phi = ph;
+                double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
+                if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, tab) != BTDF_OK)
+                    tab[c] = 0.0;
+                double d = tab[c] - rho;
+                l1 += fabs(d) * share;
+                sgn += d * share;
+                dmax = fmax(dmax, fabs(d));
+                vmax = fmax(vmax, rho);
+            }
+        }
+        double fl = fmax(R[c], T_FLOOR); /* MODEL.md section 6 floor, with R for T */
+        if (c == 0) {
+            res->T = R[c];
+            res->T_table = R[c] + sgn;
+        }
+        res->e_l1 = fmax(res->e_l1, l1 / fl);
+        res->e_t = fmax(res->e_t, fabs(sgn) / fl);
+        if (R[c] >= T_FLOOR && vmax > 0.0)
+            res->e_max = fmax(res->e_max, dmax / vmax);
+    }
+    return pts;
 }
 
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
                                btdf_report *r);
+/* One reading of a file against the truth: btdf_scatfun_eval_side's side names the
+   light's side in both modes (DIRECT reads that block, ADJOINT the block whose fast
+   index holds that light: the other transmission block, the same reflection block). */
+static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, int b,
+                                  btdf_scatfun_mode mode, size_t angles, size_t ppa,
+                                  uint64_t seed, int threads, btdf_report *r)
+{
+    mis_obj m = {f, (btdf_side)b, mode};
+    int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
+    int below = b == BTDF_SCATFUN_T_LEAVE || b == BTDF_SCATFUN_R_BOTTOM;
+    btdf_params q = *p;
+    if (below)
+        for (int k = 0; k < q.channels; k++)
+            q.ior[k] = 1.0 / p->ior[k];
+    /* Knots: the incident angles of the elevation nodes (both indices share them), so
+       every interval between nodes gets its midpoint tested (a band between two nodes
+       can hold the largest error: docs/scatfun.md, "Error report"). */
+    double *knots = malloc((f->n + 1) * sizeof *knots);
+    if (!knots)
+        return BTDF_ENOMEM;
+    size_t nk = 0;
+    knots[nk++] = 0.0;
+    for (uint32_t i = f->n; i-- > 0;)
+        if (f->xd[i] > 0.0 && f->xd[i] < 1.0)
+            knots[nk++] = acos(f->xd[i]); /* ascending in ti as mu descends */
+    knots[nk++] = M_PI / 2;
+    btdf_status st;
+    if (refl)
+        st = btdf_estimate_angles(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
+                                  refl_angle, &m, r);
+    else
+        st = btdf_estimate_knots(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
+                                 mis_eval, &m, r);
+    free(knots);
+    return st;
+}
+
+static int cmp_ti(const void *a, const void *b)
+{
+    double x = ((const btdf_ti_error *)a)->ti, y = ((const btdf_ti_error *)b)->ti;
+    return x < y ? -1 : x > y;
+}
+
+/* r := the worse of r and o at every test angle (angles both tested: the larger of each
+   error; the others: kept as they are), the statistics recomputed over the union. */
+static btdf_status merge_reports(btdf_report *r, btdf_report *o)
+{
+    size_t n = r->test_angles + o->test_angles;
+    btdf_ti_error *u = malloc((n ? n : 1) * sizeof *u);
+    if (!u)
+        return BTDF_ENOMEM;
+    memcpy(u, r->per_ti, r->test_angles * sizeof *u);
+    memcpy(u + r->test_angles, o->per_ti, o->test_angles * sizeof *u);
+    qsort(u, n, sizeof *u, cmp_ti);
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (m > 0 && u[m - 1].ti == u[i].ti) {
+            btdf_ti_error *a = &u[m - 1];
+            if (u[i].e_l1 > a->e_l1)
+                a->T_table = u[i].T_table, a->e_l1 = u[i].e_l1;
+            a->e_t = fmax(a->e_t, u[i].e_t);
+            a->e_max = fmax(a->e_max, u[i].e_max);
+        } else {
+            u[m++] = u[i];
+        }
+    }
+    double l1 = 0, t = 0, mx = 0;
+    size_t nmx = 0;
+    r->e_l1_max = r->e_t_max = r->e_max_max = 0.0;
+    for (size_t i = 0; i < m; i++) {
+        r->e_l1_max = fmax(r->e_l1_max, u[i].e_l1);
+        r->e_t_max = fmax(r->e_t_max, u[i].e_t);
+        l1 += u[i].e_l1;
+        t += u[i].e_t;
+        if (u[i].T >= T_FLOOR) { /* where e_max is defined (btdf_ti_error) */
+            r->e_max_max = fmax(r->e_max_max, u[i].e_max);
+            mx += u[i].e_max;
+            nmx++;
+        }
+    }
+    r->e_l1_mean = m ? l1 / (double)m : 0.0;
+    r->e_t_mean = m ? t / (double)m : 0.0;
+    r->e_max_mean = nmx ? mx / (double)nmx : 0.0;
+    r->e_max_angles = nmx;
+    r->test_points += o->test_points;
+    r->seconds_estimate += o->seconds_estimate;
+    free(r->per_ti);
+    r->per_ti = u;
+    r->test_angles = m;
+    return BTDF_OK;
+}
+
+btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
+                               size_t angles, size_t ppa, uint64_t seed, int threads,
+                               btdf_report *r);
+/* The report of one block, as renderers read it: light tracers (pbrt-v3's importance
+   mode, DIRECT: the light in the slow index) and path tracers' camera rays (radiance
+   mode, ADJOINT: the light in the fast index) read the same stored series along
+   different axes and with different norms, so both readings are measured and the worse
+   kept at every test angle. A three-channel transmission block's fold is right on the
+   radiance path only (build_impl): there the light side's report is that block's
+   ADJOINT reading. */
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
                                btdf_report *r)
 {
-    btdf_params q = *p;
-    if (side == BTDF_SIDE_LEAVE)
-        for (int k = 0; k < q.channels; k++)
-            q.ior[k] = 1.0 / p->ior[k];
-    mis_obj m = {f, side};
-    return btdf_estimate_fn(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, mis_eval, &m, r);
+    int b = (int)side;
+    int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
+    /* the other transmission block, which ADJOINT reads for this side's light */
+    int tb = b == BTDF_SCATFUN_T_ENTER ? BTDF_SCATFUN_T_LEAVE : BTDF_SCATFUN_T_ENTER;
+    int has_adj = refl || (f->sides & tb) != 0;
+    if (f->channels == 3 && !refl)
+        /* a file of this one block: its ADJOINT reading is the other side's light */
+        return report_reading(f, p, has_adj ? b : tb, BTDF_SCATFUN_ADJOINT, angles, ppa, seed,
+                              threads, r);
+    btdf_status st = report_reading(f, p, b, BTDF_SCATFUN_DIRECT, angles, ppa, seed, threads, r);
+    if (st != BTDF_OK || !has_adj)
+        return st;
+    btdf_report o;
+    memset(&o, 0, sizeof o);
+    st = report_reading(f, p, b, BTDF_SCATFUN_ADJOINT, angles, ppa, seed, threads, &o);
+    if (st == BTDF_OK)
+        st = merge_reports(r, &o);
+    free(o.per_ti);
+    return st;
 }
 
 BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_params *p,
@@ -1550,7 +2196,9 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
                                          size_t points_per_angle, uint64_t seed,
                                          int threads, btdf_report *r)
 {
-    if (!f || !r || (side != BTDF_SIDE_ENTER && side != BTDF_SIDE_LEAVE))
+    if (!f || !r ||
+        ((int)side != BTDF_SCATFUN_T_ENTER && (int)side != BTDF_SCATFUN_T_LEAVE &&
+         (int)side != BTDF_SCATFUN_R_TOP && (int)side != BTDF_SCATFUN_R_BOTTOM))
         return BTDF_EINVAL;
     if (btdf_params_check(p, NULL, 0) != BTDF_OK)
         return BTDF_EINVAL;

@@ -15,6 +15,10 @@
 
 #include "btdf.h"
 
+#ifndef M_PI /* C99 does not define it; POSIX math.h does */
+#define M_PI 3.14159265358979323846
+#endif
+
 /* |a - b| <= atol + rtol |b|, and neither is NaN (cmocka has no assert_double_equal). */
 static inline void assert_close_(double a, double b, double rtol, double atol, const char *file,
                                  int line)
@@ -51,6 +55,32 @@ static inline int btdf_test_rmtree(const char *dir)
     char cmd[512];
     snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
     return system(cmd) == 0 ? 0 : -1;
+}
+
+static inline double rad(double d) { return d * M_PI / 180.0; }
+
+/* A table of one channel (n, s) over ti0..ti1 degrees at tolerance tol holding part,
+   built with threads workers (0 = all); asserts the status want and a table. */
+static inline btdf_table *btdf_test_table(double n, double s, double ti0, double ti1, double tol,
+                                          int threads, btdf_part part, btdf_status want)
+{
+    btdf_table_opts o;
+    btdf_table_opts_default(&o);
+    o.params.ior[0] = n;
+    o.params.smoothness = s;
+    o.ti_min = rad(ti0);
+    o.ti_max = rad(ti1);
+    o.tolerance = tol;
+    o.threads = threads;
+    o.part = part;
+    btdf_table *t = NULL;
+    char msg[512] = "";
+    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
+    if (st != want)
+        print_message("build: %s\n", msg);
+    assert_status(want, st);
+    assert_non_null(t);
+    return t;
 }
 
 #endif

@@ -221,7 +221,7 @@ rm -f "$W"/b.*
 rm -f "$W/r.csv"
 
 # .bsdf: built, inspected, evaluated; --theta-i does not apply
-"$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 -o "$W/g.bsdf" && "$B" inspect "$W/g.bsdf" | grep -q 'SCATFUN v1' && \
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --part transmission -o "$W/g.bsdf" && "$B" inspect "$W/g.bsdf" | grep -q 'SCATFUN v1' && \
     ok ".bsdf written and inspected" || no ".bsdf"
 x=$(echo "30 150 180" | "$B" eval --table "$W/g.bsdf"); y=$("$B" eval 30 150 180)
 awk -v x="$x" -v y="$y" 'BEGIN { d = x - y; if (d < 0) d = -d; exit !(d < 0.1 * y) }' && \
@@ -234,10 +234,22 @@ rm -f "$W/z.bsdf"
 # .bsdf: a lobe too narrow for the format's node budget stops before any work, exit 3
 expect 3 "narrower than one elevation interval" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
 # .bsdf: --report is written; a file without the enter side is refused by eval
-"$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --side leave --report "$W/l.json" -o "$W/l.bsdf" && \
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --side leave --part transmission --report "$W/l.json" -o "$W/l.bsdf" && \
     grep -q '"kind": "scatfun"' "$W/l.json" && grep -q '"pbrt_v3_single_precision_safe": true' "$W/l.json" && \
     grep -q '"leave": {"met": true' "$W/l.json" && ok ".bsdf --report" || no ".bsdf --report"
 expect 1 "holds no 'enter' side" "eval --table of a leave-only .bsdf" -- "$B" eval --table "$W/l.bsdf" 30 150 180
+# .bsdf: the full interface by default (four blocks, each reported), --part transmission
+# the two transmission blocks only; --part reflection/both is refused for .xml
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 --report "$W/f.json" -o "$W/f.bsdf" && \
+    "$B" inspect "$W/f.bsdf" | grep -q '^reflection *top bottom' && \
+    grep -q '"reflection_top": {"met": true' "$W/f.json" && \
+    grep -q '"reflection_bottom": {"met": true' "$W/f.json" && \
+    grep -q '"enter": {"met": true' "$W/f.json" && ok ".bsdf: four blocks, each reported" || \
+    no ".bsdf: four blocks"
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 --part reflection -o "$W/r.bsdf" && \
+    "$B" inspect "$W/r.bsdf" | grep -q '^sides *none' && ok ".bsdf --part reflection" || \
+    no ".bsdf --part reflection"
+rm -f "$W/f.bsdf" "$W/r.bsdf" "$W/f.json"
 # .bsdf: --best-effort writes a file that missed the tolerance and still exits 3
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 1e-3 --max-memory 1 --best-effort -o "$W/b.bsdf" --report "$W/b.json"
 rc=$?
@@ -278,7 +290,7 @@ expect 1 "holds the reflection only; give --part reflection" "eval a reflection 
 rm -f "$W/d1.csv" "$W/d2.csv" "$W/rerr" "$W/berr"
 expect 2 "must be transmission, reflection or both" "tabulate: bad --part" -- "$B" tabulate --part mirror -o "$W/t.csv"
 expect 2 "grid tables hold the transmission only" "--part reflection with --grid" -- "$B" tabulate --part reflection --grid 3,4,4 -o "$W/t.csv"
-expect 2 "applies to .csv and .exr tables" "--part reflection for .xml" -- "$B" tabulate --part reflection -o "$W/t.xml"
+expect 2 "applies to .csv, .exr and .bsdf" "--part reflection for .xml" -- "$B" tabulate --part reflection -o "$W/t.xml"
 if "$B" --version | grep -q 'OpenEXR on'; then
     "$B" tabulate -q --ior 1.5 -s 3 --theta-i 0:40 --tolerance 1e-2 --part both -o "$W/b.exr" && \
         x=$(echo "30 30 180" | "$B" eval --table "$W/b.exr" --part reflection) && \
@@ -388,7 +400,7 @@ if "$B" --version | grep -q 'OpenEXR on'; then
         grep -q '^error: e_L1 max ' "$W/i.txt" && grep -q '^theta_i range: 0:40 deg' "$W/i.txt" && \
         grep -q '^file: .*OpenEXR, [0-9]* bytes' "$W/i.txt" && ok "inspect an EXR: report, ranges, sizes" || { no "inspect EXR"; cat "$W/i.txt"; }
 fi
-"$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 -o "$W/i.bsdf" && "$B" inspect "$W/i.bsdf" > "$W/i.txt" && \
+"$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 --part transmission -o "$W/i.bsdf" && "$B" inspect "$W/i.bsdf" > "$W/i.txt" && \
     grep -q '"enter": {"e_l1_max"' "$W/i.txt" && grep -q '"ior": \[1.5\]' "$W/i.txt" && \
     grep -q '^file: .*SCATFUN, [0-9]* bytes' "$W/i.txt" && ok "inspect a .bsdf: stored report, sizes" || { no "inspect .bsdf"; cat "$W/i.txt"; }
 rm -f "$W"/i.*
@@ -402,7 +414,7 @@ if command -v script >/dev/null 2>&1 && "$B" --version | grep -q 'OpenEXR on'; t
     grep -q 'p.exr \[#*-*\] *[0-9]*% .*ETA' "$W/p.tty" && ok "a progress bar with stage and ETA on a terminal" || { no "progress on a terminal"; cat "$W/p.tty"; }
     script -qec "'$B' tabulate -q --ior 1.5 -s 3 --threads 1 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
     [ ! -s "$W/p.tty" ] && ok "--quiet: no progress bar on a terminal" || { no "progress with --quiet"; cat "$W/p.tty"; }
-    script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 1e-2 -o '$W/p.bsdf'" /dev/null > "$W/p.tty" 2>&1
+    script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 1e-2 --part transmission -o '$W/p.bsdf'" /dev/null > "$W/p.tty" 2>&1
     grep -q 'p.bsdf \[#*-*\] .*elevation nodes' "$W/p.tty" && ok "a progress bar for .bsdf" || { no "progress for .bsdf"; cat "$W/p.tty"; }
     script -qec "'$B' tabulate --basis klems-quarter --threads 1 -o '$W/p.xml'" /dev/null > "$W/p.tty" 2>&1
     grep -q 'p.xml \[#*-*\] .*Klems patch averages' "$W/p.tty" && ok "a progress bar for .xml" || { no "progress for .xml"; cat "$W/p.tty"; }

@@ -1,9 +1,15 @@
 /* SPDX-License-Identifier: MIT */
 /* sampler_sweep.c: builds .bsdf files over a sweep of materials and drives pbrt-v3's sampling route
    (tests/pbrt_route.h) through each at views on both sides: termination, finite values, and the
-   Monte Carlo albedo against T(ti). Prints one line per case; exit 1 on a failure.
-   usage: sampler_sweep [-t TOL] [-n SAMPLES] [-s S1,S2,...] [-c 1|3|13] [-f FILE.bsdf]
-   (-f: sweep a written one-channel file of n = 1.5 and the first s given, tolerance TOL) */
+   Monte Carlo albedo against T(ti) (+ R(ti) when the file holds reflection). Prints one line per
+   case; exit 1 on a failure.
+   usage: sampler_sweep [-t TOL] [-n SAMPLES] [-s S1,S2,...] [-c 1|3|13] [-b BLOCKS] [-m 0|1]
+                        [-f FILE.bsdf]
+   (-b: the blocks built, a btdf_scatfun_block mask, default 3 = transmission; -m 1: pbrt's
+   radiance mode, whose e^2 makes the albedo T(q, ti)/q^2 + R(q, ti) for the view's index q,
+   default 0 = importance mode, T + R; three-channel files are always compared in radiance mode,
+   where their fold factors are right;
+   -f: sweep a written one-channel file of n = 1.5 and the first s given, tolerance TOL) */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -37,9 +43,12 @@ typedef struct sweep_totals {
         pole_cases;
 } sweep_totals;
 
-static int run_file(const btdf_scatfun *f, const btdf_params *p, double tol, long N,
+static int run_file(const btdf_scatfun *f, const btdf_params *p, double tol, long N, int radiance,
                     sweep_totals *tot)
 {
+    int blocks = btdf_scatfun_sides(f);
+    if (btdf_scatfun_channels(f) == 3)
+        radiance = 1; /* the fold factors are right on the radiance path only */
     pr_table t;
     if (pr_table_init(&t, f))
         return -1;
@@ -53,8 +62,13 @@ static int run_file(const btdf_scatfun *f, const btdf_params *p, double tol, lon
         for (size_t v = 0; v < sizeof views / sizeof views[0]; v++) {
             double th = views[v] * M_PI / 180.0;
             float wo[3] = {(float)sin(th), 0.0f, (float)(side == 0 ? cos(th) : -cos(th))};
-            double T[3] = {0, 0, 0};
+            double T[3] = {0, 0, 0}, R[3] = {0, 0, 0};
             btdf_transmittance(&q, th, T);
+            /* the blocks whose slow index is the view's side: T_ENTER and R_TOP above */
+            int hasT = blocks & (side == 0 ? BTDF_SCATFUN_T_ENTER : BTDF_SCATFUN_T_LEAVE);
+            int hasR = blocks & (side == 0 ? BTDF_SCATFUN_R_TOP : BTDF_SCATFUN_R_BOTTOM);
+            if (hasR)
+                btdf_reflectance(&q, th, R);
             pr_stats st;
             memset(&st, 0, sizeof st);
             double sum[3] = {0, 0, 0}, sum2[3] = {0, 0, 0};
@@ -66,7 +80,7 @@ static int run_file(const btdf_scatfun *f, const btdf_params *p, double tol, lon
                 /* stratified in the elevation sample, below 1 as a renderer's are */
                 u[1] = fminf((float)(((double)i + next_u(&rng)) / (double)N), 1.0f - FLT_EPSILON / 2);
                 float wi[3], rgb[3], pdf;
-                pr_sample_f(&t, wo, u, 0, wi, rgb, &pdf, &st);
+                pr_sample_f(&t, wo, u, radiance, wi, rgb, &pdf, &st);
                 double mud;
                 int itd;
                 if (!pr_sample_mu_d(&t, wo[2], u[1], &mud, &itd))
@@ -90,10 +104,17 @@ static int run_file(const btdf_scatfun *f, const btdf_params *p, double tol, lon
                 double mean = sum[c] / (double)N;
                 double var = fmax(0.0, sum2[c] / (double)N - mean * mean);
                 double se = sqrt(var / (double)N);
-                double Tc = nch == 1 ? T[0] : T[c];
-                /* the file's own error (e_T <= e_L1 <= tol, relative to max(T, 0.01))
-                   plus 4 standard errors of the estimate */
-                double allow = tol * fmax(Tc, 0.01) + 4.0 * se;
+                double Tc = nch == 1 ? T[0] : T[c], Rc = nch == 1 ? R[0] : R[c];
+                double qc = q.ior[nch == 1 ? 0 : c];
+                /* radiance mode: pbrt's e^2 turns the block into the other direction's
+                   value, whose albedo is T(q)/q^2 by reciprocity (ior > 0) */
+                double sc = radiance ? 1.0 / (qc * qc) : 1.0;
+                double want = (hasT ? Tc * sc : 0.0) + (hasR ? Rc : 0.0);
+                /* the file's own error per block (e_T <= e_L1 <= tol, relative to
+                   max(T, 0.01) and max(R, 0.01)) plus 4 standard errors of the estimate */
+                double allow = tol * ((hasT ? fmax(Tc, 0.01) * sc : 0.0) +
+                                      (hasR ? fmax(Rc, 0.01) : 0.0)) + 4.0 * se;
+                Tc = want;
                 int okc = pole || fabs(mean - Tc) <= allow;
                 ok_alb &= okc;
                 used += (size_t)snprintf(buf + used, sizeof buf - used,
@@ -126,6 +147,7 @@ int main(int argc, char **argv)
     const char *slist = "0.5,1,3,10,30,100,1000";
     int chmask = 3; /* 1: one channel, 2: three */
     const char *file = NULL;
+    int blocks = BTDF_SCATFUN_TRANSMISSION, radiance = 0;
     for (int i = 1; i + 1 < argc; i += 2) {
         if (!strcmp(argv[i], "-t"))
             tol = atof(argv[i + 1]);
@@ -135,16 +157,20 @@ int main(int argc, char **argv)
             slist = argv[i + 1];
         else if (!strcmp(argv[i], "-f"))
             file = argv[i + 1];
+        else if (!strcmp(argv[i], "-b"))
+            blocks = atoi(argv[i + 1]);
+        else if (!strcmp(argv[i], "-m"))
+            radiance = atoi(argv[i + 1]) != 0;
         else if (!strcmp(argv[i], "-c"))
             chmask = atoi(argv[i + 1]) == 1 ? 1 : atoi(argv[i + 1]) == 3 ? 2 : 3;
         else {
             fprintf(stderr, "usage: sampler_sweep [-t TOL] [-n SAMPLES] [-s S1,S2] [-c 1|3|13] "
-                            "[-f FILE.bsdf]\n");
+                            "[-b BLOCKS] [-m 0|1] [-f FILE.bsdf]\n");
             return 2;
         }
     }
-    if (!(tol > 0) || N < 100) {
-        fprintf(stderr, "sampler_sweep: -t must be > 0 and -n at least 100\n");
+    if (!(tol > 0) || N < 100 || blocks < 1 || blocks > BTDF_SCATFUN_ALL) {
+        fprintf(stderr, "sampler_sweep: -t must be > 0, -n at least 100, -b in 1..15\n");
         return 2;
     }
     sweep_totals tot;
@@ -161,7 +187,7 @@ int main(int argc, char **argv)
             return 2;
         }
         printf("# file %s, s %g, n 1.5\n", file, p.smoothness);
-        int r = run_file(f, &p, tol, N, &tot);
+        int r = run_file(f, &p, tol, N, radiance, &tot);
         btdf_scatfun_free(f);
         if (r)
             return 2;
@@ -189,16 +215,18 @@ int main(int argc, char **argv)
                 btdf_scatfun *f = NULL;
                 char msg[512] = "";
                 double t0 = wall();
-                btdf_status stb = btdf_scatfun_build(&p, tol, BTDF_SIDE_BOTH, 0, &f, msg, sizeof msg);
-                printf("# build s %g n %g ch %d tol %g: %s %s (%.1f s)\n", s, p.ior[ch == 3 ? 1 : 0],
-                       ch, tol, btdf_strerror(stb), msg, wall() - t0);
+                btdf_status stb = btdf_scatfun_build(&p, tol, (btdf_side)blocks, 0, &f, msg,
+                                                     sizeof msg);
+                printf("# build s %g n %g ch %d tol %g blocks %d: %s %s (%.1f s)\n", s,
+                       p.ior[ch == 3 ? 1 : 0], ch, tol, blocks, btdf_strerror(stb), msg,
+                       wall() - t0);
                 fflush(stdout);
                 if (!f) {
                     notbuilt++;
                     continue;
                 }
                 built++;
-                if (run_file(f, &p, tol, N, &tot)) {
+                if (run_file(f, &p, tol, N, radiance, &tot)) {
                     btdf_scatfun_free(f);
                     free(sl);
                     return 2;

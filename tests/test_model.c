@@ -9,7 +9,6 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static double rad(double d) { return d * M_PI / 180.0; }
 
 /* Every row of reference-rho.csv: relative 1e-9 where the reference is at least
    1e-290; below that the result must be 0 or below 1e-280 (MODEL.md section 4). The

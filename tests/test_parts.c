@@ -11,31 +11,16 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static double rad(double d) { return d * M_PI / 180.0; }
 
 /* ------------------------------------------------------------------------- */
 /* The reflection (MODEL.md section 8) and tables holding both parts          */
 /* ------------------------------------------------------------------------- */
 
+/* A one-channel table of one part with the default thread count, meeting tol. */
 static btdf_table *build_part(double n, double s, double ti0, double ti1, double tol,
                               btdf_part part)
 {
-    btdf_table_opts o;
-    btdf_table_opts_default(&o);
-    o.params.ior[0] = n;
-    o.params.smoothness = s;
-    o.ti_min = rad(ti0);
-    o.ti_max = rad(ti1);
-    o.tolerance = tol;
-    o.part = part;
-    btdf_table *t = NULL;
-    char msg[512] = "";
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    if (st != BTDF_OK)
-        print_message("build: %s\n", msg);
-    assert_status(BTDF_OK, st);
-    assert_non_null(t);
-    return t;
+    return btdf_test_table(n, s, ti0, ti1, tol, 0, part, BTDF_OK);
 }
 
 /* e_L1 of a reflection table at ti by a plain midpoint rule over (cos tr, phi) of the

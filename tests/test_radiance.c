@@ -58,12 +58,12 @@ static void test_klems_columns(void **state)
     btdf_rad_free(r);
 }
 
-/* A coarse tree (one build at a fixed threshold, no calibration, to keep the test
-   short): both blocks, the report through Radiance's rule, and a file with balanced
-   braces. */
-static void test_tree_file(void **state)
+/* A tree3 file of n = 1.5, s = 2 (coarse: loose tolerance) holding the blocks first..last
+   of transmission front and back, reflection front and back (slots 0 to 3, the
+   writer's), each grown once at the threshold 3e-4 within max_nodes: no calibration,
+   to keep the tests short. */
+static btdf_rad *coarse_tree(int first, int last, size_t max_nodes)
 {
-    (void)state;
     btdf_params p;
     btdf_params_default(&p);
     p.smoothness = 2.0;
@@ -72,16 +72,29 @@ static void test_tree_file(void **state)
     r->basis = BTDF_RAD_TREE3;
     r->p = p;
     r->tolerance = 0.5;
-    r->nblocks = 2;
+    r->nblocks = last + 1;
     double n = p.ior[0];
-    rad_block b0 = {BTDF_SIDE_ENTER, "Transmission Front", n, 1 / (n * n), 0, BTDF_SIDE_LEAVE,
-                    1 / n, NULL, 0, 0, 0, NULL};
-    rad_block b1 = {BTDF_SIDE_LEAVE, "Transmission Back", 1 / n, n * n, 0, BTDF_SIDE_ENTER, n,
-                    NULL, 0, 0, 0, NULL};
-    r->b[0] = b0;
-    r->b[1] = b1;
-    for (int k = 0; k < 2; k++)
-        assert_status(BTDF_OK, rad_tree_build(&p, 3e-4, 0, (size_t)1 << 24, &r->b[k], NULL, 0));
+    const rad_block all[4] = {
+        {BTDF_SIDE_ENTER, "Transmission Front", n, 1 / (n * n), 0, BTDF_SIDE_LEAVE, 1 / n, NULL,
+         0, 0, 0, NULL},
+        {BTDF_SIDE_LEAVE, "Transmission Back", 1 / n, n * n, 0, BTDF_SIDE_ENTER, n, NULL, 0, 0,
+         0, NULL},
+        {BTDF_SIDE_ENTER, "Reflection Front", n, 1.0, 1, BTDF_SIDE_ENTER, n, NULL, 0, 0, 0, NULL},
+        {BTDF_SIDE_LEAVE, "Reflection Back", 1 / n, 1.0, 1, BTDF_SIDE_LEAVE, 1 / n, NULL, 0, 0, 0,
+         NULL}};
+    for (int k = first; k <= last; k++) {
+        r->b[k] = all[k];
+        assert_status(BTDF_OK, rad_tree_build(&p, 3e-4, 0, max_nodes, &r->b[k], NULL, 0));
+    }
+    return r;
+}
+
+/* A coarse tree: both blocks, the report through Radiance's rule, and a file with
+   balanced braces. */
+static void test_tree_file(void **state)
+{
+    (void)state;
+    btdf_rad *r = coarse_tree(0, 1, (size_t)1 << 24);
     assert_int_equal(btdf_rad_block_count(r), 2);
     for (int k = 0; k < 2; k++) {
         btdf_report rep;
@@ -160,24 +173,8 @@ static void test_tree_cut(void **state)
 static void test_reflection_block(void **state)
 {
     (void)state;
-    btdf_params p;
-    btdf_params_default(&p);
-    p.smoothness = 2.0;
-    btdf_rad *r = calloc(1, sizeof *r);
-    assert_non_null(r);
-    r->basis = BTDF_RAD_TREE3;
-    r->p = p;
-    r->tolerance = 0.5;
-    r->nblocks = 4;
-    double n = p.ior[0];
-    rad_block b0 = {BTDF_SIDE_ENTER, "Reflection Front", n, 1.0, 1, BTDF_SIDE_ENTER, n, NULL,
-                    0, 0, 0, NULL};
-    rad_block b1 = {BTDF_SIDE_LEAVE, "Reflection Back", 1 / n, 1.0, 1, BTDF_SIDE_LEAVE, 1 / n,
-                    NULL, 0, 0, 0, NULL};
-    r->b[2] = b0;
-    r->b[3] = b1;
+    btdf_rad *r = coarse_tree(2, 3, (size_t)1 << 22);
     for (int k = 2; k < 4; k++) {
-        assert_status(BTDF_OK, rad_tree_build(&p, 3e-4, 0, (size_t)1 << 22, &r->b[k], NULL, 0));
         btdf_report rep;
         memset(&rep, 0, sizeof rep);
         assert_status(BTDF_OK, btdf_rad_report(r, k, 16, 2048, 7, 0, &rep));

@@ -10,24 +10,12 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static double rad(double d) { return d * M_PI / 180.0; }
 
+/* A one-channel transmission table, its build returning want. */
 static btdf_table *build(double n, double s, double ti0, double ti1, double tol, int threads,
                          btdf_status want)
 {
-    btdf_table_opts o;
-    btdf_table_opts_default(&o);
-    o.params.ior[0] = n;
-    o.params.smoothness = s;
-    o.ti_min = rad(ti0);
-    o.ti_max = rad(ti1);
-    o.tolerance = tol;
-    o.threads = threads;
-    btdf_table *t = NULL;
-    char msg[256];
-    assert_status(want, btdf_table_build(&o, &t, msg, sizeof msg));
-    assert_non_null(t);
-    return t;
+    return btdf_test_table(n, s, ti0, ti1, tol, threads, BTDF_PART_TRANSMISSION, want);
 }
 
 /* The tolerance holds on a spread of cases, checked by an estimate whose seed differs

@@ -2,6 +2,7 @@
 /* bench.c: evaluator throughput and a table's error against its run time, with the machine. */
 #define _DEFAULT_SOURCE /* wait4: the peak memory of one child process */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,6 +13,7 @@
 #include <unistd.h>
 
 #include "btdf.h"
+#include "btdf_scatfun.h"
 #include "fastnum.h"
 #include "model_impl.h"
 #include "table_impl.h"
@@ -486,6 +488,88 @@ static void api_bench(int reps)
     free(api_kernel_job.sph);
 }
 
+/* .bsdf (SCATFUN) builds: n = 1.5, both sides, all cores; median wall and CPU seconds
+   of reps builds (the builds are deterministic, so the file of the last one stands for
+   all), its size in bytes, nodes, coefficients, longest and median series, and e_L1 per
+   side measured through the file's own evaluation with the seed btdftab reports with. */
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+static void bsdf_bench(int reps)
+{
+    const struct {
+        double s, tol;
+    } cases[] = {{3, 1e-2}, {3, 1e-3}, {20, 1e-3}, {100, 1e-2}, {1000, 1e-2}};
+    printf("bsdf,s,tolerance,status,build_wall_s_median,build_cpu_s_median,bytes,nodes,"
+           "coefficients,mmax,median_length,e_l1_enter,e_l1_leave,bytes_per_unit_accuracy,"
+           "a0_peak\n");
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        btdf_params p;
+        btdf_params_default(&p);
+        p.smoothness = cases[k].s;
+        double v[9], c[9];
+        btdf_scatfun *f = NULL;
+        btdf_status st = BTDF_OK;
+        char msg[512] = "";
+        for (int r = 0; r < reps; r++) {
+            btdf_scatfun_free(f);
+            f = NULL;
+            double t0 = now(), c0 = cpu_now();
+            st = btdf_scatfun_build(&p, cases[k].tol, BTDF_SIDE_BOTH, 0, &f, msg, sizeof msg);
+            v[r] = now() - t0;
+            c[r] = cpu_now() - c0;
+            if (!f)
+                break; /* refused: no file, nothing to repeat */
+        }
+        int n = f ? reps : 1;
+        double wall = median(v, n), cpu = median(c, n);
+        if (!f) {
+            printf("bsdf,%g,%g,%s: %s,%.3f,%.3f,,,,,,,,,\n", cases[k].s, cases[k].tol,
+                   btdf_strerror(st), msg, wall, cpu);
+            fflush(stdout);
+            continue;
+        }
+        double e[2] = {0, 0};
+        for (int sd = 0; sd < 2; sd++) {
+            btdf_report r;
+            memset(&r, 0, sizeof r);
+            if (btdf_scatfun_report(f, &p, sd ? BTDF_SIDE_LEAVE : BTDF_SIDE_ENTER, 0, 0,
+                                    20081231u, 0, &r) == BTDF_OK)
+                e[sd] = r.e_l1_max;
+            else
+                e[sd] = NAN;
+            btdf_report_clear(&r);
+        }
+        size_t nn = btdf_scatfun_node_count(f), bytes = btdf_scatfun_file_size(f, NULL);
+        /* median series length over the pairs that hold one */
+        uint32_t *len = malloc(nn * nn * sizeof *len);
+        size_t nl = 0;
+        for (size_t i = 0; len && i < nn; i++)
+            for (size_t o = 0; o < nn; o++) {
+                size_t off = 0, m = 0;
+                if (btdf_scatfun_pair(f, i, o, &off, &m) == BTDF_OK && m > 0)
+                    len[nl++] = (uint32_t)m;
+            }
+        uint32_t med = 0;
+        if (len && nl) {
+            qsort(len, nl, sizeof *len, cmp_u32);
+            med = len[nl / 2];
+        }
+        free(len);
+        double emax = fmax(e[0], e[1]);
+        /* bytes per unit of accuracy: bytes times the error reached (bytes x e_L1) */
+        printf("bsdf,%g,%g,%s,%.3f,%.3f,%zu,%zu,%zu,%zu,%u,%.3g,%.3g,%.4g,%.4g\n", cases[k].s,
+               cases[k].tol, st == BTDF_OK ? "met" : "not met", wall, cpu, bytes, nn,
+               btdf_scatfun_coeff_count(f), btdf_scatfun_max_order(f), med, e[0], e[1],
+               (double)bytes * emax, btdf_scatfun_a0_peak(f));
+        fflush(stdout);
+        btdf_scatfun_free(f);
+    }
+}
+
 static const char usage[] =
     "usage: btdf-bench [SECTION [REPS]]\n"
     "Prints the machine, then CSV rows of timings and errors (docs/benchmarks.md).\n"
@@ -496,7 +580,8 @@ static const char usage[] =
     "           1.00001 at s = 3, 1e-3, 0:80, with btdf-densescan's error), api (the\n"
     "           public evaluation entry points beside the\n"
     "           internal kernel, at least 5 runs), or throughput (Eq. 25 evaluations\n"
-    "           per second)\n"
+    "           per second), or bsdf (.bsdf builds: time, bytes, nodes, series\n"
+    "           length and measured error for s = 3, 20, 100, 1000)\n"
     "  REPS     runs per table, 1 to 9 (default 3); each row reports the median\n"
     "Timings depend on the machine's load: quote medians and the machine line.\n";
 
@@ -511,7 +596,7 @@ int main(int argc, char **argv)
     long r = argc > 2 ? strtol(argv[2], &end, 10) : 3;
     if (strcmp(what, "all") && strcmp(what, "sweep") && strcmp(what, "scaling") &&
         strcmp(what, "api") && strcmp(what, "throughput") && strcmp(what, "tolerances") &&
-        strcmp(what, "fullrange") && strcmp(what, "nearone")) {
+        strcmp(what, "fullrange") && strcmp(what, "nearone") && strcmp(what, "bsdf")) {
         fprintf(stderr, "btdf-bench: unknown section '%s'\n%s", what, usage);
         return 2;
     }
@@ -619,6 +704,8 @@ int main(int argc, char **argv)
     }
     if (!strcmp(what, "all") || !strcmp(what, "api"))
         api_bench(reps < 5 ? 5 : reps);
+    if (!strcmp(what, "all") || !strcmp(what, "bsdf"))
+        bsdf_bench(reps);
     /* Last: the child processes above must not inherit this section's buffers, or
        their peak memory would include them. */
     if (!strcmp(what, "all") || !strcmp(what, "throughput")) {

@@ -173,7 +173,8 @@ typedef struct cli {
     btdf_params p;
     int threads, quiet, force, best_effort, sides, reflection, dry_run, shard_k, shard_n;
     btdf_rad_basis basis;
-    btdf_part part; /* tabulate: the lobes a table holds (default transmission) */
+    btdf_part part; /* --part: a table's lobes (default transmission); a .bsdf's blocks
+                       (default both when not given) */
     const char *table, *out, *report;
     btdf_table_opts o; /* tolerance, metric, grid, max_samples */
     size_t mib;
@@ -555,7 +556,8 @@ static int cmd_eval(const cli *c)
             table_ti_range(tpart, ti_range);
         } else if (c->reflection) {
             btdf_scatfun_free(in.scatfun);
-            return fail(1, "%s: --part reflection: this file holds the transmission", c->table);
+            return fail(1, "%s: --part reflection: eval reads the transmission of a .bsdf (its "
+                           "reflection blocks are for renderers)", c->table);
         } else {
             p.channels = btdf_scatfun_channels(in.scatfun);
             if (!(btdf_scatfun_sides(in.scatfun) & BTDF_SIDE_ENTER)) {
@@ -831,8 +833,11 @@ static int tabulate_series(const cli *c, const char *prov)
     run_progress_start(&pr, !c->quiet && isatty(2), c->out);
     /* --max-samples caps the stored coefficients, --max-memory the builder's series;
        each only when given (the format has its own budgets otherwise) */
-    return run_series_ex(prog, c->out, &c->p, c->o.tolerance,
-                         c->sides ? c->sides : BTDF_SIDE_BOTH, c->threads, c->quiet,
+    /* --side picks the light's sides, --part the parts: light from above has T_ENTER
+       and R_TOP, light from below T_LEAVE and R_BOTTOM (btdf_scatfun_block) */
+    int sides = c->sides ? c->sides : BTDF_SIDE_BOTH, part = GIVEN(c, OPT_PART) ? (int)c->part : 3;
+    int blocks = ((part & 1) ? sides : 0) | ((part & 2) ? sides << 2 : 0);
+    return run_series_ex(prog, c->out, &c->p, c->o.tolerance, blocks, c->threads, c->quiet,
                          c->best_effort, prov, c->report,
                          GIVEN(c, OPT_MAX_SAMPLES) ? c->o.max_samples : 0,
                          GIVEN(c, OPT_MAX_MEMORY) ? c->mib << 20 : 0, &pr);
@@ -874,10 +879,10 @@ static int cmd_tabulate(cli *c, const char *prov)
         if (!btdf_format_find(out, &fi))
             return fail(EXIT_USAGE, "%s: unknown output format: use %s", out,
                         btdf_format_list());
-        if ((fi.needs == BTDF_NEEDS_SERIES || fi.needs == BTDF_NEEDS_RADIANCE) &&
-            c->part != BTDF_PART_TRANSMISSION)
-            return fail(EXIT_USAGE, "%s: --part %s applies to .csv and .exr tables; this "
-                                    "format holds the transmission", out,
+        /* an .xml holds every block (both parts, light from either side) */
+        if (fi.needs == BTDF_NEEDS_RADIANCE && c->part != BTDF_PART_TRANSMISSION)
+            return fail(EXIT_USAGE, "%s: --part %s applies to .csv, .exr and .bsdf; an .xml "
+                                    "holds both parts, light from either side", out,
                         btdf_part_name(c->part));
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);

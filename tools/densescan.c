@@ -19,8 +19,17 @@
  *    that map, not by the closed form the library uses;
  *  - for n <= 1/1.01 (the facet measure diverges at the critical angle) a midpoint rule
  *    over (cos to, phi) with twice the counts instead;
+ *  - the rest of the hemisphere (directions no facet with u < 7 reaches, where a file or
+ *    table may still ring) by a midpoint rule over (cos to, phi) with twice the counts;
  *  - T by the same rule (so the floor max(T, 0.01) is this program's own), e_max as
  *    max |rho~ - rho| / max rho over the points, where T >= 0.01 (MODEL.md section 6).
+ * With --bsdf FILE (a written .bsdf of the material given by --ior, -s, --k0) it scans
+ * that file instead, through btdf_scatfun_eval_side for one transmission block
+ * (--block enter, the default, or leave: index 1/n), against btdf_scatfun_report for
+ * that block with the seed btdftab tabulate uses; --tolerance is then the file's.
+ * --mode direct|adjoint|both (default both, as the report): the light in the slow
+ * index (pbrt-v3's importance mode), in the fast index (its radiance mode, which path
+ * tracers' camera rays use), or the worse of the two at each angle.
  * The reflection (--part reflection, MODEL.md section 8) is scanned the same way: the
  * mirror direction of each facet written out here, its measure cos tr d(cos tr) d(phi)
  * by the same numerical Jacobian (the mirror map's measure is bounded for every n, so
@@ -36,6 +45,7 @@
 #include <string.h>
 
 #include <btdf/btdf.h>
+#include <btdf/btdf_scatfun.h>
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -46,9 +56,12 @@
 
 typedef struct scan {
     const btdf_table *t;
+    const btdf_scatfun *f; /* scanned instead of t when set */
+    btdf_side side;
     const btdf_params *p;
     int nu, npsi;
     int refl; /* 1: t is a reflection table, scanned against rho_r */
+    int mode; /* a file's reading: 0 DIRECT, 1 ADJOINT, 2 both (the worse per angle) */
 } scan;
 
 typedef struct ang_err {
@@ -75,6 +88,19 @@ static int refract_dir(double n, double ti, double tn, double psi, double *mu, d
     *mu = tz / len;
     *phi = atan2(ty, tx);
     return 1;
+}
+
+/* The evaluation under test: the table, or the file's block as pbrt-v3 reads it. */
+static void eval_under_test(const scan *sc, double ti, double to, double ph, double *tab)
+{
+    if (sc->f) {
+        if (btdf_scatfun_eval_side(sc->f, sc->side,
+                                   sc->mode == 1 ? BTDF_SCATFUN_ADJOINT : BTDF_SCATFUN_DIRECT,
+                                   ti, to, ph, tab) != BTDF_OK)
+            tab[0] = tab[1] = tab[2] = 0.0;
+    } else {
+        btdf_table_eval(sc->t, ti, to, ph, tab);
+    }
 }
 
 /* The mirror direction of light from (ti, azimuth 0) on facet (tn, psi), or 0 when the
@@ -123,7 +149,7 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
             for (int ip = 0; ip < 2 * sc->npsi; ip++) {
                 double dph = M_PI / (2 * sc->npsi), ph = (ip + 0.5) * dph, tab[3] = {0, 0, 0};
                 double rho = btdf_rho(n, s, p->k0, ti, to, ph), w = -mu * dmu * dph * 2.0;
-                btdf_table_eval(sc->t, ti, to, ph, tab);
+                eval_under_test(sc, ti, to, ph, tab);
                 double d = fabs(tab[c] - rho);
                 T += rho * w;
                 l1 += d * w;
@@ -153,7 +179,44 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
                 double rho = refl ? btdf_rho_r(n, s, p->k0, ti, to, ph)
                                   : btdf_rho(n, s, p->k0, ti, to, ph);
                 double tab[3] = {0, 0, 0};
-                btdf_table_eval(sc->t, ti, to, ph, tab);
+                eval_under_test(sc, ti, to, ph, tab);
+                double d = fabs(tab[c] - rho);
+                T += rho * w;
+                l1 += d * w;
+                dmax = fmax(dmax, d);
+                vmax = fmax(vmax, rho);
+            }
+        }
+        /* The facet rule covers the directions some facet with u < U_MAX sends light to;
+           a file's series can ring anywhere else (rho is below exp(-49) of its scale
+           there, the file need not be). A midpoint rule over (cos to, phi) adds the rest
+           of the hemisphere: each point whose facet (the half vector) is beyond U_MAX
+           or cannot send e_i there. */
+        for (int im = 0; !out_rule && im < 2 * sc->nu; im++) {
+            double dmu = 1.0 / (2 * sc->nu), mu = (im + 0.5) * dmu;
+            double so = sqrt(1.0 - mu * mu); /* mu < 1 */
+            for (int ip = 0; ip < 2 * sc->npsi; ip++) {
+                double dph = M_PI / (2 * sc->npsi), ph = (ip + 0.5) * dph;
+                double ix = sin(ti), iz = cos(ti);
+                double ox = so * cos(ph), oy = so * sin(ph), oz = refl ? mu : -mu;
+                double hx, hy, hz;
+                if (refl) {
+                    hx = ix + ox, hy = oy, hz = iz + oz;
+                } else {
+                    hx = ix + n * ox, hy = n * oy, hz = iz + n * oz;
+                    if (hz < 0.0)
+                        hx = -hx, hy = -hy, hz = -hz;
+                }
+                double ci = ix * hx + iz * hz, co = ox * hx + oy * hy + oz * hz;
+                int valid = hz > 0.0 && ci > 0.0 && (refl ? co > 0.0 : co < 0.0);
+                /* hz > 0 when valid: the facet's slope u = (s/2) tan(theta_h) */
+                if (valid && 0.5 * s * sqrt(hx * hx + hy * hy) / hz < U_MAX)
+                    continue; /* the facet rule's */
+                double to = refl ? acos(mu) : acos(-mu), tab[3] = {0, 0, 0};
+                double rho = refl ? btdf_rho_r(n, s, p->k0, ti, to, ph)
+                                  : btdf_rho(n, s, p->k0, ti, to, ph);
+                double w = mu * dmu * dph * 2.0;
+                eval_under_test(sc, ti, to, ph, tab);
                 double d = fabs(tab[c] - rho);
                 T += rho * w;
                 l1 += d * w;
@@ -187,7 +250,20 @@ static void *worker(void *arg)
         pthread_mutex_unlock(&w->lock);
         if (k >= w->n)
             return NULL;
-        one_angle(w->sc, w->ti[k], &w->res[k]);
+        if (w->sc->f && w->sc->mode == 2) {
+            /* both readings of the file, as its report does: the worse of each error */
+            scan one = *w->sc;
+            ang_err d, j;
+            one.mode = 0;
+            one_angle(&one, w->ti[k], &d);
+            one.mode = 1;
+            one_angle(&one, w->ti[k], &j);
+            d.e_l1 = fmax(d.e_l1, j.e_l1);
+            d.e_max = fmax(d.e_max, j.e_max);
+            w->res[k] = d;
+        } else {
+            one_angle(w->sc, w->ti[k], &w->res[k]);
+        }
     }
 }
 
@@ -207,8 +283,9 @@ static int parse_range(const char *v, double *a, double *b)
     return sscanf(v, "%lf:%lf", a, b) == 2 && *a >= 0 && *b <= 90 && *a < *b;
 }
 
-static int scan_part(const btdf_table *t, int refl, const btdf_table_opts *op, double a,
-                     double b, double step, int nu, int npsi, int threads, int dump);
+static int scan_part(const btdf_table *t, const btdf_scatfun *f, btdf_side side, int refl,
+                     const btdf_table_opts *op, double a, double b, double step, int nu,
+                     int npsi, int threads, int dump, int mode);
 
 int main(int argc, char **argv)
 {
@@ -216,7 +293,10 @@ int main(int argc, char **argv)
     btdf_table_opts_default(&o);
     double step = 0.25, a = 0.0, b = 90.0;
     int nu = 256, npsi = 192, threads = 2, dump = 0;
+    const char *bsdf = NULL;
+    btdf_side side = BTDF_SIDE_ENTER;
     btdf_part part = BTDF_PART_TRANSMISSION;
+    int mode = 2;
     for (int i = 1; i < argc; i++) {
         const char *k = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!v) {
@@ -253,6 +333,20 @@ int main(int argc, char **argv)
             npsi = atoi(v);
         } else if (!strcmp(k, "--dump")) {
             dump = atoi(v); /* 1: every angle's T and errors on standard output */
+        } else if (!strcmp(k, "--bsdf")) {
+            bsdf = v;
+        } else if (!strcmp(k, "--block")) {
+            if (strcmp(v, "enter") && strcmp(v, "leave")) {
+                fprintf(stderr, "btdf-densescan: --block %s: enter or leave\n", v);
+                return 2;
+            }
+            side = v[0] == 'e' ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE;
+        } else if (!strcmp(k, "--mode")) {
+            if (strcmp(v, "direct") && strcmp(v, "adjoint") && strcmp(v, "both")) {
+                fprintf(stderr, "btdf-densescan: --mode %s: direct, adjoint or both\n", v);
+                return 2;
+            }
+            mode = v[0] == 'd' ? 0 : v[0] == 'a' ? 1 : 2;
         } else if (!strcmp(k, "--threads")) {
             threads = atoi(v);
         } else if (!strcmp(k, "--part")) {
@@ -274,6 +368,22 @@ int main(int argc, char **argv)
     o.ti_max = b * M_PI / 180;
     o.part = part;
     char msg[512] = "";
+    if (bsdf) {
+        /* a .bsdf's transmission block (--block), against its own report */
+        btdf_scatfun *f = NULL;
+        if (part != BTDF_PART_TRANSMISSION) {
+            fprintf(stderr, "btdf-densescan: --bsdf scans a transmission block; --part "
+                            "does not apply\n");
+            return 2;
+        }
+        if (btdf_scatfun_read(bsdf, &f, msg, sizeof msg) != BTDF_OK) {
+            fprintf(stderr, "btdf-densescan: %s: %s\n", bsdf, msg);
+            return 1;
+        }
+        int bad = scan_part(NULL, f, side, 0, &o, a, b, step, nu, npsi, threads, dump, mode);
+        btdf_scatfun_free(f);
+        return bad;
+    }
     btdf_table *tab = NULL;
     btdf_status st = btdf_table_build(&o, &tab, msg, sizeof msg);
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
@@ -286,27 +396,42 @@ int main(int argc, char **argv)
         const btdf_table *t = btdf_table_part(tab, want);
         if (!t)
             continue;
-        bad |= scan_part(t, pk == 1, &o, a, b, step, nu, npsi, threads, dump);
+        bad |= scan_part(t, NULL, BTDF_SIDE_ENTER, pk == 1, &o, a, b, step, nu, npsi, threads,
+                         dump, 0);
     }
     btdf_table_free(tab);
     return bad;
 }
 
-/* Scans one part against its report; 0, or 1 when something failed. */
-static int scan_part(const btdf_table *t, int refl, const btdf_table_opts *op, double a,
-                     double b, double step, int nu, int npsi, int threads, int dump)
+/* Scans one part (of the table t, or the block side of the file f) against its report;
+   0, or 1 when something failed. */
+static int scan_part(const btdf_table *t, const btdf_scatfun *f, btdf_side side, int refl,
+                     const btdf_table_opts *op, double a, double b, double step, int nu,
+                     int npsi, int threads, int dump, int mode)
 {
     btdf_table_opts o = *op;
     btdf_report r;
     memset(&r, 0, sizeof r);
-    if (btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, 0, &r) != BTDF_OK) {
+    btdf_params truth = o.params; /* the scanned block's index: 1/n for light leaving */
+    if (f) {
+        if (side == BTDF_SIDE_LEAVE)
+            for (int c = 0; c < truth.channels; c++)
+                truth.ior[c] = 1.0 / truth.ior[c]; /* ior > 0: a file was built with it */
+        if (btdf_scatfun_report(f, &o.params, side, 0, 0, REPORT_SEED, 0, &r) != BTDF_OK) {
+            fprintf(stderr, "btdf-densescan: report failed (channels or block)\n");
+            return 1;
+        }
+    } else if (btdf_table_estimate(t, o.ti_min, o.ti_max, 0, 0, REPORT_SEED, 0, &r) !=
+               BTDF_OK) {
         fprintf(stderr, "btdf-densescan: estimate failed\n");
         return 1;
     }
     int is_max = o.metric == BTDF_METRIC_MAX;
     double reported = is_max ? r.e_max_max : r.e_l1_max;
     int met = reported <= o.tolerance;
-    scan sc = {t, &o.params, nu, npsi, refl};
+    if (f && btdf_scatfun_channels(f) == 3 && mode == 2)
+        mode = 1; /* three channels: the fold is right on the radiance path only */
+    scan sc = {t, f, side, &truth, nu, npsi, refl, mode};
     size_t n0 = (size_t)floor((b - a) / step) + 1, cap = n0 + 1 + 5 * 27;
     double *ti = malloc(cap * sizeof *ti);
     ang_err *res = malloc(cap * sizeof *res);
@@ -358,9 +483,9 @@ static int scan_part(const btdf_table *t, int refl, const btdf_table_opts *op, d
     for (size_t k = 0; k < n; k++) {
         double T[3];
         if (refl)
-            btdf_reflectance(&o.params, res[k].ti, T);
+            btdf_reflectance(&truth, res[k].ti, T);
         else
-            btdf_transmittance(&o.params, res[k].ti, T);
+            btdf_transmittance(&truth, res[k].ti, T);
         if (T[0] >= 0.01)
             tdev = fmax(tdev, fabs(res[k].T - T[0]) / T[0]);
     }

@@ -29,7 +29,9 @@ const opt_def opt_table[] = {
     {OPT_PART, "part", 0, "P", 0, CMD_TABULATE,
      "the lobes a .csv/.exr table holds: transmission (default), reflection (theta_r in\n"
      "[0, 90], nodes around the mirror direction) or both (one file, each part meeting\n"
-     "the tolerance with the whole budget)"},
+     "the tolerance with the whole budget); a .bsdf's blocks: both (default: four\n"
+     "blocks), transmission (the two transmission blocks) or reflection; not for .xml\n"
+     "(it holds both parts)"},
     {OPT_OUTPUT, "output", 'o', "FILE", 0, CMD_TABULATE,
      ".csv, .exr, .png (a montage), .bsdf (pbrt-v3/Mitsuba tabulated) or .xml\n"
      "(Radiance/WINDOW BSDF); the last two are built from Eq. 25 directly; '-' writes\n"

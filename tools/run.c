@@ -155,6 +155,10 @@ static int fail(const char *prog, int code, const char *path, const char *what)
     return code;
 }
 
+/* The .bsdf's blocks as reports and messages name them, by bit (btdf_scatfun_block). */
+static const char *const block_name[4] = {"enter", "leave", "reflection_top",
+                                          "reflection_bottom"};
+
 /* One side's report as JSON (the fields of a table's report, docs/tables.md). */
 static void json_side(FILE *f, const char *name, const btdf_report *r, double tol, int last)
 {
@@ -178,7 +182,7 @@ static void json_side(FILE *f, const char *name, const btdf_report *r, double to
 
 /* The .bsdf's JSON report, written atomically like every output. */
 static int write_series_report(const char *prog, const char *report, const btdf_params *p,
-                               const btdf_scatfun *f, const btdf_report reps[2], double tol,
+                               const btdf_scatfun *f, const btdf_report reps[4], double tol,
                                double seconds, int met, const char *prov)
 {
     char *buf = NULL;
@@ -205,10 +209,13 @@ static int write_series_report(const char *prog, const char *report, const btdf_
             p->smoothness, p->k0, tol, met ? "true" : "false", btdf_scatfun_node_count(f),
             btdf_scatfun_coeff_count(f), btdf_scatfun_max_order(f), seconds, peak,
             peak <= BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 ? "true" : "false");
-    if (reps[0].test_angles)
-        json_side(m, "enter", &reps[0], tol, reps[1].test_angles == 0);
-    if (reps[1].test_angles)
-        json_side(m, "leave", &reps[1], tol, 1);
+    int last = -1;
+    for (int b = 0; b < 4; b++)
+        if (reps[b].test_angles)
+            last = b;
+    for (int b = 0; b < 4; b++)
+        if (reps[b].test_angles)
+            json_side(m, block_name[b], &reps[b], tol, b == last);
     fprintf(m, "  }\n}\n");
     int bad = fclose(m) != 0;
     char msg[512] = "";
@@ -263,9 +270,10 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         k += snprintf(meta + k, sizeof meta - (size_t)k,
                       "], \"smoothness\": %s, \"k0\": %s, \"tolerance\": %s", nb[0], nb[1],
                       nb[2]);
-    btdf_report reps[2];
+    btdf_report reps[4];
     memset(reps, 0, sizeof reps);
-    for (int s = BTDF_SIDE_ENTER; s <= BTDF_SIDE_LEAVE; s++) {
+    for (int bi = 0; bi < 4; bi++) {
+        int s = 1 << bi; /* btdf_scatfun_block */
         if (!(sides & s))
             continue;
         btdf_report r;
@@ -275,14 +283,15 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         double e1 = run_now();
         run_progress_end(pr); /* the report line replaces the bar */
         if (es != BTDF_OK) {
-            btdf_report_clear(&reps[0]);
+            for (int q = 0; q < 4; q++)
+                btdf_report_clear(&reps[q]);
             btdf_scatfun_free(f);
             fprintf(stderr, "%s: %s: error estimate: %s\n", prog, path, btdf_strerror(es));
             return 1;
         }
         int ok = r.e_l1_max <= tol;
         met = met && ok;
-        const char *name = s == BTDF_SIDE_ENTER ? "enter" : "leave";
+        const char *name = block_name[bi];
         if (!quiet)
             fprintf(stderr,
                     "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients; "
@@ -295,7 +304,7 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
             k += snprintf(meta + k, sizeof meta - (size_t)k,
                           ", \"%s\": {\"e_l1_max\": %.4g, \"e_max_max\": %.4g, \"e_t_max\": %.4g}",
                           name, r.e_l1_max, r.e_max_max, r.e_t_max);
-        reps[s - 1] = r; /* cleared below */
+        reps[bi] = r; /* cleared below */
     }
     double peak = btdf_scatfun_a0_peak(f);
     if (!quiet && peak > BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0)
@@ -309,8 +318,8 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
     int code = 0;
     if (report)
         code = write_series_report(prog, report, p, f, reps, tol, t1 - t0, met, prov);
-    btdf_report_clear(&reps[0]);
-    btdf_report_clear(&reps[1]);
+    for (int q = 0; q < 4; q++)
+        btdf_report_clear(&reps[q]);
     if (code == 0 && !met && !best_effort) {
         fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
                         "to write it anyway)\n",

@@ -14,16 +14,24 @@ extern "C" {
 #endif
 
 /*
- * A SCATFUN v1 file holds, for every pair of elevation nodes (slow mu_s, fast mu_f),
- * the cosine series in phi_d of rho * |mu_f|, where phi_d = pi - phi (phi_d = 0 is the
- * forward plane) and rho is the radiance-form BTDF for light arriving from the slow
- * direction's side and leaving through the fast direction's side:
- *   mu_s > 0, mu_f > 0: light entering, Eq. 25 with index n,
+ * A SCATFUN v1 file holds, for every pair of elevation nodes (slow mu_s = pbrt-v3's
+ * wo.z, fast mu_f = -wi.z), the cosine series in phi_d of rho * |mu_f|, where
+ * phi_d = pi - phi (phi_d = 0 is the forward plane for transmission and the specular
+ * plane for reflection) and rho is the radiance-form BSDF for light arriving from the
+ * slow direction and leaving towards the fast one. Four blocks (btdf_scatfun_block):
+ *   T_ENTER  mu_s > 0, mu_f > 0: transmission entering, Eq. 25 with index n,
  *       ti = acos(mu_s), to = pi - acos(mu_f);
- *   mu_s < 0, mu_f < 0: light leaving, Eq. 25 with index 1/n, mirrored:
- *       ti = acos(|mu_s|), to = pi - acos(|mu_f|).
- * Reflection pairs (mu_s mu_f < 0) are empty. The header eta is n (ior[1], green,
- * for three channels). Three-channel files store the series of Y, R and B.
+ *   T_LEAVE  mu_s < 0, mu_f < 0: transmission leaving, Eq. 25 with index 1/n, mirrored:
+ *       ti = acos(|mu_s|), to = pi - acos(|mu_f|);
+ *   R_TOP    mu_s > 0, mu_f < 0: reflection back into the upper medium, rho_r
+ *       (MODEL.md 8) with index n, ti = acos(mu_s), tr = acos(|mu_f|);
+ *   R_BOTTOM mu_s < 0, mu_f > 0: reflection inside the dense medium, rho_r with index
+ *       1/n (total internal reflection included), ti = acos(|mu_s|), tr = acos(mu_f).
+ * Blocks not built are empty. The header eta is n (ior[1], green, for three
+ * channels). Three-channel files store the series of Y, R and B, with the transmission
+ * blocks of channel c scaled so that pbrt-v3's radiance-mode factor e^2 (one eta for
+ * all channels) gives each channel its own value: T_ENTER by (n_G/n_c)^2, T_LEAVE by
+ * (n_c/n_G)^2 (BTDF_SCATFUN_ADJOINT reads them right; DIRECT reads them as stored).
  * docs/scatfun.md describes the file, the node placement and the measured sizes.
  *
  * Threads: a btdf_scatfun is immutable once built or read; it may be evaluated,
@@ -34,6 +42,18 @@ extern "C" {
  * unless said otherwise. Messages go to msg (msglen bytes, may be NULL).
  */
 typedef struct btdf_scatfun btdf_scatfun;
+
+/* The blocks of a file, as a mask. The values 1 and 2 are BTDF_SIDE_ENTER and
+   BTDF_SIDE_LEAVE (a btdf_side of 1..3 asks for transmission only, as before). */
+typedef enum {
+    BTDF_SCATFUN_T_ENTER = 1,  /* transmission, light from above (index n) */
+    BTDF_SCATFUN_T_LEAVE = 2,  /* transmission, light from below (index 1/n) */
+    BTDF_SCATFUN_R_TOP = 4,    /* reflection above the surface (index n) */
+    BTDF_SCATFUN_R_BOTTOM = 8, /* reflection below, inside the dense medium (1/n) */
+    BTDF_SCATFUN_TRANSMISSION = 3,
+    BTDF_SCATFUN_REFLECTION = 12,
+    BTDF_SCATFUN_ALL = 15      /* a full dielectric interface */
+} btdf_scatfun_block;
 
 /* How a value is read back from a file, matching pbrt-v3's two transport modes. */
 typedef enum {
@@ -49,17 +69,18 @@ typedef enum {
 #define BTDF_SCATFUN_MAX_HALF_NODES 512
 #define BTDF_SCATFUN_MAX_PHI 16384
 
-/* Builds the nodes and coefficients from Eq. 25 (not from a table) for the sides
-   asked (BTDF_SIDE_BOTH is the usual choice), refining the elevation nodes and each
+/* Builds the nodes and coefficients from Eq. 25 and rho_r (not from a table) for the
+   blocks asked: `side` is a btdf_scatfun_block mask, 1..15 (BTDF_SCATFUN_ALL for a full
+   interface; BTDF_SIDE_BOTH = 3 for transmission only), refining the elevation nodes and each
    pair's series until midpoint checks against Eq. 25 pass and then an internal
    btdf_scatfun_report (24 angles x 8192 points, its own fixed seed) finds e_L1 (MODEL.md 6)
-   at most `tolerance` on every side built. threads: 0 = all cores, 1 = none;
+   at most `tolerance` on every block built (btdf_scatfun_report). threads: 0 = all cores, 1 = none;
    the result is byte-identical for any thread count.
    BTDF_OK when the tolerance was met; BTDF_EBUDGET when the node or series budget
    stopped refinement first: *out then still holds the best file reached and msg
    says the error reached; or, with *out NULL, when the lobe is too narrow for the
    format's node budget to follow at all (btdf_scatfun_build_limits). Errors: BTDF_EINVAL (parameters, tolerance outside
-   [1e-6, 0.5], side not 1..3), BTDF_ENOMEM, BTDF_EOVERFLOW. */
+   [1e-6, 0.5], side not 1..15), BTDF_ENOMEM, BTDF_EOVERFLOW. */
 BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                                         btdf_side side, int threads, btdf_scatfun **out,
                                         char *msg, size_t msglen);
@@ -125,11 +146,15 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *buf, size_t len, btdf_sca
 BTDF_API btdf_status btdf_scatfun_eval_mu(const btdf_scatfun *f, double mu_s, double mu_f,
                                           double cos_phi_d, int radiance, double *out);
 
-/* rho read back from the file in MODEL.md's convention for one side: ENTER gives
-   Eq. 25 at index n, LEAVE at index 1/n in that side's own (mirrored) frame;
-   ti in [0, pi/2], to in [pi/2, pi], phi = pi forward, radians. out[channels].
-   Sides the file does not hold read as 0. BTDF_EDOMAIN for angles out of range,
-   BTDF_EINVAL for a bad side or mode. */
+/* rho read back from the file in MODEL.md's convention for one block (`side`, a single
+   btdf_scatfun_block): T_ENTER gives Eq. 25 at index n, T_LEAVE at index 1/n in that
+   side's own (mirrored) frame, ti in [0, pi/2], to in [pi/2, pi]; R_TOP gives rho_r at
+   index n, R_BOTTOM rho_r at 1/n (mirrored frame), with `to` the reflected angle tr in
+   [0, pi/2]. phi = pi forward (specular), radians. out[channels]. DIRECT reads the
+   block whose slow index is the light's side; ADJOINT the block of the other
+   direction with pbrt's e^2 (reflection blocks: the same block with the roles of ti
+   and tr swapped). Blocks the file does not hold read as 0. BTDF_EDOMAIN for angles
+   out of range, BTDF_EINVAL for a bad side or mode. */
 BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side side,
                                             btdf_scatfun_mode mode, double ti, double to,
                                             double phi, double *out);
@@ -139,11 +164,17 @@ BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side sid
 BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double to,
                                        double phi, double *out);
 
-/* Error of the file's evaluation (mode DIRECT) against Eq. 25 for one side (ENTER or
-   LEAVE), MODEL.md section 6: test_angles stratified incident angles in [0, pi/2)
-   (0 = 24) with points_per_angle facet-space points each (0 = 8192) plus 4096 uniform
-   directions, combined as btdf_table_estimate does,
-   from the seed. p gives the truth (channel count must match the file). Fills *r
+/* Error of one block of the file (`side`: a single btdf_scatfun_block) as a renderer
+   reads it, against Eq. 25 (transmission) or rho_r (reflection, e_L1 relative to
+   max(R, 0.01)), MODEL.md section 6. A one-channel transmission block and every
+   reflection block are read in mode DIRECT; a three-channel transmission block, whose
+   stored values carry the fold factors, through the ADJOINT path of the other light
+   direction (pbrt-v3's radiance mode), against the truth of that direction. Incident
+   angles: test_angles stratified ones in [0, pi/2) (0 = 24), the midpoint of every
+   interval between the file's elevation nodes, and midpoints added where the
+   per-angle error or T (R) changes fast (btdf_table_estimate's rounds); each with
+   points_per_angle facet-space points (0 = 8192) plus 4096 uniform directions,
+   combined by the balance heuristic, from the seed. p gives the truth (channel count must match the file). Fills *r
    (zero it first; r->per_ti is malloc'd and owned by the report: free it with
    btdf_report_clear or free()). seconds_build is the build time (0 for a read
    file); slices = node count, samples = coefficient count. */
@@ -172,8 +203,9 @@ BTDF_API const float *btdf_scatfun_coeffs(const btdf_scatfun *f);
 BTDF_API btdf_status btdf_scatfun_pair(const btdf_scatfun *f, size_t i, size_t o,
                                        size_t *offset, size_t *length);
 
-/* Sides the file holds: a btdf_side mask (ENTER for mu_s, mu_f > 0 pairs, LEAVE for
-   mu_s, mu_f < 0), 0 when neither has a non-empty series. */
+/* Blocks the file holds: a btdf_scatfun_block mask (T_ENTER for mu_s, mu_f > 0 pairs,
+   T_LEAVE for mu_s, mu_f < 0, R_TOP for mu_s > 0 > mu_f, R_BOTTOM for mu_s < 0 < mu_f),
+   0 when none has a non-empty series. */
 BTDF_API int btdf_scatfun_sides(const btdf_scatfun *f);
 
 /* Largest |a_0| of channel 0 over all pairs: the scale of the values pbrt-v3's
