@@ -38,7 +38,8 @@ const opt_def opt_table[] = {
      "CSV to standard output"},
     {OPT_OUTPUT, "output", 'o', "FILE.png", 0, CMD_POLAR, "the picture"},
     {OPT_TOLERANCE, "tolerance", 0, "E", 0, CMD_TABULATE,
-     "target error of the adaptive table or .bsdf (default 1e-3), or of a tree3 .xml\n"
+     "target error of the adaptive table (default 1e-3), of a .bsdf (default 1e-2\n"
+     "with reflection blocks, 1e-3 with --part transmission) or of a tree3 .xml\n"
      "(default 0.2)"},
     {OPT_METRIC, "metric", 0, "l1|max", 0, CMD_TABULATE,
      "which error must meet E (default l1)"},
