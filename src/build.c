@@ -324,6 +324,18 @@ static int eval_nodes(const btdf_params *p, int refl, const rho_in *a, const dou
     return 1;
 }
 
+/* The measure weight an interval's midpoint check uses: the midpoint's own, but at
+   least the mean of its ends'. Where the interval crosses the edge of the reachable
+   directions (a reflection mirrored below the horizon, a refraction past the critical
+   angle) the midpoint can lie beyond it with weight 0 while the part before it, where
+   the interpolant is wrong, has weight: the (1/1.5, 3) reflection kept 90% of its
+   error in the last 4.5 deg before the horizon, unseen by the checks, and missed 1e-3
+   at every pass. */
+static double mid_weight(double wmid, double wa, double wb)
+{
+    return fmax(wmid, 0.5 * (wa + wb));
+}
+
 /* Trapezoid weight of node i on a non-uniform axis. */
 static double trap(const double *a, size_t m, size_t i)
 {
@@ -464,7 +476,8 @@ static void build_slice(const slice_target *tg, slice_out *o)
                     if (is_max)
                         ech[c] = fmax(ech[c], d * norm);
                     else
-                        ech[c] += d * wr[i * nc + j] * trap(cols, nc, j) * (rows[i + 1] - rows[i]) * 2.0;
+                        ech[c] += d * mid_weight(wr[i * nc + j], w[i * nc + j], w[(i + 1) * nc + j]) *
+                                  trap(cols, nc, j) * (rows[i + 1] - rows[i]) * 2.0;
                 }
             double e = fmax(ech[0], fmax(ech[1], ech[2]));
             er[i] = e;
@@ -485,7 +498,8 @@ static void build_slice(const slice_target *tg, slice_out *o)
                     if (is_max)
                         ech[c] = fmax(ech[c], d * norm);
                     else
-                        ech[c] += d * wc[i * (nc - 1) + j] * trap(rows, nr, i) * (cols[j + 1] - cols[j]) * 2.0;
+                        ech[c] += d * mid_weight(wc[i * (nc - 1) + j], w[i * nc + j], w[i * nc + j + 1]) *
+                                  trap(rows, nr, i) * (cols[j + 1] - cols[j]) * 2.0;
                 }
             double e = fmax(ech[0], fmax(ech[1], ech[2]));
             ec[j] = e;
