@@ -395,7 +395,7 @@ def weight_checks(count):
                 b = bsdf(**kw)
                 for tm, scale in ((mi.TransportMode.Importance, 1.0),
                                   (mi.TransportMode.Radiance, 1.0 / (n * n))):
-                    mean, err = mean_weight(b, tm, wi_of(deg), count, seed=7 + int(deg))
+                    mean, err = mean_weights(b, tm, wi_of(deg), count, seed=7 + int(deg))[0]
                     want = T * scale
                     # 4 standard errors of the mean, the quadrature's 1e-6 on T, and for
                     # the table its own reported e_T (relative to max(T, 0.01)).
@@ -408,32 +408,6 @@ def weight_checks(count):
                              "/n^2 " if scale != 1.0 else "", want, abs(mean - want), tol))
                     if not JIT:
                         break  # scalar: importance mode only (Python loop per sample)
-
-
-def mean_weight(b, mode, wi, count, seed):
-    ctx = mi.BSDFContext(mode)
-    if JIT:
-        si = dr.zeros(mi.SurfaceInteraction3f, count)
-        si.wi = mi.Vector3f(wi)
-        rng = mi.PCG32(size=count, initstate=seed)
-        _, w = b.sample(ctx, si, rng.next_float32(), mi.Point2f(rng.next_float32(),
-                                                                   rng.next_float32()))
-        x = mi.Float64(w[0])
-        m = dr.mean(x)[0] if dr.width(dr.mean(x)) else dr.mean(x)
-        m2 = dr.mean(x * x)[0]
-        m = float(m)
-    else:
-        rng = random.Random(seed)
-        si = dr.zeros(mi.SurfaceInteraction3f)
-        si.wi = mi.Vector3f(wi)
-        acc = acc2 = 0.0
-        for _ in range(count):
-            _, w = b.sample(ctx, si, rng.random(), mi.Point2f(rng.random(), rng.random()))
-            acc += float(w[0])
-            acc2 += float(w[0]) ** 2
-        m, m2 = acc / count, acc2 / count
-    var = max(float(m2) - m * m, 0.0)
-    return m, math.sqrt(var / count)
 
 
 # ---------------------------------------------------------------------------------

@@ -109,11 +109,13 @@ static int colour_near(const picture *p, double x, double y, int r, const int wa
 }
 
 /* The farthest pixel of colour want from (cx, cy) within 1.2 pixels of the ray at
-   outgoing angle to (forward side), or 0. */
+   angle to from the upward normal (forward side), or 0: below the surface line for
+   to > 90 degrees, above it otherwise. */
 static double ray_extent(const picture *p, double cx, double cy, double to, const int want[3])
 {
-    double ux = sin(to), uy = -cos(to), best = 0.0; /* to > 90 degrees: downwards */
-    for (int y = (int)cy + 3; y < p->h; y++)
+    double ux = sin(to), uy = -cos(to), best = 0.0; /* image y grows downwards */
+    int y0 = uy > 0 ? (int)cy + 3 : 0, y1 = uy > 0 ? p->h : (int)cy - 3;
+    for (int y = y0; y < y1; y++)
         for (int x = 0; x < p->w; x++) {
             double dx = x + 0.5 - cx, dy = y + 0.5 - cy;
             double along = dx * ux + dy * uy, across = fabs(dx * uy - dy * ux);
@@ -123,39 +125,52 @@ static double ray_extent(const picture *p, double cx, double cy, double to, cons
     return best;
 }
 
+/* The surface of a polar plot: the dark line across the whole width, 2 pixels wide;
+   the y of its centre, which is the plot's. */
+static double surface_y(const picture *p)
+{
+    double sy = 0.0;
+    int n = 0;
+    for (int y = 0; y < p->h; y++)
+        if (at(p, 2, y)[0] < 100 && at(p, p->w - 3, y)[0] < 100) {
+            sy += y + 0.5;
+            n++;
+        }
+    assert_true(n >= 1 && n <= 4);
+    return sy / n;
+}
+
+/* A polar plot of one material, n = 1.4, s = 3, at ti = 30 deg (o points at m and ti). */
+static void polar_setup(btdf_params *m, double *ti, btdf_preview_opts *o)
+{
+    btdf_params_default(m);
+    m->ior[0] = 1.4;
+    m->smoothness = 3.0;
+    *ti = 30.0;
+    btdf_preview_opts_default(o);
+    o->kind = BTDF_PREVIEW_POLAR;
+    o->materials = m;
+    o->nmaterials = 1;
+    o->ti_deg = ti;
+    o->nti = 1;
+}
+
 /* POLAR: the curve is where Eq. 25 puts it: along rays from the centre the lobe's radii
    stand in the ratio of Eq. 25's values. */
 static void test_polar(void **state)
 {
     (void)state;
     btdf_params m;
-    btdf_params_default(&m);
-    m.ior[0] = 1.4;
-    m.smoothness = 3.0;
-    double ti = 30.0;
+    double ti;
     btdf_preview_opts o;
-    btdf_preview_opts_default(&o);
-    o.kind = BTDF_PREVIEW_POLAR;
-    o.materials = &m;
-    o.nmaterials = 1;
-    o.ti_deg = &ti;
-    o.nti = 1;
+    polar_setup(&m, &ti, &o);
     picture p = write_and_read(&o, "polar");
     assert_int_equal(p.w, 960);
     assert_int_equal(p.h, 720);
     expect_white(&p, 0, 0);
     expect_white(&p, p.w - 1, 0);
 
-    /* The surface: the dark line across the whole width; its centre is the plot's. */
-    double sy = 0.0;
-    int n = 0;
-    for (int y = 0; y < p.h; y++)
-        if (at(&p, 2, y)[0] < 100 && at(&p, p.w - 3, y)[0] < 100) {
-            sy += y + 0.5;
-            n++;
-        }
-    assert_true(n >= 1 && n <= 4); /* a line 2 pixels wide */
-    double cx = p.w / 2.0, cy = sy / n;
+    double cx = p.w / 2.0, cy = surface_y(&p);
 
     double best = 0.0, peak_to = M_PI;
     for (int j = 0; j <= 20000; j++) {
@@ -198,28 +213,12 @@ static void test_polar_reflection(void **state)
 {
     (void)state;
     btdf_params m;
-    btdf_params_default(&m);
-    m.ior[0] = 1.4;
-    m.smoothness = 3.0;
-    double ti = 30.0;
+    double ti;
     btdf_preview_opts o;
-    btdf_preview_opts_default(&o);
-    o.kind = BTDF_PREVIEW_POLAR;
-    o.materials = &m;
-    o.nmaterials = 1;
-    o.ti_deg = &ti;
-    o.nti = 1;
+    polar_setup(&m, &ti, &o);
     o.part = BTDF_PART_BOTH;
     picture p = write_and_read(&o, "polar-both");
-    double sy = 0.0;
-    int n = 0;
-    for (int y = 0; y < p.h; y++)
-        if (at(&p, 2, y)[0] < 100 && at(&p, p.w - 3, y)[0] < 100) {
-            sy += y + 0.5;
-            n++;
-        }
-    assert_true(n >= 1 && n <= 4);
-    double cx = p.w / 2.0, cy = sy / n;
+    double cx = p.w / 2.0, cy = surface_y(&p);
     /* the reflection's peak in the plane, specular side */
     double best = 0.0, peak_tr = 0.0;
     for (int j = 0; j <= 9000; j++) {
@@ -231,14 +230,7 @@ static void test_polar_reflection(void **state)
         }
     }
     /* the farthest curve pixel along the peak's ray, above the surface */
-    double ux = sin(peak_tr), uy = -cos(peak_tr), r0 = 0.0;
-    for (int y = 0; y < (int)cy - 3; y++)
-        for (int x = 0; x < p.w; x++) {
-            double dx = x + 0.5 - cx, dy = y + 0.5 - cy;
-            double along = dx * ux + dy * uy, across = fabs(dx * uy - dy * ux);
-            if (along > 0 && across <= 1.2 && near(at(&p, x, y), curve0, 40))
-                r0 = fmax(r0, along);
-        }
+    double r0 = ray_extent(&p, cx, cy, peak_tr, curve0);
     assert_true(r0 > 100); /* on its own scale the small lobe is large */
     double k = (r0 - 1.1) / best;
     for (int q = 1; q <= 3; q++) { /* further out on the specular side, as rho_r says */

@@ -180,18 +180,29 @@ static double dense_l1(const btdf_table_opts *o)
 }
 
 /* One row of the n-near-1 comparison: the median of reps builds, and the dense scan. */
+/* reps builds of o, each in its child (run_child): their times and peaks into the
+   arrays (reps <= 9), the last result into r; 0 when a child failed. */
+static int repeat_child(btdf_table_opts *o, int reps, result *r, double *tb, double *te,
+                        double *cpu, double *pk)
+{
+    memset(r, 0, sizeof *r);
+    for (int k = 0; k < reps; k++) {
+        if (!run_child(o, r))
+            return 0;
+        tb[k] = r->tb;
+        te[k] = r->te;
+        cpu[k] = r->cpu;
+        pk[k] = r->peak_mib;
+    }
+    return 1;
+}
+
 static void run_near(const char *label, btdf_table_opts *o, int reps)
 {
-    double tb[9], cpu[9], pk[9];
+    double tb[9], te[9], cpu[9], pk[9];
     result r;
-    memset(&r, 0, sizeof r);
-    for (int k = 0; k < reps; k++) {
-        if (!run_child(o, &r))
-            return;
-        tb[k] = r.tb;
-        cpu[k] = r.cpu;
-        pk[k] = r.peak_mib;
-    }
+    if (!repeat_child(o, reps, &r, tb, te, cpu, pk))
+        return;
     double d = dense_l1(o);
     printf("%s,%.9g,%g,%g,%.0f:%.0f,%zu,%zu,%zu,%.3f,%.3f,%.1f,%.4g,%.4g,%s\n", label,
            o->params.ior[0], o->params.smoothness, o->tolerance, o->ti_min * 180.0 / M_PI,
@@ -203,16 +214,10 @@ static void run_near(const char *label, btdf_table_opts *o, int reps)
 
 static void run(FILE *out, const char *method, const char *label, btdf_table_opts *o, int reps)
 {
-    double tb[9], te[9], pk[9];
+    double tb[9], te[9], cpu[9], pk[9];
     result r;
-    memset(&r, 0, sizeof r);
-    for (int k = 0; k < reps; k++) {
-        if (!run_child(o, &r))
-            return;
-        tb[k] = r.tb;
-        te[k] = r.te;
-        pk[k] = r.peak_mib;
-    }
+    if (!repeat_child(o, reps, &r, tb, te, cpu, pk))
+        return;
     fprintf(out, "%s,%s,%g,%g,%g,%.0f,%zu,%.4f,%.4f,%.1f,%.4g,%.4g,%.4g,%s\n", method, label,
             o->params.ior[0], o->params.smoothness,
             o->kind == BTDF_TABLE_GRID ? 0.0 : o->tolerance, o->ti_max * 180.0 / M_PI, r.samples,
