@@ -714,30 +714,29 @@ static void json_part(FILE *f, const char *ind, btdf_table_kind kind, const btdf
     fprintf(f, "%s]", ind);
 }
 
+/* The request's lines of a table's JSON report: material, range, tolerance, met. */
+static void json_request(FILE *f, const btdf_table_opts *o, const btdf_report *r, int met)
+{
+    fprintf(f, "  \"ior\": [");
+    for (int c = 0; c < o->params.channels; c++)
+        fprintf(f, "%s%s", c ? ", " : "", num(o->params.ior[c]));
+    fprintf(f, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n", num(o->params.smoothness),
+            num(o->params.k0));
+    fprintf(f, "  \"theta_i_deg\": [%s, %s],\n", num(o->ti_min * 180 / M_PI),
+            num(o->ti_max * 180 / M_PI));
+    fprintf(f, "  \"tolerance\": %s,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
+            num(r->tolerance), r->metric == BTDF_METRIC_MAX ? "max" : "l1",
+            met ? "true" : "false");
+}
+
 /* r2: the reflection's report of a table holding both parts, or NULL. */
 static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
                         const btdf_report *r, const char *provenance, const btdf_report *r2)
 {
     if (kind == BTDF_TABLE_FACET_REFLECTION || r2) {
         /* reflection or both: one object per part, under "parts" */
-        fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
-                BTDF_VERSION_STRING);
-        for (const char *s = provenance; *s; s++) {
-            if (*s == '"' || *s == '\\')
-                fputc('\\', f);
-            if ((unsigned char)*s >= 0x20)
-                fputc(*s, f);
-        }
-        fprintf(f, "\",\n  \"ior\": [");
-        for (int c = 0; c < o->params.channels; c++)
-            fprintf(f, "%s%s", c ? ", " : "", num(o->params.ior[c]));
-        fprintf(f, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n", num(o->params.smoothness),
-                num(o->params.k0));
-        fprintf(f, "  \"theta_i_deg\": [%s, %s],\n", num(o->ti_min * 180 / M_PI),
-                num(o->ti_max * 180 / M_PI));
-        fprintf(f, "  \"tolerance\": %s,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
-                num(r->tolerance), r->metric == BTDF_METRIC_MAX ? "max" : "l1",
-                r->met && (!r2 || r2->met) ? "true" : "false");
+        run_json_open(f, provenance);
+        json_request(f, o, r, r->met && (!r2 || r2->met));
         fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"peak_bytes\": %zu,\n",
                 r->seconds_build, r->peak_bytes);
         fprintf(f, "  \"parts\": [\n    {\n");
@@ -749,25 +748,9 @@ static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
         fprintf(f, "\n    }\n  ]\n}\n");
         return;
     }
-    fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n", BTDF_VERSION_STRING);
-    fprintf(f, "  \"command\": \"");
-    for (const char *s = provenance; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            fputc('\\', f);
-        if ((unsigned char)*s >= 0x20)
-            fputc(*s, f);
-    }
-    fprintf(f, "\",\n  \"kind\": \"%s\",\n", btdf_table_kind_name(kind));
-    fprintf(f, "  \"ior\": [");
-    for (int c = 0; c < o->params.channels; c++)
-        fprintf(f, "%s%s", c ? ", " : "", num(o->params.ior[c]));
-    fprintf(f, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n", num(o->params.smoothness),
-            num(o->params.k0));
-    fprintf(f, "  \"theta_i_deg\": [%s, %s],\n", num(o->ti_min * 180 / M_PI),
-            num(o->ti_max * 180 / M_PI));
-    fprintf(f, "  \"tolerance\": %s,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
-            num(r->tolerance), r->metric == BTDF_METRIC_MAX ? "max" : "l1",
-            r->met ? "true" : "false");
+    run_json_open(f, provenance);
+    fprintf(f, "  \"kind\": \"%s\",\n", btdf_table_kind_name(kind));
+    json_request(f, o, r, r->met);
     fprintf(f, "  \"slices\": %zu,\n  \"samples\": %zu,\n", r->slices, r->samples);
     fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"seconds_estimate\": %.6f,\n"
                "  \"estimate_within_tabulation\": %s,\n",

@@ -14,6 +14,19 @@
 
 #include "run.h"
 
+void run_json_open(FILE *f, const char *prov)
+{
+    fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
+            btdf_version_string());
+    for (const char *s = prov ? prov : ""; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            fputc('\\', f); /* JSON string escapes; control characters are dropped */
+        if ((unsigned char)*s >= 0x20)
+            fputc(*s, f);
+    }
+    fprintf(f, "\",\n");
+}
+
 double run_now(void)
 {
     struct timespec ts;
@@ -190,15 +203,8 @@ static int write_series_report(const char *prog, const char *report, const btdf_
     FILE *m = open_memstream(&buf, &len);
     if (!m)
         return fail(prog, 1, report, "out of memory");
-    fprintf(m, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
-            btdf_version_string());
-    for (const char *s = prov ? prov : ""; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            fputc('\\', m);
-        if ((unsigned char)*s >= 0x20)
-            fputc(*s, m);
-    }
-    fprintf(m, "\",\n  \"kind\": \"scatfun\",\n  \"ior\": [");
+    run_json_open(m, prov);
+    fprintf(m, "  \"kind\": \"scatfun\",\n  \"ior\": [");
     for (int c = 0; c < p->channels; c++)
         fprintf(m, "%s%.17g", c ? ", " : "", p->ior[c]);
     double peak = btdf_scatfun_a0_peak(f);
@@ -350,15 +356,8 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
 static void rad_json(FILE *f, const btdf_rad *x, const btdf_params *p, const btdf_report *rep,
                      const char *prov)
 {
-    fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
-            btdf_version_string());
-    for (const char *s = prov ? prov : ""; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            fputc('\\', f);
-        if ((unsigned char)*s >= 0x20)
-            fputc(*s, f);
-    }
-    fprintf(f, "\",\n  \"format\": \"radiance-xml\",\n  \"basis\": \"%s\",\n",
+    run_json_open(f, prov);
+    fprintf(f, "  \"format\": \"radiance-xml\",\n  \"basis\": \"%s\",\n",
             btdf_rad_basis_name(btdf_rad_get_basis(x)));
     fprintf(f, "  \"ior\": [%.17g],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", p->ior[0],
             p->smoothness, p->k0);

@@ -5,6 +5,7 @@
 
 #include <pthread.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #include <btdf/btdf.h>
 
@@ -13,6 +14,10 @@
 
 /* Seconds on a monotonic clock. */
 double run_now(void);
+
+/* Opens a JSON report: '{', the program, its version and the command prov (escaped),
+   each on its own line, the last followed by ',' and a newline. */
+void run_json_open(FILE *f, const char *prov);
 
 /* The words the command line and the manifest share: "enter", "leave", "both" as a
    btdf_side (0 for any other word); "l1", "max" as a metric (0 for any other). */
