@@ -274,13 +274,9 @@ static double facet_rho_r(double n, double s, double k0, const rho_in *a, double
                           double ctn, double cpsi, double spsi, double beck, double *w)
 {
     *w = 0.0;
-    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
-    if (!(ca > 0.0))
-        return 0.0; /* the facet faces away from e_i */
-    double rx = 2.0 * ca * stn * cpsi - a->sin_ti, ry = 2.0 * ca * stn * spsi;
-    double rz = 2.0 * ca * ctn - a->cos_ti;
-    if (!(rz > 0.0))
-        return 0.0; /* e_r would point into the lower medium */
+    double ca, rx, ry, rz;
+    if (!facet_mirror(a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz))
+        return 0.0; /* no reflected direction in the upper medium */
     double vo = shadow_v(sqrt(rx * rx + ry * ry) / rz, s, k0); /* rz > 0 just checked */
     *w = rz * 4.0 * ca * stn;
     double r = a->pref * beck * bt_fresnel_r(n, n - 1.0, ca) * vo / (4.0 * rz);

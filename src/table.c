@@ -139,13 +139,9 @@ int facet_eval_r(double n, double s, double k0, const rho_in *a, double stn, dou
 {
     g->rho = 0.0;
     g->weight = 0.0;
-    double ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
-    if (!(ca > 0.0))
-        return 0; /* the facet faces away from e_i */
-    double rx = 2.0 * ca * stn * cpsi - a->sin_ti, ry = 2.0 * ca * stn * spsi;
-    double rz = 2.0 * ca * ctn - a->cos_ti;
-    if (!(rz > 0.0))
-        return 0; /* mirrored into the lower hemisphere: no reflected direction */
+    double ca, rx, ry, rz;
+    if (!facet_mirror(a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz))
+        return 0; /* no reflected direction in the upper medium */
     double st = sqrt(rx * rx + ry * ry);
     g->sin_to = st;
     g->cos_to = rz;

@@ -53,6 +53,21 @@ typedef struct facet_geo {
 int facet_eval(double n, double s, double k0, const rho_in *a, double tn_sin, double tn_cos,
                double cpsi, double spsi, facet_geo *g);
 
+/* The mirror direction of e_i = (sin ti, 0, cos ti) on the facet h = (stn cpsi,
+   stn spsi, ctn): ca = e_i.h and e_r = 2 ca h - e_i = (rx, ry, rz). 0 when the facet
+   faces away from e_i (ca <= 0) or mirrors it into the lower medium (rz <= 0). */
+static inline int facet_mirror(const rho_in *a, double stn, double ctn, double cpsi,
+                               double spsi, double *ca, double *rx, double *ry, double *rz)
+{
+    *ca = stn * cpsi * a->sin_ti + ctn * a->cos_ti;
+    if (!(*ca > 0.0))
+        return 0;
+    *rx = 2.0 * *ca * stn * cpsi - a->sin_ti;
+    *ry = 2.0 * *ca * stn * spsi;
+    *rz = 2.0 * *ca * ctn - a->cos_ti;
+    return *rz > 0.0;
+}
+
 /* The same for reflection: the facet (tn, psi) mirrors e_i into e_r = 2 (e_i.h) h - e_i;
    g gets e_r (sin_to, cos_to = cos tr > 0), rho_r, and weight = cos tr 4 (e_i.h), so
    that cos tr d(omega_r) = weight d(omega_h). 0 where e_r would leave the upper

@@ -128,6 +128,27 @@ static int facet_dir(int refl, double n, double ti, double tn, double psi, doubl
     return refl ? reflect_dir(ti, tn, psi, mu, phi) : refract_dir(n, ti, tn, psi, mu, phi);
 }
 
+/* One channel's sums over the points of an incident angle: T, the L1 of the error,
+   the largest error and the largest value. */
+typedef struct acc {
+    double T, l1, dmax, vmax;
+} acc;
+
+/* Adds the point (to, ph) of weight w (measure times |cos to|) of channel c. */
+static void add_point(const scan *sc, int c, double ti, double to, double ph, double w, acc *a)
+{
+    const btdf_params *p = sc->p;
+    double n = p->ior[c], s = p->smoothness;
+    double rho = sc->refl ? btdf_rho_r(n, s, p->k0, ti, to, ph) : btdf_rho(n, s, p->k0, ti, to, ph);
+    double tab[3] = {0, 0, 0};
+    eval_under_test(sc, ti, to, ph, tab);
+    double d = fabs(tab[c] - rho);
+    a->T += rho * w;
+    a->l1 += d * w;
+    a->dmax = fmax(a->dmax, d);
+    a->vmax = fmax(a->vmax, rho);
+}
+
 static void one_angle(const scan *sc, double ti, ang_err *out)
 {
     int refl = sc->refl;
@@ -136,7 +157,7 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
     out->ti = ti;
     out->T = out->e_l1 = out->e_max = 0.0;
     for (int c = 0; c < p->channels; c++) {
-        double n = p->ior[c], T = 0.0, l1 = 0.0, dmax = 0.0, vmax = 0.0;
+        double n = p->ior[c];
         /* n < 1: the facet map's measure diverges at the critical angle, which a product
            rule cannot integrate; the outgoing hemisphere is smooth there, and the lobes
            of light leaving the dense side are wide (the cases scanned have s <= 100).
@@ -144,19 +165,7 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
            a few cells of the (cos to, phi) grid at most; there the facets' Fresnel factor
            falls to 0 well before the critical angle, and the facet rule is used. */
         int out_rule = !refl && n < 1.0 && 1.0 / n - 1.0 >= 0.01;
-        for (int im = 0; out_rule && im < 2 * sc->nu; im++) {
-            double dmu = 1.0 / (2 * sc->nu), mu = -(im + 0.5) * dmu, to = acos(mu);
-            for (int ip = 0; ip < 2 * sc->npsi; ip++) {
-                double dph = M_PI / (2 * sc->npsi), ph = (ip + 0.5) * dph, tab[3] = {0, 0, 0};
-                double rho = btdf_rho(n, s, p->k0, ti, to, ph), w = -mu * dmu * dph * 2.0;
-                eval_under_test(sc, ti, to, ph, tab);
-                double d = fabs(tab[c] - rho);
-                T += rho * w;
-                l1 += d * w;
-                dmax = fmax(dmax, d);
-                vmax = fmax(vmax, rho);
-            }
-        }
+        acc a = {0.0, 0.0, 0.0, 0.0};
         for (int iu = 0; !out_rule && iu < sc->nu; iu++) {
             double u = (iu + 0.5) * du;
             double hu = 1e-6 * fmax(1.0, u);
@@ -175,55 +184,41 @@ static void one_angle(const scan *sc, double ti, ang_err *out)
                 double dph_dp = remainder(p3 - p4, 2 * M_PI) / (2 * hp);
                 double jac = fabs(dmu_du * dph_dp - dmu_dp * dph_du);
                 double w = fabs(mu) * jac * du * dpsi * 2.0;
-                double to = acos(mu), ph = fabs(phi);
-                double rho = refl ? btdf_rho_r(n, s, p->k0, ti, to, ph)
-                                  : btdf_rho(n, s, p->k0, ti, to, ph);
-                double tab[3] = {0, 0, 0};
-                eval_under_test(sc, ti, to, ph, tab);
-                double d = fabs(tab[c] - rho);
-                T += rho * w;
-                l1 += d * w;
-                dmax = fmax(dmax, d);
-                vmax = fmax(vmax, rho);
+                add_point(sc, c, ti, acos(mu), fabs(phi), w, &a);
             }
         }
-        /* The facet rule covers the directions some facet with u < U_MAX sends light to;
-           a file's series can ring anywhere else (rho is below exp(-49) of its scale
-           there, the file need not be). A midpoint rule over (cos to, phi) adds the rest
-           of the hemisphere: each point whose facet (the half vector) is beyond U_MAX
-           or cannot send e_i there. */
-        for (int im = 0; !out_rule && im < 2 * sc->nu; im++) {
-            double dmu = 1.0 / (2 * sc->nu), mu = (im + 0.5) * dmu;
+        /* A midpoint rule over (cos to, phi), with twice the counts: the whole hemisphere
+           for out_rule; otherwise the rest of it beside the facet rule, which covers only
+           the directions some facet with u < U_MAX sends light to, while a file's series
+           can ring anywhere (rho is below exp(-49) of its scale there, the file need not
+           be): each point whose facet (the half vector) is beyond U_MAX or cannot send
+           e_i there. */
+        for (int im = 0; im < 2 * sc->nu; im++) {
+            double dmu = 1.0 / (2 * sc->nu), mu = (im + 0.5) * dmu; /* |cos to| */
             double so = sqrt(1.0 - mu * mu); /* mu < 1 */
             for (int ip = 0; ip < 2 * sc->npsi; ip++) {
                 double dph = M_PI / (2 * sc->npsi), ph = (ip + 0.5) * dph;
-                double ix = sin(ti), iz = cos(ti);
-                double ox = so * cos(ph), oy = so * sin(ph), oz = refl ? mu : -mu;
-                double hx, hy, hz;
-                if (refl) {
-                    hx = ix + ox, hy = oy, hz = iz + oz;
-                } else {
-                    hx = ix + n * ox, hy = n * oy, hz = iz + n * oz;
-                    if (hz < 0.0)
-                        hx = -hx, hy = -hy, hz = -hz;
+                if (!out_rule) {
+                    double ix = sin(ti), iz = cos(ti);
+                    double ox = so * cos(ph), oy = so * sin(ph), oz = refl ? mu : -mu;
+                    double hx, hy, hz;
+                    if (refl) {
+                        hx = ix + ox, hy = oy, hz = iz + oz;
+                    } else {
+                        hx = ix + n * ox, hy = n * oy, hz = iz + n * oz;
+                        if (hz < 0.0)
+                            hx = -hx, hy = -hy, hz = -hz;
+                    }
+                    double ci = ix * hx + iz * hz, co = ox * hx + oy * hy + oz * hz;
+                    int valid = hz > 0.0 && ci > 0.0 && (refl ? co > 0.0 : co < 0.0);
+                    /* hz > 0 when valid: the facet's slope u = (s/2) tan(theta_h) */
+                    if (valid && 0.5 * s * sqrt(hx * hx + hy * hy) / hz < U_MAX)
+                        continue; /* the facet rule's */
                 }
-                double ci = ix * hx + iz * hz, co = ox * hx + oy * hy + oz * hz;
-                int valid = hz > 0.0 && ci > 0.0 && (refl ? co > 0.0 : co < 0.0);
-                /* hz > 0 when valid: the facet's slope u = (s/2) tan(theta_h) */
-                if (valid && 0.5 * s * sqrt(hx * hx + hy * hy) / hz < U_MAX)
-                    continue; /* the facet rule's */
-                double to = refl ? acos(mu) : acos(-mu), tab[3] = {0, 0, 0};
-                double rho = refl ? btdf_rho_r(n, s, p->k0, ti, to, ph)
-                                  : btdf_rho(n, s, p->k0, ti, to, ph);
-                double w = mu * dmu * dph * 2.0;
-                eval_under_test(sc, ti, to, ph, tab);
-                double d = fabs(tab[c] - rho);
-                T += rho * w;
-                l1 += d * w;
-                dmax = fmax(dmax, d);
-                vmax = fmax(vmax, rho);
+                add_point(sc, c, ti, refl ? acos(mu) : acos(-mu), ph, mu * dmu * dph * 2.0, &a);
             }
         }
+        double T = a.T, l1 = a.l1, dmax = a.dmax, vmax = a.vmax;
         double fl = fmax(T, 0.01);
         if (c == 0)
             out->T = T;
