@@ -2108,7 +2108,9 @@ static int cmp_ti(const void *a, const void *b)
 }
 
 /* r := the worse of r and o at every test angle (angles both tested: the larger of each
-   error; the others: kept as they are), the statistics recomputed over the union. */
+   error; the others: kept as they are). The maxima are the larger of the two; each
+   mean, which the estimator takes over its stratified angles only (both readings
+   share them: same seed, same range), is the worse reading's. */
 static btdf_status merge_reports(btdf_report *r, btdf_report *o)
 {
     size_t n = r->test_angles + o->test_angles;
@@ -2118,7 +2120,7 @@ static btdf_status merge_reports(btdf_report *r, btdf_report *o)
     memcpy(u, r->per_ti, r->test_angles * sizeof *u);
     memcpy(u + r->test_angles, o->per_ti, o->test_angles * sizeof *u);
     qsort(u, n, sizeof *u, cmp_ti);
-    size_t m = 0;
+    size_t m = 0, nmx = 0;
     for (size_t i = 0; i < n; i++) {
         if (m > 0 && u[m - 1].ti == u[i].ti) {
             btdf_ti_error *a = &u[m - 1];
@@ -2130,23 +2132,14 @@ static btdf_status merge_reports(btdf_report *r, btdf_report *o)
             u[m++] = u[i];
         }
     }
-    double l1 = 0, t = 0, mx = 0;
-    size_t nmx = 0;
-    r->e_l1_max = r->e_t_max = r->e_max_max = 0.0;
-    for (size_t i = 0; i < m; i++) {
-        r->e_l1_max = fmax(r->e_l1_max, u[i].e_l1);
-        r->e_t_max = fmax(r->e_t_max, u[i].e_t);
-        l1 += u[i].e_l1;
-        t += u[i].e_t;
-        if (u[i].T >= T_FLOOR) { /* where e_max is defined (btdf_ti_error) */
-            r->e_max_max = fmax(r->e_max_max, u[i].e_max);
-            mx += u[i].e_max;
-            nmx++;
-        }
-    }
-    r->e_l1_mean = m ? l1 / (double)m : 0.0;
-    r->e_t_mean = m ? t / (double)m : 0.0;
-    r->e_max_mean = nmx ? mx / (double)nmx : 0.0;
+    for (size_t i = 0; i < m; i++)
+        nmx += u[i].T >= T_FLOOR; /* where e_max is defined (btdf_ti_error) */
+    r->e_l1_max = fmax(r->e_l1_max, o->e_l1_max);
+    r->e_t_max = fmax(r->e_t_max, o->e_t_max);
+    r->e_max_max = fmax(r->e_max_max, o->e_max_max);
+    r->e_l1_mean = fmax(r->e_l1_mean, o->e_l1_mean);
+    r->e_t_mean = fmax(r->e_t_mean, o->e_t_mean);
+    r->e_max_mean = fmax(r->e_max_mean, o->e_max_mean);
     r->e_max_angles = nmx;
     r->test_points += o->test_points;
     r->seconds_estimate += o->seconds_estimate;
