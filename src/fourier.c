@@ -1732,19 +1732,28 @@ static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, doub
             np++;
         }
     }
-    enum { CHUNK = 256 };
-    double ck[CHUNK];
-    /* rk^k cos(k phi): u_{k+1} = 2 rk c u_k - rk^2 u_{k-1}, from u_0 = 1 and
-       u_{-1} = cos(-phi) / rk, written so that rk = 1 is the plain recurrence */
+    enum { CHUNK = 256, LAG = 8 };
+    double ckb[LAG + CHUNK], *ck = ckb + LAG;
+    /* u_k = rk^k cos(k phi). The first LAG by u_{k+1} = 2 rk c u_k - rk^2 u_{k-1} from
+       u_0 = 1 and u_{-1} = cos(-phi) / rk (rk = 1: the plain recurrence); then four
+       interleaved chains, u_k = 2 u_4 u_{k-4} - rk^8 u_{k-8} (cos(a + b) + cos(a - b)
+       = 2 cos a cos b with b = 4 phi): the one-step chain is bound by its latency, a
+       multiply and a fused multiply-add per term, and took as long as the sums. */
     double c_prev = cphi, c_cur = 1.0, rc = rk * cphi, r2 = rk * rk;
+    double A = 0.0, B = r2 * r2 * r2 * r2;
     for (uint32_t q0 = 0; q0 < mtop; q0 += CHUNK) {
         uint32_t len = mtop - q0 < CHUNK ? mtop - q0 : CHUNK;
-        for (uint32_t t = 0; t < len; t++) {
+        uint32_t t = 0;
+        for (; q0 + t < LAG && t < len; t++) {
             ck[t] = c_cur;
             double nx = q0 + t == 0 ? rc : 2.0 * rc * c_cur - r2 * c_prev;
             c_prev = c_cur;
             c_cur = nx;
+            if (q0 + t == 4)
+                A = 2.0 * ck[t];
         }
+        for (long u = (long)t; u < (long)len; u++) /* signed: u - 8 reaches the lags */
+            ck[u] = A * ck[u - 4] - B * ck[u - 8];
         for (int e = 0; e < np; e++) {
             if (pm[e] <= q0)
                 continue;
@@ -1762,6 +1771,8 @@ static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, doub
                 val[k] += pw[e] * ((s4[0] + s4[1]) + (s4[2] + s4[3]));
             }
         }
+        if (len == CHUNK) /* the lags of the next chunk */
+            memcpy(ckb, ck + CHUNK - LAG, LAG * sizeof *ckb);
     }
     return 1;
 }
