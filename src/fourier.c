@@ -1754,22 +1754,33 @@ static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, doub
         }
         for (long u = (long)t; u < (long)len; u++) /* signed: u - 8 reaches the lags */
             ck[u] = A * ck[u - 4] - B * ck[u - 8];
-        for (int e = 0; e < np; e++) {
-            if (pm[e] <= q0)
-                continue;
-            uint32_t l = pm[e] - q0 < len ? pm[e] - q0 : len;
-            for (uint32_t k = 0; k < f->channels; k++) {
+        /* As pbrt-v3 does: the stencil's weighted series summed into one (an
+           element-wise loop the compiler vectorises), then one cosine sum. */
+        for (uint32_t k = 0; k < f->channels; k++) {
+            double comb[CHUNK];
+            uint32_t used = 0;
+            for (int e = 0; e < np; e++) {
+                if (pm[e] <= q0)
+                    continue;
+                uint32_t l = pm[e] - q0 < len ? pm[e] - q0 : len;
                 const float *a = f->coeffs + poff[e] + (size_t)k * pm[e] + q0;
-                /* four running sums, so the loop vectorises without reassociation */
-                double s4[4] = {0.0, 0.0, 0.0, 0.0};
-                uint32_t t = 0;
-                for (; t + 4 <= l; t += 4)
-                    for (int v = 0; v < 4; v++)
-                        s4[v] += (double)a[t + v] * ck[t + v];
-                for (; t < l; t++)
-                    s4[0] += (double)a[t] * ck[t];
-                val[k] += pw[e] * ((s4[0] + s4[1]) + (s4[2] + s4[3]));
+                double w = pw[e];
+                for (uint32_t t = used; t < l; t++)
+                    comb[t] = 0.0;
+                if (l > used)
+                    used = l;
+                for (uint32_t t = 0; t < l; t++)
+                    comb[t] += w * (double)a[t];
             }
+            /* four running sums: independent chains */
+            double s4[4] = {0.0, 0.0, 0.0, 0.0};
+            uint32_t t = 0;
+            for (; t + 4 <= used; t += 4)
+                for (int v = 0; v < 4; v++)
+                    s4[v] += comb[t + v] * ck[t + v];
+            for (; t < used; t++)
+                s4[0] += comb[t] * ck[t];
+            val[k] += (s4[0] + s4[1]) + (s4[2] + s4[3]);
         }
         if (len == CHUNK) /* the lags of the next chunk */
             memcpy(ckb, ck + CHUNK - LAG, LAG * sizeof *ckb);
