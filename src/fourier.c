@@ -11,6 +11,8 @@
 #include <string.h>
 #include <time.h>
 
+#include <fftw3.h>
+
 #include "btdf.h"
 #include "btdf_scatfun.h"
 #include "model_impl.h"
@@ -99,177 +101,108 @@ static void spline_cdf(const double *x, const double *v, size_t n, double *cdf)
 }
 
 /* ------------------------------------------------------------------------- */
-/* FFT-based cosine transform on the DCT-I grid phi_j = j pi / N              */
+/* Cosine transform on the DCT-I grid phi_j = j pi / N (FFTW's REDFT00)      */
 /* ------------------------------------------------------------------------- */
 
+/* FFTW's REDFT00 of n = N + 1 points is Y_k = x_0 + (-1)^k x_N + 2 sum_{j=1}^{N-1}
+   x_j cos(pi j k / N): the real DFT of the even extension of x to 2N points, the sum
+   every transform below needs (FFTW manual, "1d Real-even DFTs (DCTs)"). Plans are
+   made once per length N = 2^k with FFTW_ESTIMATE (no timing runs, so the same plan
+   and the same bytes every run) and FFTW_UNALIGNED (any array may be passed); the
+   planner is not reentrant, so planning holds a lock, and the planner is made
+   thread-safe once for hosts that plan on threads of their own. Executing a plan on
+   new arrays is thread-safe. */
+#define DCT_LOG2_MAX 31
+static fftw_plan dct_plans[DCT_LOG2_MAX];
+static pthread_mutex_t dct_plan_lock = PTHREAD_MUTEX_INITIALIZER;
+static pthread_once_t dct_once = PTHREAD_ONCE_INIT;
+
+static void dct_init(void) { fftw_make_planner_thread_safe(); }
+
 typedef struct fftbuf {
-    size_t cap;      /* complex capacity */
-    double *re, *im; /* work */
-    size_t twl;      /* length the twiddles are for */
-    double *twr, *twi;
+    size_t cap;                      /* doubles in in and out */
+    double *in, *out;                /* work */
+    fftw_plan plan[DCT_LOG2_MAX];    /* this worker's copy of the shared plans */
 } fftbuf;
 
 static int fft_reserve(fftbuf *b, size_t L)
 {
     if (b->cap >= L)
         return 0;
-    double *re = realloc(b->re, L * sizeof *re);
-    if (!re)
+    double *in = realloc(b->in, L * sizeof *in);
+    if (!in)
         return -1;
-    b->re = re;
-    double *im = realloc(b->im, L * sizeof *im);
-    if (!im)
+    b->in = in;
+    double *out = realloc(b->out, L * sizeof *out);
+    if (!out)
         return -1;
-    b->im = im;
-    double *tr = realloc(b->twr, L / 2 * sizeof *tr);
-    if (!tr)
-        return -1;
-    b->twr = tr;
-    double *ti = realloc(b->twi, L / 2 * sizeof *ti);
-    if (!ti)
-        return -1;
-    b->twi = ti;
+    b->out = out;
     b->cap = L;
-    b->twl = 0;
     return 0;
 }
 
 static void fft_free(fftbuf *b)
 {
-    free(b->re);
-    free(b->im);
-    free(b->twr);
-    free(b->twi);
+    free(b->in);
+    free(b->out);
     memset(b, 0, sizeof *b);
 }
 
-/* In-place forward complex FFT of length L (a power of two) on b->re, b->im. The
-   twiddles are kept for the largest length the buffer holds and read with a stride
-   for shorter ones (the builder alternates lengths; recomputing them per call cost a
-   tenth of a build). Powers of two scale exactly, so the values are the same. */
-static void twiddles(fftbuf *b, size_t L)
+/* The REDFT00 plan of N + 1 points (N a power of two, 2 <= N <= 2^30); NULL if FFTW
+   cannot make one (out of memory). */
+static fftw_plan dct_plan(fftbuf *b, size_t N)
 {
-    if (!(b->twl >= L && b->twl % L == 0)) {
-        size_t T = b->cap % L == 0 ? b->cap : L;
-        for (size_t k = 0; k < T / 2; k++) {
-            double a = -2.0 * M_PI * (double)k / (double)T;
-            b->twr[k] = cos(a);
-            b->twi[k] = sin(a);
-        }
-        b->twl = T;
+    int k = 0;
+    while (((size_t)1 << k) < N)
+        k++;
+    if (b->plan[k])
+        return b->plan[k];
+    pthread_once(&dct_once, dct_init);
+    pthread_mutex_lock(&dct_plan_lock);
+    if (!dct_plans[k]) {
+        double *i = fftw_malloc((N + 1) * sizeof *i), *o = fftw_malloc((N + 1) * sizeof *o);
+        if (i && o) /* ESTIMATE plans never touch the arrays */
+            dct_plans[k] = fftw_plan_r2r_1d((int)N + 1, i, o, FFTW_REDFT00,
+                                            FFTW_ESTIMATE | FFTW_UNALIGNED);
+        fftw_free(i);
+        fftw_free(o);
     }
-}
-
-static void fft(fftbuf *b, size_t L)
-{
-    twiddles(b, L);
-    size_t g = b->twl / L; /* L >= 1; twl is a multiple of L */
-    double *re = b->re, *im = b->im;
-    for (size_t i = 1, j = 0; i < L; i++) {
-        size_t bit = L >> 1;
-        for (; j & bit; bit >>= 1)
-            j ^= bit;
-        j ^= bit;
-        if (i < j) {
-            double t = re[i]; re[i] = re[j]; re[j] = t;
-            t = im[i]; im[i] = im[j]; im[j] = t;
-        }
-    }
-    for (size_t len = 2; len <= L; len <<= 1) {
-        size_t half = len / 2, step = L / len * g;
-        for (size_t s = 0; s < L; s += len) {
-            for (size_t k = 0; k < half; k++) {
-                double wr = b->twr[k * step], wi = b->twi[k * step];
-                size_t p = s + k, q = p + half;
-                double xr = re[q] * wr - im[q] * wi, xi = re[q] * wi + im[q] * wr;
-                re[q] = re[p] - xr;
-                im[q] = im[p] - xi;
-                re[p] += xr;
-                im[p] += xi;
-            }
-        }
-    }
-}
-
-/* Real parts of the DFT X[k] = sum_j x[j] e^(-2 pi i j k / L), k = 0..L/2, of a real
-   sequence x[0..L-1] in b->re (L a power of two >= 4), into b->re[0..L/2], by one
-   complex FFT of length L/2: z[n] = x[2n] + i x[2n+1] gives Z, and with
-   E_k = (Z_k + conj Z_(H-k)) / 2, O_k = (Z_k - conj Z_(H-k)) / 2i, X_k = E_k + W^k O_k,
-   W = e^(-2 pi i / L). Half the work of transforming x as a complex sequence. */
-static void fft_real(fftbuf *b, size_t L)
-{
-    size_t H = L / 2;
-    twiddles(b, L); /* a table for L serves H too */
-    double *re = b->re, *im = b->im;
-    for (size_t n = 0; n < H; n++) { /* re[2n], re[2n+1] are read before re[n] is written */
-        double e = re[2 * n], o = re[2 * n + 1];
-        re[n] = e;
-        im[n] = o;
-    }
-    fft(b, H);
-    size_t g = b->twl / L; /* a multiple of L (twiddles above; fft keeps it) */
-    double z0r = re[0], z0i = im[0];
-    re[0] = z0r + z0i; /* k = 0: E = Re Z_0, O = Im Z_0 */
-    re[H] = z0r - z0i; /* k = H: W^H = -1 */
-    for (size_t k = 1; k <= H / 2; k++) {
-        size_t q = H - k;
-        double ar = re[k], ai = im[k], br = re[q], bi = im[q];
-        /* W^k = c - i s with c = cos(2 pi k / L), s = sin(2 pi k / L) */
-        double c = b->twr[k * g], sn = -b->twi[k * g];
-        double sr = 0.5 * (ar + br), si = 0.5 * (ai + bi), dr = 0.5 * (ar - br);
-        /* Re X_k = Re E_k + c Re O_k + s Im O_k with Re O_k = (ai + bi) / 2 and
-           Im O_k = -(ar - br) / 2; for X_(H-k), W^(H-k) = -c - i s, Re O = (ai + bi) / 2
-           and Im O = (ar - br) / 2 */
-        double xk = sr + c * si - sn * dr;
-        double xq = sr - c * si + sn * dr;
-        re[k] = xk;
-        if (q != k)
-            re[q] = xq;
-    }
+    b->plan[k] = dct_plans[k];
+    pthread_mutex_unlock(&dct_plan_lock);
+    return b->plan[k];
 }
 
 /* Coefficients a[0..N] with g(phi) = sum a_k cos(k phi) from samples x[0..N] on the
    DCT-I grid (trapezoid rule, exact for degree < N; higher degrees alias). */
 static int dct_forward(fftbuf *b, const double *x, size_t N, double *a)
 {
-    size_t L = 2 * N;
-    if (fft_reserve(b, L))
+    if (fft_reserve(b, N + 1))
         return -1;
-    for (size_t j = 0; j <= N; j++) {
-        b->re[j] = x[j];
-        b->im[j] = 0.0;
-    }
-    for (size_t j = 1; j < N; j++) {
-        b->re[L - j] = x[j];
-        b->im[L - j] = 0.0;
-    }
-    fft_real(b, L);
-    a[0] = b->re[0] / (double)L;
+    fftw_plan pl = dct_plan(b, N);
+    if (!pl)
+        return -1;
+    memcpy(b->in, x, (N + 1) * sizeof *x);
+    fftw_execute_r2r(pl, b->in, b->out);
+    double L = 2.0 * (double)N;
+    a[0] = b->out[0] / L;
     for (size_t k = 1; k < N; k++)
-        a[k] = b->re[k] / (double)N;
-    a[N] = b->re[N] / (double)L;
+        a[k] = b->out[k] / (double)N;
+    a[N] = b->out[N] / L;
     return 0;
 }
 
-/* Series values y[0..N] at phi_j = j pi / N from coefficients a[0..m-1], m <= N + 1. */
+/* Series values y[0..N] at phi_j = j pi / N from coefficients a[0..m-1], m <= N + 1:
+   REDFT00 of (a_0, a_1/2, ..., a_{N-1}/2, a_N) is a_0 + (-1)^j a_N + sum a_k cos. */
 static int dct_inverse(fftbuf *b, const double *a, size_t m, size_t N, double *y)
 {
-    size_t L = 2 * N;
-    if (fft_reserve(b, L))
+    if (fft_reserve(b, N + 1))
         return -1;
-    for (size_t k = 0; k < L; k++)
-        b->re[k] = 0.0;
-    for (size_t k = 0; k < m && k <= N; k++) {
-        if (k == 0 || k == N) {
-            b->re[k] = a[k];
-        } else {
-            b->re[k] = 0.5 * a[k];
-            b->re[L - k] = 0.5 * a[k];
-        }
-    }
-    fft_real(b, L);
-    for (size_t j = 0; j <= N; j++)
-        y[j] = b->re[j];
+    fftw_plan pl = dct_plan(b, N);
+    if (!pl)
+        return -1;
+    for (size_t k = 0; k <= N; k++)
+        b->in[k] = k >= m ? 0.0 : (k == 0 || k == N) ? a[k] : 0.5 * a[k];
+    fftw_execute_r2r(pl, b->in, y);
     return 0;
 }
 
@@ -368,7 +301,7 @@ static void *build_ws_new(void *vctx)
         w->cosg[c->nmax / 2] = 0.0, w->sing[c->nmax / 2] = 1.0;
     }
     if (!w->cosg || !w->sing || !w->x || !w->x2 || !w->a || !w->a2 || !w->ia || !w->y || !w->rho ||
-        fft_reserve(&w->fb, 2 * c->nmax)) {
+        fft_reserve(&w->fb, c->nmax + 1)) {
         fft_free(&w->fb);
         free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
         free(w->rho);
@@ -1421,7 +1354,10 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
     /* initial half nodes: mu = sin of equal angle steps, denser towards grazing */
     size_t K0 = 8;
     double *P = malloc(BTDF_SCATFUN_MAX_HALF_NODES * 2 * sizeof *P);
-    if (!P) {
+    /* fresh[j]: interval j was made by the last pass's split; ahead: fronts (below) */
+    unsigned char *fresh = calloc(BTDF_SCATFUN_MAX_HALF_NODES * 2, 1);
+    unsigned char *ahead = calloc(BTDF_SCATFUN_MAX_HALF_NODES, 1);
+    if (!P || !fresh || !ahead) {
         st = BTDF_ENOMEM;
         goto done;
     }
@@ -1572,6 +1508,25 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             }
         }
         free(ea);
+        /* Fronts. A new node is also a new row and column of pairs, and the checks sum
+           over rows and columns: an interval next to a freshly split one can fail only
+           because the new rows now see it (measured for n = 1.5, s = 3 at 1e-3: the
+           failing interval moved one step outwards per pass, its check at 3.1, 2.6,
+           2.2, 1.7, 1.3 times the share, six passes). When an interval that was not
+           just split fails beside one that was, split the next one outwards too: the
+           front moves two intervals per pass. */
+        for (size_t j = 0; j < K; j++)
+            ahead[j] = 0;
+        for (size_t j = 0; j < K; j++) {
+            if (!split[j] || fresh[j])
+                continue;
+            if (j > 0 && fresh[j - 1] && j + 1 < K && !fresh[j + 1])
+                ahead[j + 1] = 1;
+            if (j + 1 < K && fresh[j + 1] && j > 0 && !fresh[j - 1])
+                ahead[j - 1] = 1;
+        }
+        for (size_t j = 0; j < K; j++)
+            split[j] |= ahead[j];
         for (size_t j = 0; j < K; j++)
             nsplit += split[j];
         if (progress) /* K nodes checked, nsplit intervals to split */
@@ -1621,6 +1576,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                     break;
                 }
                 c.budget *= 0.5;
+                memset(fresh, 0, K);
                 stall = 0;
                 last_err = HUGE_VAL;
                 free(split);
@@ -1649,8 +1605,12 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             double lo = j == 0 ? 0.0 : P[j - 1];
             double m = to_float_node(split_point(P, K, j, endr));
             if (split[j] && m > lo && m < P[j]) {
+                fresh[KQ] = 1;
                 Q[KQ++] = m;
                 ins[j] = m == c.mid[j] ? 1 : 2;
+                fresh[KQ] = 1;
+            } else {
+                fresh[KQ] = 0;
             }
             Q[KQ++] = P[j];
         }
@@ -1703,6 +1663,8 @@ done:
     free(c.P);
     free(c.full);
     free(P);
+    free(fresh);
+    free(ahead);
     pthread_mutex_destroy(&c.lock);
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
         btdf_scatfun_free(best);
@@ -1770,31 +1732,58 @@ static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, doub
             np++;
         }
     }
-    enum { CHUNK = 256 };
-    double ck[CHUNK];
-    /* rk^k cos(k phi): u_{k+1} = 2 rk c u_k - rk^2 u_{k-1}, from u_0 = 1 and
-       u_{-1} = cos(-phi) / rk, written so that rk = 1 is the plain recurrence */
+    enum { CHUNK = 256, LAG = 8 };
+    double ckb[LAG + CHUNK], *ck = ckb + LAG;
+    /* u_k = rk^k cos(k phi). The first LAG by u_{k+1} = 2 rk c u_k - rk^2 u_{k-1} from
+       u_0 = 1 and u_{-1} = cos(-phi) / rk (rk = 1: the plain recurrence); then four
+       interleaved chains, u_k = 2 u_4 u_{k-4} - rk^8 u_{k-8} (cos(a + b) + cos(a - b)
+       = 2 cos a cos b with b = 4 phi): the one-step chain is bound by its latency, a
+       multiply and a fused multiply-add per term, and took as long as the sums. */
     double c_prev = cphi, c_cur = 1.0, rc = rk * cphi, r2 = rk * rk;
+    double A = 0.0, B = r2 * r2 * r2 * r2;
     for (uint32_t q0 = 0; q0 < mtop; q0 += CHUNK) {
         uint32_t len = mtop - q0 < CHUNK ? mtop - q0 : CHUNK;
-        for (uint32_t t = 0; t < len; t++) {
+        uint32_t t = 0;
+        for (; q0 + t < LAG && t < len; t++) {
             ck[t] = c_cur;
             double nx = q0 + t == 0 ? rc : 2.0 * rc * c_cur - r2 * c_prev;
             c_prev = c_cur;
             c_cur = nx;
+            if (q0 + t == 4)
+                A = 2.0 * ck[t];
         }
-        for (int e = 0; e < np; e++) {
-            if (pm[e] <= q0)
-                continue;
-            uint32_t l = pm[e] - q0 < len ? pm[e] - q0 : len;
-            for (uint32_t k = 0; k < f->channels; k++) {
+        for (long u = (long)t; u < (long)len; u++) /* signed: u - 8 reaches the lags */
+            ck[u] = A * ck[u - 4] - B * ck[u - 8];
+        /* As pbrt-v3 does: the stencil's weighted series summed into one (an
+           element-wise loop the compiler vectorises), then one cosine sum. */
+        for (uint32_t k = 0; k < f->channels; k++) {
+            double comb[CHUNK];
+            uint32_t used = 0;
+            for (int e = 0; e < np; e++) {
+                if (pm[e] <= q0)
+                    continue;
+                uint32_t l = pm[e] - q0 < len ? pm[e] - q0 : len;
                 const float *a = f->coeffs + poff[e] + (size_t)k * pm[e] + q0;
-                double sum = 0.0;
+                double w = pw[e];
+                for (uint32_t t = used; t < l; t++)
+                    comb[t] = 0.0;
+                if (l > used)
+                    used = l;
                 for (uint32_t t = 0; t < l; t++)
-                    sum += (double)a[t] * ck[t];
-                val[k] += pw[e] * sum;
+                    comb[t] += w * (double)a[t];
             }
+            /* four running sums: independent chains */
+            double s4[4] = {0.0, 0.0, 0.0, 0.0};
+            uint32_t t = 0;
+            for (; t + 4 <= used; t += 4)
+                for (int v = 0; v < 4; v++)
+                    s4[v] += comb[t + v] * ck[t + v];
+            for (; t < used; t++)
+                s4[0] += comb[t] * ck[t];
+            val[k] += (s4[0] + s4[1]) + (s4[2] + s4[3]);
         }
+        if (len == CHUNK) /* the lags of the next chunk */
+            memcpy(ckb, ck + CHUNK - LAG, LAG * sizeof *ckb);
     }
     return 1;
 }

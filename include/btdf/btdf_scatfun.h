@@ -66,7 +66,7 @@ typedef enum {
 } btdf_scatfun_mode;
 
 /* Largest half-node count and series length a build may use (its budget). */
-#define BTDF_SCATFUN_MAX_HALF_NODES 512
+#define BTDF_SCATFUN_MAX_HALF_NODES 1024
 #define BTDF_SCATFUN_MAX_PHI 16384
 
 /* Builds the nodes and coefficients from Eq. 25 and rho_r (not from a table) for the
