@@ -127,7 +127,7 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "     In Radiance the surface normal points into the dense medium (index n = %.9g).\n"
                "     Transmission Front serves light from the dense side (leaving it, 1/n), "
                "Transmission Back light entering it (n);\n     Reflection Front light "
-               "reflected outside (n), Reflection Back inside (1/n), when present.\n",
+               "reflected outside (n), Reflection Back inside (1/n).\n",
             r->p.ior[0]);
     if (c->opts->provenance) {
         fputs("     Command: ", f);

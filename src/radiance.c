@@ -126,7 +126,8 @@ typedef struct rad_probes {
     double *u0, *a, *b, *f;
     const btdf_rad *r;
     int k;
-    const rad_node *nodes; /* the tree under test */
+    const rad_node *nodes; /* the tree under test; NULL for a Klems block, whose value
+                              as Radiance reads it is stored in u0 (a, b unused) */
     btdf_ti_error *res;
 } rad_probes;
 
@@ -193,7 +194,12 @@ static void probe_angle(void *arg, size_t i)
             }
             double pv[3], qv[3];
             render_dirs(r, pr->k, ti, to, phi, pv, qv);
-            tree_coords(pv, qv, &pr->u0[j], &pr->a[j], &pr->b[j]);
+            if (r->basis == RAD_BASIS_TREE3) {
+                tree_coords(pv, qv, &pr->u0[j], &pr->a[j], &pr->b[j]);
+            } else {
+                pr->u0[j] = btdf_rad_lookup(r, pr->k, pv, qv);
+                pr->a[j] = pr->b[j] = 0.0;
+            }
             pr->f[j] = f;
         }
     }
@@ -261,7 +267,8 @@ static void probe_error(void *arg, size_t i)
     rad_probes *pr = arg;
     double l1 = 0.0, dmax = 0.0, fmaxv = 0.0, tf = 0.0;
     for (size_t j = i * pr->kv; j < (i + 1) * pr->kv; j++) {
-        double v = rad_tree_lookup(pr->nodes, pr->u0[j], pr->a[j], pr->b[j]);
+        double v = pr->nodes ? rad_tree_lookup(pr->nodes, pr->u0[j], pr->a[j], pr->b[j])
+                             : pr->u0[j];
         double d = fabs(v - pr->f[j]);
         l1 += d;
         tf += v;
@@ -436,7 +443,7 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     r->p = *p;
     r->tolerance = basis == RAD_BASIS_TREE3 ? tolerance : 0.0;
     r->kb = rad_klems(basis);
-    r->nblocks = basis == RAD_BASIS_TREE3 ? 4 : 2;
+    r->nblocks = 4; /* both transmissions and both reflections, in every basis */
     double n = p->ior[0];
     r->b[0].side = BTDF_SIDE_ENTER; /* radiance.h: what each block holds and why */
     r->b[0].label = "Transmission Front";
@@ -516,7 +523,9 @@ BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
         return rad_tree_lookup(b->nodes, u0, a, bb);
     }
     /* Klems: incident patch of p's direction of travel (-p), outgoing patch of q, both by
-       the polar angle from their own side's normal. */
+       the polar angle from their own side's normal: Radiance's bsdf_m.c rule for every
+       block, transmission or reflection, front or back (its incident maps reverse x and
+       y, the outgoing ones keep them; the back maps only flip z). */
     int i = rad_klems_patch(r->kb, deg(acos(fmin(1.0, fabs(p[2])))), deg(atan2(-p[1], -p[0])));
     int o = rad_klems_patch(r->kb, deg(acos(fmin(1.0, fabs(q[2])))), deg(atan2(q[1], q[0])));
     if (i < 0 || o < 0)
@@ -565,13 +574,8 @@ static btdf_status rad_reflect_report(const btdf_rad *r, int k, size_t test_angl
         rad_probes_free(&pr);
         return BTDF_ENOMEM;
     }
-    if (r->basis == RAD_BASIS_TREE3) {
-        rad_probes_eval(&pr, r->b[k].nodes, threads, rep->per_ti);
-    } else {
-        rad_probes_free(&pr);
-        btdf_report_clear(rep);
-        return BTDF_EINVAL; /* Klems files hold no reflection blocks */
-    }
+    int tree = r->basis == RAD_BASIS_TREE3;
+    rad_probes_eval(&pr, tree ? r->b[k].nodes : NULL, threads, rep->per_ti);
     rep->test_angles = m;
     rep->test_points = m * pr.kv;
     for (size_t i = 0; i < m; i++) {
@@ -593,9 +597,10 @@ static btdf_status rad_reflect_report(const btdf_rad *r, int k, size_t test_angl
     rep->seconds_build = r->seconds_build;
     rep->tolerance = r->tolerance;
     rep->metric = BTDF_METRIC_L1;
-    rep->met = btdf_rad_e_l1_checked(rep) <= r->tolerance;
-    rep->slices = (size_t)r->b[k].depth;
-    rep->samples = r->b[k].leaves;
+    /* a Klems matrix has no tolerance: its entries are exact averages */
+    rep->met = !tree || btdf_rad_e_l1_checked(rep) <= r->tolerance;
+    rep->slices = tree ? (size_t)r->b[k].depth : (size_t)r->kb->npatch;
+    rep->samples = tree ? r->b[k].leaves : (size_t)r->kb->npatch * (size_t)r->kb->npatch;
     return BTDF_OK;
 }
 

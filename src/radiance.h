@@ -27,7 +27,7 @@
  *            rho(1/n; q -> p) = rho(n; p -> q) / n^2;
  *   block 1: "Transmission Back"  (p on +Z, light from -Z entering, index n):
  *            rho(n; q -> p) = n^2 rho(1/n; p -> q).
- * Reflection (tree3 only; rho_r is reciprocal, so no swap and no scale):
+ * Reflection (rho_r is reciprocal, so no swap and no scale):
  *   block 2: "Reflection Front" (p and q on -Z, outside): rho_r(n);
  *   block 3: "Reflection Back"  (p and q on +Z, inside the dense medium): rho_r(1/n).
  *

@@ -30,7 +30,8 @@ void rad_tb_free(rad_tb *t);
 btdf_status rad_tree_build(const btdf_params *p, double eps, int threads, size_t max_nodes,
                            rad_block *blk, char *msg, size_t msglen);
 
-/* One Klems matrix for index n, values times scale (klems.c). */
+/* One Klems matrix for index n, values times scale (klems.c): Eq. 25, or rho_r when
+   blk->reflect is set. */
 btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
                             const rad_klems_basis *kb, int threads, rad_block *blk, char *msg,
                             size_t msglen);

@@ -2,9 +2,11 @@
 # SPDX-License-Identifier: MIT
 # radiance.sh BTDFTAB PYTHON: writes Radiance BSDF files (tensor tree and Klems) and checks
 # them with Radiance itself (PYTHON must import pyradiance, which bundles Radiance's
-# programs and BSDF library): the file loads, Radiance's lookup equals the report's
-# probes for both blocks, and rtrace gives the hemispherical transmittance within the
-# report's e_T (tests/radiance_check.py). Also: bad --basis values fail cleanly.
+# programs and BSDF library): the file loads with its four blocks (both transmissions
+# and both reflections, in the tree and the Klems file alike), Radiance's lookup equals
+# the report's probes for every block, and rtrace gives the hemispherical transmittance
+# (reflectance) within the report's e_T (tests/radiance_check.py). Also: bad --basis
+# values fail cleanly.
 # Ends with "N passed, N failed".
 set -u
 B="$1"

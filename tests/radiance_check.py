@@ -2,8 +2,8 @@
 """radiance_check.py FILE.xml REPORT.json: reads a btdftab Radiance BSDF with Radiance's own
 library and programs (the pyradiance wheel) and checks it against btdftab's report.
 
-1. The file loads, with both transmission blocks (and both reflection blocks when the
-   report lists them).
+1. The file loads, with both transmission blocks and both reflection blocks (every
+   basis, tree or Klems, holds the four), and the report lists the four.
 2. At the report's 1,000 probes per block (light and view directions in Radiance's
    frame), Radiance's BSDF query returns the value the report says the file holds.
    Tolerance, relative, plus 1e-6 absolute: tree 2e-4: Radiance stores values as float
@@ -80,11 +80,13 @@ def main():
     xml, rep_path = os.path.abspath(sys.argv[1]), sys.argv[2]
     rep = json.load(open(rep_path))
     sd = bsdf.load_file(xml)
-    refl = any(b.get("reflection") for b in rep["blocks"])
+    nrefl = sum(1 for b in rep["blocks"] if b.get("reflection"))
     check(sd is not None and sd.tf is not None and sd.tb is not None and
-          (not refl or (sd.rf is not None and sd.rb is not None)),
-          "Radiance loads %s with both transmission blocks%s" %
-          (os.path.basename(xml), " and both reflection blocks" if refl else ""))
+          sd.rf is not None and sd.rb is not None and
+          len(rep["blocks"]) == 4 and nrefl == 2,
+          "Radiance loads %s with both transmission blocks and both reflection blocks "
+          "(%s basis; the report lists %d blocks, %d of them reflection)" %
+          (os.path.basename(xml), rep["basis"], len(rep["blocks"]), nrefl))
     rel = 2e-4 if rep["basis"] == "tree3" else 5e-4
     for blk in rep["blocks"]:
         bad, worst, nonzero = 0, 0.0, 0

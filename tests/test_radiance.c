@@ -22,6 +22,49 @@ static void test_square_disk_round_trip(void **state)
     }
 }
 
+/* One Klems-quarter file of the default material (n = 1.5, s = 3), all four blocks,
+   built once for the Klems tests (the group's setup). */
+static btdf_rad *klems_q;
+
+static int klems_setup(void **state)
+{
+    (void)state;
+    btdf_params p;
+    btdf_params_default(&p);
+    return btdf_rad_build(&p, BTDF_RAD_KLEMS_QUARTER, 0.0, 0, &klems_q, NULL, 0) == BTDF_OK
+               ? 0
+               : -1;
+}
+
+static int klems_teardown(void **state)
+{
+    (void)state;
+    btdf_rad_free(klems_q);
+    return 0;
+}
+
+/* Patch o of a Klems basis: its band, its index in the band, and its projected solid
+   angle Lambda = pi (cos^2 lo - cos^2 hi) / nphi. */
+static double klems_lambda(const rad_klems_basis *kb, int o, int *band, int *j)
+{
+    int b = 0, q = o;
+    while (q >= kb->nphi[b])
+        q -= kb->nphi[b++];
+    *band = b;
+    *j = q;
+    double t0 = kb->theta[b] * M_PI / 180, t1 = kb->theta[b + 1] * M_PI / 180;
+    return M_PI * (cos(t0) * cos(t0) - cos(t1) * cos(t1)) / kb->nphi[b];
+}
+
+/* The patch a Klems patch turns into by 180 deg about the normal (every band but the
+   cap has an even count). */
+static int klems_turn(const rad_klems_basis *kb, int o)
+{
+    int band, j;
+    klems_lambda(kb, o, &band, &j);
+    return o - j + (j + kb->nphi[band] / 2) % kb->nphi[band];
+}
+
 /* Klems: every column's hemispherical sum is the transmittance a render sees, scaled
    as the block says (n^2 rho(1/n) seen from +Z, rho(n)/n^2 from -Z), averaged over the
    incident patch; here at normal incidence (patch 0, a 9 deg cap for the quarter basis),
@@ -29,25 +72,20 @@ static void test_square_disk_round_trip(void **state)
 static void test_klems_columns(void **state)
 {
     (void)state;
-    btdf_params p;
-    btdf_params_default(&p);
-    btdf_rad *r = NULL;
-    assert_status(BTDF_OK, btdf_rad_build(&p, BTDF_RAD_KLEMS_QUARTER, 0.0, 0, &r, NULL, 0));
+    btdf_rad *r = klems_q;
+    assert_int_equal(btdf_rad_block_count(r), 4);
     const rad_klems_basis *kb = r->kb;
     for (int k = 0; k < 2; k++) {
         double sum = 0.0, lam_total = 0.0;
         for (int o = 0; o < kb->npatch; o++) {
-            int band = 0, q = o;
-            while (q >= kb->nphi[band])
-                q -= kb->nphi[band++];
-            double t0 = kb->theta[band] * M_PI / 180, t1 = kb->theta[band + 1] * M_PI / 180;
-            double lam = M_PI * (cos(t0) * cos(t0) - cos(t1) * cos(t1)) / kb->nphi[band];
+            int band, j;
+            double lam = klems_lambda(kb, o, &band, &j);
             sum += r->b[k].klems[(size_t)o * kb->npatch] * lam;
             lam_total += lam;
             assert_true(r->b[k].klems[(size_t)o * kb->npatch] >= 0.0f);
         }
         assert_close(lam_total, M_PI, 1e-12, 0.0);
-        btdf_params q = p;
+        btdf_params q = r->p;
         q.ior[0] = r->b[k].n;
         double T0, T9;
         btdf_transmittance(&q, 0.0, &T0);
@@ -55,7 +93,158 @@ static void test_klems_columns(void **state)
         double want = r->b[k].scale * T0;
         assert_close(sum, want, 0.0, r->b[k].scale * fabs(T9 - T0) + 1e-4);
     }
-    btdf_rad_free(r);
+}
+
+/* The 4-point Gauss-Legendre nodes and weights on [-1, 1] (the builder's rule). */
+static const double gx[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                             0.8611363115940526};
+static const double gw[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                             0.3478548451374538};
+
+/* The projected-solid-angle average of R(ti) over w = sin^2 ti in [w0, w1] by `panels`
+   panels of the 4-point rule in w, or (u_var) in u = cos ti with dw = 2u du. The
+   builder's incident rule: 1 panel in w, and in the grazing band 8 panels in u. */
+static double r_average(const btdf_params *q, double w0, double w1, int panels, int u_var)
+{
+    double sum = 0.0, u0 = sqrt(1.0 - w1), u1 = sqrt(1.0 - w0);
+    double h = u_var ? (u1 - u0) / panels : (w1 - w0) / panels;
+    for (int m = 0; m < panels; m++)
+        for (int a = 0; a < 4; a++) {
+            double x = (u_var ? u0 : w0) + h * (m + 0.5 * (1.0 + gx[a])), R;
+            assert_status(BTDF_OK, btdf_reflectance(q, u_var ? acos(x) : asin(sqrt(x)), &R));
+            sum += 0.5 * gw[a] * h * R * (u_var ? 2.0 * x : 1.0);
+        }
+    return sum / (w1 - w0);
+}
+
+/* Klems reflection blocks: for every incident patch the column summed with the outgoing
+   patches' projected solid angles is R averaged over the incident patch (R of the
+   block's own index: n outside, 1/n inside, whose edge of total internal reflection lies
+   at 41.8 deg, inside the quarter basis' 27-46 deg band).
+   (a) Against R at the builder's own incident nodes the difference is the outgoing
+   integration's alone: its rule stops when its error estimates sum to 1e-7 per outgoing
+   patch and incident node (KL_EPS), 41e-7 for 41 patches. An estimate (the difference
+   of two rules), not a bound: allowed twice that, plus the file's 6 significant digits
+   (5e-7 of the sum) and btdf_reflectance's 1e-9; measured at most 3.2e-6 (front) and
+   4.7e-6 (back, the 46-66 deg band).
+   (b) Against the exact average (256 panels in w) the builder's incident rule adds its
+   own error: 4 nodes in w, and in the grazing band 8 panels in cos ti, within 1e-6 of R
+   (klems.c); allowed 1e-5 more. A patch's share in the wrong direction (the lobe
+   mirrored the wrong way) would move no sum: test_klems_reflection_lookup looks at
+   where the lobe is. */
+static void test_klems_reflection_energy(void **state)
+{
+    (void)state;
+    btdf_rad *r = klems_q;
+    const rad_klems_basis *kb = r->kb;
+    for (int k = 2; k < 4; k++) {
+        const rad_block *b = &r->b[k];
+        assert_true(b->reflect && b->scale == 1.0);
+        btdf_params q = r->p;
+        q.ior[0] = b->n;
+        double worst_a = 0.0, worst_b = 0.0;
+        for (int i = 0; i < kb->npatch; i++) {
+            int band, j;
+            klems_lambda(kb, i, &band, &j);
+            double sum = 0.0;
+            for (int o = 0; o < kb->npatch; o++) {
+                int bo, jo;
+                double v = b->klems[(size_t)o * kb->npatch + (size_t)i];
+                assert_true(v >= 0.0f && isfinite(v));
+                sum += v * klems_lambda(kb, o, &bo, &jo);
+            }
+            double s0 = sin(kb->theta[band] * M_PI / 180), s1 = sin(kb->theta[band + 1] * M_PI / 180);
+            int graze = band == kb->nbands - 1;
+            double ra = r_average(&q, s0 * s0, s1 * s1, graze ? 8 : 1, graze);
+            double rb = r_average(&q, s0 * s0, s1 * s1, 256, 0);
+            assert_close(sum, ra, 0.0, 2 * kb->npatch * 1e-7 + 5e-7 * ra + 1e-9);
+            assert_close(sum, rb, 0.0, 2 * kb->npatch * 1e-7 + 5e-7 * rb + 1e-5);
+            worst_a = fmax(worst_a, fabs(sum - ra));
+            worst_b = fmax(worst_b, fabs(sum - rb));
+        }
+        if (getenv("BTDF_TEST_VERBOSE"))
+            fprintf(stderr, "%s: column sums vs R at the rule's nodes %.3g, vs the average %.3g\n",
+                    b->label, worst_a, worst_b);
+    }
+}
+
+/* rho_r is reciprocal and isotropic, so swapping the light and the view maps entry
+   (o, i) to (turn(i), turn(o)): the view's patch as the light's travel direction is
+   turned by 180 deg, and so is the light's. Both read in one medium (the block's side).
+   The builder treats the two roles differently (fixed nodes over the incident patch,
+   adaptive over the outgoing one), so the two entries differ by the two rules' errors:
+   the outgoing rule's 1e-7 per patch and node over the patch's Lambda (>= 0.0375 sr
+   here: 2.7e-6 in the entry) twice, the file's 6 digits (5e-7 relative) twice, and the
+   incident rule's error, which this test measures. Outside (n = 1.5) it is smooth:
+   measured at most 4.3e-4 relative for entries above 0.01, allowed 1e-3 plus 1e-5.
+   Inside (1/n) the entries of directions about 84 deg apart carry the edge of total
+   internal reflection, which the incident rule's 4 x 4 nodes do not resolve: measured
+   at most 1.06e-2 relative (a 46-66 deg patch with a grazing one), allowed 2e-2 plus
+   1e-5 (docs/radiance.md). A block with the roles mixed up (the outgoing patch read with
+   the incident rule's reversal) puts the lobe at the back-scatter and fails by orders
+   of magnitude. */
+static void test_klems_reflection_reciprocity(void **state)
+{
+    (void)state;
+    btdf_rad *r = klems_q;
+    const rad_klems_basis *kb = r->kb;
+    size_t np = (size_t)kb->npatch;
+    for (int k = 2; k < 4; k++) {
+        const float *m = r->b[k].klems;
+        double worst = 0.0;
+        for (int o = 0; o < kb->npatch; o++)
+            for (int i = 0; i < kb->npatch; i++) {
+                double a = m[(size_t)o * np + (size_t)i];
+                double b = m[(size_t)klems_turn(kb, i) * np + (size_t)klems_turn(kb, o)];
+                assert_close(a, b, k == 2 ? 1e-3 : 2e-2, 1e-5);
+                if (a > 0.01)
+                    worst = fmax(worst, fabs(a - b) / a);
+            }
+        if (getenv("BTDF_TEST_VERBOSE"))
+            fprintf(stderr, "%s: reciprocity worst relative %.3g\n", r->b[k].label, worst);
+    }
+}
+
+/* Read back by Radiance's rule (btdf_rad_lookup), a Klems reflection block puts the
+   lobe of a view at 37 deg, azimuth 20 deg, around the mirror azimuth 200 deg on the
+   view's side: the largest value over the hemisphere lies within a grazing-band patch
+   (45 deg) of it (s = 3: the rough lobe peaks towards grazing, measured at 66.5 deg,
+   204 deg), the mirror direction itself reads the matrix' diagonal entry of its patch,
+   more than the back-scatter direction (37 deg, 20 deg), and the other side reads 0. */
+static void test_klems_reflection_lookup(void **state)
+{
+    (void)state;
+    btdf_rad *r = klems_q;
+    const rad_klems_basis *kb = r->kb;
+    for (int k = 2; k < 4; k++) {
+        double sg = r->b[k].side == BTDF_SIDE_ENTER ? -1.0 : 1.0;
+        double tv = 37.0 * M_PI / 180, pv = 20.0 * M_PI / 180;
+        double p[3] = {sin(tv) * cos(pv), sin(tv) * sin(pv), sg * cos(tv)};
+        double best = -1.0, bt = 0.0, bp = 0.0;
+        for (int a = 0; a < 89; a++)
+            for (int c = 0; c < 360; c += 2) {
+                double t = (a + 0.5) * M_PI / 180, ph = c * M_PI / 180;
+                double q[3] = {sin(t) * cos(ph), sin(t) * sin(ph), sg * cos(t)};
+                double v = btdf_rad_lookup(r, k, p, q);
+                if (v > best) {
+                    best = v;
+                    bt = a + 0.5;
+                    bp = c;
+                }
+            }
+        if (getenv("BTDF_TEST_VERBOSE"))
+            fprintf(stderr, "%s: peak %.6g at %.1f %.1f\n", r->b[k].label, best, bt, bp);
+        assert_true(fabs(bp - 200.0) <= 45.0);
+        double mirror[3] = {-p[0], -p[1], p[2]}, back[3] = {p[0], p[1], p[2]};
+        int i = rad_klems_patch(kb, 37.0, 200.0);
+        double vm = btdf_rad_lookup(r, k, p, mirror), vb = btdf_rad_lookup(r, k, p, back);
+        assert_true(vm == r->b[k].klems[(size_t)i * kb->npatch + (size_t)i]);
+        if (getenv("BTDF_TEST_VERBOSE"))
+            fprintf(stderr, "%s: mirror %.6g back-scatter %.6g\n", r->b[k].label, vm, vb);
+        assert_true(vm > vb);
+        double q_other[3] = {-p[0], -p[1], -p[2]};
+        assert_true(btdf_rad_lookup(r, k, p, q_other) == 0.0);
+    }
 }
 
 /* A tree3 file of n = 1.5, s = 2 (coarse: loose tolerance) holding the blocks first..last
@@ -196,10 +385,16 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_square_disk_round_trip),
-        cmocka_unit_test(test_klems_columns),
         cmocka_unit_test(test_tree_file),
         cmocka_unit_test(test_tree_cut),
         cmocka_unit_test(test_reflection_block),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    const struct CMUnitTest klems[] = {
+        cmocka_unit_test(test_klems_columns),
+        cmocka_unit_test(test_klems_reflection_energy),
+        cmocka_unit_test(test_klems_reflection_reciprocity),
+        cmocka_unit_test(test_klems_reflection_lookup),
+    };
+    int fails = cmocka_run_group_tests(tests, NULL, NULL);
+    return fails + cmocka_run_group_tests(klems, klems_setup, klems_teardown);
 }

@@ -21,8 +21,8 @@ extern "C" {
  * (rho(n; q -> p) = n^2 rho(1/n; p -> q)), so each block holds what a render needs:
  *   block 0 "Transmission Front" (p on -Z; light from +Z, leaving the dense side, 1/n);
  *   block 1 "Transmission Back"  (p on +Z; light from -Z, entering it, index n);
- *   block 2 "Reflection Front"   (p and light on -Z, outside: rho_r(n)), tree3 only;
- *   block 3 "Reflection Back"    (p and light on +Z, inside: rho_r(1/n)), tree3 only.
+ *   block 2 "Reflection Front"   (p and light on -Z, outside: rho_r(n));
+ *   block 3 "Reflection Back"    (p and light on +Z, inside: rho_r(1/n)).
  * The BSDF material's surface normal (+Z) points into the dense medium.
  */
 typedef struct btdf_rad btdf_rad;
@@ -41,7 +41,7 @@ BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b);
 /* Builds the blocks for one channel. tree3: the two transmission and two reflection
    blocks, leaves whose e_L1 (MODEL.md 6) as Radiance reads them meets tolerance
    ([1e-3, 0.5]) for light up to BTDF_RAD_TI_CHECKED_DEG, checked by estimates of its
-   own; Klems: the two transmission blocks, exact patch averages (tolerance ignored).
+   own; Klems: the same four blocks, exact patch averages (tolerance ignored).
    threads: 0 = all cores; the result does not depend on it. BTDF_OK; BTDF_EBUDGET when the tolerance could not be met (*out holds the best
    file); BTDF_EINVAL (parameters, more than one channel, tolerance); BTDF_ENOMEM. */
 #define BTDF_RAD_TI_CHECKED_DEG 80.0
