@@ -1701,7 +1701,7 @@ int scatfun_nodes_d(btdf_scatfun *f)
    pairs), arranged for speed: cos(k phi) comes from the Chebyshev recurrence once, in
    chunks, and each pair's series is a dot product with that chunk, instead of one
    serial recurrence per pair. Only the order of the additions differs. */
-static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, double mu_f,
+BT_CLONES static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, double mu_f,
                        double cphi, double rk, double *val)
 {
     long os, of;
