@@ -1698,11 +1698,12 @@ int scatfun_nodes_d(btdf_scatfun *f)
 
 /* Stored-channel series values (Y, R, B or one channel) at (mu_s, mu_f, cos phi_d).
    The same sum as pbrt-v3's (weights times the cosine series of the 16 stencil
-   pairs), arranged for speed: cos(k phi) comes from the Chebyshev recurrence once, in
-   chunks, and each pair's series is a dot product with that chunk, instead of one
-   serial recurrence per pair. Only the order of the additions differs. */
-BT_CLONES static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s, double mu_f,
-                       double cphi, double rk, double *val)
+   pairs), arranged for speed: cos(k phi) comes from recurrences once, in chunks; per
+   chunk the stencil's weighted series are added into one (as pbrt-v3 interpolates its
+   coefficients) and that one is summed against the cosines. Only the order of the
+   additions differs. */
+BT_CLONES static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s,
+                                 double mu_f, double cphi, double rk, double *val)
 {
     long os, of;
     double ws[4], wf[4];
@@ -1737,8 +1738,8 @@ BT_CLONES static int eval_stored(const btdf_scatfun *f, const double *x, double 
     /* u_k = rk^k cos(k phi). The first LAG by u_{k+1} = 2 rk c u_k - rk^2 u_{k-1} from
        u_0 = 1 and u_{-1} = cos(-phi) / rk (rk = 1: the plain recurrence); then four
        interleaved chains, u_k = 2 u_4 u_{k-4} - rk^8 u_{k-8} (cos(a + b) + cos(a - b)
-       = 2 cos a cos b with b = 4 phi): the one-step chain is bound by its latency, a
-       multiply and a fused multiply-add per term, and took as long as the sums. */
+       = 2 cos a cos b with b = 4 phi): the one-step chain is bound by its latency (two
+       multiplies and a subtraction per term) and took as long as the sums. */
     double c_prev = cphi, c_cur = 1.0, rc = rk * cphi, r2 = rk * rk;
     double A = 0.0, B = r2 * r2 * r2 * r2;
     for (uint32_t q0 = 0; q0 < mtop; q0 += CHUNK) {
