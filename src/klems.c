@@ -49,13 +49,16 @@
 
 static const double full_t[] = {0, 5, 15, 25, 35, 45, 55, 65, 75, 90};
 static const int full_n[] = {1, 8, 16, 20, 24, 24, 24, 16, 12};
-static const double half_t[] = {0, 6.5, 19.5, 32.5, 46.5, 61.5, 76.5, 90};
-static const int half_n[] = {1, 8, 12, 16, 20, 12, 4};
-static const double quarter_t[] = {0, 9, 27, 46, 66, 90};
+/* The half and quarter bases as Radiance knows them by name (its bsdf_m.c, since its
+   2022 change "corrected Klems half and quarter bases to match WINDOW"): for a name it
+   knows, Radiance reads the matrix with its own bands and ignores the file's blocks. */
+static const double half_t[] = {0, 6.5, 19.5, 32.5, 45.5, 58.5, 71.5, 90};
+static const int half_n[] = {1, 8, 12, 16, 20, 12, 8};
+static const double quarter_t[] = {0, 9, 27, 45, 63, 90};
 static const int quarter_n[] = {1, 8, 12, 12, 8};
 
 static const rad_klems_basis kb_full = {"LBNL/Klems Full", 9, full_t, full_n, 145};
-static const rad_klems_basis kb_half = {"LBNL/Klems Half", 7, half_t, half_n, 73};
+static const rad_klems_basis kb_half = {"LBNL/Klems Half", 7, half_t, half_n, 77};
 static const rad_klems_basis kb_quarter = {"LBNL/Klems Quarter", 5, quarter_t, quarter_n, 41};
 
 const rad_klems_basis *rad_klems(rad_basis b)

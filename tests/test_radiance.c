@@ -120,13 +120,13 @@ static double r_average(const btdf_params *q, double w0, double w1, int panels, 
 /* Klems reflection blocks: for every incident patch the column summed with the outgoing
    patches' projected solid angles is R averaged over the incident patch (R of the
    block's own index: n outside, 1/n inside, whose edge of total internal reflection lies
-   at 41.8 deg, inside the quarter basis' 27-46 deg band).
+   at 41.8 deg, inside the quarter basis' 27-45 deg band).
    (a) Against R at the builder's own incident nodes the difference is the outgoing
    integration's alone: its rule stops when its error estimates sum to 1e-7 per outgoing
    patch and incident node (KL_EPS), 41e-7 for 41 patches. An estimate (the difference
    of two rules), not a bound: allowed twice that, plus the file's 6 significant digits
-   (5e-7 of the sum) and btdf_reflectance's 1e-9; measured at most 3.2e-6 (front) and
-   4.7e-6 (back, the 46-66 deg band).
+   (5e-7 of the sum) and btdf_reflectance's 1e-9; measured at most 4.4e-7 (front) and
+   5.1e-6 (back).
    (b) Against the exact average (256 panels in w) the builder's incident rule adds its
    own error: 4 nodes in w, and in the grazing band 8 panels in cos ti, within 1e-6 of R
    (klems.c); allowed 1e-5 more. A patch's share in the wrong direction (the lobe
@@ -176,13 +176,13 @@ static void test_klems_reflection_energy(void **state)
    the outgoing rule's 1e-7 per patch and node over the patch's Lambda (>= 0.0375 sr
    here: 2.7e-6 in the entry) twice, the file's 6 digits (5e-7 relative) twice, and the
    incident rule's error, which this test measures. Outside (n = 1.5) it is smooth:
-   measured at most 4.3e-4 relative for entries above 0.01, allowed 1e-3 plus 1e-5.
+   measured at most 1.0e-4 relative for entries above 0.01, allowed 1e-3 plus 1e-5.
    Inside (1/n) the entries of directions about 84 deg apart carry the edge of total
    internal reflection, which the incident rule's 4 x 4 nodes do not resolve: measured
-   at most 1.06e-2 relative (a 46-66 deg patch with a grazing one), allowed 2e-2 plus
-   1e-5 (docs/radiance.md). A block with the roles mixed up (the outgoing patch read with
-   the incident rule's reversal) puts the lobe at the back-scatter and fails by orders
-   of magnitude. */
+   at most 2.6e-2 relative (a 9-27 deg patch with a 45-63 deg one; 1.06e-2 with the
+   quarter basis' former bands, 46-66 deg), allowed 4e-2 plus 1e-5 (docs/radiance.md).
+   A block with the roles mixed up (the outgoing patch read with the incident rule's
+   reversal) puts the lobe at the back-scatter and fails by orders of magnitude. */
 static void test_klems_reflection_reciprocity(void **state)
 {
     (void)state;
@@ -196,7 +196,7 @@ static void test_klems_reflection_reciprocity(void **state)
             for (int i = 0; i < kb->npatch; i++) {
                 double a = m[(size_t)o * np + (size_t)i];
                 double b = m[(size_t)klems_turn(kb, i) * np + (size_t)klems_turn(kb, o)];
-                assert_close(a, b, k == 2 ? 1e-3 : 2e-2, 1e-5);
+                assert_close(a, b, k == 2 ? 1e-3 : 4e-2, 1e-5);
                 if (a > 0.01)
                     worst = fmax(worst, fabs(a - b) / a);
             }

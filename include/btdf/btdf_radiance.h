@@ -30,7 +30,7 @@ typedef struct btdf_rad btdf_rad;
 typedef enum {
     BTDF_RAD_TREE3 = 0,        /* TensorTree3 (Shirley-Chiu), adaptive, to a tolerance */
     BTDF_RAD_KLEMS_FULL = 1,   /* 145 x 145 patch-pair averages */
-    BTDF_RAD_KLEMS_HALF = 2,   /* 73 x 73 */
+    BTDF_RAD_KLEMS_HALF = 2,   /* 77 x 77 */
     BTDF_RAD_KLEMS_QUARTER = 3 /* 41 x 41 */
 } btdf_rad_basis;
 
