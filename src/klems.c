@@ -326,16 +326,14 @@ static void kl_column(void *arg, size_t i)
     free(col);
 }
 
-btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
-                            const rad_klems_basis *kb,
-                            int threads, rad_block *blk, char *msg, size_t msglen)
+btdf_status rad_klems_acc(const btdf_params *p, double n, double scale, int reflect,
+                          const rad_klems_basis *kb, int threads, double **out, char *msg,
+                          size_t msglen)
 {
     size_t np = (size_t)kb->npatch;
-    kl_job j = {p, n, scale, kb, blk->reflect, malloc(np * np * sizeof(double))};
-    float *m = malloc(np * np * sizeof *m);
-    if (!j.acc || !m) {
-        free(j.acc);
-        free(m);
+    kl_job j = {p, n, scale, kb, reflect, malloc(np * np * sizeof(double))};
+    *out = NULL;
+    if (!j.acc) {
         if (msg && msglen)
             snprintf(msg, msglen, "out of memory for a %zu x %zu Klems matrix", np, np);
         return BTDF_ENOMEM;
@@ -346,16 +344,41 @@ btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
     for (size_t k = 0; k < np * np; k++) {
         if (isnan(j.acc[k])) {
             free(j.acc);
-            free(m);
             if (msg && msglen)
                 snprintf(msg, msglen, "out of memory integrating the Klems matrix");
             return BTDF_ENOMEM;
         }
-        char t[32];
-        snprintf(t, sizeof t, "%.6g", j.acc[k]);
-        m[k] = (float)strtod(t, NULL); /* the value exactly as the file holds it */
     }
-    free(j.acc);
+    *out = j.acc;
+    return BTDF_OK;
+}
+
+float rad_klems_value(double v)
+{
+    char t[32];
+    snprintf(t, sizeof t, "%.6g", v);
+    return (float)strtod(t, NULL); /* the value exactly as the file holds it */
+}
+
+btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
+                            const rad_klems_basis *kb,
+                            int threads, rad_block *blk, char *msg, size_t msglen)
+{
+    size_t np = (size_t)kb->npatch;
+    double *acc = NULL;
+    btdf_status st = rad_klems_acc(p, n, scale, blk->reflect, kb, threads, &acc, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    float *m = malloc(np * np * sizeof *m);
+    if (!m) {
+        free(acc);
+        if (msg && msglen)
+            snprintf(msg, msglen, "out of memory for a %zu x %zu Klems matrix", np, np);
+        return BTDF_ENOMEM;
+    }
+    for (size_t k = 0; k < np * np; k++)
+        m[k] = rad_klems_value(acc[k]);
+    free(acc);
     blk->klems = m;
     return BTDF_OK;
 }
