@@ -125,6 +125,18 @@ double blend_ti(double v0, double v1, double w, double g, double g0, double g1);
 const char *table_kind_name(btdf_table_kind k);
 int table_kind_parse(const char *name, btdf_table_kind *k);
 
+/* T(ti) or R(ti) per channel (btdf_transmittance / btdf_reflectance), remembered by
+   the parameters and the exact angle, so the builder's repeated measurements of a file
+   (the same knot midpoints each time, each block read twice) compute each once.
+   Thread-safe; a value is the same whether it was remembered or computed. */
+typedef struct albedo_memo albedo_memo;
+albedo_memo *albedo_memo_new(void);
+void albedo_memo_free(albedo_memo *m);
+/* out[0..p->channels-1]; m may be NULL (computes). Returns btdf_transmittance's or
+   btdf_reflectance's status. */
+btdf_status albedo_memo_get(albedo_memo *m, const btdf_params *p, int refl, double ti,
+                            double *out);
+
 /* An evaluation under test: rho~ for every channel at incidence ti and outgoing
    direction q = {sin ti, cos ti, sin to, cos to, cos phi, sin phi, |phi| folded to
    [0, pi], to}. */
@@ -140,7 +152,8 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
 btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_max,
                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
                                 int threads, const double *knots, size_t nknots,
-                                est_eval_fn fn, const void *obj, btdf_report *r);
+                                est_eval_fn fn, const void *obj, albedo_memo *memo,
+                                btdf_report *r);
 
 /* A whole per-angle estimate: fills res (zeroed, res->ti set) at incidence ti with p
    the truth's parameters, from the generator state rng (fixed by ti and the seed);
@@ -153,7 +166,8 @@ typedef size_t (*est_angle_fn)(const void *obj, const btdf_params *p, double ti,
 btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
                                  size_t test_angles, size_t points_per_angle, uint64_t seed,
                                  int threads, const double *knots, size_t nknots,
-                                 est_angle_fn fn, const void *obj, btdf_report *r);
+                                 est_angle_fn fn, const void *obj, albedo_memo *memo,
+                                btdf_report *r);
 /* The same for an evaluation of the reflection: against rho_r (MODEL.md section 8)
    over the upper hemisphere, relative to max(R(ti), 0.01); q holds tr for to. */
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
