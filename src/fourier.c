@@ -1115,6 +1115,7 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     btdf_scatfun *f = calloc(1, sizeof *f);
     if (!f)
         return BTDF_ENOMEM;
+    f->memo = albedo_memo_new(); /* NULL is fine: the reports then compute every T */
     f->n = (uint32_t)n;
     f->ncoeffs = (uint32_t)total;
     f->mmax = (uint32_t)mmax;
@@ -1692,7 +1693,6 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             st = BTDF_OK;
     }
 done:
-    albedo_memo_free(memo);
     free_state(&c);
     free(c.P);
     free(c.full);
@@ -1701,11 +1701,16 @@ done:
     free(ahead);
     pthread_mutex_destroy(&c.lock);
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        albedo_memo_free(memo);
         btdf_scatfun_free(best);
         return st;
     }
     best->tolerance = tolerance;
     best->seconds_build = btdf_now() - t0;
+    if (memo) { /* the file's reports test the same knot midpoints: hand over T and R */
+        albedo_memo_free(best->memo);
+        best->memo = memo;
+    }
     *out = best;
     if (st == BTDF_EBUDGET)
         return scatfun_say(msg, msglen, BTDF_EBUDGET,
@@ -2254,7 +2259,7 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
        near grazing incidence (1.9e-3 at ti = 86.7 deg for s = 3, where a
        1500 x 1500 brute-force integral agrees with this estimator). */
     btdf_status st = scatfun_report_mis(f, p, side, test_angles, points_per_angle, seed,
-                                        threads, NULL, r);
+                                        threads, f->memo, r);
     if (st != BTDF_OK)
         return st;
     r->slices = f->n;

@@ -7,6 +7,7 @@
 
 #include "btdf.h"
 #include "model_impl.h"
+#include "scatfun_impl.h"
 
 typedef struct tslice {
     double ti;
@@ -124,18 +125,6 @@ double blend_ti(double v0, double v1, double w, double g, double g0, double g1);
    for an unknown name. */
 const char *table_kind_name(btdf_table_kind k);
 int table_kind_parse(const char *name, btdf_table_kind *k);
-
-/* T(ti) or R(ti) per channel (btdf_transmittance / btdf_reflectance), remembered by
-   the parameters and the exact angle, so the builder's repeated measurements of a file
-   (the same knot midpoints each time, each block read twice) compute each once.
-   Thread-safe; a value is the same whether it was remembered or computed. */
-typedef struct albedo_memo albedo_memo;
-albedo_memo *albedo_memo_new(void);
-void albedo_memo_free(albedo_memo *m);
-/* out[0..p->channels-1]; m may be NULL (computes). Returns btdf_transmittance's or
-   btdf_reflectance's status. */
-btdf_status albedo_memo_get(albedo_memo *m, const btdf_params *p, int refl, double ti,
-                            double *out);
 
 /* An evaluation under test: rho~ for every channel at incidence ti and outgoing
    direction q = {sin ti, cos ti, sin to, cos to, cos phi, sin phi, |phi| folded to
