@@ -240,6 +240,7 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
     btdf_scatfun *f = calloc(1, sizeof *f);
     if (!f)
         return scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
+    f->memo = albedo_memo_new(); /* NULL is fine: the reports then compute every T */
     size_t nn = (size_t)n * n; /* fits: 12 n^2 <= len */
     f->n = n;
     f->ncoeffs = nco;
@@ -515,5 +516,6 @@ BTDF_API void btdf_scatfun_free(btdf_scatfun *f)
     free(f->offsets);
     free(f->coeffs);
     free(f->meta);
+    albedo_memo_free(f->memo);
     free(f);
 }

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* estimate.c: a table's error against Eq. 25 (MODEL.md section 6) at points it was not built on. */
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -22,6 +23,107 @@ static uint64_t mix(uint64_t *x)
 
 static double unif(uint64_t *x) { return (double)(mix(x) >> 11) * (1.0 / 9007199254740992.0); }
 
+/* ------------------------------------------------------------------------- */
+/* Remembered T and R                                                        */
+/* ------------------------------------------------------------------------- */
+
+typedef struct memo_key {
+    int refl, channels;
+    double ior[BTDF_MAX_CHANNELS], s, k0, ti;
+} memo_key;
+
+typedef struct memo_ent {
+    memo_key key;
+    double v[BTDF_MAX_CHANNELS];
+    struct memo_ent *next;
+} memo_ent;
+
+#define MEMO_BUCKETS 4096
+
+struct albedo_memo {
+    pthread_mutex_t lock;
+    memo_ent *b[MEMO_BUCKETS];
+};
+
+albedo_memo *albedo_memo_new(void)
+{
+    albedo_memo *m = calloc(1, sizeof *m);
+    if (m && pthread_mutex_init(&m->lock, NULL) != 0) {
+        free(m);
+        return NULL;
+    }
+    return m;
+}
+
+void albedo_memo_free(albedo_memo *m)
+{
+    if (!m)
+        return;
+    for (size_t i = 0; i < MEMO_BUCKETS; i++)
+        for (memo_ent *e = m->b[i], *nx; e; e = nx) {
+            nx = e->next;
+            free(e);
+        }
+    pthread_mutex_destroy(&m->lock);
+    free(m);
+}
+
+static int key_eq(const memo_key *a, const memo_key *b)
+{
+    if (a->refl != b->refl || a->channels != b->channels || a->s != b->s || a->k0 != b->k0 ||
+        a->ti != b->ti)
+        return 0;
+    for (int c = 0; c < a->channels; c++)
+        if (a->ior[c] != b->ior[c])
+            return 0;
+    return 1;
+}
+
+btdf_status albedo_memo_get(albedo_memo *m, const btdf_params *p, int refl, double ti,
+                            double *out)
+{
+    if (!m)
+        return refl ? btdf_reflectance(p, ti, out) : btdf_transmittance(p, ti, out);
+    memo_key k;
+    memset(&k, 0, sizeof k);
+    k.refl = refl;
+    k.channels = p->channels;
+    for (int c = 0; c < p->channels && c < BTDF_MAX_CHANNELS; c++)
+        k.ior[c] = p->ior[c];
+    k.s = p->smoothness;
+    k.k0 = p->k0;
+    k.ti = ti;
+    uint64_t bits, nb;
+    memcpy(&bits, &ti, sizeof bits);
+    memcpy(&nb, &k.ior[0], sizeof nb);
+    size_t h = (size_t)((bits ^ (nb * 0x9e3779b97f4a7c15ull) ^ (uint64_t)refl) *
+                        0xbf58476d1ce4e5b9ull >> 52) % MEMO_BUCKETS;
+    pthread_mutex_lock(&m->lock);
+    for (const memo_ent *e = m->b[h]; e; e = e->next)
+        if (key_eq(&e->key, &k)) {
+            memcpy(out, e->v, (size_t)p->channels * sizeof *out);
+            pthread_mutex_unlock(&m->lock);
+            return BTDF_OK;
+        }
+    pthread_mutex_unlock(&m->lock);
+    /* computed outside the lock; two threads computing the same key store the same
+       value, so either copy may stay */
+    btdf_status st = refl ? btdf_reflectance(p, ti, out) : btdf_transmittance(p, ti, out);
+    if (st != BTDF_OK)
+        return st;
+    memo_ent *e = malloc(sizeof *e);
+    if (!e)
+        return BTDF_OK; /* not remembered: the value is still right */
+    e->key = k;
+    memset(e->v, 0, sizeof e->v);
+    memcpy(e->v, out, (size_t)p->channels * sizeof *out);
+    pthread_mutex_lock(&m->lock);
+    e->next = m->b[h];
+    m->b[h] = e;
+    pthread_mutex_unlock(&m->lock);
+    return BTDF_OK;
+}
+
 typedef struct est_job {
     const btdf_params *p; /* the truth: Eq. 25 with these parameters */
     est_eval_fn fn;       /* the evaluation under test */
@@ -34,6 +136,7 @@ typedef struct est_job {
     btdf_ti_error *res;
     size_t *points;
     int refl;             /* 1: the truth is rho_r over the upper hemisphere, R for T */
+    albedo_memo *memo;    /* T and R remembered across calls, or NULL */
 } est_job;
 
 /*
@@ -97,10 +200,9 @@ static void est_angle(void *arg, size_t k)
     r->ti = ti;
     double Tall[BTDF_MAX_CHANNELS];
     int refl = j->refl;
-    if (refl)
-        btdf_reflectance(p, ti, Tall);
-    else
-        btdf_transmittance(p, ti, Tall);
+    if (albedo_memo_get(j->memo, p, refl, ti, Tall) != BTDF_OK)
+        for (int c = 0; c < p->channels; c++)
+            Tall[c] = 0.0; /* ti in range and p checked: not reached */
     double wmax = -expm1(-U_EST * U_EST);
     double dw = wmax / (double)j->nu, dpsi = M_PI / (double)j->npsi;
     double dmu = 1.0 / (double)j->nmu, dphi = M_PI / (double)j->nphi;
@@ -242,7 +344,7 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
                                  double ti_max, size_t test_angles, size_t points_per_angle,
                                  uint64_t seed, int threads, const double *knots,
                                  size_t nknots, est_eval_fn fn, est_angle_fn custom,
-                                 const void *obj, btdf_report *r)
+                                 const void *obj, albedo_memo *memo, btdf_report *r)
 {
     if (!p || !(fn || custom) || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
         return BTDF_EINVAL;
@@ -266,6 +368,7 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
     j.nmu = 64;
     j.nphi = 64;
     j.seed = seed;
+    j.memo = memo;
     double span = ti_max - ti_min;
     /* V(ti) falls to 0 before grazing over about 1/s rad (smoothness >= 1e-3 checked) */
     double min_gap = fmin(REFINE_MIN_GAP, 2e-2 / p->smoothness);
@@ -391,19 +494,21 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
 btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_max,
                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
                                 int threads, const double *knots, size_t nknots,
-                                est_eval_fn fn, const void *obj, btdf_report *r)
+                                est_eval_fn fn, const void *obj, albedo_memo *memo,
+                                btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, fn, NULL, obj, r);
+                         knots, nknots, fn, NULL, obj, memo, r);
 }
 
 btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
                                  size_t test_angles, size_t points_per_angle, uint64_t seed,
                                  int threads, const double *knots, size_t nknots,
-                                 est_angle_fn fn, const void *obj, btdf_report *r)
+                                 est_angle_fn fn, const void *obj, albedo_memo *memo,
+                                btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, NULL, fn, obj, r);
+                         knots, nknots, NULL, fn, obj, memo, r);
 }
 
 btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
@@ -411,7 +516,7 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
                              int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         NULL, 0, fn, NULL, obj, r);
+                         NULL, 0, fn, NULL, obj, NULL, r);
 }
 
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
@@ -419,7 +524,7 @@ btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_ma
                                int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
     return estimate_impl(p, 1, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         NULL, 0, fn, NULL, obj, r);
+                         NULL, 0, fn, NULL, obj, NULL, r);
 }
 
 BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
@@ -455,7 +560,7 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
     }
     btdf_status st = estimate_impl(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
                                    test_angles, points_per_angle, seed, threads, knots, nk,
-                                   table_fn, NULL, t, r);
+                                   table_fn, NULL, t, NULL, r);
     free(knots);
     if (st == BTDF_OK) {
         r->slices = t->ns;

@@ -508,6 +508,15 @@ static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t
    angles its splits were not chosen from (one fixed seed let the splits fit its
    angles: s = 20 at 1e-3 passed 0.75e-3 on them and measured 1.45e-3 on others). */
 #define QUICK_SEED 0x5ca7f00dULL
+/* Facet-slope points per test angle of those measurements (the report's default is
+   8192; the 64 x 64 direction points come on top). A quarter of the default spreads no
+   more: per-angle e_L1 at 2048 against 8192 points differed by 1.0 % and 4.3 % rms
+   (n = 1.5, s = 3 at 1e-3, entering and leaving side), 1.6 % and 0.4 % (s = 100 at
+   1e-2), where two seeds at 8192 differ by 0.9 %, 4.0 %, 1.2 % and 0.35 % (angles
+   within 0.3 of the worst); the worst angle's e_L1 moved by at most 2.6 %, inside
+   ACCEPT_SHARE's margin. The measurement then costs 1.6 (s = 3) to 3.3 (s = 100)
+   times less. */
+#define QUICK_PPA 2048
 /* The first azimuth grid has at least NMIN_PHI intervals over [0, pi] (8 s for narrow
    lobes); converge() doubles it until the coefficients settle. */
 #define NMIN_PHI 32.0
@@ -526,6 +535,47 @@ static size_t truncate_len_measured(const build_ctx *c, build_ws *w, size_t N, s
                                     const double *norm, double eps_trunc)
 {
     size_t S = c->nmax + 1, lo = 0, hi = m0; /* hi passes (the bound holds there) */
+    /* A bracket from the coefficients alone, without transforms. With the trapezoid
+       sum Tr over the grid of N (weights summing to pi) and the discrete orthogonality
+       of cos(q phi) on it, Tr(t^2) = sum c_q a_q^2 (c_q = pi for q = 0 and N, pi/2
+       otherwise), so by Cauchy-Schwarz the measured tail 2 Tr(|t|) is at most
+       2 sqrt(pi Tr(t^2)): where that is within eps_trunc, m passes. And 2 Tr(|t|) >=
+       2 |Tr(t cos r phi)| = 2 c_r |a_r| for every r >= m: where that exceeds it, m
+       fails. The bisection then runs inside the bracket only (fewer inverse transforms,
+       same rule). */
+    {
+        size_t up = 0, low = 0; /* up passes in every channel; below low some fails */
+        for (int k = 0; k < c->nst; k++) {
+            const double *ak = w->a + k * S;
+            double lim = eps_trunc * norm[k]; /* norm >= T_FLOOR > 0 */
+            double t2 = 0.0;
+            size_t q = m0, upk = m0, lowk = 0;
+            /* tail sums from the top: every q > m0 - 1 was dropped by the bound */
+            for (size_t r = m0; r <= N; r++) {
+                double cr = (r == 0 || r == N) ? M_PI : 0.5 * M_PI;
+                t2 += cr * ak[r] * ak[r];
+            }
+            while (q > 0) {
+                double cr = (q - 1 == 0 || q - 1 == N) ? M_PI : 0.5 * M_PI;
+                double a = ak[q - 1];
+                if (2.0 * cr * fabs(a) > lim) {
+                    lowk = q; /* m = q - 1 and below keep a_{q-1} in the tail: fail */
+                    break;
+                }
+                t2 += cr * a * a;
+                if (2.0 * sqrt(M_PI * t2) <= lim)
+                    upk = q - 1;
+                q--;
+            }
+            if (upk > up)
+                up = upk;
+            if (lowk > low)
+                low = lowk;
+        }
+        if (up < hi)
+            hi = up;
+        lo = low < hi ? low : hi;
+    }
     while (lo < hi) {
         size_t mid = lo + (hi - lo) / 2, q;
         int pass = 1;
@@ -783,6 +833,15 @@ oom:
      of that light (T' of the other side's index; R of the same block for
      reflection). So one pair's series may err by max(T', floor) mu / e^2 in the
      stored units; cos(camera) <= 1 leaves a factor 2 of margin. */
+/* The norms only set the shares the node checks allow (what decides is the file's own
+   measurement, with T converged to 1e-9), so T and R come from a quarter of the
+   converged rule's panels: 8 x 6 against 16 x 12 differs by at most 2.2e-2 of
+   max(T, 0.01) (n = 1/2.4, s = 20, near the critical angle) and 1e-5 of max(R, 0.01),
+   over n in {1.5, 1.33, 2.4, 1.0001} and their inverses, s in {1, 3, 20, 100, 1000},
+   ti in 0.5-degree steps; it costs a quarter. */
+#define NORM_U_PANELS 8
+#define NORM_PSI_PANELS 6
+
 static void norms_at(const build_ctx *c, int side, double mu, double *out)
 {
     btdf_params q = *c->p;
@@ -791,9 +850,7 @@ static void norms_at(const build_ctx *c, int side, double mu, double *out)
     double T[3] = {0, 0, 0};
     /* acos of a value in [0, 1] is in [0, pi/2], the accepted range */
     double ti = acos(fmin(1.0, fmax(0.0, mu)));
-    if ((blk_refl[side] ? btdf_reflectance(&q, ti, T) : btdf_transmittance(&q, ti, T)) !=
-        BTDF_OK)
-        T[0] = T[1] = T[2] = 0.0;
+    bt_albedo_panels(&q, blk_refl[side], ti, NORM_U_PANELS, NORM_PSI_PANELS, T);
     if (c->nst == 1) {
         out[0] = fmax(T[0], T_FLOOR);
     } else {
@@ -809,8 +866,7 @@ static void norms_at(const build_ctx *c, int side, double mu, double *out)
         int other = side == BLK_T_ENTER ? BLK_T_LEAVE : BLK_T_ENTER;
         for (int k = 0; k < c->nc; k++)
             q.ior[k] = c->ior[other][k];
-        if (btdf_transmittance(&q, ti, T) != BTDF_OK)
-            T[0] = T[1] = T[2] = 0.0;
+        bt_albedo_panels(&q, 0, ti, NORM_U_PANELS, NORM_PSI_PANELS, T);
         e2 = side == BLK_T_ENTER ? 1.0 / (eta * eta) : eta * eta; /* eta > 0 (checked) */
     }
     /* mu >= the first node or midpoint > 0; the floor keeps the norm positive should
@@ -823,6 +879,21 @@ static void norms_at(const build_ctx *c, int side, double mu, double *out)
         out[5] = fmax(T[0], T_FLOOR) * w;
         out[6] = fmax(T[2], T_FLOOR) * w;
     }
+}
+
+/* Job k of K * NBLK * 2: the norms of node or midpoint k / (2 NBLK) for one block,
+   unless carried from the last pass. */
+static void job_norms(void *vctx, size_t k)
+{
+    build_ctx *c = vctx;
+    size_t j = k / (2 * NBLK);
+    int s = (int)(k / 2 % NBLK), at_mid = (int)(k % 2);
+    if (!c->want[s])
+        return;
+    if (at_mid && !c->hasTm[j])
+        norms_at(c, s, c->mid[j], c->Tm[j][s]);
+    else if (!at_mid && !c->hasTn[j])
+        norms_at(c, s, c->P[j], c->Tn[j][s]);
 }
 
 /* The norm of the series at (slow node with norms ns, fast node with norms nf): it
@@ -1085,6 +1156,7 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     btdf_scatfun *f = calloc(1, sizeof *f);
     if (!f)
         return BTDF_ENOMEM;
+    f->memo = albedo_memo_new(); /* NULL is fine: the reports then compute every T */
     f->n = (uint32_t)n;
     f->ncoeffs = (uint32_t)total;
     f->mmax = (uint32_t)mmax;
@@ -1181,19 +1253,25 @@ static size_t pow2_at_least(double v)
     return p;
 }
 
+btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
+                               size_t angles, size_t ppa, uint64_t seed, int threads,
+                               albedo_memo *memo, btdf_report *r);
+
 /* Error estimate of one side with a fixed sample (for the build's own loop): the
    file's own evaluation, the default report's density, a seed of the builder's. Test
    angles whose e_L1 exceeds mark_at get their elevation interval marked in split
    (half nodes P[0..K-1]; both sides share them); *nmark counts new marks. */
 static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads,
-                       uint64_t seed, const double *P, size_t K, double mark_at,
-                       unsigned char *split, size_t *nmark)
+                       uint64_t seed, albedo_memo *memo, const double *P, size_t K,
+                       double mark_at, unsigned char *split, size_t *nmark)
 {
     btdf_report r;
     memset(&r, 0, sizeof r);
-    /* as dense as the default report (narrow lobes need it), on other points */
-    if (btdf_scatfun_report(f, p, side, 24, 8192, seed, threads, &r) != BTDF_OK)
+    /* btdf_scatfun_report's work, with T and R remembered from the last measurement */
+    if (scatfun_report_mis(f, p, side, 24, QUICK_PPA, seed, threads, memo, &r) != BTDF_OK) {
+        free(r.per_ti);
         return HUGE_VAL;
+    }
     for (size_t k = 0; split && k < r.test_angles; k++) {
         double mu = cos(r.per_ti[k].ti);
         size_t j = 0; /* interval j is (P[j-1], P[j]], P[-1] = 0 */
@@ -1351,6 +1429,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
 
     btdf_scatfun *best = NULL;
     double best_err = HUGE_VAL;
+    /* T and R of the test angles, kept across the measurements (NULL: computed each time) */
+    albedo_memo *memo = albedo_memo_new();
     /* initial half nodes: mu = sin of equal angle steps, denser towards grazing */
     size_t K0 = 8;
     double *P = malloc(BTDF_SCATFUN_MAX_HALF_NODES * 2 * sizeof *P);
@@ -1379,19 +1459,14 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             st = BTDF_ENOMEM;
             goto done;
         }
-        for (size_t j = 0; j < K; j++) {
+        for (size_t j = 0; j < K; j++)
             /* checked where a split would put the node, so check series become pairs */
             c.mid[j] = to_float_node(split_point(P, K, j, 0.5));
-            for (int s = 0; s < NBLK; s++) {
-                if (!c.want[s])
-                    continue;
-                if (!c.hasTn[j])
-                    norms_at(&c, s, P[j], c.Tn[j][s]);
-                if (!c.hasTm[j])
-                    norms_at(&c, s, c.mid[j], c.Tm[j][s]);
-            }
+        /* the norms of new nodes and midpoints (each its own job: same values on any
+           number of threads) */
+        btdf_parallel_for(threads, K * NBLK * 2, job_norms, &c);
+        for (size_t j = 0; j < K; j++)
             c.hasTn[j] = c.hasTm[j] = 1;
-        }
         if (btdf_parallel_for_ws(threads, NBLK * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
             st = BTDF_ENOMEM;
             goto done;
@@ -1548,7 +1623,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             for (int s = 0; s < NBLK; s++)
                 if (c.want[s])
                     e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
-                                         QUICK_SEED + (uint64_t)local, P, K,
+                                         QUICK_SEED + (uint64_t)local, memo, P, K,
                                          MARK_SHARE * tolerance, split, &nmark));
             if (e < best_err) {
                 btdf_scatfun_free(best);
@@ -1640,8 +1715,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                 for (int s = 0; s < NBLK; s++)
                     if (c.want[s])
                         e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
-                                             QUICK_SEED + (uint64_t)local, NULL, 0, 0.0, NULL,
-                                             NULL));
+                                             QUICK_SEED + (uint64_t)local, memo, NULL, 0,
+                                             0.0, NULL, NULL));
                 if (e < best_err || !best) {
                     btdf_scatfun_free(best);
                     best = f;
@@ -1667,11 +1742,16 @@ done:
     free(ahead);
     pthread_mutex_destroy(&c.lock);
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        albedo_memo_free(memo);
         btdf_scatfun_free(best);
         return st;
     }
     best->tolerance = tolerance;
     best->seconds_build = btdf_now() - t0;
+    if (memo) { /* the file's reports test the same knot midpoints: hand over T and R */
+        albedo_memo_free(best->memo);
+        best->memo = memo;
+    }
     *out = best;
     if (st == BTDF_EBUDGET)
         return scatfun_say(msg, msglen, BTDF_EBUDGET,
@@ -1840,12 +1920,12 @@ static btdf_status eval_mu_rk(const btdf_scatfun *f, double mu_s, double mu_f,
     return BTDF_OK;
 }
 
-/* (mu_s, mu_f, radiance) of a block and mode for angles in MODEL.md's frame; to is
-   the transmitted angle in [pi/2, pi] or, for reflection, tr in [0, pi/2]. */
-static void side_mus(btdf_side side, btdf_scatfun_mode mode, double ti, double to,
+/* (mu_s, mu_f, radiance) of a block and mode for directions in MODEL.md's frame, given
+   by ci = cos ti and co = |cos to| (to the transmitted angle in [pi/2, pi] or, for
+   reflection, tr in [0, pi/2]), both in [0, 1]. */
+static void side_mus(btdf_side side, btdf_scatfun_mode mode, double ci, double co,
                      double *mu_s, double *mu_f, int *radiance)
 {
-    double ci = cos(ti), co = fabs(cos(to)); /* both >= 0 in range */
     int adj = mode == BTDF_SCATFUN_ADJOINT;
     *radiance = adj;
     switch ((int)side) {
@@ -1864,6 +1944,10 @@ static void side_mus(btdf_side side, btdf_scatfun_mode mode, double ti, double t
     }
 }
 
+static btdf_status eval_side_cos(const btdf_scatfun *f, btdf_side side,
+                                 btdf_scatfun_mode mode, double ci, double co, double cpd,
+                                 double *out);
+
 BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side side,
                                             btdf_scatfun_mode mode, double ti, double to,
                                             double phi, double *out)
@@ -1880,9 +1964,19 @@ BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side sid
     int to_ok = refl ? (to >= 0.0 && to <= M_PI / 2) : (to >= M_PI / 2 && to <= M_PI);
     if (!(ti >= 0.0 && ti <= M_PI / 2) || !to_ok || !isfinite(phi))
         return BTDF_EDOMAIN;
+    /* phi = pi is forward (specular), phi_d = 0: cos phi_d = -cos phi */
+    return eval_side_cos(f, side, mode, cos(ti), fabs(cos(to)), -cos(phi), out);
+}
+
+/* btdf_scatfun_eval_side from cosines: ci = cos ti and co = |cos to| in [0, 1], cpd =
+   cos phi_d = -cos phi in [-1, 1]; side and mode checked by the caller. */
+static btdf_status eval_side_cos(const btdf_scatfun *f, btdf_side side,
+                                 btdf_scatfun_mode mode, double ci, double co, double cpd,
+                                 double *out)
+{
     double ms, mf;
     int rad;
-    side_mus(side, mode, ti, to, &ms, &mf, &rad);
+    side_mus(side, mode, ci, co, &ms, &mf, &rad);
     /* Within 0.02 deg of the normal (|mu| above the outermost node, 1 - 2^-24 in files
        this library writes) read the outermost node: a renderer gives 0 there, the model
        has no such gap (docs/scatfun.md, "Views on the normal"). */
@@ -1904,8 +1998,7 @@ BTDF_API btdf_status btdf_scatfun_eval_side(const btdf_scatfun *f, btdf_side sid
         rk *= sqrt(fmax(0.0, 1.0 - mf * mf)) / sn_bot;
     ms = fmin(top, fmax(bot, ms));
     mf = fmin(top, fmax(bot, mf));
-    /* phi = pi is forward (specular), phi_d = 0: cos phi_d = -cos phi */
-    return eval_mu_rk(f, ms, mf, -cos(phi), rad, rk, out);
+    return eval_mu_rk(f, ms, mf, cpd, rad, rk, out);
 }
 
 BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double to,
@@ -1922,13 +2015,19 @@ typedef struct mis_obj {
     const btdf_scatfun *f;
     btdf_side side; /* the block evaluated (eval_side's side) */
     btdf_scatfun_mode mode;
+    albedo_memo *memo; /* R remembered (refl_angle), or NULL */
 } mis_obj;
 
 static void mis_eval(const void *obj, double ti, const double *q, double *out)
 {
     const mis_obj *m = obj;
-    double phi = atan2(q[5], q[4]);
-    if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, q[7], phi, out) != BTDF_OK)
+    (void)ti;
+    /* the estimator's cosines (q: sin ti, cos ti, sin to, cos to, cos phi, sin phi, ...,
+       with cos^2 + sin^2 = 1 to rounding), so no angle is turned back into a cosine;
+       the clamps keep rounding inside the ranges eval_side_cos takes */
+    double ci = fmin(1.0, fmax(0.0, q[1])), co = fmin(1.0, fabs(q[3]));
+    double cpd = -fmin(1.0, fmax(-1.0, q[4]));
+    if (eval_side_cos(m->f, m->side, m->mode, ci, co, cpd, out) != BTDF_OK)
         for (uint32_t k = 0; k < m->f->channels; k++)
             out[k] = 0.0;
 }
@@ -1973,7 +2072,7 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
     double dw = wmax / (double)nu, dpsi = M_PI / (double)npsi;
     double dmu = 1.0 / (double)nmu, dphi = M_PI / (double)nphi;
     double R[BTDF_MAX_CHANNELS], tab[BTDF_MAX_CHANNELS];
-    if (btdf_reflectance(p, ti, R) != BTDF_OK)
+    if (albedo_memo_get(m->memo, p, 1, ti, R) != BTDF_OK)
         for (int c = 0; c < p->channels; c++)
             R[c] = 0.0;
     size_t pts = 0;
@@ -2053,15 +2152,16 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
 
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
-                               btdf_report *r);
+                               albedo_memo *memo, btdf_report *r);
 /* One reading of a file against the truth: btdf_scatfun_eval_side's side names the
    light's side in both modes (DIRECT reads that block, ADJOINT the block whose fast
    index holds that light: the other transmission block, the same reflection block). */
 static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, int b,
                                   btdf_scatfun_mode mode, size_t angles, size_t ppa,
-                                  uint64_t seed, int threads, btdf_report *r)
+                                  uint64_t seed, int threads, albedo_memo *memo,
+                                  btdf_report *r)
 {
-    mis_obj m = {f, (btdf_side)b, mode};
+    mis_obj m = {f, (btdf_side)b, mode, memo};
     int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
     int below = b == BTDF_SCATFUN_T_LEAVE || b == BTDF_SCATFUN_R_BOTTOM;
     btdf_params q = *p;
@@ -2083,10 +2183,10 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
     btdf_status st;
     if (refl)
         st = btdf_estimate_angles(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
-                                  refl_angle, &m, r);
+                                  refl_angle, &m, memo, r);
     else
         st = btdf_estimate_knots(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
-                                 mis_eval, &m, r);
+                                 mis_eval, &m, memo, r);
     free(knots);
     return st;
 }
@@ -2141,7 +2241,7 @@ static btdf_status merge_reports(btdf_report *r, btdf_report *o)
 
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
-                               btdf_report *r);
+                               albedo_memo *memo, btdf_report *r);
 /* The report of one block, as renderers read it: light tracers (pbrt-v3's importance
    mode, DIRECT: the light in the slow index) and path tracers' camera rays (radiance
    mode, ADJOINT: the light in the fast index) read the same stored series along
@@ -2151,7 +2251,7 @@ btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf
    ADJOINT reading. */
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
-                               btdf_report *r)
+                               albedo_memo *memo, btdf_report *r)
 {
     int b = (int)side;
     int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
@@ -2161,13 +2261,14 @@ btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf
     if (f->channels == 3 && !refl)
         /* a file of this one block: its ADJOINT reading is the other side's light */
         return report_reading(f, p, has_adj ? b : tb, BTDF_SCATFUN_ADJOINT, angles, ppa, seed,
-                              threads, r);
-    btdf_status st = report_reading(f, p, b, BTDF_SCATFUN_DIRECT, angles, ppa, seed, threads, r);
+                              threads, memo, r);
+    btdf_status st =
+        report_reading(f, p, b, BTDF_SCATFUN_DIRECT, angles, ppa, seed, threads, memo, r);
     if (st != BTDF_OK || !has_adj)
         return st;
     btdf_report o;
     memset(&o, 0, sizeof o);
-    st = report_reading(f, p, b, BTDF_SCATFUN_ADJOINT, angles, ppa, seed, threads, &o);
+    st = report_reading(f, p, b, BTDF_SCATFUN_ADJOINT, angles, ppa, seed, threads, memo, &o);
     if (st == BTDF_OK)
         st = merge_reports(r, &o);
     free(o.per_ti);
@@ -2199,7 +2300,7 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
        near grazing incidence (1.9e-3 at ti = 86.7 deg for s = 3, where a
        1500 x 1500 brute-force integral agrees with this estimator). */
     btdf_status st = scatfun_report_mis(f, p, side, test_angles, points_per_angle, seed,
-                                        threads, r);
+                                        threads, f->memo, r);
     if (st != BTDF_OK)
         return st;
     r->slices = f->n;

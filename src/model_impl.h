@@ -580,8 +580,15 @@ btdf_status btdf_say(btdf_status st, char *msg, size_t msglen, const char *fmt, 
    and tests that speak degrees: reduces to [-45, 45] before converting. */
 void btdf_sincos_deg(double deg, double *s, double *c);
 
-/* min over channels of T(ti) from a coarse quadrature (about 1e-4 absolute). */
+/* min over channels of T(ti) from a coarse quadrature (within 2.8e-3 absolute, worst
+   near the critical angle for n < 1: btdf_transmittance_coarse). */
 double btdf_transmittance_coarse(const btdf_params *p, double ti);
+
+/* T(ti) (refl = 0) or R(ti) (refl = 1) per channel, with the given panels of the
+   facet-slope and azimuth quadratures (16 x 12 is btdf_transmittance's converged rule);
+   ti in [0, pi/2] and p checked by the caller. */
+void bt_albedo_panels(const btdf_params *p, int refl, double ti, int u_panels,
+                      int psi_panels, double *out);
 
 /* min over channels of R(ti) from the same coarse quadrature. */
 double btdf_reflectance_coarse(const btdf_params *p, double ti);

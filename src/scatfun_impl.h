@@ -32,6 +32,18 @@
    no sample (pdf 0) instead of NaN. docs/scatfun.md, "Views on the normal". */
 #define POLE_NODE 0.999999940395355224609375
 
+/* T(ti) or R(ti) per channel (btdf_transmittance / btdf_reflectance), remembered by
+   the parameters and the exact angle, so the builder's repeated measurements of a file
+   (the same knot midpoints each time, each block read twice) compute each once.
+   Thread-safe; a value is the same whether it was remembered or computed. */
+typedef struct albedo_memo albedo_memo;
+albedo_memo *albedo_memo_new(void);
+void albedo_memo_free(albedo_memo *m);
+/* out[0..p->channels-1]; m may be NULL (computes). Returns btdf_transmittance's or
+   btdf_reflectance's status. */
+btdf_status albedo_memo_get(albedo_memo *m, const btdf_params *p, int refl, double ti,
+                            double *out);
+
 struct btdf_scatfun {
     uint32_t n, ncoeffs, mmax, channels;
     float eta, alpha[2];
@@ -46,6 +58,7 @@ struct btdf_scatfun {
     btdf_params params;
     double tolerance, seconds_build;
     int sides;         /* btdf_side mask of the blocks present */
+    albedo_memo *memo; /* T and R of the reports' test angles (NULL: computed each time) */
 };
 
 /* msg <- the formatted text (when msg and msglen); returns st. */

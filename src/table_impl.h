@@ -7,6 +7,7 @@
 
 #include "btdf.h"
 #include "model_impl.h"
+#include "scatfun_impl.h"
 
 typedef struct tslice {
     double ti;
@@ -140,7 +141,8 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
 btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_max,
                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
                                 int threads, const double *knots, size_t nknots,
-                                est_eval_fn fn, const void *obj, btdf_report *r);
+                                est_eval_fn fn, const void *obj, albedo_memo *memo,
+                                btdf_report *r);
 
 /* A whole per-angle estimate: fills res (zeroed, res->ti set) at incidence ti with p
    the truth's parameters, from the generator state rng (fixed by ti and the seed);
@@ -153,7 +155,8 @@ typedef size_t (*est_angle_fn)(const void *obj, const btdf_params *p, double ti,
 btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
                                  size_t test_angles, size_t points_per_angle, uint64_t seed,
                                  int threads, const double *knots, size_t nknots,
-                                 est_angle_fn fn, const void *obj, btdf_report *r);
+                                 est_angle_fn fn, const void *obj, albedo_memo *memo,
+                                btdf_report *r);
 /* The same for an evaluation of the reflection: against rho_r (MODEL.md section 8)
    over the upper hemisphere, relative to max(R(ti), 0.01); q holds tr for to. */
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
