@@ -124,6 +124,10 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "<!-- Written by btdftab %s: Xu & Sun (2008) Eq. 25, the BTDF of a rough "
                "dielectric interface. Values are the BTDF in 1/sr (no cosine factor).\n",
             BTDF_VERSION_STRING);
+    if (r->channels == 3)
+        fprintf(f, "     Colour: R, G, B in Radiance's RGB (its default primaries, equal-energy "
+                   "white) for n = %.9g, %.9g, %.9g, written as CIE X, Y, Z.\n",
+                r->p.ior[0], r->p.ior[1], r->p.ior[2]);
     fprintf(f, "     In Radiance the surface normal points into the dense medium (index n = %.9g).\n"
                "     Transmission Front serves light from the dense side (leaving it, 1/n), "
                "Transmission Back light entering it (n);\n     Reflection Front light "
@@ -144,15 +148,22 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "</Name>\n\t\t<Manufacturer>btdftab %s</Manufacturer>\n", BTDF_VERSION_STRING);
     fprintf(f, "\t\t<Thickness unit=\"Millimeter\">0</Thickness>\n"
                "\t\t<DeviceType>Other</DeviceType>\n");
-    fprintf(f, "\t\t<Comments>Xu and Sun 2008 Eq. 25 rough interface: n = %.9g, s = %.9g, "
-               "k0 = %.9g; basis %s",
-            r->p.ior[0], r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
+    if (r->channels == 3)
+        fprintf(f, "\t\t<Comments>Xu and Sun 2008 Eq. 25 rough interface: n = %.9g (R), "
+                   "%.9g (G), %.9g (B) in Radiance's RGB, written as CIE X, Y, Z; s = %.9g, "
+                   "k0 = %.9g; basis %s",
+                r->p.ior[0], r->p.ior[1], r->p.ior[2], r->p.smoothness, r->p.k0,
+                rad_basis_name(r->basis));
+    else
+        fprintf(f, "\t\t<Comments>Xu and Sun 2008 Eq. 25 rough interface: n = %.9g, s = %.9g, "
+                   "k0 = %.9g; basis %s",
+                r->p.ior[0], r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
     if (tree)
         fprintf(f, ", tolerance %g", r->tolerance);
     if (r->reported)
         for (int k = 0; k < r->nblocks; k++)
-            fprintf(f, "; %s: e_L1 max %.4g, e_T max %.4g as Radiance reads it", r->b[k].label,
-                    r->e_l1[k], r->e_t[k]);
+            fprintf(f, "; %s: e_L1 max %.4g, e_T max %.4g as Radiance reads it%s", r->b[k].label,
+                    r->e_l1[k], r->e_t[k], r->channels == 3 ? " (the worst of R, G, B)" : "");
     fprintf(f, "</Comments>\n\t</Material>\n");
     fprintf(f, "\t<DataDefinition>\n");
     if (tree) {
@@ -162,40 +173,49 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
         put_klems_basis(f, r->kb);
     }
     fprintf(f, "\t</DataDefinition>\n");
-    fprintf(f, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
-               "\t\t<Wavelength unit=\"Integral\">Visible</Wavelength>\n"
-               "\t\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
-               "\t\t<DetectorSpectrum>ASTM E308 1931 Y.dsp</DetectorSpectrum>\n");
-    for (int k = 0; k < r->nblocks; k++) {
-        const rad_block *b = &r->b[k];
-        fprintf(f, "\t\t<WavelengthDataBlock>\n\t\t\t<WavelengthDataDirection>%s"
-                   "</WavelengthDataDirection>\n",
-                b->label);
-        if (tree) {
-            fprintf(f, "\t\t\t<AngleBasis>LBNL/Shirley-Chiu</AngleBasis>\n");
-        } else {
-            fprintf(f, "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
-                       "\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n",
-                    r->kb->name, r->kb->name);
-        }
-        fprintf(f, "\t\t\t<ScatteringDataType>BTDF</ScatteringDataType>\n"
-                   "\t\t\t<ScatteringData>\n");
-        if (tree) {
-            put_node(f, b->nodes, 0);
-        } else {
-            size_t np = (size_t)r->kb->npatch;
-            for (size_t o = 0; o < np; o++) { /* one row per outgoing patch */
-                for (size_t i = 0; i < np; i++) {
-                    if (i)
-                        fputc(' ', f);
-                    put_value(f, b->klems[o * np + i]);
-                }
-                fputc('\n', f);
+    /* One WavelengthData per channel: Visible (CIE Y), and for colour CIE-X and CIE-Z
+       (renderer-formats.md 3.4), each with the four blocks. */
+    static const char *const wl[3] = {"Visible", "CIE-X", "CIE-Z"};
+    static const char *const det[3] = {"Y", "X", "Z"};
+    for (int ch = 0; ch < (r->channels == 3 ? 3 : 1); ch++) {
+        fprintf(f, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
+                   "\t\t<Wavelength unit=\"Integral\">%s</Wavelength>\n"
+                   "\t\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
+                   "\t\t<DetectorSpectrum>ASTM E308 1931 %s.dsp</DetectorSpectrum>\n",
+                wl[ch], det[ch]);
+        for (int k = 0; k < r->nblocks; k++) {
+            const rad_block *b = &r->b[k];
+            fprintf(f, "\t\t<WavelengthDataBlock>\n\t\t\t<WavelengthDataDirection>%s"
+                       "</WavelengthDataDirection>\n",
+                    b->label);
+            if (tree) {
+                fprintf(f, "\t\t\t<AngleBasis>LBNL/Shirley-Chiu</AngleBasis>\n");
+            } else {
+                fprintf(f, "\t\t\t<ColumnAngleBasis>%s</ColumnAngleBasis>\n"
+                           "\t\t\t<RowAngleBasis>%s</RowAngleBasis>\n",
+                        r->kb->name, r->kb->name);
             }
+            fprintf(f, "\t\t\t<ScatteringDataType>BTDF</ScatteringDataType>\n"
+                       "\t\t\t<ScatteringData>\n");
+            if (tree) {
+                put_node(f, b->nodes, 0);
+            } else {
+                const float *m = ch == 0 ? b->klems : (ch == 1 ? b->klems_x : b->klems_z);
+                size_t np = (size_t)r->kb->npatch;
+                for (size_t o = 0; o < np; o++) { /* one row per outgoing patch */
+                    for (size_t i = 0; i < np; i++) {
+                        if (i)
+                            fputc(' ', f);
+                        put_value(f, m[o * np + i]);
+                    }
+                    fputc('\n', f);
+                }
+            }
+            fprintf(f, "\t\t\t</ScatteringData>\n\t\t</WavelengthDataBlock>\n");
         }
-        fprintf(f, "\t\t\t</ScatteringData>\n\t\t</WavelengthDataBlock>\n");
+        fprintf(f, "\t</WavelengthData>\n");
     }
-    fprintf(f, "\t</WavelengthData>\n</Layer>\n</Optical>\n</WindowElement>\n");
+    fprintf(f, "</Layer>\n</Optical>\n</WindowElement>\n");
     return ferror(f) ? BTDF_EIO : BTDF_OK;
 }
 

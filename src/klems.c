@@ -49,13 +49,16 @@
 
 static const double full_t[] = {0, 5, 15, 25, 35, 45, 55, 65, 75, 90};
 static const int full_n[] = {1, 8, 16, 20, 24, 24, 24, 16, 12};
-static const double half_t[] = {0, 6.5, 19.5, 32.5, 46.5, 61.5, 76.5, 90};
-static const int half_n[] = {1, 8, 12, 16, 20, 12, 4};
-static const double quarter_t[] = {0, 9, 27, 46, 66, 90};
+/* The half and quarter bases as Radiance knows them by name (its bsdf_m.c, since its
+   2022 change "corrected Klems half and quarter bases to match WINDOW"): for a name it
+   knows, Radiance reads the matrix with its own bands and ignores the file's blocks. */
+static const double half_t[] = {0, 6.5, 19.5, 32.5, 45.5, 58.5, 71.5, 90};
+static const int half_n[] = {1, 8, 12, 16, 20, 12, 8};
+static const double quarter_t[] = {0, 9, 27, 45, 63, 90};
 static const int quarter_n[] = {1, 8, 12, 12, 8};
 
 static const rad_klems_basis kb_full = {"LBNL/Klems Full", 9, full_t, full_n, 145};
-static const rad_klems_basis kb_half = {"LBNL/Klems Half", 7, half_t, half_n, 73};
+static const rad_klems_basis kb_half = {"LBNL/Klems Half", 7, half_t, half_n, 77};
 static const rad_klems_basis kb_quarter = {"LBNL/Klems Quarter", 5, quarter_t, quarter_n, 41};
 
 const rad_klems_basis *rad_klems(rad_basis b)
@@ -323,16 +326,14 @@ static void kl_column(void *arg, size_t i)
     free(col);
 }
 
-btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
-                            const rad_klems_basis *kb,
-                            int threads, rad_block *blk, char *msg, size_t msglen)
+btdf_status rad_klems_acc(const btdf_params *p, double n, double scale, int reflect,
+                          const rad_klems_basis *kb, int threads, double **out, char *msg,
+                          size_t msglen)
 {
     size_t np = (size_t)kb->npatch;
-    kl_job j = {p, n, scale, kb, blk->reflect, malloc(np * np * sizeof(double))};
-    float *m = malloc(np * np * sizeof *m);
-    if (!j.acc || !m) {
-        free(j.acc);
-        free(m);
+    kl_job j = {p, n, scale, kb, reflect, malloc(np * np * sizeof(double))};
+    *out = NULL;
+    if (!j.acc) {
         if (msg && msglen)
             snprintf(msg, msglen, "out of memory for a %zu x %zu Klems matrix", np, np);
         return BTDF_ENOMEM;
@@ -343,16 +344,41 @@ btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
     for (size_t k = 0; k < np * np; k++) {
         if (isnan(j.acc[k])) {
             free(j.acc);
-            free(m);
             if (msg && msglen)
                 snprintf(msg, msglen, "out of memory integrating the Klems matrix");
             return BTDF_ENOMEM;
         }
-        char t[32];
-        snprintf(t, sizeof t, "%.6g", j.acc[k]);
-        m[k] = (float)strtod(t, NULL); /* the value exactly as the file holds it */
     }
-    free(j.acc);
+    *out = j.acc;
+    return BTDF_OK;
+}
+
+float rad_klems_value(double v)
+{
+    char t[32];
+    snprintf(t, sizeof t, "%.6g", v);
+    return (float)strtod(t, NULL); /* the value exactly as the file holds it */
+}
+
+btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
+                            const rad_klems_basis *kb,
+                            int threads, rad_block *blk, char *msg, size_t msglen)
+{
+    size_t np = (size_t)kb->npatch;
+    double *acc = NULL;
+    btdf_status st = rad_klems_acc(p, n, scale, blk->reflect, kb, threads, &acc, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    float *m = malloc(np * np * sizeof *m);
+    if (!m) {
+        free(acc);
+        if (msg && msglen)
+            snprintf(msg, msglen, "out of memory for a %zu x %zu Klems matrix", np, np);
+        return BTDF_ENOMEM;
+    }
+    for (size_t k = 0; k < np * np; k++)
+        m[k] = rad_klems_value(acc[k]);
+    free(acc);
     blk->klems = m;
     return BTDF_OK;
 }

@@ -29,6 +29,95 @@ BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b) { return rad_basis_na
 
 BTDF_API int btdf_rad_block_count(const btdf_rad *r) { return r ? r->nblocks : 0; }
 
+BTDF_API int btdf_rad_channels(const btdf_rad *r) { return r ? (r->channels == 3 ? 3 : 1) : 0; }
+
+/* ------------------------------------------------------------------ colour */
+
+/* Radiance renders in its own RGB: the primaries of its color.h when built without
+   NTSC_RGB or SHARP_RGB ("nominal CRT primaries"), with an equal-energy white:
+   chromaticities (x, y) R (0.640, 0.330), G (0.290, 0.600), B (0.150, 0.060), white
+   (1/3, 1/3). A three-channel file's R, G, B are in that space, so that rtrace's R, G, B
+   are the three channels and equal channels are white (docs/radiance.md "Colour"). */
+static const double rad_prim[4][2] = {{0.640, 0.330}, {0.290, 0.600}, {0.150, 0.060},
+                                      {1.0 / 3.0, 1.0 / 3.0}};
+
+static void inv3(double a[3][3], double o[3][3])
+{
+    double c00 = a[1][1] * a[2][2] - a[1][2] * a[2][1];
+    double c01 = a[1][2] * a[2][0] - a[1][0] * a[2][2];
+    double c02 = a[1][0] * a[2][1] - a[1][1] * a[2][0];
+    /* only for the primaries' matrices: three chromaticities not on one line, so
+       det != 0 (a triangle of area 0.1 or so in (x, y)) */
+    double d = a[0][0] * c00 + a[0][1] * c01 + a[0][2] * c02;
+    o[0][0] = c00 / d;
+    o[1][0] = c01 / d;
+    o[2][0] = c02 / d;
+    o[0][1] = (a[0][2] * a[2][1] - a[0][1] * a[2][2]) / d;
+    o[1][1] = (a[0][0] * a[2][2] - a[0][2] * a[2][0]) / d;
+    o[2][1] = (a[0][1] * a[2][0] - a[0][0] * a[2][1]) / d;
+    o[0][2] = (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / d;
+    o[1][2] = (a[0][2] * a[1][0] - a[0][0] * a[1][2]) / d;
+    o[2][2] = (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / d;
+}
+
+/* Column j of the matrix is primary j's XYZ at luminance S_j: (x/y, 1, z/y) S_j, the
+   S_j chosen so that R = G = B = 1 gives the white's XYZ at Y = 1, here (1, 1, 1). */
+void rad_rgb_to_xyz(double m[3][3])
+{
+    double p[3][3], ip[3][3], w[3];
+    for (int j = 0; j < 3; j++) {
+        double x = rad_prim[j][0], y = rad_prim[j][1];
+        p[0][j] = x / y; /* y > 0 for every primary */
+        p[1][j] = 1.0;
+        p[2][j] = (1.0 - x - y) / y;
+    }
+    double xw = rad_prim[3][0], yw = rad_prim[3][1];
+    w[0] = xw / yw;
+    w[1] = 1.0;
+    w[2] = (1.0 - xw - yw) / yw;
+    inv3(p, ip);
+    for (int j = 0; j < 3; j++) {
+        double sj = ip[j][0] * w[0] + ip[j][1] * w[1] + ip[j][2] * w[2];
+        for (int i = 0; i < 3; i++)
+            m[i][j] = p[i][j] * sj;
+    }
+}
+
+void rad_xyz_to_rgb(double m[3][3])
+{
+    double a[3][3];
+    rad_rgb_to_xyz(a);
+    inv3(a, m);
+}
+
+BTDF_API void btdf_rad_rgb_to_xyz(double m[3][3]) { rad_rgb_to_xyz(m); }
+
+/* Block k's geometry for the index nc (radiance.h: what each block holds and why). */
+void rad_block_of(int k, double nc, rad_block *b)
+{
+    static const char *const labels[4] = {"Transmission Front", "Transmission Back",
+                                          "Reflection Front", "Reflection Back"};
+    b->label = labels[k];
+    b->reflect = k >= 2;
+    b->side = k % 2 == 0 ? BTDF_SIDE_ENTER : BTDF_SIDE_LEAVE;
+    b->n = k % 2 == 0 ? nc : 1.0 / nc;
+    /* transmission: p as incident, rho(n; p -> q) scaled to rho(n_light; q -> p) */
+    b->scale = k == 0 ? 1.0 / (nc * nc) : (k == 1 ? nc * nc : 1.0);
+    /* Reflection: p and q on one side, rho_r reciprocal: no swap, no scale. */
+    b->light = k == 0 || k == 3 ? BTDF_SIDE_LEAVE : BTDF_SIDE_ENTER;
+    b->n_light = b->light == BTDF_SIDE_ENTER ? nc : 1.0 / nc;
+}
+
+/* The index of the light block k serves, in channel c. */
+static double rad_n_light(const btdf_rad *r, int k, int c)
+{
+    rad_block b;
+    rad_block_of(k, r->p.ior[r->channels == 3 && c > 0 ? c : 0], &b);
+    return b.n_light;
+}
+
+static double rad_lookup_ch(const btdf_rad *r, int k, int c, const double p[3], const double q[3]);
+
 BTDF_API btdf_status btdf_rad_block(const btdf_rad *r, int k, btdf_rad_block_info *info)
 {
     if (!r || !info || k < 0 || k >= r->nblocks)
@@ -69,6 +158,8 @@ BTDF_API void btdf_rad_free(btdf_rad *r)
     for (int k = 0; k < RAD_MAX_BLOCKS; k++) {
         free(r->b[k].nodes);
         free(r->b[k].klems);
+        free(r->b[k].klems_x);
+        free(r->b[k].klems_z);
     }
     free(r);
 }
@@ -125,7 +216,8 @@ typedef struct rad_probes {
     double *ti, *T, *fl; /* per angle: light angle, T (or R) of the light, max(T, 0.01) */
     double *u0, *a, *b, *f;
     const btdf_rad *r;
-    int k;
+    int k, c;       /* block, channel (0 for one channel) */
+    double n_light; /* the index of the light the block serves, in channel c */
     const rad_node *nodes; /* the tree under test; NULL for a Klems block, whose value
                               as Radiance reads it is stored in u0 (a, b unused) */
     btdf_ti_error *res;
@@ -187,17 +279,17 @@ static void probe_angle(void *arg, size_t i)
             double phi = 2.0 * M_PI * ((double)ph + rad_unif(&z)) / (double)pr->nphi;
             double st = sqrt(u1), to = asin(st), f;
             if (b->reflect) {
-                f = btdf_rho_r(b->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
+                f = btdf_rho_r(pr->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
             } else {
                 to = M_PI - to;
-                f = btdf_rho(b->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
+                f = btdf_rho(pr->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
             }
             double pv[3], qv[3];
             render_dirs(r, pr->k, ti, to, phi, pv, qv);
             if (r->basis == RAD_BASIS_TREE3) {
                 tree_coords(pv, qv, &pr->u0[j], &pr->a[j], &pr->b[j]);
             } else {
-                pr->u0[j] = btdf_rad_lookup(r, pr->k, pv, qv);
+                pr->u0[j] = rad_lookup_ch(r, pr->k, pr->c, pv, qv);
                 pr->a[j] = pr->b[j] = 0.0;
             }
             pr->f[j] = f;
@@ -205,10 +297,13 @@ static void probe_angle(void *arg, size_t i)
     }
 }
 
-static btdf_status rad_probes_make(const btdf_rad *r, int k, double ti_max, size_t m, size_t ns,
-                                   size_t nphi, uint64_t seed, int threads, rad_probes *pr)
+static btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_max, size_t m,
+                                   size_t ns, size_t nphi, uint64_t seed, int threads,
+                                   rad_probes *pr)
 {
     memset(pr, 0, sizeof *pr);
+    pr->c = c;
+    pr->n_light = rad_n_light(r, k, c);
     pr->ti_max = ti_max;
     /* e_L1 jumps where a light's ring passes from one cell to the next in r, at
        r = j / 2^(L-1) for a cell of level L; a stratified set misses narrow peaks
@@ -239,7 +334,7 @@ static btdf_status rad_probes_make(const btdf_rad *r, int k, double ti_max, size
     pr->f = pr->b + n;
     btdf_params q = r->p;
     q.channels = 1;
-    q.ior[0] = r->b[k].n_light;
+    q.ior[0] = pr->n_light;
     uint64_t z = seed;
     for (size_t i = 0; i < m; i++) {
         if (i < m - extra) {
@@ -313,8 +408,8 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
 {
     rad_block *b = &r->b[k];
     rad_probes pr;
-    btdf_status st = rad_probes_make(r, k, RAD_TI_CHECKED, RAD_CHECK_ANGLES, RAD_CHECK_S, RAD_CHECK_PHI,
-                                     RAD_CHECK_SEED, threads, &pr);
+    btdf_status st = rad_probes_make(r, k, 0, RAD_TI_CHECKED, RAD_CHECK_ANGLES, RAD_CHECK_S,
+                                     RAD_CHECK_PHI, RAD_CHECK_SEED, threads, &pr);
     if (st != BTDF_OK)
         return st;
     btdf_ti_error *res = malloc(pr.m * sizeof *res);
@@ -414,6 +509,61 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
     return st;
 }
 
+/* Block k of a three-channel Klems file: each channel's exact patch-pair averages (in
+   double, before rounding), combined linearly into CIE X, Y and Z (averaging is
+   linear, so each XYZ matrix is the average of the XYZ BSDF), then rounded for the file
+   each on its own. Channels with equal indices are integrated once. */
+btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t msglen)
+{
+    rad_block *b = &r->b[k];
+    size_t np = (size_t)r->kb->npatch, nn = np * np;
+    double *acc[3] = {NULL, NULL, NULL}, m[3][3];
+    btdf_status st = BTDF_OK;
+    rad_rgb_to_xyz(m);
+    for (int c = 0; c < 3 && st == BTDF_OK; c++) {
+        int same = -1;
+        for (int d = 0; d < c; d++)
+            if (r->p.ior[d] == r->p.ior[c])
+                same = d;
+        if (same >= 0) {
+            acc[c] = acc[same];
+            continue;
+        }
+        rad_block bc;
+        rad_block_of(k, r->p.ior[c], &bc);
+        st = rad_klems_acc(&r->p, bc.n, bc.scale, bc.reflect, r->kb, threads, &acc[c], msg,
+                           msglen);
+    }
+    float *out[3] = {NULL, NULL, NULL};
+    for (int i = 0; i < 3 && st == BTDF_OK; i++) {
+        out[i] = malloc(nn * sizeof *out[i]);
+        if (!out[i]) {
+            st = btdf_say(BTDF_ENOMEM, msg, msglen, "out of memory for a Klems matrix");
+            break;
+        }
+        for (size_t e = 0; e < nn; e++) {
+            double v = m[i][0] * acc[0][e] + m[i][1] * acc[1][e] + m[i][2] * acc[2][e];
+            out[i][e] = rad_klems_value(v);
+        }
+    }
+    for (int c = 0; c < 3; c++) {
+        int shared = 0;
+        for (int d = 0; d < c; d++)
+            shared |= acc[d] == acc[c];
+        if (!shared)
+            free(acc[c]);
+    }
+    if (st != BTDF_OK) {
+        for (int i = 0; i < 3; i++)
+            free(out[i]);
+        return st;
+    }
+    b->klems_x = out[0];
+    b->klems = out[1];
+    b->klems_z = out[2];
+    return BTDF_OK;
+}
+
 BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basis basis,
                                              double tolerance, int threads,
                                              btdf_progress_fn progress, void *user,
@@ -422,14 +572,19 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     btdf_status st = btdf_params_check(p, msg, msglen);
     if (st != BTDF_OK)
         return st;
-    if (p->channels != 1) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "a Radiance BSDF file holds one channel (Visible): give one "
-                                  "--ior value, not %d", p->channels);
-        return BTDF_EINVAL;
-    }
     if ((unsigned)basis > RAD_BASIS_KLEMS_QUARTER)
         return BTDF_EINVAL;
+    if (p->channels != 1 && !(p->channels == 3 && basis != RAD_BASIS_TREE3)) {
+        if (msg && msglen)
+            snprintf(msg, msglen, p->channels == 3
+                     ? "three --ior values (colour) are written to Klems files only "
+                       "(--basis klems-full, klems-half or klems-quarter): a tensor tree "
+                       "in colour (CIE-u, CIE-v trees) is not implemented"
+                     : "a Radiance BSDF file holds one channel (Visible) or three (R, G, "
+                       "B as CIE X, Y, Z): give one or three --ior values, not %d",
+                     p->channels);
+        return BTDF_EINVAL;
+    }
     if (basis == RAD_BASIS_TREE3 && !(tolerance >= 1e-3 && tolerance <= 0.5)) {
         if (msg && msglen)
             snprintf(msg, msglen, "tolerance %g: a tensor tree takes [1e-3, 0.5]", tolerance);
@@ -444,41 +599,18 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     r->tolerance = basis == RAD_BASIS_TREE3 ? tolerance : 0.0;
     r->kb = rad_klems(basis);
     r->nblocks = 4; /* both transmissions and both reflections, in every basis */
-    double n = p->ior[0];
-    r->b[0].side = BTDF_SIDE_ENTER; /* radiance.h: what each block holds and why */
-    r->b[0].label = "Transmission Front";
-    r->b[0].n = n;
-    r->b[0].scale = 1.0 / (n * n);
-    r->b[0].light = BTDF_SIDE_LEAVE;
-    r->b[0].n_light = 1.0 / n;
-    r->b[1].side = BTDF_SIDE_LEAVE;
-    r->b[1].label = "Transmission Back";
-    r->b[1].n = 1.0 / n;
-    r->b[1].scale = n * n;
-    r->b[1].light = BTDF_SIDE_ENTER;
-    r->b[1].n_light = n;
-    /* Reflection: p and q on one side, rho_r reciprocal: no swap, no scale. */
-    r->b[2].side = BTDF_SIDE_ENTER;
-    r->b[2].label = "Reflection Front";
-    r->b[2].reflect = 1;
-    r->b[2].n = n;
-    r->b[2].scale = 1.0;
-    r->b[2].light = BTDF_SIDE_ENTER;
-    r->b[2].n_light = n;
-    r->b[3].side = BTDF_SIDE_LEAVE;
-    r->b[3].label = "Reflection Back";
-    r->b[3].reflect = 1;
-    r->b[3].n = 1.0 / n;
-    r->b[3].scale = 1.0;
-    r->b[3].light = BTDF_SIDE_LEAVE;
-    r->b[3].n_light = 1.0 / n;
+    r->channels = p->channels;
+    for (int k = 0; k < r->nblocks; k++)
+        rad_block_of(k, p->ior[0], &r->b[k]);
     for (int k = 0; k < r->nblocks && (st == BTDF_OK || st == BTDF_EBUDGET); k++) {
         rad_block *b = &r->b[k];
         if (basis != RAD_BASIS_TREE3) {
             if (progress)
                 progress(user, "Klems patch averages, block", (size_t)k,
                          (size_t)(r->nblocks - k));
-            st = rad_klems_build(p, b->n, b->scale, r->kb, threads, b, msg, msglen);
+            st = r->channels == 3 ? rad_klems_colour(r, k, threads, msg, msglen)
+                                  : rad_klems_build(p, b->n, b->scale, r->kb, threads, b, msg,
+                                                    msglen);
             continue;
         }
         btdf_status sk = rad_tree_block(r, k, threads, progress, user, msg, msglen);
@@ -506,21 +638,25 @@ static void tree_coords(const double p[3], const double q[3], double *u0, double
 
 static double deg(double r) { return r * (180.0 / M_PI); }
 
-BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
-                                const double q[3])
+/* The file's X, Y, Z at (p, q) in block k (a one-channel file: Y in all three, the
+   equal-energy white Radiance gives a grey file); 0 when off the block. */
+static void rad_lookup_xyz(const btdf_rad *r, int k, const double p[3], const double q[3],
+                           double xyz[3])
 {
+    xyz[0] = xyz[1] = xyz[2] = 0.0;
     if (!r || k < 0 || k >= r->nblocks)
-        return 0.0;
+        return;
     const rad_block *b = &r->b[k];
     /* Transmission Front and Reflection Front: p on -Z; the Back blocks: p on +Z; q on
        the other side (transmission) or the same (reflection) */
     double sg = b->side == BTDF_SIDE_ENTER ? -1.0 : 1.0, sq = b->reflect ? sg : -sg;
     if (!(sg * p[2] > 0.0 && sq * q[2] > 0.0))
-        return 0.0;
+        return;
     if (r->basis == RAD_BASIS_TREE3) {
         double u0, a, bb;
         tree_coords(p, q, &u0, &a, &bb);
-        return rad_tree_lookup(b->nodes, u0, a, bb);
+        xyz[0] = xyz[1] = xyz[2] = rad_tree_lookup(b->nodes, u0, a, bb);
+        return;
     }
     /* Klems: incident patch of p's direction of travel (-p), outgoing patch of q, both by
        the polar angle from their own side's normal: Radiance's bsdf_m.c rule for every
@@ -529,34 +665,71 @@ BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
     int i = rad_klems_patch(r->kb, deg(acos(fmin(1.0, fabs(p[2])))), deg(atan2(-p[1], -p[0])));
     int o = rad_klems_patch(r->kb, deg(acos(fmin(1.0, fabs(q[2])))), deg(atan2(q[1], q[0])));
     if (i < 0 || o < 0)
-        return 0.0;
-    return b->klems[(size_t)o * (size_t)r->kb->npatch + (size_t)i];
+        return;
+    size_t e = (size_t)o * (size_t)r->kb->npatch + (size_t)i;
+    xyz[1] = b->klems[e];
+    xyz[0] = b->klems_x ? b->klems_x[e] : xyz[1];
+    xyz[2] = b->klems_z ? b->klems_z[e] : xyz[1];
 }
 
-double btdf_rad_render(const btdf_rad *r, btdf_side light, double ti, double to, double phi)
+/* Channel c (R, G, B: 0, 1, 2) of the file at (p, q), recovered from its X, Y, Z; -1:
+   its Y. A one-channel file: its value for c = 0 or -1. */
+static double rad_lookup_ch(const btdf_rad *r, int k, int c, const double p[3], const double q[3])
+{
+    double xyz[3], m[3][3];
+    rad_lookup_xyz(r, k, p, q, xyz);
+    if (c < 0 || !r || r->channels != 3)
+        return xyz[1];
+    rad_xyz_to_rgb(m);
+    return m[c][0] * xyz[0] + m[c][1] * xyz[1] + m[c][2] * xyz[2];
+}
+
+BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
+                                const double q[3])
+{
+    return rad_lookup_ch(r, k, -1, p, q);
+}
+
+BTDF_API void btdf_rad_lookup_xyz(const btdf_rad *r, int k, const double p[3],
+                                  const double q[3], double xyz[3])
+{
+    rad_lookup_xyz(r, k, p, q, xyz);
+}
+
+BTDF_API double btdf_rad_lookup_channel(const btdf_rad *r, int k, int c, const double p[3],
+                                        const double q[3])
+{
+    if (!r || c < 0 || c >= (r->channels == 3 ? 3 : 1))
+        return 0.0;
+    return rad_lookup_ch(r, k, c, p, q);
+}
+
+double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti, double to,
+                       double phi)
 {
     int k = light == BTDF_SIDE_LEAVE ? 0 : 1; /* the block of the view's side */
     double p[3], q[3];
     render_dirs(r, k, ti, to, phi, p, q);
-    return btdf_rad_lookup(r, k, p, q);
+    return rad_lookup_ch(r, k, c, p, q);
 }
 
 typedef struct rad_est {
     const btdf_rad *r;
     btdf_side light;
+    int c;
 } rad_est;
 
 static void rad_est_fn(const void *obj, double ti, const double *q, double *out)
 {
     const rad_est *e = obj;
     /* q = {sin ti, cos ti, sin to, cos to, cos phi, sin phi, |phi|, to} */
-    out[0] = btdf_rad_render(e->r, e->light, ti, q[7], atan2(q[5], q[4]));
+    out[0] = btdf_rad_render(e->r, e->light, e->c, ti, q[7], atan2(q[5], q[4]));
 }
 
 /* A reflection block's report: the probe estimate (stratified light angles over 0-90
    degrees, views stratified in projected solid angle) against rho_r, since the
    transmission estimator follows Eq. 25's lobe. */
-static btdf_status rad_reflect_report(const btdf_rad *r, int k, size_t test_angles,
+static btdf_status rad_reflect_report(const btdf_rad *r, int k, int c, size_t test_angles,
                                       size_t points_per_angle, uint64_t seed, int threads,
                                       btdf_report *rep)
 {
@@ -565,7 +738,7 @@ static btdf_status rad_reflect_report(const btdf_rad *r, int k, size_t test_angl
     size_t ns = (size_t)sqrt((double)ppa / 2.0);
     ns = ns < 4 ? 4 : ns;
     rad_probes pr;
-    btdf_status st = rad_probes_make(r, k, M_PI / 2, m, ns, 2 * ns, seed, threads, &pr);
+    btdf_status st = rad_probes_make(r, k, c, M_PI / 2, m, ns, 2 * ns, seed, threads, &pr);
     if (st != BTDF_OK)
         return st;
     memset(rep, 0, sizeof *rep);
@@ -608,14 +781,21 @@ BTDF_API btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angle
                                      size_t points_per_angle, uint64_t seed, int threads,
                                      btdf_report *rep)
 {
-    if (!r || !rep || k < 0 || k >= r->nblocks)
+    return btdf_rad_report_channel(r, k, 0, test_angles, points_per_angle, seed, threads, rep);
+}
+
+BTDF_API btdf_status btdf_rad_report_channel(const btdf_rad *r, int k, int c,
+                                             size_t test_angles, size_t points_per_angle,
+                                             uint64_t seed, int threads, btdf_report *rep)
+{
+    if (!r || !rep || k < 0 || k >= r->nblocks || c < 0 || c >= (r->channels == 3 ? 3 : 1))
         return BTDF_EINVAL;
     if (r->b[k].reflect)
-        return rad_reflect_report(r, k, test_angles, points_per_angle, seed, threads, rep);
+        return rad_reflect_report(r, k, c, test_angles, points_per_angle, seed, threads, rep);
     btdf_params q = r->p;
     q.channels = 1;
-    q.ior[0] = r->b[k].n_light;
-    rad_est e = {r, r->b[k].light};
+    q.ior[0] = rad_n_light(r, k, c);
+    rad_est e = {r, r->b[k].light, r->channels == 3 ? c : -1};
     btdf_status st = btdf_estimate_fn(&q, 0.0, M_PI / 2, test_angles, points_per_angle, seed,
                                       threads, rad_est_fn, &e, rep);
     if (st == BTDF_OK) {

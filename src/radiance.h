@@ -70,14 +70,17 @@ typedef struct rad_block {
     rad_node *nodes;
     size_t nnodes, leaves;
     int depth;
-    /* Klems: values[out * npatch + in], the file's row-major order */
+    /* Klems: values[out * npatch + in], the file's row-major order: CIE Y ("Visible");
+       with three channels also CIE X and Z (NULL for one channel) */
     float *klems;
+    float *klems_x, *klems_z;
 } rad_block;
 
 struct btdf_rad {
     rad_basis basis;
     btdf_params p;
     double tolerance;
+    int channels; /* 1 (Visible only) or 3 (R, G, B: Klems Y, X and Z matrices) */
     int nblocks;
     rad_block b[RAD_MAX_BLOCKS];
     const rad_klems_basis *kb; /* Klems bases only */
@@ -91,12 +94,19 @@ struct btdf_rad {
 const rad_klems_basis *rad_klems(rad_basis b);
 const char *rad_basis_name(rad_basis b);
 
+/* Radiance's own RGB (its default primaries, equal-energy white; docs/radiance.md
+   "Colour") to CIE XYZ: m[row X, Y, Z][column R, G, B], and its inverse. */
+void rad_rgb_to_xyz(double m[3][3]);
+void rad_xyz_to_rgb(double m[3][3]);
+
 
 
 /* What a render gets for light of the given side (ENTER: from -Z, LEAVE: from +Z) in
    that light's MODEL.md frame (ti in [0, pi/2], to in [pi/2, pi], phi): the block of
-   the view's side at (p = view, q = light). Compare with rho(n_light; ti, to, phi). */
-double btdf_rad_render(const btdf_rad *r, btdf_side light, double ti, double to, double phi);
+   the view's side at (p = view, q = light), channel c (-1: Y). Compare with
+   rho(n_light; ti, to, phi). */
+double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti, double to,
+                       double phi);
 
 /* The tolerance of a tree is met up to this incidence of the light (80 deg). A light at
    ti is the ring of radius sin ti of the tree's square, so the last 10 degrees lie in

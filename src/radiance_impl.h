@@ -36,6 +36,19 @@ btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
                             const rad_klems_basis *kb, int threads, rad_block *blk, char *msg,
                             size_t msglen);
 
+/* The same matrix in double, before it is rounded for the file (*out: malloc'd). */
+btdf_status rad_klems_acc(const btdf_params *p, double n, double scale, int reflect,
+                          const rad_klems_basis *kb, int threads, double **out, char *msg,
+                          size_t msglen);
+/* A Klems value exactly as the file holds it (6 significant digits, as a float). */
+float rad_klems_value(double v);
+
+/* Block k (0-3, radiance.h) for the index nc: label, sides, n, scale, n_light. */
+void rad_block_of(int k, double nc, rad_block *b);
+/* Block k of a three-channel Klems file r (r->p.ior[0..2], r->kb set): CIE X, Y, Z
+   matrices from the channels' exact averages combined linearly, each then rounded. */
+btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t msglen);
+
 /* Radiance's Klems patch of a direction given by its polar angle (degrees, [0, 90])
    and azimuth (degrees); -1 at theta = 90 or beyond. */
 int rad_klems_patch(const rad_klems_basis *kb, double theta_deg, double phi_deg);

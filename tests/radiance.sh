@@ -5,8 +5,9 @@
 # programs and BSDF library): the file loads with its four blocks (both transmissions
 # and both reflections, in the tree and the Klems file alike), Radiance's lookup equals
 # the report's probes for every block, and rtrace gives the hemispherical transmittance
-# (reflectance) within the report's e_T (tests/radiance_check.py). Also: bad --basis
-# values fail cleanly.
+# (reflectance) within the report's e_T (tests/radiance_check.py). A colour file (three
+# --ior values, Klems quarter basis: CIE X, Y, Z matrices) the same way, each of rtrace's
+# R, G, B against its channel. Also: bad --basis values and a colour tree fail cleanly.
 # Ends with "N passed, N failed".
 set -u
 B="$1"
@@ -30,16 +31,20 @@ if ! "$PY" -c 'import pyradiance' 2>/dev/null; then
     exit 1
 fi
 here=$(dirname "$0")
-for basis in tree3 klems-full; do
+# colour: indices far apart, so that the channels' colours are saturated enough to tell
+# Radiance's RGB primaries from others (with NTSC's the check's colour loss fails)
+for run in "tree3 1.5" "klems-full 1.5" "klems-quarter 1.2,1.5,2.2"; do
+    basis=${run% *}
+    ior=${run#* }
     tol=""
     [ "$basis" = tree3 ] && tol="--tolerance 0.2"
-    if "$B" tabulate -q --ior 1.5 -s 3 --basis "$basis" $tol -o "$W/glazing.xml" \
+    if "$B" tabulate -q --ior "$ior" -s 3 --basis "$basis" $tol -o "$W/glazing.xml" \
         --report "$W/glazing.json"; then
-        ok "tabulate --basis $basis -o glazing.xml"
+        ok "tabulate --ior $ior --basis $basis -o glazing.xml"
         "$PY" "$here/radiance_check.py" "$W/glazing.xml" "$W/glazing.json" | tee "$W/check.log"
         tally "$W/check.log"
     else
-        no "tabulate --basis $basis -o glazing.xml"
+        no "tabulate --ior $ior --basis $basis -o glazing.xml"
     fi
     rm -f "$W"/glazing.*
 done
@@ -49,8 +54,11 @@ done
 [ $? -eq 2 ] && grep -q "klems-eighth" "$W/err" && [ ! -e "$W/t.xml" ] &&
     ok "--basis klems-eighth: usage error naming the value" || no "--basis klems-eighth"
 "$B" tabulate --ior 1.5,1.6,1.7 -o "$W/t.xml" 2>"$W/err"
-[ $? -eq 2 ] && grep -q "one channel" "$W/err" && [ ! -e "$W/t.xml" ] &&
-    ok "three channels: usage error" || no "three channels to .xml"
+[ $? -eq 2 ] && grep -q "Klems files only" "$W/err" && [ ! -e "$W/t.xml" ] &&
+    ok "three channels to a tree: usage error" || no "three channels to a tree"
+"$B" tabulate --ior 1.5,1.6 --basis klems-quarter -o "$W/t.xml" 2>"$W/err"
+[ $? -eq 2 ] && grep -q "1 value or 3" "$W/err" && [ ! -e "$W/t.xml" ] &&
+    ok "two channels: usage error" || no "two channels to .xml"
 "$B" tabulate --basis klems-half -o "$W/t.csv" 2>"$W/err"
 [ $? -eq 2 ] && grep -q "\.xml output only" "$W/err" && [ ! -e "$W/t.csv" ] &&
     ok "--basis with a .csv: usage error" || no "--basis with a .csv"

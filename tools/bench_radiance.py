@@ -14,7 +14,8 @@ first. Prints a table: wall and CPU seconds (the children's user + system time) 
 run each on a shared machine, not medians; the file's size and the bytes of its
 "Transmission Back" block (the one block bsdf2ttree writes for this function, light
 entering), so that files with more blocks compare fairly. GROUPS: a comma list of
-"radiance" (bsdf2ttree, bsdf2klems) and "btdftab" (default both).
+"radiance" (bsdf2ttree, bsdf2klems), "btdftab" (its three trees and its Klems file) and
+"btdftab-klems" (its Klems file alone) (default "radiance,btdftab").
 """
 import re
 import resource
@@ -152,7 +153,7 @@ def main():
         jobs.append(("btdftab tree3 --tolerance %g" % tol,
                      [btdftab, "tabulate", "-q", "--basis", "tree3", "--tolerance", str(tol),
                       "-o", "bt_t%g.xml" % tol], "bt_t%g.xml" % tol))
-    if "btdftab" in groups:
+    if "btdftab" in groups or "btdftab-klems" in groups:
         jobs.append(("btdftab klems-full",
                      [btdftab, "tabulate", "-q", "--basis", "klems-full", "-o", "bt_kf.xml"],
                      "bt_kf.xml"))

@@ -49,7 +49,8 @@ const opt_def opt_table[] = {
      "enter (index n, default), leave (index 1/n); for .bsdf also both (the\n"
      "default there)"},
     {OPT_BASIS, "basis", 0, "B", 0, CMD_TABULATE,
-     ".xml: tree3 (TensorTree3, default), klems-full, klems-half or klems-quarter"},
+     ".xml: tree3 (TensorTree3, default), klems-full, klems-half or klems-quarter\n"
+     "(three --ior values, colour: Klems only)"},
     {OPT_THETA_I, "theta-i", 0, "A:B", 0, CMD_TABULATE,
      "incidence range in degrees (default 0:90)"},
     {OPT_THETA_O, "theta-o", 0, "A:B", 0, CMD_TABULATE,

@@ -352,54 +352,101 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
 /* The JSON report of a .xml: per block the error report and probes, the directions
    at which Radiance's own lookup must return the value the file holds. */
 #define RAD_PROBES 1000
+/* The report's own estimate of the file's integral is a sum too: each report is also
+   run at a quarter of the points (same seed, so the same stratified angles), and the
+   JSON gives that estimate beside it ("T_file_coarse", null at angles the coarse run
+   did not reach), from which a reader judges the estimate's own error. */
+#define RAD_COARSE 4
+static const char *const rad_ch_name[3] = {"R", "G", "B"};
 
+/* One report's summary and per-angle rows (4 spaces of indent for the fields). */
+static void rad_json_report(FILE *f, const btdf_report *r, const btdf_report *coarse,
+                            const char *ind)
+{
+    const double d2r = 3.14159265358979323846 / 180.0;
+    fprintf(f, "%s\"seconds_estimate\": %.6f, \"test_angles\": %zu, \"test_points\": %zu,\n",
+            ind, r->seconds_estimate, r->test_angles, r->test_points);
+    fprintf(f, "%s\"e_l1\": {\"max\": %.6g, \"max_to_%g_deg\": %.6g, \"mean\": %.6g},\n", ind,
+            r->e_l1_max, BTDF_RAD_TI_CHECKED_DEG, btdf_rad_e_l1_checked(r), r->e_l1_mean);
+    fprintf(f, "%s\"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n", ind,
+            r->e_max_max, r->e_max_mean, r->e_max_angles);
+    fprintf(f, "%s\"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n%s\"per_theta_i\": [\n", ind,
+            r->e_t_max, r->e_t_mean, ind);
+    for (size_t a = 0; a < r->test_angles; a++) {
+        const btdf_ti_error *e = &r->per_ti[a];
+        char tc[40] = "null";
+        for (size_t b = 0; coarse && b < coarse->test_angles; b++)
+            if (coarse->per_ti[b].ti == e->ti)
+                snprintf(tc, sizeof tc, "%.9g", coarse->per_ti[b].T_table);
+        fprintf(f,
+                "%s {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_file\": %.9g, \"T_file_coarse\": %s, "
+                "\"e_l1\": %.6g, \"e_t\": %.6g, \"e_max\": %.6g}%s\n",
+                ind, e->ti / d2r, e->T, e->T_table, tc, e->e_l1, e->e_t, e->e_max,
+                a + 1 < r->test_angles ? "," : "");
+    }
+    fprintf(f, "%s]", ind);
+}
+
+/* rep[k * 3 + c], coarse likewise: block k, channel c. */
 static void rad_json(FILE *f, const btdf_rad *x, const btdf_params *p, const btdf_report *rep,
-                     const char *prov)
+                     const btdf_report *coarse, const char *prov)
 {
     run_json_open(f, prov);
+    int nch = btdf_rad_channels(x);
     fprintf(f, "  \"format\": \"radiance-xml\",\n  \"basis\": \"%s\",\n",
             btdf_rad_basis_name(btdf_rad_get_basis(x)));
-    fprintf(f, "  \"ior\": [%.17g],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", p->ior[0],
-            p->smoothness, p->k0);
+    fprintf(f, "  \"ior\": [");
+    for (int c = 0; c < nch; c++)
+        fprintf(f, "%s%.17g", c ? ", " : "", p->ior[c]);
+    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", p->smoothness, p->k0);
+    if (nch == 3) {
+        double m[3][3];
+        btdf_rad_rgb_to_xyz(m);
+        fprintf(f, "  \"rgb_to_xyz\": [[%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g], "
+                   "[%.17g, %.17g, %.17g]],\n",
+                m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2]);
+    }
     fprintf(f, "  \"seconds_build\": %.6f,\n  \"blocks\": [\n", btdf_rad_seconds_build(x));
     const double d2r = 3.14159265358979323846 / 180.0;
     int nb = btdf_rad_block_count(x);
     for (int k = 0; k < nb; k++) {
-        const btdf_report *r = &rep[k];
         btdf_rad_block_info b;
         btdf_rad_block(x, k, &b);
         int refl = strncmp(b.label, "Reflection", 10) == 0;
         fprintf(f, "   {\"label\": \"%s\", \"side\": \"%s\", \"reflection\": %s, \"n\": %.17g,\n",
                 b.label, b.light == BTDF_SIDE_ENTER ? "enter" : "leave", refl ? "true" : "false",
                 b.n_light);
+        const btdf_report *r0 = &rep[k * 3];
         fprintf(f, "    \"values\": %zu, \"depth\": %d, \"tolerance\": %.9g, \"met\": %s,\n",
-                b.values, b.depth, r->tolerance, r->met ? "true" : "false");
-        fprintf(f, "    \"seconds_estimate\": %.6f, \"test_angles\": %zu, \"test_points\": %zu,\n",
-                r->seconds_estimate, r->test_angles, r->test_points);
-        fprintf(f, "    \"e_l1\": {\"max\": %.6g, \"max_to_%g_deg\": %.6g, \"mean\": %.6g},\n",
-                r->e_l1_max, BTDF_RAD_TI_CHECKED_DEG, btdf_rad_e_l1_checked(r), r->e_l1_mean);
-        fprintf(f, "    \"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n",
-                r->e_max_max, r->e_max_mean, r->e_max_angles);
-        fprintf(f, "    \"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n    \"per_theta_i\": [\n",
-                r->e_t_max, r->e_t_mean);
-        for (size_t a = 0; a < r->test_angles; a++) {
-            const btdf_ti_error *e = &r->per_ti[a];
-            fprintf(f,
-                    "     {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_file\": %.9g, \"e_l1\": %.6g, "
-                    "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
-                    e->ti / d2r, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
-                    a + 1 < r->test_angles ? "," : "");
+                b.values, b.depth, r0->tolerance, r0->met ? "true" : "false");
+        if (nch == 1) {
+            rad_json_report(f, r0, &coarse[k * 3], "    ");
+            fprintf(f, ",\n");
+        } else {
+            /* per channel: R, G, B recovered from the file's X, Y, Z, each against
+               Eq. 25 at its own index */
+            fprintf(f, "    \"channels\": [\n");
+            for (int c = 0; c < 3; c++) {
+                double nl = b.light == BTDF_SIDE_ENTER ? p->ior[c] : 1.0 / p->ior[c];
+                fprintf(f, "     {\"channel\": \"%s\", \"n\": %.17g,\n", rad_ch_name[c], nl);
+                rad_json_report(f, &rep[k * 3 + c], &coarse[k * 3 + c], "      ");
+                fprintf(f, "}%s\n", c < 2 ? "," : "");
+            }
+            fprintf(f, "    ],\n");
         }
         /* Probes [theta_p, phi_p, theta_q, phi_q, value, rho]: degrees (theta from +Z,
            phi from +X) in Radiance's frame; p on the block's side (the view), q the
            light (on the other side, or for a reflection block the same); value is what
            Radiance's lookup gives, rho Eq. 25 (or rho_r) for light from q to p. Half
            spread over the hemisphere, half near the straight-through (or specular)
-           direction. */
-        fprintf(f, "    ],\n    \"probes\": [\n");
+           direction. A three-channel file: value is the file's CIE Y and rho the Y of
+           the three channels' Eq. 25, then the file's X and Z follow. */
+        fprintf(f, "    \"probes\": [\n");
         uint64_t z = 0x9e3779b97f4a7c15ull * (uint64_t)(k + 1);
         /* p's side: the view's; for reflection the light's side too */
         double sg = (b.light == BTDF_SIDE_LEAVE) != refl ? -1.0 : 1.0;
+        double m[3][3];
+        btdf_rad_rgb_to_xyz(m);
         for (int i = 0; i < RAD_PROBES; i++) {
             double u[4];
             for (int d = 0; d < 4; d++) {
@@ -421,14 +468,23 @@ static void rad_json(FILE *f, const btdf_rad *x, const btdf_params *p, const btd
                             cos(th_p * d2r)};
             double qv[3] = {sin(th_q * d2r) * cos(pq * d2r), sin(th_q * d2r) * sin(pq * d2r),
                             cos(th_q * d2r)};
-            double v = btdf_rad_lookup(x, k, pv, qv);
+            double xyz[3];
+            btdf_rad_lookup_xyz(x, k, pv, qv, xyz);
             /* Eq. 25 for the light at q in its own frame (rho depends on cos phi only) */
-            double truth = refl ? btdf_rho_r(b.n_light, p->smoothness, p->k0, tq * d2r,
-                                             tp * d2r, (pp - pq) * d2r)
-                                : btdf_rho(b.n_light, p->smoothness, p->k0, tq * d2r,
+            double truth = 0.0;
+            for (int c = 0; c < nch; c++) {
+                double nl = b.light == BTDF_SIDE_ENTER ? p->ior[c] : 1.0 / p->ior[c];
+                double t = refl ? btdf_rho_r(nl, p->smoothness, p->k0, tq * d2r, tp * d2r,
+                                             (pp - pq) * d2r)
+                                : btdf_rho(nl, p->smoothness, p->k0, tq * d2r,
                                            (180.0 - tp) * d2r, (pp - pq) * d2r);
-            fprintf(f, "     [%.4f, %.4f, %.4f, %.4f, %.9g, %.9g]%s\n", th_p, pp, th_q, pq, v,
-                    truth, i + 1 < RAD_PROBES ? "," : "");
+                truth += nch == 1 ? t : m[1][c] * t;
+            }
+            fprintf(f, "     [%.4f, %.4f, %.4f, %.4f, %.9g, %.9g", th_p, pp, th_q, pq, xyz[1],
+                    truth);
+            if (nch == 3)
+                fprintf(f, ", %.9g, %.9g", xyz[0], xyz[2]);
+            fprintf(f, "]%s\n", i + 1 < RAD_PROBES ? "," : "");
         }
         fprintf(f, "    ]}%s\n", k + 1 < nb ? "," : "");
     }
@@ -455,33 +511,49 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
     size_t len = strlen(base) > 4 ? strlen(base) - 4 : strlen(base);
     snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1), base);
     btdf_rad_set_name(x, name);
-    btdf_report rep[4];
+    btdf_report rep[4 * 3], coarse[4 * 3];
     memset(rep, 0, sizeof rep);
-    int met = 1, code = 0, nb = btdf_rad_block_count(x);
+    memset(coarse, 0, sizeof coarse);
+    int met = 1, code = 0, nb = btdf_rad_block_count(x), nch = btdf_rad_channels(x);
     for (int k = 0; k < nb && code == 0; k++) {
         btdf_rad_block_info b;
         btdf_rad_block(x, k, &b);
-        btdf_status es = btdf_rad_report(x, k, 0, 0, REPORT_SEED, threads, &rep[k]);
-        if (es != BTDF_OK) {
-            code = fail(prog, 1, path, btdf_strerror(es));
-            break;
+        double el1 = 0.0, et = 0.0;
+        for (int c = 0; c < nch && code == 0; c++) {
+            btdf_report *rk = &rep[k * 3 + c];
+            btdf_status es = btdf_rad_report_channel(x, k, c, 0, 0, REPORT_SEED, threads, rk);
+            if (es == BTDF_OK && report) /* 8192 / RAD_COARSE points, the same angles */
+                es = btdf_rad_report_channel(x, k, c, 0, 8192 / RAD_COARSE, REPORT_SEED,
+                                             threads, &coarse[k * 3 + c]);
+            if (es != BTDF_OK) {
+                code = fail(prog, 1, path, btdf_strerror(es));
+                break;
+            }
+            el1 = fmax(el1, rk->e_l1_max);
+            et = fmax(et, rk->e_t_max);
+            met = met && rk->met;
+            if (k == 0 && c == 0)
+                run_progress_end(pr); /* the report lines replace the bar */
+            char chn[48] = "";
+            if (nch == 3)
+                snprintf(chn, sizeof chn, ", channel %s (n = %.6g)", rad_ch_name[c],
+                         p->ior[c]);
+            if (!quiet)
+                fprintf(stderr,
+                        "%s: %s: %s (light %s, as Radiance reads it%s): %zu %s; build %.3f s, "
+                        "estimate %.3f s (%zu angles, %zu points); e_L1 max %.3g (%.3g up to "
+                        "%g deg) mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
+                        prog, path, b.label,
+                        b.light == BTDF_SIDE_ENTER ? "entering, n" : "leaving, 1/n", chn,
+                        b.values, basis == BTDF_RAD_TREE3 ? "leaves" : "entries",
+                        btdf_rad_seconds_build(x), rk->seconds_estimate, rk->test_angles,
+                        rk->test_points, rk->e_l1_max, btdf_rad_e_l1_checked(rk),
+                        BTDF_RAD_TI_CHECKED_DEG, rk->e_l1_mean, rk->e_max_max, rk->e_t_max,
+                        basis != BTDF_RAD_TREE3 ? ""
+                                                : (rk->met ? "; tolerance met"
+                                                           : "; TOLERANCE NOT MET"));
         }
-        btdf_rad_set_errors(x, k, rep[k].e_l1_max, rep[k].e_t_max);
-        met = met && rep[k].met;
-        if (k == 0)
-            run_progress_end(pr); /* the report lines replace the bar */
-        if (!quiet)
-            fprintf(stderr,
-                    "%s: %s: %s (light %s, as Radiance reads it): %zu %s; build %.3f s, "
-                    "estimate %.3f s (%zu angles, %zu points); e_L1 max %.3g (%.3g up to %g "
-                    "deg) mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
-                    prog, path, b.label, b.light == BTDF_SIDE_ENTER ? "entering, n" : "leaving, 1/n",
-                    b.values, basis == BTDF_RAD_TREE3 ? "leaves" : "entries",
-                    btdf_rad_seconds_build(x), rep[k].seconds_estimate, rep[k].test_angles,
-                    rep[k].test_points, rep[k].e_l1_max, btdf_rad_e_l1_checked(&rep[k]),
-                    BTDF_RAD_TI_CHECKED_DEG, rep[k].e_l1_mean, rep[k].e_max_max, rep[k].e_t_max,
-                    basis != BTDF_RAD_TREE3 ? ""
-                                            : (rep[k].met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+        btdf_rad_set_errors(x, k, el1, et);
     }
     if (code == 0 && !met && !best_effort) {
         fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
@@ -496,7 +568,7 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
         if (!f) {
             code = fail(prog, 1, report, "out of memory");
         } else {
-            rad_json(f, x, p, rep, prov);
+            rad_json(f, x, p, rep, coarse, prov);
             if (fclose(f) != 0)
                 code = fail(prog, 1, report, "out of memory");
         }
@@ -517,8 +589,10 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
     }
     run_progress_end(pr); /* if no block was reported */
     free(buf);
-    for (int k = 0; k < 4; k++)
+    for (int k = 0; k < 4 * 3; k++) {
         btdf_report_clear(&rep[k]);
+        btdf_report_clear(&coarse[k]);
+    }
     btdf_rad_free(x);
     return code;
 }

@@ -30,7 +30,7 @@ typedef struct btdf_rad btdf_rad;
 typedef enum {
     BTDF_RAD_TREE3 = 0,        /* TensorTree3 (Shirley-Chiu), adaptive, to a tolerance */
     BTDF_RAD_KLEMS_FULL = 1,   /* 145 x 145 patch-pair averages */
-    BTDF_RAD_KLEMS_HALF = 2,   /* 73 x 73 */
+    BTDF_RAD_KLEMS_HALF = 2,   /* 77 x 77 */
     BTDF_RAD_KLEMS_QUARTER = 3 /* 41 x 41 */
 } btdf_rad_basis;
 
@@ -38,12 +38,13 @@ typedef enum {
 BTDF_API int btdf_rad_basis_parse(const char *s, btdf_rad_basis *b);
 BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b);
 
-/* Builds the blocks for one channel. tree3: the two transmission and two reflection
+/* Builds the blocks. tree3: the two transmission and two reflection
    blocks, leaves whose e_L1 (MODEL.md 6) as Radiance reads them meets tolerance
    ([1e-3, 0.5]) for light up to BTDF_RAD_TI_CHECKED_DEG, checked by estimates of its
    own; Klems: the same four blocks, exact patch averages (tolerance ignored).
    threads: 0 = all cores; the result does not depend on it. BTDF_OK; BTDF_EBUDGET when the tolerance could not be met (*out holds the best
-   file); BTDF_EINVAL (parameters, more than one channel, tolerance); BTDF_ENOMEM. */
+   file); BTDF_EINVAL (parameters, two channels, three with a tree, tolerance); BTDF_ENOMEM.
+   Three channels (Klems): per block CIE X, Y, Z matrices (docs/radiance.md "Colour"). */
 #define BTDF_RAD_TI_CHECKED_DEG 80.0
 BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
                                     double tolerance, int threads, btdf_rad **out, char *msg,
@@ -65,6 +66,12 @@ typedef struct btdf_rad_block_info {
 } btdf_rad_block_info;
 
 BTDF_API int btdf_rad_block_count(const btdf_rad *r);
+/* 1 (a Visible, CIE Y, file) or 3 (colour: R, G, B in Radiance's RGB, written as CIE
+   X, Y, Z; docs/radiance.md "Colour"). */
+BTDF_API int btdf_rad_channels(const btdf_rad *r);
+/* Radiance's RGB (its default primaries, equal-energy white) to CIE XYZ:
+   m[X, Y, Z][R, G, B]. */
+BTDF_API void btdf_rad_rgb_to_xyz(double m[3][3]);
 BTDF_API btdf_status btdf_rad_block(const btdf_rad *r, int k, btdf_rad_block_info *info);
 BTDF_API btdf_rad_basis btdf_rad_get_basis(const btdf_rad *r);
 BTDF_API double btdf_rad_seconds_build(const btdf_rad *r);
@@ -74,6 +81,12 @@ BTDF_API double btdf_rad_seconds_build(const btdf_rad *r);
    surface normal, y up), pointing away from the surface. 0 off the block. */
 BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
                                 const double q[3]);
+/* The same for the file's CIE X, Y, Z (one channel: Y three times), and for channel c
+   (0, 1, 2: R, G, B) recovered from them (one channel: c = 0 only; 0 otherwise). */
+BTDF_API void btdf_rad_lookup_xyz(const btdf_rad *r, int k, const double p[3],
+                                  const double q[3], double xyz[3]);
+BTDF_API double btdf_rad_lookup_channel(const btdf_rad *r, int k, int c, const double p[3],
+                                        const double q[3]);
 
 /* The error (MODEL.md 6) of what a render gets from block k against Eq. 25 (rho_r
    for a reflection block, R for T) for the light it serves, at test_angles incidences over 0-90 deg (0 = 48) with about
@@ -82,6 +95,11 @@ BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
 BTDF_API btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,
                                      size_t points_per_angle, uint64_t seed, int threads,
                                      btdf_report *rep);
+/* The same for channel c of a three-channel file (R, G, B recovered from the file's
+   X, Y, Z, against Eq. 25 at that channel's index); btdf_rad_report is channel 0. */
+BTDF_API btdf_status btdf_rad_report_channel(const btdf_rad *r, int k, int c,
+                                             size_t test_angles, size_t points_per_angle,
+                                             uint64_t seed, int threads, btdf_report *rep);
 /* The largest per-angle e_L1 of a report up to BTDF_RAD_TI_CHECKED_DEG. */
 BTDF_API double btdf_rad_e_l1_checked(const btdf_report *rep);
 
