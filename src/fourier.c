@@ -1253,12 +1253,8 @@ static size_t pow2_at_least(double v)
     return p;
 }
 
-btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
-                               size_t angles, size_t ppa, uint64_t seed, int threads,
-                               albedo_memo *memo, btdf_report *r);
-
 /* Error estimate of one side with a fixed sample (for the build's own loop): the
-   file's own evaluation, the default report's density, a seed of the builder's. Test
+   file's own evaluation, QUICK_PPA facet points per angle, a seed of the builder's. Test
    angles whose e_L1 exceeds mark_at get their elevation interval marked in split
    (half nodes P[0..K-1]; both sides share them); *nmark counts new marks. */
 static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads,
@@ -2150,9 +2146,6 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
     return pts;
 }
 
-btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
-                               size_t angles, size_t ppa, uint64_t seed, int threads,
-                               albedo_memo *memo, btdf_report *r);
 /* One reading of a file against the truth: btdf_scatfun_eval_side's side names the
    light's side in both modes (DIRECT reads that block, ADJOINT the block whose fast
    index holds that light: the other transmission block, the same reflection block). */
@@ -2239,9 +2232,6 @@ static btdf_status merge_reports(btdf_report *r, btdf_report *o)
     return BTDF_OK;
 }
 
-btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
-                               size_t angles, size_t ppa, uint64_t seed, int threads,
-                               albedo_memo *memo, btdf_report *r);
 /* The report of one block, as renderers read it: light tracers (pbrt-v3's importance
    mode, DIRECT: the light in the slow index) and path tracers' camera rays (radiance
    mode, ADJOINT: the light in the fast index) read the same stored series along

@@ -600,6 +600,7 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     r->kb = rad_klems(basis);
     r->nblocks = 4; /* both transmissions and both reflections, in every basis */
     r->channels = p->channels;
+    rad_xyz_to_rgb(r->to_rgb); /* once, not per lookup */
     for (int k = 0; k < r->nblocks; k++)
         rad_block_of(k, p->ior[0], &r->b[k]);
     for (int k = 0; k < r->nblocks && (st == BTDF_OK || st == BTDF_EBUDGET); k++) {
@@ -676,11 +677,11 @@ static void rad_lookup_xyz(const btdf_rad *r, int k, const double p[3], const do
    its Y. A one-channel file: its value for c = 0 or -1. */
 static double rad_lookup_ch(const btdf_rad *r, int k, int c, const double p[3], const double q[3])
 {
-    double xyz[3], m[3][3];
+    double xyz[3];
     rad_lookup_xyz(r, k, p, q, xyz);
     if (c < 0 || !r || r->channels != 3)
         return xyz[1];
-    rad_xyz_to_rgb(m);
+    const double(*m)[3] = r->to_rgb;
     return m[c][0] * xyz[0] + m[c][1] * xyz[1] + m[c][2] * xyz[2];
 }
 

@@ -81,6 +81,7 @@ struct btdf_rad {
     btdf_params p;
     double tolerance;
     int channels; /* 1 (Visible only) or 3 (R, G, B: Klems Y, X and Z matrices) */
+    double to_rgb[3][3]; /* X, Y, Z -> R, G, B (rad_xyz_to_rgb), for lookups in colour */
     int nblocks;
     rad_block b[RAD_MAX_BLOCKS];
     const rad_klems_basis *kb; /* Klems bases only */

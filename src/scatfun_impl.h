@@ -61,6 +61,12 @@ struct btdf_scatfun {
     albedo_memo *memo; /* T and R of the reports' test angles (NULL: computed each time) */
 };
 
+/* btdf_scatfun_report's work without its checks and summary fields, T and R taken from
+   memo (NULL: computed); fills r's errors and per-angle rows. */
+btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
+                               size_t angles, size_t ppa, uint64_t seed, int threads,
+                               albedo_memo *memo, btdf_report *r);
+
 /* msg <- the formatted text (when msg and msglen); returns st. */
 btdf_status scatfun_say(char *msg, size_t msglen, btdf_status st, const char *fmt, ...);
 /* Fills f->xd from f->nodes; 0 on success, -1 when out of memory. */
