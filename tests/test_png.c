@@ -619,6 +619,9 @@ static void test_errors(void **state)
     (void)state;
     char path[256], msg[300] = "";
     temp_path(path, sizeof path, "bad");
+    /* the name holds the pid, which the system reuses: a file left by an earlier process
+       (a crashed run) must not count as one this test's calls wrote */
+    remove(path);
     btdf_preview_opts o;
     btdf_preview_opts_default(&o);
     o.kind = BTDF_PREVIEW_MONTAGE; /* no table */
