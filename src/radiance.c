@@ -461,8 +461,8 @@ static void tree_eps3(const btdf_rad *r, const int *chs, int npr, const double *
                       double out[3])
 {
     for (int c = 0; c < 3; c++) {
-        out[c] = eps[0];
-        for (int i = 0; i < npr; i++)
+        out[c] = eps[0]; /* one channel: eps[0] alone is used */
+        for (int i = 0; i < npr && r->channels == 3; i++)
             if (r->p.ior[chs[i]] == r->p.ior[c])
                 out[c] = eps[i];
     }
