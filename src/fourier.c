@@ -272,6 +272,7 @@ typedef struct build_ws {
     double *ia;      /* interpolated coefficients, nst * (nmax + 1) */
     double *rho;     /* per model channel scratch */
     double *cosg, *sing; /* cos and sin of j pi / nmax, j = 0..nmax */
+    double *h2g;         /* sin^2 of j pi / (2 nmax): bt_rho's azimuth term at phi_d */
 } build_ws;
 
 static void *build_ws_new(void *vctx)
@@ -290,23 +291,28 @@ static void *build_ws_new(void *vctx)
     w->rho = malloc(4 * sizeof(double));
     w->cosg = malloc((c->nmax + 1) * sizeof(double));
     w->sing = malloc((c->nmax + 1) * sizeof(double));
-    if (w->cosg && w->sing) {
+    w->h2g = malloc((c->nmax + 1) * sizeof(double));
+    if (w->cosg && w->sing && w->h2g) {
         for (size_t j = 0; j <= c->nmax; j++) {
             w->cosg[j] = cos(M_PI * (double)j / (double)c->nmax);
             w->sing[j] = sin(M_PI * (double)j / (double)c->nmax);
+            /* 1 + cos phi = 1 - cos phi_d = 2 sin^2(phi_d / 2), without cancellation */
+            double sh = sin(0.5 * M_PI * (double)j / (double)c->nmax);
+            w->h2g[j] = sh * sh;
         }
         /* exact forward, side and backward planes */
         w->cosg[0] = 1.0, w->sing[0] = 0.0;
         w->cosg[c->nmax] = -1.0, w->sing[c->nmax] = 0.0;
         w->cosg[c->nmax / 2] = 0.0, w->sing[c->nmax / 2] = 1.0;
     }
-    if (!w->cosg || !w->sing || !w->x || !w->x2 || !w->a || !w->a2 || !w->ia || !w->y || !w->rho ||
-        fft_reserve(&w->fb, c->nmax + 1)) {
+    if (!w->cosg || !w->sing || !w->h2g || !w->x || !w->x2 || !w->a || !w->a2 || !w->ia ||
+        !w->y || !w->rho || fft_reserve(&w->fb, c->nmax + 1)) {
         fft_free(&w->fb);
         free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
         free(w->rho);
         free(w->cosg);
         free(w->sing);
+        free(w->h2g);
         free(w);
         return NULL;
     }
@@ -323,6 +329,7 @@ static void build_ws_free(void *vw)
     free(w->rho);
     free(w->cosg);
     free(w->sing);
+    free(w->h2g);
     free(w);
 }
 
@@ -351,6 +358,33 @@ static void stored_values(const build_ctx *c, int b, const rho_in *ri, const rho
     }
 }
 
+/* sample_grid for a one-channel transmission block: Eq. 25 in its branch-free form
+   (bt_rho, the public entry points' kernel, which the compiler vectorises) along the
+   azimuth row; the same function as rho_kernel's to rounding. */
+BT_CLONES static void sample_grid_t1(const build_ctx *c, const build_ws *w, int b,
+                                     double mu_s, double mu_f, size_t N, size_t step,
+                                     size_t phase, double *x)
+{
+    /* |mu| <= 1 for every node and midpoint; fmax guards rounding */
+    double ss = sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), sf = sqrt(fmax(0.0, 1.0 - mu_f * mu_f));
+    /* ti = acos mu_s and b = pi - to = acos mu_f, both in [0, pi/2] */
+    double ti = atan2(ss, mu_s), bb = atan2(sf, mu_f);
+    double sp = sin(0.5 * (ti + bb)), cp = cos(0.5 * (ti + bb)), sm = sin(0.5 * (ti - bb));
+    bt_io io;
+    bt_io_set(&io, ss, mu_s, sf, mu_f, sp, cp, sm);
+    double n = c->ior[b][0], d = n - 1.0, s = c->p->smoothness;
+    bt_io_pref(&io, s, c->p->k0);
+    double f = mu_f; /* one channel: no fold (stored_values) */
+    size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
+    const double *h2 = w->h2g, *sn = w->sing;
+    /* a counted loop (the vectoriser needs the trip count): j = phase + t step */
+    long cnt = phase <= N ? (long)((N - phase) / step) + 1 : 0, sg = (long)(step * g);
+    const double *h2p = h2 + phase * g, *snp = sn + phase * g;
+    double *xp = x + phase;
+    for (long t = 0; t < cnt; t++)
+        xp[t * (long)step] = bt_rho(n, d, s, &io, h2p[t * sg], snp[t * sg]) * f;
+}
+
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
    j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones).
    mu_s, mu_f are the block's cosines as magnitudes, in [0, 1]. */
@@ -358,6 +392,10 @@ static void sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_
                         double mu_f, size_t N, size_t stride, size_t step, size_t phase,
                         double *x)
 {
+    if (!blk_refl[b] && c->nc == 1) {
+        sample_grid_t1(c, w, b, mu_s, mu_f, N, step, phase, x);
+        return;
+    }
     rho_in ri;
     rho_out ro;
     bt_ir ir;
