@@ -2151,9 +2151,25 @@ static fixed_read *fixed_new(const btdf_scatfun *f, btdf_side side, btdf_scatfun
         memset(r->off, 0, (n + 1) * sizeof *r->off);
         return r;
     }
+    /* The views' cosine keeps one sign at this angle, and in files with two zero
+       nodes in the middle (this library's) every stencil of that sign stays on its
+       own side: only those nodes are combined (the others keep length 0). */
+    uint32_t o_lo = 0, o_hi = n;
+    if (n >= 4 && n % 2 == 0 && f->xd[n / 2 - 1] == 0.0 && f->xd[n / 2] == 0.0) {
+        double vs, vf;
+        side_mus(side, mode, ci, 1.0, &vs, &vf, &rad);
+        int pos = (r->slow_fixed ? vf : vs) > 0.0;
+        o_lo = pos ? n / 2 - 1 : 0;
+        o_hi = pos ? n : n / 2 + 1;
+    }
     size_t total = 0;
     for (uint32_t o = 0; o < n; o++) {
         uint32_t m = 0;
+        if (o < o_lo || o >= o_hi) {
+            r->off[o] = total;
+            r->len[o] = 0;
+            continue;
+        }
         for (int a = 0; a < 4; a++) {
             long i = os + a;
             if (w[a] == 0.0 || i < 0 || i >= (long)n)
@@ -2172,7 +2188,7 @@ static fixed_read *fixed_new(const btdf_scatfun *f, btdf_side side, btdf_scatfun
         fixed_free(r);
         return NULL;
     }
-    for (uint32_t o = 0; o < n; o++) {
+    for (uint32_t o = o_lo; o < o_hi; o++) {
         for (int a = 0; a < 4; a++) {
             long i = os + a;
             if (w[a] == 0.0 || i < 0 || i >= (long)n)
