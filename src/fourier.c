@@ -1812,7 +1812,7 @@ int scatfun_nodes_d(btdf_scatfun *f)
     return 0;
 }
 
-/* u_k = rk^k cos(k phi), generated in chunks of CHUNK terms. The first LAG by
+/* u_k = rk^k cos(k phi), generated in chunks of COS_CHUNK terms. The first COS_LAG by
    u_{k+1} = 2 rk c u_k - rk^2 u_{k-1} from u_0 = 1 and u_{-1} = cos(-phi) / rk (rk = 1:
    the plain recurrence); then four interleaved chains, u_k = 2 u_4 u_{k-4} - rk^8 u_{k-8}
    (cos(a + b) + cos(a - b) = 2 cos a cos b with b = 4 phi): the one-step chain is bound
