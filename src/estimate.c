@@ -137,6 +137,8 @@ typedef struct est_job {
     size_t *points;
     int refl;             /* 1: the truth is rho_r over the upper hemisphere, R for T */
     albedo_memo *memo;    /* T and R remembered across calls, or NULL */
+    est_prep_fn prep;     /* per-angle context for fn, or NULL (then fn reads all of q) */
+    est_done_fn done;     /* frees what prep returned */
 } est_job;
 
 /*
@@ -195,6 +197,9 @@ static void est_angle(void *arg, size_t k)
     double sti = sin(ti), cti = cos(ti), s = p->smoothness;
     rho_in a;
     rho_in_init(&a, sti, cti, s, p->k0);
+    /* with a context (prep), fn reads the cosines of q only: the angles are left 0 */
+    void *ctx = j->prep ? j->prep(j->obj, ti) : NULL;
+    const void *obj = ctx ? ctx : j->obj;
     btdf_ti_error *r = &j->res[k];
     memset(r, 0, sizeof *r);
     r->ti = ti;
@@ -225,10 +230,13 @@ static void est_angle(void *arg, size_t k)
                     continue; /* no outgoing direction: both the table and the model are 0 */
                 double va = g.weight * a_measure(u, s, dw, dpsi);
                 double vb = fabs(g.cos_to) * dmu * dphi * 2.0;
-                double to = atan2(g.sin_to, g.cos_to);
-                double pf = fabs(atan2(g.sin_phi, g.cos_phi));
+                double to = 0.0, pf = 0.0;
+                if (!j->prep) {
+                    to = atan2(g.sin_to, g.cos_to);
+                    pf = fabs(atan2(g.sin_phi, g.cos_phi));
+                }
                 const double q[8] = {sti, cti, g.sin_to, g.cos_to, g.cos_phi, g.sin_phi, pf, to};
-                j->fn(j->obj, ti, q, tab);
+                j->fn(obj, ti, q, tab);
                 /* g.rho is Eq. 25 through the kernel, independent of the table */
                 est_add(&acc, tab[c], g.rho, va > 0.0 ? va * vb / (va + vb) : 0.0);
             }
@@ -262,8 +270,9 @@ static void est_angle(void *arg, size_t k)
                     rho_out_init(&b, sto, mu, s, p->k0);
                     rho = rho_kernel(n, s, &a, &b, cph, sph);
                 }
-                const double q[8] = {sti, cti, sto, mu, cph, sph, ph, atan2(sto, mu)};
-                j->fn(j->obj, ti, q, tab);
+                const double q[8] = {sti, cti, sto, mu, cph, sph, ph,
+                                     j->prep ? 0.0 : atan2(sto, mu)};
+                j->fn(obj, ti, q, tab);
                 est_add(&acc, tab[c], rho, share);
             }
         }
@@ -278,6 +287,8 @@ static void est_angle(void *arg, size_t k)
         r->e_t = fmax(r->e_t, et);
         r->e_max = fmax(r->e_max, em);
     }
+    if (ctx)
+        j->done(ctx);
     j->points[k] = pts;
 }
 
@@ -344,7 +355,8 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
                                  double ti_max, size_t test_angles, size_t points_per_angle,
                                  uint64_t seed, int threads, const double *knots,
                                  size_t nknots, est_eval_fn fn, est_angle_fn custom,
-                                 const void *obj, albedo_memo *memo, btdf_report *r)
+                                 est_prep_fn prep, est_done_fn done, const void *obj,
+                                 albedo_memo *memo, btdf_report *r)
 {
     if (!p || !(fn || custom) || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
         return BTDF_EINVAL;
@@ -361,6 +373,8 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
     j.refl = refl;
     j.fn = fn;
     j.custom = custom;
+    j.prep = prep && done ? prep : NULL;
+    j.done = done;
     j.ppa = points_per_angle;
     j.obj = obj;
     j.npsi = 32;
@@ -498,7 +512,18 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
                                 btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, fn, NULL, obj, memo, r);
+                         knots, nknots, fn, NULL, NULL, NULL, obj, memo, r);
+}
+
+btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double ti_max,
+                                     size_t test_angles, size_t points_per_angle,
+                                     uint64_t seed, int threads, const double *knots,
+                                     size_t nknots, est_eval_fn fn, est_prep_fn prep,
+                                     est_done_fn done, const void *obj, albedo_memo *memo,
+                                     btdf_report *r)
+{
+    return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         knots, nknots, fn, NULL, prep, done, obj, memo, r);
 }
 
 btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
@@ -508,7 +533,7 @@ btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_
                                 btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, NULL, fn, obj, memo, r);
+                         knots, nknots, NULL, fn, NULL, NULL, obj, memo, r);
 }
 
 btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
@@ -516,7 +541,7 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
                              int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         NULL, 0, fn, NULL, obj, NULL, r);
+                         NULL, 0, fn, NULL, NULL, NULL, obj, NULL, r);
 }
 
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
@@ -524,7 +549,7 @@ btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_ma
                                int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
     return estimate_impl(p, 1, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         NULL, 0, fn, NULL, obj, NULL, r);
+                         NULL, 0, fn, NULL, NULL, NULL, obj, NULL, r);
 }
 
 BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
@@ -560,7 +585,7 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
     }
     btdf_status st = estimate_impl(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
                                    test_angles, points_per_angle, seed, threads, knots, nk,
-                                   table_fn, NULL, t, NULL, r);
+                                   table_fn, NULL, NULL, NULL, t, NULL, r);
     free(knots);
     if (st == BTDF_OK) {
         r->slices = t->ns;

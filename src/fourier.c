@@ -272,6 +272,7 @@ typedef struct build_ws {
     double *ia;      /* interpolated coefficients, nst * (nmax + 1) */
     double *rho;     /* per model channel scratch */
     double *cosg, *sing; /* cos and sin of j pi / nmax, j = 0..nmax */
+    double *h2g;         /* sin^2 of j pi / (2 nmax): bt_rho's azimuth term at phi_d */
 } build_ws;
 
 static void *build_ws_new(void *vctx)
@@ -290,23 +291,28 @@ static void *build_ws_new(void *vctx)
     w->rho = malloc(4 * sizeof(double));
     w->cosg = malloc((c->nmax + 1) * sizeof(double));
     w->sing = malloc((c->nmax + 1) * sizeof(double));
-    if (w->cosg && w->sing) {
+    w->h2g = malloc((c->nmax + 1) * sizeof(double));
+    if (w->cosg && w->sing && w->h2g) {
         for (size_t j = 0; j <= c->nmax; j++) {
             w->cosg[j] = cos(M_PI * (double)j / (double)c->nmax);
             w->sing[j] = sin(M_PI * (double)j / (double)c->nmax);
+            /* 1 + cos phi = 1 - cos phi_d = 2 sin^2(phi_d / 2), without cancellation */
+            double sh = sin(0.5 * M_PI * (double)j / (double)c->nmax);
+            w->h2g[j] = sh * sh;
         }
         /* exact forward, side and backward planes */
         w->cosg[0] = 1.0, w->sing[0] = 0.0;
         w->cosg[c->nmax] = -1.0, w->sing[c->nmax] = 0.0;
         w->cosg[c->nmax / 2] = 0.0, w->sing[c->nmax / 2] = 1.0;
     }
-    if (!w->cosg || !w->sing || !w->x || !w->x2 || !w->a || !w->a2 || !w->ia || !w->y || !w->rho ||
-        fft_reserve(&w->fb, c->nmax + 1)) {
+    if (!w->cosg || !w->sing || !w->h2g || !w->x || !w->x2 || !w->a || !w->a2 || !w->ia ||
+        !w->y || !w->rho || fft_reserve(&w->fb, c->nmax + 1)) {
         fft_free(&w->fb);
         free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
         free(w->rho);
         free(w->cosg);
         free(w->sing);
+        free(w->h2g);
         free(w);
         return NULL;
     }
@@ -323,6 +329,7 @@ static void build_ws_free(void *vw)
     free(w->rho);
     free(w->cosg);
     free(w->sing);
+    free(w->h2g);
     free(w);
 }
 
@@ -351,6 +358,33 @@ static void stored_values(const build_ctx *c, int b, const rho_in *ri, const rho
     }
 }
 
+/* sample_grid for a one-channel transmission block: Eq. 25 in its branch-free form
+   (bt_rho, the public entry points' kernel, which the compiler vectorises) along the
+   azimuth row; the same function as rho_kernel's to rounding. */
+BT_CLONES static void sample_grid_t1(const build_ctx *c, const build_ws *w, int b,
+                                     double mu_s, double mu_f, size_t N, size_t step,
+                                     size_t phase, double *x)
+{
+    /* |mu| <= 1 for every node and midpoint; fmax guards rounding */
+    double ss = sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), sf = sqrt(fmax(0.0, 1.0 - mu_f * mu_f));
+    /* ti = acos mu_s and b = pi - to = acos mu_f, both in [0, pi/2] */
+    double ti = atan2(ss, mu_s), bb = atan2(sf, mu_f);
+    double sp = sin(0.5 * (ti + bb)), cp = cos(0.5 * (ti + bb)), sm = sin(0.5 * (ti - bb));
+    bt_io io;
+    bt_io_set(&io, ss, mu_s, sf, mu_f, sp, cp, sm);
+    double n = c->ior[b][0], d = n - 1.0, s = c->p->smoothness;
+    bt_io_pref(&io, s, c->p->k0);
+    double f = mu_f; /* one channel: no fold (stored_values) */
+    size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
+    const double *h2 = w->h2g, *sn = w->sing;
+    /* a counted loop (the vectoriser needs the trip count): j = phase + t step */
+    long cnt = phase <= N ? (long)((N - phase) / step) + 1 : 0, sg = (long)(step * g);
+    const double *h2p = h2 + phase * g, *snp = sn + phase * g;
+    double *xp = x + phase;
+    for (long t = 0; t < cnt; t++)
+        xp[t * (long)step] = bt_rho(n, d, s, &io, h2p[t * sg], snp[t * sg]) * f;
+}
+
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
    j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones).
    mu_s, mu_f are the block's cosines as magnitudes, in [0, 1]. */
@@ -358,6 +392,10 @@ static void sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_
                         double mu_f, size_t N, size_t stride, size_t step, size_t phase,
                         double *x)
 {
+    if (!blk_refl[b] && c->nc == 1) {
+        sample_grid_t1(c, w, b, mu_s, mu_f, N, step, phase, x);
+        return;
+    }
     rho_in ri;
     rho_out ro;
     bt_ir ir;
@@ -421,8 +459,10 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
                 for (size_t j = 1; j <= N2 && zero; j += 2)
                     zero = w->x[k * S + j] == 0.0;
             if (zero) {
-                for (size_t q = 0; q < (size_t)c->nst * S; q++)
-                    w->a[q] = 0.0;
+                /* the N2 + 1 coefficients the caller reads, not the whole stride (nmax
+                   + 1: zeroing 128 KiB per unreachable pair was 4% of a build) */
+                for (int k = 0; k < c->nst; k++)
+                    memset(w->a + (size_t)k * S, 0, (N2 + 1) * sizeof *w->a);
                 return N2;
             }
         }
@@ -1772,6 +1812,63 @@ int scatfun_nodes_d(btdf_scatfun *f)
     return 0;
 }
 
+/* u_k = rk^k cos(k phi), generated in chunks of COS_CHUNK terms. The first COS_LAG by
+   u_{k+1} = 2 rk c u_k - rk^2 u_{k-1} from u_0 = 1 and u_{-1} = cos(-phi) / rk (rk = 1:
+   the plain recurrence); then four interleaved chains, u_k = 2 u_4 u_{k-4} - rk^8 u_{k-8}
+   (cos(a + b) + cos(a - b) = 2 cos a cos b with b = 4 phi): the one-step chain is bound
+   by its latency (two multiplies and a subtraction per term) and took as long as the
+   sums. */
+enum { COS_CHUNK = 256, COS_LAG = 8 };
+
+typedef struct cos_rec {
+    double c_prev, c_cur, rc, r2, A, B;
+    double ckb[COS_LAG + COS_CHUNK]; /* the lags, then the chunk */
+} cos_rec;
+
+BT_INLINE void cos_rec_init(cos_rec *s, double cphi, double rk)
+{
+    s->c_prev = cphi;
+    s->c_cur = 1.0;
+    s->rc = rk * cphi;
+    s->r2 = rk * rk;
+    s->A = 0.0;
+    s->B = s->r2 * s->r2 * s->r2 * s->r2;
+}
+
+/* Fills s->ckb + COS_LAG with u_{q0} .. u_{q0 + len - 1}; chunks are asked in order,
+   q0 = 0, COS_CHUNK, 2 COS_CHUNK, ... */
+BT_INLINE const double *cos_rec_chunk(cos_rec *s, uint32_t q0, uint32_t len)
+{
+    double *ck = s->ckb + COS_LAG;
+    if (q0 > 0) /* the lags of this chunk: the end of the last one */
+        memcpy(s->ckb, s->ckb + COS_CHUNK, COS_LAG * sizeof *s->ckb);
+    uint32_t t = 0;
+    for (; q0 + t < COS_LAG && t < len; t++) {
+        ck[t] = s->c_cur;
+        double nx = q0 + t == 0 ? s->rc : 2.0 * s->rc * s->c_cur - s->r2 * s->c_prev;
+        s->c_prev = s->c_cur;
+        s->c_cur = nx;
+        if (q0 + t == 4)
+            s->A = 2.0 * ck[t];
+    }
+    for (long u = (long)t; u < (long)len; u++) /* signed: u - 8 reaches the lags */
+        ck[u] = s->A * ck[u - 4] - s->B * ck[u - 8];
+    return ck;
+}
+
+/* sum_t comb[t] ck[t] in four running sums (independent chains) */
+BT_INLINE double cos_dot(const double *comb, const double *ck, uint32_t used)
+{
+    double s4[4] = {0.0, 0.0, 0.0, 0.0};
+    uint32_t t = 0;
+    for (; t + 4 <= used; t += 4)
+        for (int v = 0; v < 4; v++)
+            s4[v] += comb[t + v] * ck[t + v];
+    for (; t < used; t++)
+        s4[0] += comb[t] * ck[t];
+    return (s4[0] + s4[1]) + (s4[2] + s4[3]);
+}
+
 /* Stored-channel series values (Y, R, B or one channel) at (mu_s, mu_f, cos phi_d).
    The same sum as pbrt-v3's (weights times the cosine series of the 16 stencil
    pairs), arranged for speed: cos(k phi) comes from recurrences once, in chunks; per
@@ -1809,32 +1906,15 @@ BT_CLONES static int eval_stored(const btdf_scatfun *f, const double *x, double 
             np++;
         }
     }
-    enum { CHUNK = 256, LAG = 8 };
-    double ckb[LAG + CHUNK], *ck = ckb + LAG;
-    /* u_k = rk^k cos(k phi). The first LAG by u_{k+1} = 2 rk c u_k - rk^2 u_{k-1} from
-       u_0 = 1 and u_{-1} = cos(-phi) / rk (rk = 1: the plain recurrence); then four
-       interleaved chains, u_k = 2 u_4 u_{k-4} - rk^8 u_{k-8} (cos(a + b) + cos(a - b)
-       = 2 cos a cos b with b = 4 phi): the one-step chain is bound by its latency (two
-       multiplies and a subtraction per term) and took as long as the sums. */
-    double c_prev = cphi, c_cur = 1.0, rc = rk * cphi, r2 = rk * rk;
-    double A = 0.0, B = r2 * r2 * r2 * r2;
-    for (uint32_t q0 = 0; q0 < mtop; q0 += CHUNK) {
-        uint32_t len = mtop - q0 < CHUNK ? mtop - q0 : CHUNK;
-        uint32_t t = 0;
-        for (; q0 + t < LAG && t < len; t++) {
-            ck[t] = c_cur;
-            double nx = q0 + t == 0 ? rc : 2.0 * rc * c_cur - r2 * c_prev;
-            c_prev = c_cur;
-            c_cur = nx;
-            if (q0 + t == 4)
-                A = 2.0 * ck[t];
-        }
-        for (long u = (long)t; u < (long)len; u++) /* signed: u - 8 reaches the lags */
-            ck[u] = A * ck[u - 4] - B * ck[u - 8];
+    cos_rec cr;
+    cos_rec_init(&cr, cphi, rk);
+    for (uint32_t q0 = 0; q0 < mtop; q0 += COS_CHUNK) {
+        uint32_t len = mtop - q0 < COS_CHUNK ? mtop - q0 : COS_CHUNK;
+        const double *ck = cos_rec_chunk(&cr, q0, len);
         /* As pbrt-v3 does: the stencil's weighted series summed into one (an
            element-wise loop the compiler vectorises), then one cosine sum. */
         for (uint32_t k = 0; k < f->channels; k++) {
-            double comb[CHUNK];
+            double comb[COS_CHUNK];
             uint32_t used = 0;
             for (int e = 0; e < np; e++) {
                 if (pm[e] <= q0)
@@ -1849,18 +1929,8 @@ BT_CLONES static int eval_stored(const btdf_scatfun *f, const double *x, double 
                 for (uint32_t t = 0; t < l; t++)
                     comb[t] += w * (double)a[t];
             }
-            /* four running sums: independent chains */
-            double s4[4] = {0.0, 0.0, 0.0, 0.0};
-            uint32_t t = 0;
-            for (; t + 4 <= used; t += 4)
-                for (int v = 0; v < 4; v++)
-                    s4[v] += comb[t + v] * ck[t + v];
-            for (; t < used; t++)
-                s4[0] += comb[t] * ck[t];
-            val[k] += (s4[0] + s4[1]) + (s4[2] + s4[3]);
+            val[k] += cos_dot(comb, ck, used);
         }
-        if (len == CHUNK) /* the lags of the next chunk */
-            memcpy(ckb, ck + CHUNK - LAG, LAG * sizeof *ckb);
     }
     return 1;
 }
@@ -2007,12 +2077,242 @@ BTDF_API btdf_status btdf_scatfun_eval(const btdf_scatfun *f, double ti, double 
 /* Error report (MODEL.md section 6)                                         */
 /* ------------------------------------------------------------------------- */
 
+/* A reading of one block at one light angle, for the reports: the light's cosine is
+   one index of the file (the slow one for DIRECT, the fast one for ADJOINT: side_mus)
+   and the same for every view of that angle, so the spline across it is applied once
+   per angle, to every node of the other index, instead of once per view (16 stencil
+   series per view become 4). Values are btdf_scatfun_eval_side's up to the order of
+   the additions. */
+typedef struct fixed_read {
+    const btdf_scatfun *f;
+    btdf_side side;
+    btdf_scatfun_mode mode;
+    double ci;       /* the light's cosine */
+    int ok;          /* 0: the light's cosine lies outside the nodes: everything reads 0 */
+    int slow_fixed;  /* 1: the slow index is the light's (DIRECT) */
+    double rk_fixed; /* the light's share of the near-normal scaling (eval_side_cos) */
+    size_t *off;     /* per node of the other index: where its series start in buf */
+    uint32_t *len;   /* per node of the other index: the combined length (0: none) */
+    double *buf;     /* per node, channels x len: the light's stencil combined */
+} fixed_read;
+
+/* Clamps mu into the nodes' range as eval_side_cos does; returns the factor of the
+   near-normal scaling (1 inside). */
+BT_INLINE double cap_mu(const btdf_scatfun *f, double *mu)
+{
+    double top = f->xd[f->n - 1], bot = f->xd[0], rk = 1.0;
+    double sn_top = sqrt(fmax(0.0, 1.0 - top * top)), sn_bot = sqrt(fmax(0.0, 1.0 - bot * bot));
+    if (*mu > top && sn_top > 0.0)
+        rk = sqrt(fmax(0.0, 1.0 - *mu * *mu)) / sn_top; /* sn_top > 0: nodes inside (-1, 1) */
+    if (*mu < bot && sn_bot > 0.0)
+        rk = sqrt(fmax(0.0, 1.0 - *mu * *mu)) / sn_bot;
+    *mu = fmin(top, fmax(bot, *mu));
+    return rk;
+}
+
+static void fixed_free(fixed_read *r)
+{
+    if (!r)
+        return;
+    free(r->off);
+    free(r->len);
+    free(r->buf);
+    free(r);
+}
+
+/* The reader of (f, side, mode) at light cosine ci in [0, 1]; NULL when out of memory. */
+static fixed_read *fixed_new(const btdf_scatfun *f, btdf_side side, btdf_scatfun_mode mode,
+                             double ci)
+{
+    fixed_read *r = calloc(1, sizeof *r);
+    if (!r)
+        return NULL;
+    r->f = f;
+    r->side = side;
+    r->mode = mode;
+    r->ci = ci;
+    r->slow_fixed = mode == BTDF_SCATFUN_DIRECT;
+    double ms, mf;
+    int rad;
+    side_mus(side, mode, ci, 0.5, &ms, &mf, &rad);
+    double mu = r->slow_fixed ? ms : mf;
+    r->rk_fixed = cap_mu(f, &mu);
+    long os;
+    double w[4];
+    uint32_t n = f->n;
+    r->off = malloc((n + 1) * sizeof *r->off);
+    r->len = calloc(n, sizeof *r->len);
+    if (!r->off || !r->len) {
+        fixed_free(r);
+        return NULL;
+    }
+    r->ok = cr_weights(f->xd, n, mu, &os, w);
+    if (!r->ok) {
+        memset(r->off, 0, (n + 1) * sizeof *r->off);
+        return r;
+    }
+    /* The views' cosine keeps one sign at this angle, and in files with two zero
+       nodes in the middle (this library's) every stencil of that sign stays on its
+       own side: only those nodes are combined (the others keep length 0). */
+    uint32_t o_lo = 0, o_hi = n;
+    if (n >= 4 && n % 2 == 0 && f->xd[n / 2 - 1] == 0.0 && f->xd[n / 2] == 0.0) {
+        double vs, vf;
+        side_mus(side, mode, ci, 1.0, &vs, &vf, &rad);
+        int pos = (r->slow_fixed ? vf : vs) > 0.0;
+        o_lo = pos ? n / 2 - 1 : 0;
+        o_hi = pos ? n : n / 2 + 1;
+    }
+    size_t total = 0;
+    for (uint32_t o = 0; o < n; o++) {
+        uint32_t m = 0;
+        if (o < o_lo || o >= o_hi) {
+            r->off[o] = total;
+            r->len[o] = 0;
+            continue;
+        }
+        for (int a = 0; a < 4; a++) {
+            long i = os + a;
+            if (w[a] == 0.0 || i < 0 || i >= (long)n)
+                continue;
+            size_t e = r->slow_fixed ? 2 * ((size_t)i * n + o) : 2 * ((size_t)o * n + (size_t)i);
+            if (f->offsets[e + 1] > m)
+                m = f->offsets[e + 1];
+        }
+        r->off[o] = total;
+        r->len[o] = m;
+        total += (size_t)m * f->channels;
+    }
+    r->off[n] = total;
+    r->buf = calloc(total ? total : 1, sizeof *r->buf);
+    if (!r->buf) {
+        fixed_free(r);
+        return NULL;
+    }
+    for (uint32_t o = o_lo; o < o_hi; o++) {
+        for (int a = 0; a < 4; a++) {
+            long i = os + a;
+            if (w[a] == 0.0 || i < 0 || i >= (long)n)
+                continue;
+            size_t e = r->slow_fixed ? 2 * ((size_t)i * n + o) : 2 * ((size_t)o * n + (size_t)i);
+            uint32_t m = f->offsets[e + 1];
+            for (uint32_t k = 0; k < f->channels; k++) {
+                const float *src = f->coeffs + f->offsets[e] + (size_t)k * m;
+                double *dst = r->buf + r->off[o] + (size_t)k * r->len[o];
+                for (uint32_t t = 0; t < m; t++)
+                    dst[t] += w[a] * (double)src[t];
+            }
+        }
+    }
+    return r;
+}
+
+/* eval_side_cos(f, side, mode, r->ci, co, cpd, out) through the combined series. */
+BT_CLONES static void fixed_eval(const fixed_read *r, double co, double cpd, double *out)
+{
+    const btdf_scatfun *f = r->f;
+    for (uint32_t k = 0; k < f->channels; k++)
+        out[k] = 0.0;
+    if (!r->ok)
+        return;
+    double ms, mf;
+    int rad;
+    side_mus(r->side, r->mode, r->ci, co, &ms, &mf, &rad);
+    double mu = r->slow_fixed ? mf : ms;
+    double rk = r->rk_fixed * cap_mu(f, &mu);
+    if (r->slow_fixed)
+        mf = mu;
+    else
+        ms = mu;
+    long ov;
+    double w[4];
+    if (!cr_weights(f->xd, f->n, mu, &ov, w))
+        return;
+    const double *ser[4];
+    double wt[4];
+    uint32_t ln[4], mtop = 0;
+    int np = 0;
+    for (int b = 0; b < 4; b++) {
+        long o = ov + b;
+        if (w[b] == 0.0 || o < 0 || o >= (long)f->n || r->len[o] == 0)
+            continue;
+        ser[np] = r->buf + r->off[o];
+        ln[np] = r->len[o];
+        wt[np] = w[b];
+        if (ln[np] > mtop)
+            mtop = ln[np];
+        np++;
+    }
+    double val[3] = {0.0, 0.0, 0.0};
+    cos_rec cr;
+    cos_rec_init(&cr, fmin(1.0, fmax(-1.0, cpd)), rk);
+    for (uint32_t q0 = 0; q0 < mtop; q0 += COS_CHUNK) {
+        uint32_t len = mtop - q0 < COS_CHUNK ? mtop - q0 : COS_CHUNK;
+        const double *ck = cos_rec_chunk(&cr, q0, len);
+        for (uint32_t k = 0; k < f->channels; k++) {
+            double comb[COS_CHUNK];
+            uint32_t used = 0;
+            for (int e = 0; e < np; e++) {
+                if (ln[e] <= q0)
+                    continue;
+                uint32_t l = ln[e] - q0 < len ? ln[e] - q0 : len;
+                const double *a = ser[e] + (size_t)k * ln[e] + q0;
+                for (uint32_t t = used; t < l; t++)
+                    comb[t] = 0.0;
+                if (l > used)
+                    used = l;
+                for (uint32_t t = 0; t < l; t++)
+                    comb[t] += wt[e] * a[t];
+            }
+            val[k] += cos_dot(comb, ck, used);
+        }
+    }
+    /* f = value / |mu_f|: at mu_f = 0 (grazing) the stored value is 0 too; read 0 */
+    if (!(fabs(mf) > 0.0))
+        return;
+    stored_to_out(f->channels, val, out);
+    double scale = 1.0 / fabs(mf);
+    if (rad && ms * mf > 0.0) {
+        /* pbrt-v3's radiance factor, as eval_mu_rk; eta finite and > 0 */
+        double e = mf > 0.0 ? 1.0 / (double)f->eta : (double)f->eta;
+        scale *= e * e;
+    }
+    for (uint32_t k = 0; k < f->channels; k++) {
+        double v = out[k] * scale;
+        out[k] = isfinite(v) ? v : 0.0;
+    }
+}
+
 typedef struct mis_obj {
     const btdf_scatfun *f;
     btdf_side side; /* the block evaluated (eval_side's side) */
     btdf_scatfun_mode mode;
-    albedo_memo *memo; /* R remembered (refl_angle), or NULL */
+    albedo_memo *memo;    /* R remembered (refl_angle), or NULL */
+    const fixed_read *fr; /* the reading at this angle (mis_prep), or NULL */
 } mis_obj;
+
+/* The per-angle context of the estimator: a copy of the reading with its fixed_read. */
+static void *mis_prep(const void *obj, double ti)
+{
+    const mis_obj *m = obj;
+    mis_obj *c = malloc(sizeof *c);
+    if (!c)
+        return NULL;
+    *c = *m;
+    /* ti in [0, pi/2]: cos ti in [0, 1] */
+    c->fr = fixed_new(m->f, m->side, m->mode, fmin(1.0, fmax(0.0, cos(ti))));
+    if (!c->fr) {
+        free(c);
+        return NULL;
+    }
+    return c;
+}
+
+static void mis_done(void *ctx)
+{
+    mis_obj *c = ctx;
+    fixed_free((fixed_read *)c->fr);
+    free(c);
+}
 
 static void mis_eval(const void *obj, double ti, const double *q, double *out)
 {
@@ -2023,6 +2323,10 @@ static void mis_eval(const void *obj, double ti, const double *q, double *out)
        the clamps keep rounding inside the ranges eval_side_cos takes */
     double ci = fmin(1.0, fmax(0.0, q[1])), co = fmin(1.0, fabs(q[3]));
     double cpd = -fmin(1.0, fmax(-1.0, q[4]));
+    if (m->fr) {
+        fixed_eval(m->fr, co, cpd, out);
+        return;
+    }
     if (eval_side_cos(m->f, m->side, m->mode, ci, co, cpd, out) != BTDF_OK)
         for (uint32_t k = 0; k < m->f->channels; k++)
             out[k] = 0.0;
@@ -2058,6 +2362,17 @@ static double refl_h_measure(double u, double s, double dw, double dpsi)
  * Both cover the half phi in [0, pi] and count twice (rho_r is even in phi). The
  * norm is max(R(ti), 0.01) (MODEL.md sections 6 and 8).
  */
+/* btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, out), through fr when
+   there is one (ti its angle). */
+static btdf_status refl_read(const mis_obj *m, const fixed_read *fr, double ti, double tr,
+                             double phi, double *out)
+{
+    if (!fr)
+        return btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, out);
+    fixed_eval(fr, fabs(cos(tr)), -cos(phi), out); /* as eval_side passes them */
+    return BTDF_OK;
+}
+
 static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint64_t rng,
                          size_t ppa, btdf_ti_error *res)
 {
@@ -2072,6 +2387,9 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
         for (int c = 0; c < p->channels; c++)
             R[c] = 0.0;
     size_t pts = 0;
+    /* the light's index combined once for the angle (NULL when out of memory: the
+       plain evaluation, the same values) */
+    fixed_read *fr = fixed_new(m->f, m->side, m->mode, fmin(1.0, fmax(0.0, cti)));
     for (int c = 0; c < p->channels; c++) {
         double n = p->ior[c], l1 = 0.0, sgn = 0.0, dmax = 0.0, vmax = 0.0;
         for (size_t iu = 0; iu < nu; iu++) {
@@ -2093,7 +2411,7 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
                 double va = rz * 4.0 * ca * refl_h_measure(u, s, dw, dpsi);
                 double vb = rz * dmu * dphi * 2.0;
                 double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
-                if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, tab) != BTDF_OK)
+                if (refl_read(m, fr, ti, tr, phi, tab) != BTDF_OK)
                     tab[c] = 0.0;
                 double d = tab[c] - rho, wgt = va * vb / (va + vb); /* va, vb > 0 */
                 l1 += fabs(d) * wgt;
@@ -2124,7 +2442,7 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
                 }
                 double tr = atan2(sr, mu), phi = ph;
                 double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
-                if (btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, tab) != BTDF_OK)
+                if (refl_read(m, fr, ti, tr, phi, tab) != BTDF_OK)
                     tab[c] = 0.0;
                 double d = tab[c] - rho;
                 l1 += fabs(d) * share;
@@ -2143,6 +2461,7 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
         if (R[c] >= T_FLOOR && vmax > 0.0)
             res->e_max = fmax(res->e_max, dmax / vmax);
     }
+    fixed_free(fr);
     return pts;
 }
 
@@ -2154,7 +2473,7 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
                                   uint64_t seed, int threads, albedo_memo *memo,
                                   btdf_report *r)
 {
-    mis_obj m = {f, (btdf_side)b, mode, memo};
+    mis_obj m = {f, (btdf_side)b, mode, memo, NULL};
     int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
     int below = b == BTDF_SCATFUN_T_LEAVE || b == BTDF_SCATFUN_R_BOTTOM;
     btdf_params q = *p;
@@ -2178,8 +2497,8 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
         st = btdf_estimate_angles(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
                                   refl_angle, &m, memo, r);
     else
-        st = btdf_estimate_knots(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
-                                 mis_eval, &m, memo, r);
+        st = btdf_estimate_knots_prep(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots,
+                                      nk, mis_eval, mis_prep, mis_done, &m, memo, r);
     free(knots);
     return st;
 }

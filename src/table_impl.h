@@ -144,6 +144,20 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
                                 est_eval_fn fn, const void *obj, albedo_memo *memo,
                                 btdf_report *r);
 
+/* A context for one incident angle ti, made from obj before the angle's points and
+   passed to the est_eval_fn in obj's place (NULL: out of memory, obj is passed). */
+typedef void *(*est_prep_fn)(const void *obj, double ti);
+typedef void (*est_done_fn)(void *ctx);
+
+/* btdf_estimate_knots with a per-angle context from prep (freed by done); fn then reads
+   q[0..5] only (q[6] and q[7], the angles, are left 0: no atan2 per point). */
+btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double ti_max,
+                                     size_t test_angles, size_t points_per_angle,
+                                     uint64_t seed, int threads, const double *knots,
+                                     size_t nknots, est_eval_fn fn, est_prep_fn prep,
+                                     est_done_fn done, const void *obj, albedo_memo *memo,
+                                     btdf_report *r);
+
 /* A whole per-angle estimate: fills res (zeroed, res->ti set) at incidence ti with p
    the truth's parameters, from the generator state rng (fixed by ti and the seed);
    res->T is the norm's quantity (T, or R for reflection). Returns the points used. */
