@@ -37,11 +37,12 @@ static void put_comment_text(FILE *f, const char *s)
 /* A value as written: 6 significant digits (FLT_DIG: reads back to the stored float),
    in as few characters as C's strtod and Radiance's reader take: no "0" before the
    point (".0123"), no "+" or leading zeros in the exponent ("1.2e-5"). Tree leaves
-   are rounded to 4 digits already (ttree.c), so they print as such. */
-static void put_value(FILE *f, float v)
+   are rounded to 4 digits already (ttree.c), so they print as such; a colour tree's
+   u', v' are plain floats, written with 9 digits (FLT_DECIMAL_DIG: the very float). */
+static void put_value_digits(FILE *f, float v, int digits)
 {
     char t[32], o[32];
-    snprintf(t, sizeof t, "%.6g", (double)v);
+    snprintf(t, sizeof t, "%.*g", digits, (double)v);
     const char *s = t;
     size_t k = 0;
     if (s[0] == '0' && s[1] == '.')
@@ -62,13 +63,23 @@ static void put_value(FILE *f, float v)
     fputs(o, f);
 }
 
+static void put_value(FILE *f, float v) { put_value_digits(f, v, 6); }
+
+/* What node k of block b holds in tree `what`: 0 the Y tree (the node's value), 1 and
+   2 the u' and v' trees of a colour file (the same structure). */
+static float node_value(const rad_block *b, size_t k, int what)
+{
+    return what == 0 ? b->nodes[k].v : b->cv[k * RAD_CV + 2 + (size_t)what];
+}
+
 /* Node k: a leaf { v }, a grid of 8 leaves { v0 .. v7 } (dimension 0 slowest, as
    Radiance reads a 2 x 2 x 2 grid), or { child0 .. child7 }. */
-static void put_node(FILE *f, const rad_node *nd, size_t k)
+static void put_node(FILE *f, const rad_block *b, size_t k, int what)
 {
+    const rad_node *nd = b->nodes;
     if (nd[k].child < 0) {
         fputc('{', f);
-        put_value(f, nd[k].v);
+        put_value_digits(f, node_value(b, k, what), what ? 9 : 6);
         fputc('}', f);
         return;
     }
@@ -83,13 +94,14 @@ static void put_node(FILE *f, const rad_node *nd, size_t k)
             int n = ((g >> 2) & 1) | (((g >> 1) & 1) << 1) | ((g & 1) << 2);
             if (g)
                 fputc(' ', f);
-            put_value(f, c[n].v);
+            put_value_digits(f, node_value(b, (size_t)nd[k].child + (size_t)n, what),
+                             what ? 9 : 6);
         }
         fputs("}\n", f);
         return;
     }
     for (int n = 0; n < 8; n++)
-        put_node(f, nd, (size_t)nd[k].child + (size_t)n);
+        put_node(f, b, (size_t)nd[k].child + (size_t)n, what);
     fputs("}\n", f);
 }
 
@@ -126,8 +138,8 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
             BTDF_VERSION_STRING);
     if (r->channels == 3)
         fprintf(f, "     Colour: R, G, B in Radiance's RGB (its default primaries, equal-energy "
-                   "white) for n = %.9g, %.9g, %.9g, written as CIE X, Y, Z.\n",
-                r->p.ior[0], r->p.ior[1], r->p.ior[2]);
+                   "white) for n = %.9g, %.9g, %.9g, written as CIE %s.\n",
+                r->p.ior[0], r->p.ior[1], r->p.ior[2], tree ? "Y, u', v'" : "X, Y, Z");
     fprintf(f, "     In Radiance the surface normal points into the dense medium (index n = %.9g).\n"
                "     Transmission Front serves light from the dense side (leaving it, 1/n), "
                "Transmission Back light entering it (n);\n     Reflection Front light "
@@ -150,10 +162,10 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                "\t\t<DeviceType>Other</DeviceType>\n");
     if (r->channels == 3)
         fprintf(f, "\t\t<Comments>Xu and Sun 2008 Eq. 25 rough interface: n = %.9g (R), "
-                   "%.9g (G), %.9g (B) in Radiance's RGB, written as CIE X, Y, Z; s = %.9g, "
+                   "%.9g (G), %.9g (B) in Radiance's RGB, written as CIE %s; s = %.9g, "
                    "k0 = %.9g; basis %s",
-                r->p.ior[0], r->p.ior[1], r->p.ior[2], r->p.smoothness, r->p.k0,
-                rad_basis_name(r->basis));
+                r->p.ior[0], r->p.ior[1], r->p.ior[2], tree ? "Y, u', v'" : "X, Y, Z",
+                r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
     else
         fprintf(f, "\t\t<Comments>Xu and Sun 2008 Eq. 25 rough interface: n = %.9g, s = %.9g, "
                    "k0 = %.9g; basis %s",
@@ -174,14 +186,21 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     }
     fprintf(f, "\t</DataDefinition>\n");
     /* One WavelengthData per channel: Visible (CIE Y), and for colour CIE-X and CIE-Z
+       (Klems) or CIE-u and CIE-v (trees of u', v' of the Y tree's structure)
        (renderer-formats.md 3.4), each with the four blocks. */
-    static const char *const wl[3] = {"Visible", "CIE-X", "CIE-Z"};
-    static const char *const det[3] = {"Y", "X", "Z"};
+    const char *const *wl = tree ? (const char *const[3]){"Visible", "CIE-u", "CIE-v"}
+                                 : (const char *const[3]){"Visible", "CIE-X", "CIE-Z"};
+    /* informational: the 1931 observer's function, or the chromaticity taken from them */
+    const char *const *det =
+        tree ? (const char *const[3]){"ASTM E308 1931 Y.dsp", "CIE 1976 u' (ASTM E308 1931)",
+                                      "CIE 1976 v' (ASTM E308 1931)"}
+             : (const char *const[3]){"ASTM E308 1931 Y.dsp", "ASTM E308 1931 X.dsp",
+                                      "ASTM E308 1931 Z.dsp"};
     for (int ch = 0; ch < (r->channels == 3 ? 3 : 1); ch++) {
         fprintf(f, "\t<WavelengthData>\n\t\t<LayerNumber>System</LayerNumber>\n"
                    "\t\t<Wavelength unit=\"Integral\">%s</Wavelength>\n"
                    "\t\t<SourceSpectrum>CIE Illuminant D65 1nm.ssp</SourceSpectrum>\n"
-                   "\t\t<DetectorSpectrum>ASTM E308 1931 %s.dsp</DetectorSpectrum>\n",
+                   "\t\t<DetectorSpectrum>%s</DetectorSpectrum>\n",
                 wl[ch], det[ch]);
         for (int k = 0; k < r->nblocks; k++) {
             const rad_block *b = &r->b[k];
@@ -198,7 +217,7 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
             fprintf(f, "\t\t\t<ScatteringDataType>BTDF</ScatteringDataType>\n"
                        "\t\t\t<ScatteringData>\n");
             if (tree) {
-                put_node(f, b->nodes, 0);
+                put_node(f, b, 0, ch);
             } else {
                 const float *m = ch == 0 ? b->klems : (ch == 1 ? b->klems_x : b->klems_z);
                 size_t np = (size_t)r->kb->npatch;

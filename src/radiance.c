@@ -116,7 +116,23 @@ static double rad_n_light(const btdf_rad *r, int k, int c)
     return b.n_light;
 }
 
-static double rad_lookup_ch(const btdf_rad *r, int k, int c, const double p[3], const double q[3]);
+static double rad_lookup_ch(const btdf_rad *r, int k, int c, int chosen, const double p[3],
+                            const double q[3]);
+
+/* Channel c (-1: Y) of leaf i of tree block b: chosen = 1, in a colour tree, the value
+   the builder chose (cv), else as Radiance reads the file back (Y and u', v' to X, Y, Z,
+   then to R, G, B through the inverse of rad_rgb_to_xyz). */
+static double tree_value(const btdf_rad *r, const rad_block *b, size_t i, int c, int chosen)
+{
+    if (!b->cv || c < 0)
+        return b->nodes[i].v;
+    const float *cv = b->cv + i * RAD_CV;
+    if (chosen)
+        return cv[c];
+    double xyz[3];
+    rad_colour_xyz(b->nodes[i].v, cv[3], cv[4], xyz);
+    return r->to_rgb[c][0] * xyz[0] + r->to_rgb[c][1] * xyz[1] + r->to_rgb[c][2] * xyz[2];
+}
 
 BTDF_API btdf_status btdf_rad_block(const btdf_rad *r, int k, btdf_rad_block_info *info)
 {
@@ -157,6 +173,7 @@ BTDF_API void btdf_rad_free(btdf_rad *r)
         return;
     for (int k = 0; k < RAD_MAX_BLOCKS; k++) {
         free(r->b[k].nodes);
+        free(r->b[k].cv);
         free(r->b[k].klems);
         free(r->b[k].klems_x);
         free(r->b[k].klems_z);
@@ -217,8 +234,9 @@ typedef struct rad_probes {
     double *u0, *a, *b, *f;
     const btdf_rad *r;
     int k, c;       /* block, channel (0 for one channel) */
+    int chosen;     /* a colour tree's channel as the builder chose it (tree_value) */
     double n_light; /* the index of the light the block serves, in channel c */
-    const rad_node *nodes; /* the tree under test; NULL for a Klems block, whose value
+    const rad_block *tree; /* the tree under test; NULL for a Klems block, whose value
                               as Radiance reads it is stored in u0 (a, b unused) */
     btdf_ti_error *res;
 } rad_probes;
@@ -289,7 +307,7 @@ static void probe_angle(void *arg, size_t i)
             if (r->basis == RAD_BASIS_TREE3) {
                 tree_coords(pv, qv, &pr->u0[j], &pr->a[j], &pr->b[j]);
             } else {
-                pr->u0[j] = rad_lookup_ch(r, pr->k, pr->c, pv, qv);
+                pr->u0[j] = rad_lookup_ch(r, pr->k, pr->c, 0, pv, qv);
                 pr->a[j] = pr->b[j] = 0.0;
             }
             pr->f[j] = f;
@@ -362,8 +380,11 @@ static void probe_error(void *arg, size_t i)
     rad_probes *pr = arg;
     double l1 = 0.0, dmax = 0.0, fmaxv = 0.0, tf = 0.0;
     for (size_t j = i * pr->kv; j < (i + 1) * pr->kv; j++) {
-        double v = pr->nodes ? rad_tree_lookup(pr->nodes, pr->u0[j], pr->a[j], pr->b[j])
-                             : pr->u0[j];
+        double v = pr->tree ? tree_value(pr->r, pr->tree,
+                                          rad_tree_leaf(pr->tree->nodes, pr->u0[j], pr->a[j],
+                                                        pr->b[j]),
+                                          pr->r->channels == 3 ? pr->c : -1, pr->chosen)
+                            : pr->u0[j];
         double d = fabs(v - pr->f[j]);
         l1 += d;
         tf += v;
@@ -381,11 +402,11 @@ static void probe_error(void *arg, size_t i)
     e->e_max = pr->T[i] >= 0.01 && fmaxv > 0.0 ? dmax / fmaxv : 0.0;
 }
 
-/* The errors of tree `nodes` at every probe angle into res[m]. */
-static void rad_probes_eval(rad_probes *pr, const rad_node *nodes, int threads,
+/* The errors of tree block `tree` (NULL: a Klems block) at every probe angle into res[m]. */
+static void rad_probes_eval(rad_probes *pr, const rad_block *tree, int threads,
                             btdf_ti_error *res)
 {
-    pr->nodes = nodes;
+    pr->tree = tree;
     pr->res = res;
     btdf_parallel_for(threads, pr->m, probe_error, pr);
 }
@@ -401,101 +422,226 @@ static double res_max_l1(const btdf_ti_error *res, size_t m)
 /* Passes of a tensor-tree block, for the progress bar (growth steps). */
 #define RAD_TREE_PASSES 8
 
+static btdf_status rad_report_ch(const btdf_rad *r, int k, int c, int chosen,
+                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
+                                 int threads, btdf_report *rep);
+
+/* The channels a colour tree's builder checks: one per distinct index (equal indices
+   give equal channels), into ch[]; their count. One channel: channel 0. */
+static int tree_channels(const btdf_rad *r, int ch[3])
+{
+    int n = 0;
+    for (int c = 0; c < (r->channels == 3 ? 3 : 1); c++) {
+        int seen = 0;
+        for (int d = 0; d < c; d++)
+            seen |= r->p.ior[d] == r->p.ior[c];
+        if (!seen)
+            ch[n++] = c;
+    }
+    return n;
+}
+
+/* The largest probe e_L1 of tree block b per checked channel (into e[], the probe sets'
+   order) and the worst of them (res: the last channel's per-angle errors). */
+static double tree_probe_err(rad_probes *pr, int npr, const rad_block *b, int threads,
+                             btdf_ti_error *res, double *e)
+{
+    double w = 0.0;
+    for (int i = 0; i < npr; i++) {
+        rad_probes_eval(&pr[i], b, threads, res);
+        e[i] = res_max_l1(res, pr[i].m);
+        w = fmax(w, e[i]);
+    }
+    return w;
+}
+
+/* Thresholds per channel from those of the checked channels (chs[i]: eps[i]); a channel
+   of an index met before shares its threshold. */
+static void tree_eps3(const btdf_rad *r, const int *chs, int npr, const double *eps,
+                      double out[3])
+{
+    for (int c = 0; c < 3; c++) {
+        out[c] = eps[0]; /* one channel: eps[0] alone is used */
+        for (int i = 0; i < npr && r->channels == 3; i++)
+            if (r->p.ior[chs[i]] == r->p.ior[c])
+                out[c] = eps[i];
+    }
+}
+
 /* Grows the tree of block k until the probe estimate's largest e_L1 is below
-   RAD_AIM * tolerance, then cuts it at the largest eps that still holds that. */
+   RAD_AIM * tolerance, then cuts it at the largest eps that still holds that. A colour
+   tree has one eps per channel (index): grown with one eps until every channel meets the
+   aim (each channel's probes against its own leaf values, as the builder chose them; the
+   file carries them to the rounding of Y, 5e-4), then each channel's eps raised in turn
+   while every channel still meets it (a channel's splits help the others, so all are
+   checked). With one index this is the one-channel search, step for step. */
 static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress_fn progress,
                                   void *user, char *msg, size_t msglen)
 {
     rad_block *b = &r->b[k];
-    rad_probes pr;
-    btdf_status st = rad_probes_make(r, k, 0, RAD_TI_CHECKED, RAD_CHECK_ANGLES, RAD_CHECK_S,
-                                     RAD_CHECK_PHI, RAD_CHECK_SEED, threads, &pr);
-    if (st != BTDF_OK)
+    rad_probes pr[3];
+    int chs[3], npr = tree_channels(r, chs);
+    btdf_status st = BTDF_OK;
+    memset(pr, 0, sizeof pr);
+    for (int i = 0; i < npr && st == BTDF_OK; i++) {
+        st = rad_probes_make(r, k, chs[i], RAD_TI_CHECKED, RAD_CHECK_ANGLES, RAD_CHECK_S,
+                             RAD_CHECK_PHI, RAD_CHECK_SEED, threads, &pr[i]);
+        pr[i].chosen = 1;
+    }
+    if (st != BTDF_OK) {
+        for (int i = 0; i < npr; i++)
+            rad_probes_free(&pr[i]);
         return st;
-    btdf_ti_error *res = malloc(pr.m * sizeof *res);
+    }
+    btdf_ti_error *res = malloc(pr[0].m * sizeof *res);
     rad_tb *t = res ? rad_tb_new(&r->p, b, threads) : NULL;
     if (!t) {
         free(res);
-        rad_probes_free(&pr);
+        for (int i = 0; i < npr; i++)
+            rad_probes_free(&pr[i]);
         return btdf_say(BTDF_ENOMEM, msg, msglen, "out of memory building the tensor tree");
     }
-    double aim = RAD_AIM * r->tolerance;
-    /* A cell's share is about eps and a light's ring crosses some 10^2 to 10^4 cells:
-       start from eps = tolerance / 100 and refine as e_L1 ~ eps^(1/3) suggests. */
-    double eps = r->tolerance * 1e-2, e = 0.0;
+    double aim = RAD_AIM * r->tolerance, ech[3], e3[3];
+    /* per checked channel: its cut (lo) and what the tree is grown to (grown; 1e300: not
+       yet, no split for that channel) */
+    double lo[3] = {0.0, 0.0, 0.0}, grown[3] = {1e300, 1e300, 1e300}, e = 0.0;
     int pass = 0;
-    for (;;) {
-        if (progress)
-            progress(user, "tensor tree, block", (size_t)(k * RAD_TREE_PASSES + pass),
-                     (size_t)((r->nblocks - k) * RAD_TREE_PASSES - pass));
-        st = rad_tb_grow(t, eps, RAD_MAX_NODES);
-        if (st == BTDF_ENOMEM)
-            break;
-        btdf_status se = rad_tb_extract(t, eps, b);
-        if (se != BTDF_OK) {
-            st = se;
-            break;
+    for (int c = 0; c < npr && st == BTDF_OK; c++) {
+        /* Channel c alone (the others' thresholds at infinity): its one-channel tree.
+           A cell's share is about eps and a light's ring crosses some 10^2 to 10^4 cells:
+           start from eps = tolerance / 100 and refine as e_L1 ~ eps^(1/3) suggests. */
+        double eps = r->tolerance * 1e-2, one[3] = {1e300, 1e300, 1e300};
+        for (;;) {
+            if (progress)
+                progress(user, "tensor tree, block", (size_t)(k * RAD_TREE_PASSES + pass),
+                         (size_t)((r->nblocks - k) * RAD_TREE_PASSES - pass));
+            grown[c] = fmin(grown[c], eps);
+            tree_eps3(r, chs, npr, grown, e3);
+            st = rad_tb_grow3(t, e3, RAD_MAX_NODES);
+            if (st == BTDF_ENOMEM)
+                break;
+            one[c] = eps;
+            tree_eps3(r, chs, npr, one, e3);
+            btdf_status se = rad_tb_extract3(t, e3, b);
+            if (se != BTDF_OK) {
+                st = se;
+                break;
+            }
+            rad_probes_eval(&pr[c], b, threads, res);
+            e = res_max_l1(res, pr[c].m);
+            if (getenv("BTDF_RAD_DEBUG")) {
+                fprintf(stderr, "grow %s channel %d eps %.3g: %zu leaves, e_L1 max %.4g:",
+                        b->label, chs[c], eps, b->leaves, e);
+                for (size_t i = 0; i < pr[c].m; i += 6)
+                    fprintf(stderr, " %.0f:%.3g", res[i].ti * 180 / M_PI, res[i].e_l1);
+                fprintf(stderr, " %.1f:%.3g\n", res[pr[c].m - 1].ti * 180 / M_PI,
+                        res[pr[c].m - 1].e_l1);
+            }
+            if (e <= aim || st == BTDF_EBUDGET)
+                break;
+            double g = aim / e;
+            g = g * g * g;
+            eps *= g < 1.0 / 64 ? 1.0 / 64 : (g > 0.5 ? 0.5 : g);
+            if (pass < RAD_TREE_PASSES - 1)
+                pass++;
         }
-        rad_probes_eval(&pr, b->nodes, threads, res);
-        e = res_max_l1(res, pr.m);
-        if (getenv("BTDF_RAD_DEBUG")) {
-            fprintf(stderr, "grow %s eps %.3g: %zu leaves, e_L1 max %.4g:", b->label, eps,
-                    b->leaves, e);
-            for (size_t i = 0; i < pr.m; i += 6)
-                fprintf(stderr, " %.0f:%.3g", res[i].ti * 180 / M_PI, res[i].e_l1);
-            fprintf(stderr, " %.1f:%.3g\n", res[pr.m - 1].ti * 180 / M_PI, res[pr.m - 1].e_l1);
-        }
-        if (e <= aim || st == BTDF_EBUDGET)
+        if (st != BTDF_OK)
             break;
-        double g = aim / e;
-        g = g * g * g;
-        eps *= g < 1.0 / 64 ? 1.0 / 64 : (g > 0.5 ? 0.5 : g);
-        if (pass < RAD_TREE_PASSES - 1)
-            pass++;
-    }
-    if (st == BTDF_OK) {
         /* Cut: the largest eps (a factor 2^(1/8) apart) whose tree still meets the aim. */
-        double lo = eps, hi = 0.0;
+        double hi = 0.0;
+        lo[c] = eps;
         for (int i = 0; i < 24; i++) {
-            double x = hi > 0.0 ? sqrt(lo * hi) : 2.0 * lo;
-            if (hi > 0.0 && hi / lo < 1.09)
+            double x = hi > 0.0 ? sqrt(lo[c] * hi) : 2.0 * lo[c];
+            if (hi > 0.0 && hi / lo[c] < 1.09)
                 break;
-            if (rad_tb_extract(t, x, b) != BTDF_OK)
+            one[c] = x;
+            tree_eps3(r, chs, npr, one, e3);
+            if (rad_tb_extract3(t, e3, b) != BTDF_OK)
                 break;
-            rad_probes_eval(&pr, b->nodes, threads, res);
-            double ex = res_max_l1(res, pr.m);
+            rad_probes_eval(&pr[c], b, threads, res);
+            double ex = res_max_l1(res, pr[c].m);
             if (getenv("BTDF_RAD_DEBUG"))
-                fprintf(stderr, "cut %s eps %.3g: %zu leaves, e_L1 max %.4g\n", b->label, x,
-                        b->leaves, ex);
+                fprintf(stderr, "cut %s channel %d eps %.3g: %zu leaves, e_L1 max %.4g\n",
+                        b->label, chs[c], x, b->leaves, ex);
             if (ex <= aim)
-                lo = x;
+                lo[c] = x;
             else
                 hi = x;
         }
-        st = rad_tb_extract(t, lo, b);
-        /* The probes see e_L1 at fixed angles; it jumps where a light's ring enters the
-           next cell, and the report's estimate refines there. So check the cut tree
-           with that estimator too (its own seed) and cut finer while it misses. */
-        for (int i = 0; i < 6 && st == BTDF_OK; i++) {
-            btdf_report rep;
-            memset(&rep, 0, sizeof rep);
-            st = btdf_rad_report(r, k, 48, 4096, RAD_CHECK_SEED, threads, &rep);
-            double ec = btdf_rad_e_l1_checked(&rep);
-            btdf_report_clear(&rep);
-            if (getenv("BTDF_RAD_DEBUG"))
-                fprintf(stderr, "check %s eps %.3g: %zu leaves, e_L1 max %.4g\n", b->label, lo,
-                        b->leaves, ec);
-            if (st != BTDF_OK || ec <= RAD_AIM_CHECK * r->tolerance)
+    }
+    if (st == BTDF_OK) {
+        /* The colour tree splits where any channel's does: check each channel on it and
+           cut finer (2^(-1/8)) for a channel that misses (its leaves are its own tree's
+           or finer, which usually lowers its e_L1 but need not: the leaf values minimise
+           a cell's own share, not a light's sum); with one channel this never runs, its
+           cut met the aim. */
+        tree_eps3(r, chs, npr, lo, e3);
+        st = rad_tb_extract3(t, e3, b);
+        for (int i = 0; i < 16 && st == BTDF_OK && npr > 1; i++) {
+            if (tree_probe_err(pr, npr, b, threads, res, ech) <= aim)
                 break;
-            lo *= 0.6;
-            if (lo < eps) { /* below what the tree was grown to: grow it further */
-                eps = lo;
-                st = rad_tb_grow(t, eps, RAD_MAX_NODES);
+            int regrow = 0;
+            for (int c = 0; c < npr; c++) {
+                if (!(ech[c] > aim))
+                    continue;
+                lo[c] *= 0.917; /* 2^(-1/8) */
+                if (lo[c] < grown[c]) {
+                    grown[c] = lo[c];
+                    regrow = 1;
+                }
+            }
+            if (regrow) {
+                tree_eps3(r, chs, npr, grown, e3);
+                st = rad_tb_grow3(t, e3, RAD_MAX_NODES);
                 if (st != BTDF_OK)
                     break;
             }
-            st = rad_tb_extract(t, lo, b);
+            tree_eps3(r, chs, npr, lo, e3);
+            st = rad_tb_extract3(t, e3, b);
         }
+        /* The probes see e_L1 at fixed angles; it jumps where a light's ring enters the
+           next cell, and the report's estimate refines there. So check the cut tree
+           with that estimator too (its own seed) and cut finer while it misses: the
+           channels that miss. */
+        for (int i = 0; i < 6 && st == BTDF_OK; i++) {
+            double ec = 0.0;
+            for (int c = 0; c < npr && st == BTDF_OK; c++) {
+                btdf_report rep;
+                memset(&rep, 0, sizeof rep);
+                st = rad_report_ch(r, k, chs[c], 1, 48, 4096, RAD_CHECK_SEED, threads, &rep);
+                ech[c] = btdf_rad_e_l1_checked(&rep);
+                ec = fmax(ec, ech[c]);
+                btdf_report_clear(&rep);
+            }
+            if (getenv("BTDF_RAD_DEBUG"))
+                fprintf(stderr, "check %s eps %.3g: %zu leaves, e_L1 max %.4g\n", b->label,
+                        lo[0], b->leaves, ec);
+            if (st != BTDF_OK || ec <= RAD_AIM_CHECK * r->tolerance)
+                break;
+            int regrow = 0;
+            for (int c = 0; c < npr; c++) {
+                if (!(ech[c] > RAD_AIM_CHECK * r->tolerance))
+                    continue;
+                lo[c] *= 0.6;
+                if (lo[c] < grown[c]) { /* below what the tree was grown to */
+                    grown[c] = lo[c];
+                    regrow = 1;
+                }
+            }
+            if (regrow) { /* grow it further */
+                tree_eps3(r, chs, npr, grown, e3);
+                st = rad_tb_grow3(t, e3, RAD_MAX_NODES);
+                if (st != BTDF_OK)
+                    break;
+            }
+            tree_eps3(r, chs, npr, lo, e3);
+            st = rad_tb_extract3(t, e3, b);
+        }
+    }
+    if (st == BTDF_EBUDGET) { /* the best tree it has: grown as far as it went */
+        tree_eps3(r, chs, npr, grown, e3);
+        if (rad_tb_extract3(t, e3, b) != BTDF_OK)
+            st = BTDF_ENOMEM;
     }
     if (st == BTDF_EBUDGET) {
         snprintf(msg, msglen, "%s: e_L1 %.3g above the tolerance %g with the node budget "
@@ -505,7 +651,8 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
     }
     rad_tb_free(t);
     free(res);
-    rad_probes_free(&pr);
+    for (int i = 0; i < npr; i++)
+        rad_probes_free(&pr[i]);
     return st;
 }
 
@@ -574,14 +721,11 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
         return st;
     if ((unsigned)basis > RAD_BASIS_KLEMS_QUARTER)
         return BTDF_EINVAL;
-    if (p->channels != 1 && !(p->channels == 3 && basis != RAD_BASIS_TREE3)) {
+    if (p->channels != 1 && p->channels != 3) {
         if (msg && msglen)
-            snprintf(msg, msglen, p->channels == 3
-                     ? "three --ior values (colour) are written to Klems files only "
-                       "(--basis klems-full, klems-half or klems-quarter): a tensor tree "
-                       "in colour (CIE-u, CIE-v trees) is not implemented"
-                     : "a Radiance BSDF file holds one channel (Visible) or three (R, G, "
-                       "B as CIE X, Y, Z): give one or three --ior values, not %d",
+            snprintf(msg, msglen, "a Radiance BSDF file holds one channel (Visible) or three "
+                                  "(R, G, B as CIE X, Y, Z, or a tree's Y, u', v'): give one "
+                                  "or three --ior values, not %d",
                      p->channels);
         return BTDF_EINVAL;
     }
@@ -656,7 +800,11 @@ static void rad_lookup_xyz(const btdf_rad *r, int k, const double p[3], const do
     if (r->basis == RAD_BASIS_TREE3) {
         double u0, a, bb;
         tree_coords(p, q, &u0, &a, &bb);
-        xyz[0] = xyz[1] = xyz[2] = rad_tree_lookup(b->nodes, u0, a, bb);
+        size_t i = rad_tree_leaf(b->nodes, u0, a, bb);
+        if (b->cv)
+            rad_colour_xyz(b->nodes[i].v, b->cv[i * RAD_CV + 3], b->cv[i * RAD_CV + 4], xyz);
+        else
+            xyz[0] = xyz[1] = xyz[2] = b->nodes[i].v;
         return;
     }
     /* Klems: incident patch of p's direction of travel (-p), outgoing patch of q, both by
@@ -674,10 +822,22 @@ static void rad_lookup_xyz(const btdf_rad *r, int k, const double p[3], const do
 }
 
 /* Channel c (R, G, B: 0, 1, 2) of the file at (p, q), recovered from its X, Y, Z; -1:
-   its Y. A one-channel file: its value for c = 0 or -1. */
-static double rad_lookup_ch(const btdf_rad *r, int k, int c, const double p[3], const double q[3])
+   its Y. A one-channel file: its value for c = 0 or -1. chosen: a colour tree's channel
+   as its builder chose it (tree_value). */
+static double rad_lookup_ch(const btdf_rad *r, int k, int c, int chosen, const double p[3],
+                            const double q[3])
 {
     double xyz[3];
+    if (chosen && c >= 0 && r && r->channels == 3 && r->basis == RAD_BASIS_TREE3 && k >= 0 &&
+        k < r->nblocks) {
+        const rad_block *b = &r->b[k];
+        double sg = b->side == BTDF_SIDE_ENTER ? -1.0 : 1.0, sq = b->reflect ? sg : -sg;
+        if (!(sg * p[2] > 0.0 && sq * q[2] > 0.0))
+            return 0.0;
+        double u0, a, bb;
+        tree_coords(p, q, &u0, &a, &bb);
+        return tree_value(r, b, rad_tree_leaf(b->nodes, u0, a, bb), c, 1);
+    }
     rad_lookup_xyz(r, k, p, q, xyz);
     if (c < 0 || !r || r->channels != 3)
         return xyz[1];
@@ -688,7 +848,7 @@ static double rad_lookup_ch(const btdf_rad *r, int k, int c, const double p[3], 
 BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
                                 const double q[3])
 {
-    return rad_lookup_ch(r, k, -1, p, q);
+    return rad_lookup_ch(r, k, -1, 0, p, q);
 }
 
 BTDF_API void btdf_rad_lookup_xyz(const btdf_rad *r, int k, const double p[3],
@@ -702,37 +862,43 @@ BTDF_API double btdf_rad_lookup_channel(const btdf_rad *r, int k, int c, const d
 {
     if (!r || c < 0 || c >= (r->channels == 3 ? 3 : 1))
         return 0.0;
-    return rad_lookup_ch(r, k, c, p, q);
+    return rad_lookup_ch(r, k, c, 0, p, q);
+}
+
+static double rad_render(const btdf_rad *r, btdf_side light, int c, int chosen, double ti,
+                         double to, double phi)
+{
+    int k = light == BTDF_SIDE_LEAVE ? 0 : 1; /* the block of the view's side */
+    double p[3], q[3];
+    render_dirs(r, k, ti, to, phi, p, q);
+    return rad_lookup_ch(r, k, c, chosen, p, q);
 }
 
 double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti, double to,
                        double phi)
 {
-    int k = light == BTDF_SIDE_LEAVE ? 0 : 1; /* the block of the view's side */
-    double p[3], q[3];
-    render_dirs(r, k, ti, to, phi, p, q);
-    return rad_lookup_ch(r, k, c, p, q);
+    return rad_render(r, light, c, 0, ti, to, phi);
 }
 
 typedef struct rad_est {
     const btdf_rad *r;
     btdf_side light;
-    int c;
+    int c, chosen;
 } rad_est;
 
 static void rad_est_fn(const void *obj, double ti, const double *q, double *out)
 {
     const rad_est *e = obj;
     /* q = {sin ti, cos ti, sin to, cos to, cos phi, sin phi, |phi|, to} */
-    out[0] = btdf_rad_render(e->r, e->light, e->c, ti, q[7], atan2(q[5], q[4]));
+    out[0] = rad_render(e->r, e->light, e->c, e->chosen, ti, q[7], atan2(q[5], q[4]));
 }
 
 /* A reflection block's report: the probe estimate (stratified light angles over 0-90
    degrees, views stratified in projected solid angle) against rho_r, since the
    transmission estimator follows Eq. 25's lobe. */
-static btdf_status rad_reflect_report(const btdf_rad *r, int k, int c, size_t test_angles,
-                                      size_t points_per_angle, uint64_t seed, int threads,
-                                      btdf_report *rep)
+static btdf_status rad_reflect_report(const btdf_rad *r, int k, int c, int chosen,
+                                      size_t test_angles, size_t points_per_angle,
+                                      uint64_t seed, int threads, btdf_report *rep)
 {
     double t0 = btdf_now();
     size_t m = test_angles ? test_angles : 48, ppa = points_per_angle ? points_per_angle : 8192;
@@ -749,7 +915,8 @@ static btdf_status rad_reflect_report(const btdf_rad *r, int k, int c, size_t te
         return BTDF_ENOMEM;
     }
     int tree = r->basis == RAD_BASIS_TREE3;
-    rad_probes_eval(&pr, tree ? r->b[k].nodes : NULL, threads, rep->per_ti);
+    pr.chosen = chosen;
+    rad_probes_eval(&pr, tree ? &r->b[k] : NULL, threads, rep->per_ti);
     rep->test_angles = m;
     rep->test_points = m * pr.kv;
     for (size_t i = 0; i < m; i++) {
@@ -789,14 +956,24 @@ BTDF_API btdf_status btdf_rad_report_channel(const btdf_rad *r, int k, int c,
                                              size_t test_angles, size_t points_per_angle,
                                              uint64_t seed, int threads, btdf_report *rep)
 {
+    return rad_report_ch(r, k, c, 0, test_angles, points_per_angle, seed, threads, rep);
+}
+
+/* btdf_rad_report_channel; chosen: a colour tree's channels as its builder chose them
+   (the builder's own check), not as read back from the file's Y, u', v'. */
+static btdf_status rad_report_ch(const btdf_rad *r, int k, int c, int chosen,
+                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
+                                 int threads, btdf_report *rep)
+{
     if (!r || !rep || k < 0 || k >= r->nblocks || c < 0 || c >= (r->channels == 3 ? 3 : 1))
         return BTDF_EINVAL;
     if (r->b[k].reflect)
-        return rad_reflect_report(r, k, c, test_angles, points_per_angle, seed, threads, rep);
+        return rad_reflect_report(r, k, c, chosen, test_angles, points_per_angle, seed,
+                                  threads, rep);
     btdf_params q = r->p;
     q.channels = 1;
     q.ior[0] = rad_n_light(r, k, c);
-    rad_est e = {r, r->b[k].light, r->channels == 3 ? c : -1};
+    rad_est e = {r, r->b[k].light, r->channels == 3 ? c : -1, chosen};
     btdf_status st = btdf_estimate_fn(&q, 0.0, M_PI / 2, test_angles, points_per_angle, seed,
                                       threads, rad_est_fn, &e, rep);
     if (st == BTDF_OK) {

@@ -45,8 +45,11 @@ typedef btdf_rad_basis rad_basis;
    nodes[child .. child + 7], child index bit d set = upper half of dimension d. */
 typedef struct rad_node {
     int32_t child;
-    float v; /* the leaf value exactly as written to the file */
+    float v; /* the leaf value exactly as written to the file (CIE Y in colour) */
 } rad_node;
+
+/* Floats per node of a colour tree (rad_block.cv): R, G, B, u', v'. */
+#define RAD_CV 5
 
 /* A Klems angle basis: nbands theta bands, band k from theta[k] to theta[k + 1]
    (degrees) with nphi[k] patches. */
@@ -70,6 +73,10 @@ typedef struct rad_block {
     rad_node *nodes;
     size_t nnodes, leaves;
     int depth;
+    /* A colour tree (three channels): per node RAD_CV floats, cv[RAD_CV k + c] channel
+       c (R, G, B) as the builder chose it, then the CIE u', v' the file holds (with
+       nodes[k].v, CIE Y, Radiance reads back these channels: rad_colour_xyz); else NULL */
+    float *cv;
     /* Klems: values[out * npatch + in], the file's row-major order: CIE Y ("Visible");
        with three channels also CIE X and Z (NULL for one channel) */
     float *klems;
@@ -80,7 +87,8 @@ struct btdf_rad {
     rad_basis basis;
     btdf_params p;
     double tolerance;
-    int channels; /* 1 (Visible only) or 3 (R, G, B: Klems Y, X and Z matrices) */
+    int channels; /* 1 (Visible only) or 3 (R, G, B: Klems Y, X and Z matrices, or the
+                     tree's Y with u', v') */
     double to_rgb[3][3]; /* X, Y, Z -> R, G, B (rad_xyz_to_rgb), for lookups in colour */
     int nblocks;
     rad_block b[RAD_MAX_BLOCKS];
@@ -99,6 +107,15 @@ const char *rad_basis_name(rad_basis b);
    "Colour") to CIE XYZ: m[row X, Y, Z][column R, G, B], and its inverse. */
 void rad_rgb_to_xyz(double m[3][3]);
 void rad_xyz_to_rgb(double m[3][3]);
+
+/* A colour tree leaf (ttree.c): from the channels rgb as the builder chose them, the
+   file's CIE Y (4 digits, as every tree value) and u', v' (floats, written to read back
+   exactly: Radiance reads them as floats; rounded to 6 digits they would move a small
+   channel of a saturated colour by up to 0.4 %; the white point's where X + 15 Y + 3 Z
+   = 0), with m = rad_rgb_to_xyz. */
+void rad_colour_leaf(const double m[3][3], const float rgb[3], float *y, float uv[2]);
+/* X, Y, Z of a file's (Y, u', v'), as Radiance forms them; 0 for v' <= 0. */
+void rad_colour_xyz(double y, double u, double v, double xyz[3]);
 
 
 

@@ -17,6 +17,11 @@ library and programs (the pyradiance wheel) and checks it against btdftab's repo
    these in 8 bits (steps of 1/410, rounded up or down at random: ccolor.c), so a
    decoded u', v' is within 1/410 of the file's; the allowance is the largest change of
    X (Z) over that square around the file's u', v', plus 5e-4 X (Z).
+   A colour tree (Y, u', v' trees): Radiance keeps u', v' as floats and forms the colour
+   from the perturbed Y and u', v' through its "sharp" RGB: to sharp RGB with one
+   4-digit matrix (T) and back with another (F), which are not exact inverses, so it
+   returns F T (X, Y, Z) (1 + 1e-4 d) (bsdf_t.c, ccolor.c). X, Y and Z each within 2e-4
+   relative (plus 1e-6) of F T times the file's X, Y, Z (as the report reads them).
 3. rtrace with a BSDF material, lit by a distant source on the side of the light a block
    serves and viewed from the block's own side (Radiance takes the block of the view's
    side) along N directions stratified in projected solid angle, gives
@@ -33,7 +38,12 @@ library and programs (the pyradiance wheel) and checks it against btdftab's repo
    square of check 2 at every view, summed, plus 5e-4 of the channel); and the loss
    itself is measured: the sum of the file's own R, G, B over the same views (read
    from the file's X, Y, Z by Radiance's Klems index rule) against rtrace's, which must
-   lie within that bound.
+   lie within that bound. A colour tree: the bound is that of check 2's F T summed, i.e.
+   per channel sum_j |A_cj| T_j + 1.5e-4 (T_c + sum_j |A_cj| T_j), A = C (F T - I) M (M
+   the report's RGB -> XYZ, C its inverse, T_j the report's estimate of the file's
+   channel j, raised by twice its own estimate error); the loss is measured against the
+   report's own estimate of the file's channel (T_file), within that bound plus the two
+   sums' own errors (2 x quadrature + 2 x estimate).
 Prints one "ok"/"not ok" line per check and ends with "N passed, N failed".
 """
 import json
@@ -90,6 +100,13 @@ def view_dirs(nr, nphi, up):
     x, y = (R * np.cos(P)).ravel(), (R * np.sin(P)).ravel()
     z = up * np.sqrt(np.maximum(0.0, 1 - x * x - y * y))
     return np.stack([x, y, z], axis=1)
+
+
+# Radiance's "sharp" RGB matrices (ccolor.c, float): XYZ -> sharp (T) and back (F).
+SHARP_TO = np.array([[1.2694, -0.0988, -0.1706], [-0.8364, 1.8006, 0.0357],
+                     [0.0297, -0.0315, 1.0018]], dtype=np.float32).astype(float)
+SHARP_FROM = np.array([[0.8156, 0.0472, 0.1372], [0.3791, 0.5769, 0.0440],
+                       [-0.0123, 0.0167, 0.9955]], dtype=np.float32).astype(float)
 
 
 # Radiance's Klems bases by name (bsdf_m.c): theta bounds (degrees) and patches per band.
@@ -170,9 +187,11 @@ def main():
           "Radiance loads %s with both transmission blocks and both reflection blocks "
           "(%s basis; the report lists %d blocks, %d of them reflection)" %
           (os.path.basename(xml), rep["basis"], len(rep["blocks"]), nrefl))
-    rel = 2e-4 if rep["basis"] == "tree3" else 5e-4
+    tree = rep["basis"] == "tree3"
+    rel = 2e-4 if tree else 5e-4
     colour = len(rep["ior"]) == 3
     xz = np.array([[1.0, 0, 0], [0, 0, 1.0]])
+    FT = SHARP_FROM @ SHARP_TO
     for blk in rep["blocks"]:
         bad, worst, nonzero, badc, worst_xz, used_xz = 0, 0.0, 0, 0, 0.0, 0.0
         for pr in blk["probes"]:
@@ -180,10 +199,21 @@ def main():
             got = bsdf.query(sd, ts, ps, tv, pv)  # X, Y, Z; light direction first
             y = float(got[1])
             nonzero += v > 0
-            if abs(y - v) > rel * v + 1e-6:
+            # a colour tree's Y passes through F T too: that change allowed on top
+            shift = abs(float((FT - np.eye(3))[1] @ np.array([pr[6], v, pr[7]]))) \
+                if colour and tree else 0.0
+            if abs(y - v) > rel * v + shift + 1e-6:
                 bad += 1
             worst = max(worst, abs(y - v) / max(v, 1e-30))
-            if colour:
+            if colour and tree:
+                want = FT @ np.array([pr[6], v, pr[7]])
+                diff = np.abs(np.asarray(got, dtype=float) - want)
+                allow = 2e-4 * np.abs(want) + 1e-6
+                badc += int(np.any(diff > allow))
+                if v > 1e-3:
+                    worst_xz = max(worst_xz, float(np.max(diff / np.abs(want))))
+                    used_xz = max(used_xz, float(np.max(diff / allow)))
+            elif colour:
                 fx, fz = pr[6], pr[7]
                 allow = chroma_box(np.array([fx, v, fz]), xz) + 5e-4 * np.array([fx, fz]) + 1e-6
                 diff = np.abs(np.array([got[0], got[2]]) - np.array([fx, fz]))
@@ -194,15 +224,23 @@ def main():
         check(bad == 0 and nonzero >= 100,
               "%s: Radiance's query equals the report at %d probes (%d non-zero; worst "
               "relative difference %.2g)" % (blk["label"], len(blk["probes"]), nonzero, worst))
-        if colour:
+        if colour and tree:
+            check(badc == 0,
+                  "%s: Radiance's X, Y, Z equal its sharp-RGB round trip F T of the file's "
+                  "(Y, u', v') at %d probes (worst relative difference %.2g where Y > 1e-3; "
+                  "at most %.2f of the allowance 2e-4)"
+                  % (blk["label"], len(blk["probes"]), worst_xz, used_xz))
+        elif colour:
             check(badc == 0,
                   "%s: Radiance's X and Z within its (u', v') encoding of the file's at %d "
                   "probes (worst relative difference %.2g where Y > 1e-3; at most %.2f of "
                   "the allowance)" % (blk["label"], len(blk["probes"]), worst_xz, used_xz))
 
     work = tempfile.mkdtemp()
-    mats = klems_matrices(xml) if colour else None
+    mats = klems_matrices(xml) if colour and not tree else None
     to_rgb = np.linalg.inv(np.array(rep["rgb_to_xyz"])) if colour else None
+    # a colour tree: channel c's change through F T per unit of channel j
+    A = np.abs(to_rgb @ (FT - np.eye(3)) @ np.array(rep["rgb_to_xyz"])) if colour else None
     for blk in rep["blocks"]:
         light_side = -1.0 if blk["side"] == "enter" else 1.0  # Front: light from -Z
         view_side = light_side if blk.get("reflection") else -light_side
@@ -233,7 +271,13 @@ def main():
             rays = [(x * 1e-3, y * 1e-3, view_side * 1.0, -x, -y, -z) for x, y, z in v]
             L = rtrace("scene.oct", direct, rays, work)
             sums.append(L.sum(axis=0) * math.pi / len(v) / (e_sun * math.cos(ti)))
-        if colour:
+        if colour and tree:
+            at = [[e for e in ch["per_theta_i"] if e["theta_i_deg"] == ang][0]
+                  for ch in blk["channels"]]
+            tj = np.array([e["T_file"] + 2 * abs(e["T_file"] - e["T_file_coarse"]) for e in at])
+            own = np.array([e["T_file"] for e in at])
+            bound = A @ tj + 1.5e-4 * (tj + A @ tj)
+        elif colour:
             # the file's own R, G, B over the same 128 x 256 views, and the bound of what
             # Radiance's (u', v') encoding can change in each (per matrix entry, cached)
             own, bound, cache = np.zeros(3), np.zeros(3), {}
@@ -257,7 +301,18 @@ def main():
             tol = e_t * max(T, 0.01) + 2 * quad + 2 * est
             label = blk["label"] + (" " + name if name else "")
             extra = ""
-            if colour:
+            if colour and tree:
+                tol += bound[col]
+                extra = " + colour %.2g" % bound[col]
+                loss = abs(t_rt - own[col])
+                allow = bound[col] + 2 * quad + 2 * est
+                check(loss <= allow,
+                      "%s: rtrace %s at %.2f deg %.5f vs the report's estimate of the "
+                      "file's %.5f: |diff| %.2g (%.2g relative) <= colour %.2g + 2 x "
+                      "quadrature %.2g + 2 x estimate %.2g"
+                      % (label, what, ang, t_rt, own[col], loss, loss / max(own[col], 1e-30),
+                         bound[col], quad, est))
+            elif colour:
                 tol += bound[col]
                 extra = " + colour %.2g" % bound[col]
                 loss = abs(t_rt - own[col])

@@ -265,12 +265,13 @@ static btdf_rad *coarse_tree(int first, int last, size_t max_nodes)
     double n = p.ior[0];
     const rad_block all[4] = {
         {BTDF_SIDE_ENTER, "Transmission Front", n, 1 / (n * n), 0, BTDF_SIDE_LEAVE, 1 / n, NULL,
-         0, 0, 0, NULL, NULL, NULL},
+         0, 0, 0, NULL, NULL, NULL, NULL},
         {BTDF_SIDE_LEAVE, "Transmission Back", 1 / n, n * n, 0, BTDF_SIDE_ENTER, n, NULL, 0, 0,
-         0, NULL, NULL, NULL},
-        {BTDF_SIDE_ENTER, "Reflection Front", n, 1.0, 1, BTDF_SIDE_ENTER, n, NULL, 0, 0, 0, NULL, NULL, NULL},
+         0, NULL, NULL, NULL, NULL},
+        {BTDF_SIDE_ENTER, "Reflection Front", n, 1.0, 1, BTDF_SIDE_ENTER, n, NULL, 0, 0, 0, NULL,
+         NULL, NULL, NULL},
         {BTDF_SIDE_LEAVE, "Reflection Back", 1 / n, 1.0, 1, BTDF_SIDE_LEAVE, 1 / n, NULL, 0, 0, 0,
-         NULL, NULL, NULL}};
+         NULL, NULL, NULL, NULL}};
     for (int k = first; k <= last; k++) {
         r->b[k] = all[k];
         assert_status(BTDF_OK, rad_tree_build(&p, 3e-4, 0, max_nodes, &r->b[k], NULL, 0));
@@ -335,7 +336,7 @@ static void test_tree_cut(void **state)
     p.smoothness = 2.0;
     double n = p.ior[0];
     rad_block direct = {BTDF_SIDE_LEAVE, "Transmission Back", 1 / n, n * n, 0, BTDF_SIDE_ENTER,
-                        n, NULL, 0, 0, 0, NULL, NULL, NULL};
+                        n, NULL, 0, 0, 0, NULL, NULL, NULL, NULL};
     rad_block cut = direct;
     const double eps = 2e-3;
     assert_status(BTDF_OK, rad_tree_build(&p, eps, 0, (size_t)1 << 22, &direct, NULL, 0));
@@ -406,6 +407,204 @@ static void test_rgb_to_xyz(void **state)
     assert_close(m[1][0], 0.2651058201, 0.0, 1e-9);
     assert_close(m[1][1], 0.6701058201, 0.0, 1e-9);
     assert_close(m[1][2], 0.0647883598, 0.0, 1e-9);
+}
+
+/* ------------------------------------------------------------ colour trees */
+
+/* Blocks 0 and 1 (both transmissions) of a tree3 file, s = 2, each grown once at the
+   threshold 3e-4 in every channel (as coarse_tree: no calibration, to keep the tests
+   short): one channel (n[0]) or three (R, G, B at n[0..2]: Y, u', v'). */
+static btdf_rad *tree_rad(int channels, const double n[3], int threads)
+{
+    btdf_rad *r = calloc(1, sizeof *r);
+    assert_non_null(r);
+    btdf_params_default(&r->p);
+    r->p.smoothness = 2.0;
+    r->p.channels = channels;
+    for (int c = 0; c < channels; c++)
+        r->p.ior[c] = n[c];
+    r->basis = BTDF_RAD_TREE3;
+    r->channels = channels;
+    r->tolerance = 0.5;
+    r->nblocks = 2;
+    rad_xyz_to_rgb(r->to_rgb);
+    for (int k = 0; k < 2; k++) {
+        rad_block_of(k, n[0], &r->b[k]);
+        assert_status(BTDF_OK, rad_tree_build(&r->p, 3e-4, threads, (size_t)1 << 24, &r->b[k],
+                                              NULL, 0));
+    }
+    return r;
+}
+
+/* Three equal indices: the colour tree is the one-index tree, node for node (the split
+   rule sees three equal shares, each channel's leaf value is the one index's, and Y of
+   three equal channels is that value: the Y row of the matrix sums to 1), and every
+   leaf has the white point's chromaticity u' = 4/19, v' = 9/19 as the file holds them
+   (where there is light: grey; where there is none: the white written for no light). */
+static void test_tree_colour_neutral(void **state)
+{
+    (void)state;
+    const double n[3] = {1.5, 1.5, 1.5};
+    btdf_rad *r3 = tree_rad(3, n, 0), *r1 = tree_rad(1, n, 0);
+    const float wu = (float)(4.0 / 19.0), wv = (float)(9.0 / 19.0);
+    size_t lit = 0;
+    for (int k = 0; k < 2; k++) {
+        const rad_block *a = &r3->b[k], *b = &r1->b[k];
+        assert_non_null(a->cv);
+        assert_null(b->cv);
+        assert_int_equal(a->nnodes, b->nnodes);
+        assert_int_equal(a->leaves, b->leaves);
+        for (size_t i = 0; i < a->nnodes; i++) {
+            assert_int_equal(a->nodes[i].child, b->nodes[i].child);
+            assert_true(a->nodes[i].v == b->nodes[i].v);
+            if (a->nodes[i].child >= 0)
+                continue;
+            const float *cv = a->cv + i * RAD_CV;
+            for (int c = 0; c < 3; c++)
+                assert_true(cv[c] == b->nodes[i].v);
+            assert_true(cv[3] == wu && cv[4] == wv);
+            lit += b->nodes[i].v > 0.0f;
+        }
+    }
+    assert_true(lit > 1000);
+    /* and Radiance's reading of it: X = Y = Z to the white's floats (X / Y = 9 u' / (4 v')
+       is 1 within 2e-7, Z / Y within 4e-7) */
+    double p[3] = {0.3, 0.1, -sqrt(0.9)}, q[3] = {-0.2, -0.05, sqrt(1.0 - 0.0425)}, xyz[3];
+    btdf_rad_lookup_xyz(r3, 0, p, q, xyz);
+    assert_true(xyz[1] > 0.0 && xyz[1] == btdf_rad_lookup(r1, 0, p, q));
+    assert_close(xyz[0], xyz[1], 2e-7, 0.0);
+    assert_close(xyz[2], xyz[1], 4e-7, 0.0);
+    btdf_rad_free(r3);
+    btdf_rad_free(r1);
+}
+
+/* Walks tree a (colour) and b (one channel, index n[c]) side by side: where both have a
+   leaf for the same cell, a's channel c is b's value exactly (the builder gives each
+   channel its own value on each cell); counts those leaves into *same. */
+static void walk_same(const rad_block *a, size_t ia, const rad_block *b, size_t ib, int c,
+                      size_t *same)
+{
+    int la = a->nodes[ia].child < 0, lb = b->nodes[ib].child < 0;
+    if (la && lb) {
+        assert_true(a->cv[ia * RAD_CV + (size_t)c] == b->nodes[ib].v);
+        ++*same;
+        return;
+    }
+    if (la || lb)
+        return; /* one finer than the other there (a splits for any channel) */
+    for (int k = 0; k < 8; k++)
+        walk_same(a, (size_t)a->nodes[ia].child + (size_t)k, b,
+                  (size_t)b->nodes[ib].child + (size_t)k, c, same);
+}
+
+/* Three distinct indices (1.2, 1.5, 2.2: saturated, far from white). Each channel's
+   leaf value is that index's own (exactly the one-index tree's where the two trees have
+   the same cell), and reading the file back as Radiance does (Y and u', v' to X, Y, Z,
+   then the inverse matrix) gives each channel within the file's roundings: Y to 4
+   significant digits (half a unit of its 4th digit, relative to Y, scales all three
+   channels alike) and u', v' to floats (6e-8 relative each, through the derivatives of
+   channel c in u' and v' at Y), plus float rounding (6e-8 relative of the channels,
+   1e-12 of the tolerance). A channel read with another's index (B for R)
+   is tens of per cent off somewhere. No NaN or inf, u', v' > 0 everywhere. */
+static void test_tree_colour_channels(void **state)
+{
+    (void)state;
+    const double n[3] = {1.2, 1.5, 2.2};
+    btdf_rad *r = tree_rad(3, n, 0);
+    double C[3][3], used = 0.0, apart = 0.0;
+    rad_xyz_to_rgb(C);
+    for (int c = 0; c < 3; c++) {
+        const double n1[3] = {n[c], n[c], n[c]};
+        btdf_rad *one = tree_rad(1, n1, 0);
+        for (int k = 0; k < 2; k++) {
+            size_t same = 0;
+            walk_same(&r->b[k], 0, &one->b[k], 0, c, &same);
+            /* the colour tree is finer, but shares most cells with each channel's */
+            assert_true(same * 2 > one->b[k].leaves);
+        }
+        btdf_rad_free(one);
+    }
+    for (int k = 0; k < 2; k++) {
+        const rad_block *b = &r->b[k];
+        for (size_t i = 0; i < b->nnodes; i++) {
+            if (b->nodes[i].child >= 0)
+                continue;
+            const float *cv = b->cv + i * RAD_CV;
+            double y = b->nodes[i].v, u = cv[3], v = cv[4], xyz[3];
+            assert_true(isfinite(y) && isfinite(u) && isfinite(v) && u > 0.0 && v > 0.0);
+            rad_colour_xyz(y, u, v, xyz);
+            /* half a unit of Y's 4th digit (its float may sit just below a power of 10:
+               1e-4 is 9.99999975e-05) */
+            double dy = 0.5 * pow(10.0, floor(log10(fmax(y, 1e-300) * (1.0 + 1e-6))) - 3);
+            for (int c = 0; c < 3; c++) {
+                double got = C[c][0] * xyz[0] + C[c][1] * xyz[1] + C[c][2] * xyz[2];
+                double gu = (C[c][0] * 9.0 - C[c][2] * 3.0) / (4.0 * v);
+                double gv = -(C[c][0] * 9.0 * u + C[c][2] * (12.0 - 3.0 * u)) / (4.0 * v * v);
+                double tol = (y > 0.0 ? fabs(got) * dy / y : 0.0) +
+                             y * (fabs(gu) * 6e-8 * u + fabs(gv) * 6e-8 * v);
+                tol = tol * (1.0 + 1e-12) + 6e-8 * (fabs(got) + cv[c]) + 1e-30;
+                assert_close(got, cv[c], 0.0, tol);
+                used = fmax(used, fabs(got - cv[c]) / tol);
+            }
+            if (cv[0] > 0.1)
+                apart = fmax(apart, fabs(cv[2] - cv[0]) / cv[0]);
+        }
+    }
+    assert_true(apart > 0.1);
+    if (getenv("BTDF_TEST_VERBOSE"))
+        fprintf(stderr, "colour tree: read back within %.2f of the rounding bound; B vs R up "
+                        "to %.3g relative\n", used, apart);
+    btdf_rad_free(r);
+}
+
+/* The same colour tree on 1 and 2 threads: the same nodes, values and colours, bit for
+   bit, and the same file bytes; the file has the Visible, CIE-u and CIE-v trees, of one
+   structure (as many braces each). */
+static void test_tree_colour_threads(void **state)
+{
+    (void)state;
+    const double n[3] = {1.2, 1.5, 2.2};
+    btdf_rad *a = tree_rad(3, n, 1), *b = tree_rad(3, n, 2);
+    char pa[] = "test_radiance_c1.xml", pb[] = "test_radiance_c2.xml";
+    for (int k = 0; k < 2; k++) {
+        assert_int_equal(a->b[k].nnodes, b->b[k].nnodes);
+        assert_memory_equal(a->b[k].nodes, b->b[k].nodes, a->b[k].nnodes * sizeof(rad_node));
+        assert_memory_equal(a->b[k].cv, b->b[k].cv, a->b[k].nnodes * RAD_CV * sizeof(float));
+    }
+    btdf_output wa = {NULL, NULL, NULL, NULL, NULL, a}, wb = {NULL, NULL, NULL, NULL, NULL, b};
+    assert_status(BTDF_OK, btdf_write(&wa, pa, NULL, 0));
+    assert_status(BTDF_OK, btdf_write(&wb, pb, NULL, 0));
+    FILE *fa = fopen(pa, "rb"), *fb = fopen(pb, "rb");
+    assert_non_null(fa);
+    assert_non_null(fb);
+    int ca, cb, differ = 0;
+    long braces[3] = {0, 0, 0}, part = -1;
+    char win[32] = "";
+    do {
+        ca = fgetc(fa);
+        cb = fgetc(fb);
+        differ |= ca != cb;
+        if (ca == EOF)
+            break;
+        memmove(win, win + 1, sizeof win - 2);
+        win[sizeof win - 2] = (char)ca;
+        if (strstr(win, ">Visible<"))
+            part = 0;
+        else if (strstr(win, ">CIE-u<"))
+            part = 1;
+        else if (strstr(win, ">CIE-v<"))
+            part = 2;
+        if (ca == '{' && part >= 0)
+            braces[part]++;
+    } while (cb != EOF);
+    fclose(fa);
+    fclose(fb);
+    remove(pa);
+    remove(pb);
+    assert_false(differ);
+    assert_true(braces[0] > 1000 && braces[1] == braces[0] && braces[2] == braces[0]);
+    btdf_rad_free(a);
+    btdf_rad_free(b);
 }
 
 /* Blocks 0-2 of a three-channel Klems-quarter file (Reflection Back, the slowest block to
@@ -521,6 +720,9 @@ int main(void)
         cmocka_unit_test(test_tree_cut),
         cmocka_unit_test(test_reflection_block),
         cmocka_unit_test(test_rgb_to_xyz),
+        cmocka_unit_test(test_tree_colour_neutral),
+        cmocka_unit_test(test_tree_colour_channels),
+        cmocka_unit_test(test_tree_colour_threads),
     };
     const struct CMUnitTest klems[] = {
         cmocka_unit_test(test_klems_columns),

@@ -50,7 +50,7 @@ const opt_def opt_table[] = {
      "default there)"},
     {OPT_BASIS, "basis", 0, "B", 0, CMD_TABULATE,
      ".xml: tree3 (TensorTree3, default), klems-full, klems-half or klems-quarter\n"
-     "(three --ior values, colour: Klems only)"},
+     "(three --ior values: colour, a tree's Y, u', v' or Klems' X, Y, Z)"},
     {OPT_THETA_I, "theta-i", 0, "A:B", 0, CMD_TABULATE,
      "incidence range in degrees (default 0:90)"},
     {OPT_THETA_O, "theta-o", 0, "A:B", 0, CMD_TABULATE,

@@ -43,8 +43,10 @@ BTDF_API const char *btdf_rad_basis_name(btdf_rad_basis b);
    ([1e-3, 0.5]) for light up to BTDF_RAD_TI_CHECKED_DEG, checked by estimates of its
    own; Klems: the same four blocks, exact patch averages (tolerance ignored).
    threads: 0 = all cores; the result does not depend on it. BTDF_OK; BTDF_EBUDGET when the tolerance could not be met (*out holds the best
-   file); BTDF_EINVAL (parameters, two channels, three with a tree, tolerance); BTDF_ENOMEM.
-   Three channels (Klems): per block CIE X, Y, Z matrices (docs/radiance.md "Colour"). */
+   file); BTDF_EINVAL (parameters, two channels, tolerance); BTDF_ENOMEM.
+   Three channels: per block CIE X, Y, Z matrices (Klems) or a tree of CIE Y with trees
+   of u', v' of its structure, split where any channel needs it (docs/radiance.md
+   "Colour"). */
 #define BTDF_RAD_TI_CHECKED_DEG 80.0
 BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
                                     double tolerance, int threads, btdf_rad **out, char *msg,
@@ -67,7 +69,7 @@ typedef struct btdf_rad_block_info {
 
 BTDF_API int btdf_rad_block_count(const btdf_rad *r);
 /* 1 (a Visible, CIE Y, file) or 3 (colour: R, G, B in Radiance's RGB, written as CIE
-   X, Y, Z; docs/radiance.md "Colour"). */
+   X, Y, Z, or a tree's Y, u', v'; docs/radiance.md "Colour"). */
 BTDF_API int btdf_rad_channels(const btdf_rad *r);
 /* Radiance's RGB (its default primaries, equal-energy white) to CIE XYZ:
    m[X, Y, Z][R, G, B]. */
