@@ -468,6 +468,34 @@ static void tree_eps3(const btdf_rad *r, const int *chs, int npr, const double *
     }
 }
 
+/* Multiplies by f the threshold lo[c] of every channel whose e_L1 ech[c] is above aim;
+   where one falls below what the tree was grown to (grown[c]), grows the tree further;
+   then cuts it at lo into b. */
+static btdf_status recut_missing(const btdf_rad *r, rad_tb *t, rad_block *b, const int *chs,
+                                 int npr, const double *ech, double aim, double f, double *lo,
+                                 double *grown)
+{
+    double e3[3];
+    int regrow = 0;
+    for (int c = 0; c < npr; c++) {
+        if (!(ech[c] > aim))
+            continue;
+        lo[c] *= f;
+        if (lo[c] < grown[c]) {
+            grown[c] = lo[c];
+            regrow = 1;
+        }
+    }
+    if (regrow) {
+        tree_eps3(r, chs, npr, grown, e3);
+        btdf_status st = rad_tb_grow3(t, e3, RAD_MAX_NODES);
+        if (st != BTDF_OK)
+            return st;
+    }
+    tree_eps3(r, chs, npr, lo, e3);
+    return rad_tb_extract3(t, e3, b);
+}
+
 /* Grows the tree of block k until the probe estimate's largest e_L1 is below
    RAD_AIM * tolerance, then cuts it at the largest eps that still holds that. A colour
    tree has one eps per channel (index): grown with one eps until every channel meets the
@@ -580,24 +608,7 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
         for (int i = 0; i < 16 && st == BTDF_OK && npr > 1; i++) {
             if (tree_probe_err(pr, npr, b, threads, res, ech) <= aim)
                 break;
-            int regrow = 0;
-            for (int c = 0; c < npr; c++) {
-                if (!(ech[c] > aim))
-                    continue;
-                lo[c] *= 0.917; /* 2^(-1/8) */
-                if (lo[c] < grown[c]) {
-                    grown[c] = lo[c];
-                    regrow = 1;
-                }
-            }
-            if (regrow) {
-                tree_eps3(r, chs, npr, grown, e3);
-                st = rad_tb_grow3(t, e3, RAD_MAX_NODES);
-                if (st != BTDF_OK)
-                    break;
-            }
-            tree_eps3(r, chs, npr, lo, e3);
-            st = rad_tb_extract3(t, e3, b);
+            st = recut_missing(r, t, b, chs, npr, ech, aim, 0.917 /* 2^(-1/8) */, lo, grown);
         }
         /* The probes see e_L1 at fixed angles; it jumps where a light's ring enters the
            next cell, and the report's estimate refines there. So check the cut tree
@@ -618,24 +629,8 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
                         lo[0], b->leaves, ec);
             if (st != BTDF_OK || ec <= RAD_AIM_CHECK * r->tolerance)
                 break;
-            int regrow = 0;
-            for (int c = 0; c < npr; c++) {
-                if (!(ech[c] > RAD_AIM_CHECK * r->tolerance))
-                    continue;
-                lo[c] *= 0.6;
-                if (lo[c] < grown[c]) { /* below what the tree was grown to */
-                    grown[c] = lo[c];
-                    regrow = 1;
-                }
-            }
-            if (regrow) { /* grow it further */
-                tree_eps3(r, chs, npr, grown, e3);
-                st = rad_tb_grow3(t, e3, RAD_MAX_NODES);
-                if (st != BTDF_OK)
-                    break;
-            }
-            tree_eps3(r, chs, npr, lo, e3);
-            st = rad_tb_extract3(t, e3, b);
+            st = recut_missing(r, t, b, chs, npr, ech, RAD_AIM_CHECK * r->tolerance, 0.6, lo,
+                               grown);
         }
     }
     if (st == BTDF_EBUDGET) { /* the best tree it has: grown as far as it went */
