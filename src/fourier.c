@@ -266,8 +266,8 @@ typedef struct build_ctx {
 
 typedef struct build_ws {
     fftbuf fb;
-    double *x, *x2;  /* samples per stored channel: nst * (nmax + 1) */
-    double *a, *a2;  /* coefficients per stored channel */
+    double *x;       /* samples per stored channel: nst * (nmax + 1) */
+    double *a;       /* coefficients per stored channel */
     double *y;       /* inverse values */
     double *ia;      /* interpolated coefficients, nst * (nmax + 1) */
     double *rho;     /* per model channel scratch */
@@ -283,9 +283,7 @@ static void *build_ws_new(void *vctx)
         return NULL;
     size_t len = (size_t)c->nst * (c->nmax + 1);
     w->x = malloc(len * sizeof(double));
-    w->x2 = malloc(len * sizeof(double));
     w->a = malloc(len * sizeof(double));
-    w->a2 = malloc(len * sizeof(double));
     w->ia = malloc(len * sizeof(double));
     w->y = malloc((c->nmax + 1) * sizeof(double));
     w->rho = malloc(4 * sizeof(double));
@@ -305,10 +303,10 @@ static void *build_ws_new(void *vctx)
         w->cosg[c->nmax] = -1.0, w->sing[c->nmax] = 0.0;
         w->cosg[c->nmax / 2] = 0.0, w->sing[c->nmax / 2] = 1.0;
     }
-    if (!w->cosg || !w->sing || !w->h2g || !w->x || !w->x2 || !w->a || !w->a2 || !w->ia ||
+    if (!w->cosg || !w->sing || !w->h2g || !w->x || !w->a || !w->ia ||
         !w->y || !w->rho || fft_reserve(&w->fb, c->nmax + 1)) {
         fft_free(&w->fb);
-        free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
+        free(w->x); free(w->a); free(w->ia); free(w->y);
         free(w->rho);
         free(w->cosg);
         free(w->sing);
@@ -325,7 +323,7 @@ static void build_ws_free(void *vw)
     if (!w)
         return;
     fft_free(&w->fb);
-    free(w->x); free(w->x2); free(w->a); free(w->a2); free(w->ia); free(w->y);
+    free(w->x); free(w->a); free(w->ia); free(w->y);
     free(w->rho);
     free(w->cosg);
     free(w->sing);
@@ -424,9 +422,10 @@ static void sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_
 }
 
 /* Converged coefficients of g at (mu_s, mu_f): doubles the azimuth grid until the
-   coefficients move by less than eps_alias (in L1 over the circle, per channel
-   relative to norm[ch]). Leaves w->a with stride nmax + 1 holding N + 1 coefficients
-   per stored channel and w->x the samples on that grid; returns N (0 on failure). */
+   series of the coarser grid misses the samples of the finer one by less than
+   eps_alias (in L1 over the circle, per channel relative to norm[ch]). Leaves w->a
+   with stride nmax + 1 holding N + 1 coefficients per stored channel and w->x the
+   samples on that grid; returns N (0 on failure). */
 static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double mu_f,
                        const double *norm, double eps_alias)
 {
@@ -468,36 +467,29 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
         }
         double worst = 0.0;
         for (int k = 0; k < c->nst; k++) {
-            if (blk_refl[side]) {
-                /* Reflection below the dense side has cusps in phi where facets start
-                   to reflect totally (Fresnel ~ 1 - sqrt), so its coefficients decay
-                   like k^-1.5 and the bound below would double the grid to its cap.
-                   The measured L1 over the circle of the coarse series against the
-                   new samples is the error itself, not a bound. */
-                if (dct_inverse(&w->fb, w->a + k * S, N + 1, N2, w->y))
-                    return 0;
-                double sum = 0.0;
-                for (size_t j = 0; j <= N2; j++) {
-                    double d = fabs(w->y[j] - w->x[k * S + j]);
-                    sum += (j == 0 || j == N2) ? 0.5 * d : d;
-                }
-                /* trapezoid over [0, pi] doubled for the circle; norm >= T_FLOOR */
-                double d = 2.0 * sum * M_PI / (double)N2 / norm[k];
-                if (d > worst)
-                    worst = d;
-            }
-            if (dct_forward(&w->fb, w->x + k * S, N2, w->a2 + k * S))
+            /* The measured L1 over the circle of the coarse series against the new
+               samples (the points it did not see) is its error, not a bound on it.
+               Until this version transmission used the bound 2 pi sum |a'_q - a_q|
+               (a' the finer grid's): where g has a kink or an edge in phi (reflection
+               below the dense side, where facets start to reflect totally, Fresnel ~
+               1 - sqrt; transmission, where the facets needed turn away or pass the
+               critical angle) the coefficients decay like q^-1.5 or slower and the
+               bound kept doubling the grid: n = 1.5, s = 3 at 1e-3 converged 50,534
+               series at N = 1024 to 4096; measured, none needs more than 512, with
+               the same nodes and the same measured e_L1 of the file. */
+            if (dct_inverse(&w->fb, w->a + k * S, N + 1, N2, w->y))
                 return 0;
-            /* |integral over the circle of sum d_k cos k phi| <= 2 pi sum |d_k| */
-            double d = 0.0;
-            for (size_t q = 0; q <= N; q++)
-                d += fabs(w->a2[k * S + q] - w->a[k * S + q]);
-            for (size_t q = N + 1; q <= N2; q++)
-                d += fabs(w->a2[k * S + q]);
-            d = 2.0 * M_PI * d / norm[k]; /* norm >= T_FLOOR > 0 */
-            if (d > worst && !blk_refl[side])
+            double sum = 0.0;
+            for (size_t j = 0; j <= N2; j++) {
+                double d = fabs(w->y[j] - w->x[k * S + j]);
+                sum += (j == 0 || j == N2) ? 0.5 * d : d;
+            }
+            /* trapezoid over [0, pi] doubled for the circle; norm >= T_FLOOR */
+            double d = 2.0 * sum * M_PI / (double)N2 / norm[k];
+            if (d > worst)
                 worst = d;
-            memcpy(w->a + k * S, w->a2 + k * S, (N2 + 1) * sizeof(double));
+            if (dct_forward(&w->fb, w->x + k * S, N2, w->a + k * S))
+                return 0;
         }
         N = N2;
         if (worst <= eps_alias)
