@@ -383,6 +383,54 @@ BT_CLONES static void sample_grid_t1(const build_ctx *c, const build_ws *w, int 
         xp[t * (long)step] = bt_rho(n, d, s, &io, h2p[t * sg], snp[t * sg]) * f;
 }
 
+/* Declared in scatfun_impl.h. Along the azimuth each of bt_rho's three conditions
+   (BT_RHO_GEOMETRY: e_i.v > 0, e_o.v > 0 with the facet's side, and the slope below the
+   exponential's underflow) is linear in h2 = sin^2(phi_d/2) in [0, 1]: with w = e_i +
+   e_o, |w|^2 = wx0^2 + wz^2 + 4 sto (wx0 + sto) h2, so e_i.v and e_o.v are linear in
+   h2; v_z = wz - d cto does not depend on phi; and rxy^2 = (A + B h2)^2 + 4 n^2 sto^2
+   h2 (1 - h2) with A = wx0 - d sto, B = 2 n sto, whose h2^2 terms cancel. A pair is
+   declared unreachable only when the three conditions, each relaxed by 1e-9 of its
+   scale (far above the kernel's rounding), still hold nowhere on [0, 1]. */
+int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
+                        double mu_f)
+{
+    /* as sample_grid_t1: |mu| <= 1, fmax guards rounding */
+    double ss = sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), sf = sqrt(fmax(0.0, 1.0 - mu_f * mu_f));
+    double ti = atan2(ss, mu_s), bb = atan2(sf, mu_f);
+    double sp = sin(0.5 * (ti + bb)), cp = cos(0.5 * (ti + bb)), sm = sin(0.5 * (ti - bb));
+    bt_io io;
+    bt_io_set(&io, ss, mu_s, sf, mu_f, sp, cp, sm);
+    for (int k = 0; k < channels; k++) {
+        double n = ior[k], d = n - 1.0;
+        double vz = io.wz - d * io.cto;
+        if (!(fabs(vz) > 1e-12))
+            return 0; /* v_z's sign too close to call: the caller samples */
+        double sg = vz < 0.0 ? -1.0 : 1.0, vz2 = vz * vz;
+        double w0 = io.wx0 * io.wx0 + io.wz * io.wz, w1 = 4.0 * io.sto * (io.wx0 + io.sto);
+        double A = io.wx0 - d * io.sto, B = 2.0 * n * io.sto;
+        /* f(h2) = al + be h2 > 0 for sg e_i.v = sg (n |w|^2/2 - d), -sg e_o.v =
+           -sg (d + |w|^2/2) and CUT vz^2 - (s^2/4) rxy^2 */
+        double al[3] = {sg * (0.5 * n * w0 - d), -sg * (d + 0.5 * w0),
+                        BTDF_EXP_CUT * vz2 - 0.25 * s * s * A * A};
+        double be[3] = {sg * 0.5 * n * w1, -sg * 0.5 * w1,
+                        -0.25 * s * s * (2.0 * A * B + B * B)};
+        double lo = 0.0, hi = 1.0;
+        for (int i = 0; i < 3; i++) {
+            double scale = fabs(al[i]) + fabs(be[i]) + (i == 2 ? BTDF_EXP_CUT * vz2 : 1.0);
+            double a = al[i] + 1e-9 * scale; /* relaxed: f > -1e-9 scale */
+            if (be[i] > 0.0)
+                lo = fmax(lo, -a / be[i]); /* be != 0 */
+            else if (be[i] < 0.0)
+                hi = fmin(hi, -a / be[i]); /* be != 0 */
+            else if (!(a > 0.0))
+                lo = 2.0; /* f <= -1e-9 scale at every azimuth */
+        }
+        if (lo < hi)
+            return 0; /* this channel reaches some azimuth */
+    }
+    return 1;
+}
+
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
    j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones).
    mu_s, mu_f are the block's cosines as magnitudes, in [0, 1]. */
@@ -431,6 +479,17 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
 {
     size_t S = c->nmax + 1;
     size_t N = c->nmin;
+    if (!blk_refl[side] &&
+        scatfun_unreachable(c->ior[side], c->nc, c->p->smoothness, mu_s, mu_f)) {
+        /* No facet connects the pair at any azimuth (n = 1.5, s = 20 at 1e-3: 880,000
+           of 1.86 million series): what the samples below would find, 0 on both grids
+           (2 N <= nmax: build_impl), without sampling. */
+        for (int k = 0; k < c->nst; k++) {
+            memset(w->x + (size_t)k * S, 0, (2 * N + 1) * sizeof *w->x);
+            memset(w->a + (size_t)k * S, 0, (2 * N + 1) * sizeof *w->a);
+        }
+        return 2 * N;
+    }
     sample_grid(c, w, side, mu_s, mu_f, N, S, 1, 0, w->x);
     for (int k = 0; k < c->nst; k++)
         if (dct_forward(&w->fb, w->x + k * S, N, w->a + k * S))

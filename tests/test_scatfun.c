@@ -14,6 +14,7 @@
 
 #include "btdf.h"
 #include "btdf_scatfun.h"
+#include "scatfun_impl.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -718,6 +719,59 @@ static void test_bad_arguments(void **state)
     btdf_scatfun_free(NULL);
 }
 
+
+/* The builder skips the pairs scatfun_unreachable declares dark at every azimuth: each
+   such pair must be 0 at every azimuth through the public Eq. 25 (ti = acos mu_s, to =
+   pi - acos mu_f, 361 azimuths in [0, pi], the forward and back planes among them),
+   over indices on both sides of 1 (0.99 and 1.01 included), smoothness 1 to 1000 and
+   cosines from 1e-4 to 1. And the skip must be worth having: at least half of the
+   pairs found dark by that scan are declared (the edge is left to sampling). */
+static void test_unreachable_pairs(void **state)
+{
+    (void)state;
+    const double ns[] = {1.5, 1.0 / 1.5, 2.4, 1.0 / 2.4, 1.01, 0.99, 1.33};
+    const double ss[] = {1.0, 3.0, 20.0, 100.0, 1000.0};
+    const int nm = 31, nphi = 360;
+    long declared = 0, dark = 0, wrong = 0;
+    for (size_t a = 0; a < sizeof ns / sizeof ns[0]; a++)
+        for (size_t b = 0; b < sizeof ss / sizeof ss[0]; b++)
+            for (int i = 0; i < nm; i++)
+                for (int j = 0; j < nm; j++) {
+                    /* cosines sin(k pi / (2 (nm - 1))) with the grazing one at 1e-4 */
+                    double mu_s = i == 0 ? 1e-4 : sin(M_PI * i / (2.0 * (nm - 1)));
+                    double mu_f = j == 0 ? 1e-4 : sin(M_PI * j / (2.0 * (nm - 1)));
+                    double ti = acos(mu_s), to = M_PI - acos(mu_f);
+                    int zero = 1;
+                    for (int k = 0; k <= nphi && zero; k++)
+                        zero = btdf_rho(ns[a], ss[b], 0.7, ti, to, M_PI * k / nphi) == 0.0;
+                    int un = scatfun_unreachable(&ns[a], 1, ss[b], mu_s, mu_f);
+                    dark += zero;
+                    declared += un;
+                    if (un && !zero) {
+                        wrong++;
+                        print_error("n %g s %g mu_s %g mu_f %g declared dark, not\n", ns[a],
+                                    ss[b], mu_s, mu_f);
+                    }
+                }
+    print_message("%ld of %ld dark pairs declared\n", declared, dark);
+    assert_int_equal(wrong, 0);
+    assert_true(declared > 0 && 2 * declared >= dark);
+    /* three channels: dark only where every channel is; both kinds of pair met */
+    const double rgb[3] = {1.2, 1.5, 2.4};
+    int mixed = 0, alldark = 0;
+    for (int i = 1; i < nm; i++)
+        for (int j = 1; j < nm; j++) {
+            double mu_s = sin(M_PI * i / (2.0 * (nm - 1))), mu_f = sin(M_PI * j / (2.0 * (nm - 1)));
+            int cnt = 0;
+            for (int k = 0; k < 3; k++)
+                cnt += scatfun_unreachable(&rgb[k], 1, 20.0, mu_s, mu_f);
+            assert_int_equal(scatfun_unreachable(rgb, 3, 20.0, mu_s, mu_f), cnt == 3);
+            mixed += cnt > 0 && cnt < 3;
+            alldark += cnt == 3;
+        }
+    assert_true(mixed > 0 && alldark > 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -733,6 +787,7 @@ int main(void)
         cmocka_unit_test(test_four_blocks),
         cmocka_unit_test(test_colour_fold),
         cmocka_unit_test(test_report_reads_adjoint),
+        cmocka_unit_test(test_unreachable_pairs),
     };
     return cmocka_run_group_tests_name("scatfun", tests, setup, teardown);
 }
