@@ -383,52 +383,103 @@ BT_CLONES static void sample_grid_t1(const build_ctx *c, const build_ws *w, int 
         xp[t * (long)step] = bt_rho(n, d, s, &io, h2p[t * sg], snp[t * sg]) * f;
 }
 
-/* Declared in scatfun_impl.h. Along the azimuth each of bt_rho's three conditions
-   (BT_RHO_GEOMETRY: e_i.v > 0, e_o.v > 0 with the facet's side, and the slope below the
-   exponential's underflow) is linear in h2 = sin^2(phi_d/2) in [0, 1]: with w = e_i +
-   e_o, |w|^2 = wx0^2 + wz^2 + 4 sto (wx0 + sto) h2, so e_i.v and e_o.v are linear in
-   h2; v_z = wz - d cto does not depend on phi; and rxy^2 = (A + B h2)^2 + 4 n^2 sto^2
-   h2 (1 - h2) with A = wx0 - d sto, B = 2 n sto, whose h2^2 terms cancel. A pair is
-   declared unreachable only when the three conditions, each relaxed by 1e-9 of its
-   scale (far above the kernel's rounding), still hold nowhere on [0, 1]. */
-int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
-                        double mu_f)
+/* The first azimuth grid has at least NMIN_PHI intervals over [0, pi] (8 s for the
+   narrowest pairs: first_grid); converge() doubles it until the series settle. */
+#define NMIN_PHI 32.0
+
+/* Along the azimuth each of bt_rho's three conditions (BT_RHO_GEOMETRY: e_i.v > 0,
+   e_o.v > 0 with the facet's side, and the slope below the exponential's underflow)
+   is linear in h2 = sin^2(phi_d/2) in [0, 1]: with w = e_i + e_o, |w|^2 = wx0^2 + wz^2
+   + 4 sto (wx0 + sto) h2, so e_i.v and e_o.v are linear in h2; v_z = wz - d cto does
+   not depend on phi; and rxy^2 = (A + B h2)^2 + 4 n^2 sto^2 h2 (1 - h2) with A = wx0 -
+   d sto, B = 2 n sto, whose h2^2 terms cancel. So is the exponent E = (s^2/4) rxy^2 /
+   v_z^2: the Gaussian factor is e^-E0 e^-(G/2) e^((G/2) cos phi_d), G = dE/dh2, a von
+   Mises shape whose cosine coefficients fall like exp(-k^2 / |G|).
+   For one channel of index n: 0 when the conditions, each relaxed by 1e-9 of its scale
+   (far above the kernel's rounding), hold nowhere on [0, 1]; else 1, with *kappa =
+   |G|/2 and *width the angle phi_d spanned by the h2 where they all hold; -1 when v_z
+   is too close to 0 to tell its sign. */
+static int pair_azimuth(double n, double s, const bt_io *io, double *kappa, double *width)
+{
+    double d = n - 1.0;
+    double vz = io->wz - d * io->cto;
+    if (!(fabs(vz) > 1e-12))
+        return -1;
+    double sg = vz < 0.0 ? -1.0 : 1.0, vz2 = vz * vz;
+    double w0 = io->wx0 * io->wx0 + io->wz * io->wz, w1 = 4.0 * io->sto * (io->wx0 + io->sto);
+    double A = io->wx0 - d * io->sto, B = 2.0 * n * io->sto;
+    /* f(h2) = al + be h2 > 0 for sg e_i.v = sg (n |w|^2/2 - d), -sg e_o.v =
+       -sg (d + |w|^2/2) and CUT vz^2 - (s^2/4) rxy^2 */
+    double al[3] = {sg * (0.5 * n * w0 - d), -sg * (d + 0.5 * w0),
+                    BTDF_EXP_CUT * vz2 - 0.25 * s * s * A * A};
+    double be[3] = {sg * 0.5 * n * w1, -sg * 0.5 * w1, -0.25 * s * s * (2.0 * A * B + B * B)};
+    double lo = 0.0, hi = 1.0;
+    for (int i = 0; i < 3; i++) {
+        double scale = fabs(al[i]) + fabs(be[i]) + (i == 2 ? BTDF_EXP_CUT * vz2 : 1.0);
+        double a = al[i] + 1e-9 * scale; /* relaxed: f > -1e-9 scale */
+        if (be[i] > 0.0)
+            lo = fmax(lo, -a / be[i]); /* be != 0 */
+        else if (be[i] < 0.0)
+            hi = fmin(hi, -a / be[i]); /* be != 0 */
+        else if (!(a > 0.0))
+            lo = 2.0; /* f <= -1e-9 scale at every azimuth */
+    }
+    if (!(lo < hi))
+        return 0;
+    /* lo, hi in [0, 1] here, so the sqrt and asin arguments are too */
+    *width = 2.0 * (asin(sqrt(fmin(hi, 1.0))) - asin(sqrt(fmax(lo, 0.0))));
+    *kappa = 0.5 * fabs(-be[2] / vz2); /* vz2 > 1e-24 */
+    return 1;
+}
+
+static size_t pow2_at_least(double v);
+
+static void pair_io(double mu_s, double mu_f, bt_io *io)
 {
     /* as sample_grid_t1: |mu| <= 1, fmax guards rounding */
     double ss = sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), sf = sqrt(fmax(0.0, 1.0 - mu_f * mu_f));
     double ti = atan2(ss, mu_s), bb = atan2(sf, mu_f);
     double sp = sin(0.5 * (ti + bb)), cp = cos(0.5 * (ti + bb)), sm = sin(0.5 * (ti - bb));
+    bt_io_set(io, ss, mu_s, sf, mu_f, sp, cp, sm);
+}
+
+/* Declared in scatfun_impl.h: pair_azimuth finds no azimuth for any channel. */
+int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
+                        double mu_f)
+{
     bt_io io;
-    bt_io_set(&io, ss, mu_s, sf, mu_f, sp, cp, sm);
+    pair_io(mu_s, mu_f, &io);
     for (int k = 0; k < channels; k++) {
-        double n = ior[k], d = n - 1.0;
-        double vz = io.wz - d * io.cto;
-        if (!(fabs(vz) > 1e-12))
-            return 0; /* v_z's sign too close to call: the caller samples */
-        double sg = vz < 0.0 ? -1.0 : 1.0, vz2 = vz * vz;
-        double w0 = io.wx0 * io.wx0 + io.wz * io.wz, w1 = 4.0 * io.sto * (io.wx0 + io.sto);
-        double A = io.wx0 - d * io.sto, B = 2.0 * n * io.sto;
-        /* f(h2) = al + be h2 > 0 for sg e_i.v = sg (n |w|^2/2 - d), -sg e_o.v =
-           -sg (d + |w|^2/2) and CUT vz^2 - (s^2/4) rxy^2 */
-        double al[3] = {sg * (0.5 * n * w0 - d), -sg * (d + 0.5 * w0),
-                        BTDF_EXP_CUT * vz2 - 0.25 * s * s * A * A};
-        double be[3] = {sg * 0.5 * n * w1, -sg * 0.5 * w1,
-                        -0.25 * s * s * (2.0 * A * B + B * B)};
-        double lo = 0.0, hi = 1.0;
-        for (int i = 0; i < 3; i++) {
-            double scale = fabs(al[i]) + fabs(be[i]) + (i == 2 ? BTDF_EXP_CUT * vz2 : 1.0);
-            double a = al[i] + 1e-9 * scale; /* relaxed: f > -1e-9 scale */
-            if (be[i] > 0.0)
-                lo = fmax(lo, -a / be[i]); /* be != 0 */
-            else if (be[i] < 0.0)
-                hi = fmin(hi, -a / be[i]); /* be != 0 */
-            else if (!(a > 0.0))
-                lo = 2.0; /* f <= -1e-9 scale at every azimuth */
-        }
-        if (lo < hi)
-            return 0; /* this channel reaches some azimuth */
+        double kappa, width;
+        if (pair_azimuth(ior[k], s, &io, &kappa, &width) != 0)
+            return 0; /* this channel reaches some azimuth, or may */
     }
     return 1;
+}
+
+/* The first azimuth grid of a transmission pair: enough points for the von Mises
+   factor of its Gaussian (6 sqrt(kappa) harmonics, where its coefficients have fallen
+   to e^-18 of the first) and 4 across the azimuths any facet reaches, at least
+   NMIN_PHI and at most the material's nmin (8 s, for the narrowest pairs); 2 nmin
+   for a pair that may be dark (the doubling below finds it so). converge() then doubles
+   it until the measured error is met, as for every pair. */
+static size_t first_grid(const build_ctx *c, int b, double mu_s, double mu_f)
+{
+    bt_io io;
+    pair_io(mu_s, mu_f, &io);
+    double want = NMIN_PHI;
+    for (int k = 0; k < c->nc; k++) {
+        double kappa = 0.0, width = 0.0;
+        int r = pair_azimuth(c->ior[b][k], c->p->smoothness, &io, &kappa, &width);
+        if (r < 0)
+            return c->nmin;
+        if (r == 0)
+            continue;
+        want = fmax(want, 6.0 * sqrt(kappa));
+        /* width > 0 when reached; 4 pi / width may be huge: capped below */
+        want = fmax(want, width > 0.0 ? 4.0 * M_PI / width : HUGE_VAL);
+    }
+    return want >= (double)c->nmin ? c->nmin : pow2_at_least(want);
 }
 
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
@@ -478,17 +529,18 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
                        const double *norm, double eps_alias)
 {
     size_t S = c->nmax + 1;
-    size_t N = c->nmin;
+    size_t N = blk_refl[side] ? c->nmin : first_grid(c, side, mu_s, mu_f);
     if (!blk_refl[side] &&
         scatfun_unreachable(c->ior[side], c->nc, c->p->smoothness, mu_s, mu_f)) {
         /* No facet connects the pair at any azimuth (n = 1.5, s = 20 at 1e-3: 880,000
-           of 1.86 million series): what the samples below would find, 0 on both grids
-           (2 N <= nmax: build_impl), without sampling. */
+           of 1.86 million series): what the samples below would find on the material's
+           grids, 0 (2 nmin <= nmax: build_impl), without sampling. */
+        N = 2 * c->nmin;
         for (int k = 0; k < c->nst; k++) {
-            memset(w->x + (size_t)k * S, 0, (2 * N + 1) * sizeof *w->x);
-            memset(w->a + (size_t)k * S, 0, (2 * N + 1) * sizeof *w->a);
+            memset(w->x + (size_t)k * S, 0, (N + 1) * sizeof *w->x);
+            memset(w->a + (size_t)k * S, 0, (N + 1) * sizeof *w->a);
         }
-        return 2 * N;
+        return N;
     }
     sample_grid(c, w, side, mu_s, mu_f, N, S, 1, 0, w->x);
     for (int k = 0; k < c->nst; k++)
@@ -608,9 +660,6 @@ static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t
    ACCEPT_SHARE's margin. The measurement then costs 1.6 (s = 3) to 3.3 (s = 100)
    times less. */
 #define QUICK_PPA 2048
-/* The first azimuth grid has at least NMIN_PHI intervals over [0, pi] (8 s for narrow
-   lobes); converge() doubles it until the coefficients settle. */
-#define NMIN_PHI 32.0
 
 static double share_alias(const build_ctx *c) { return 0.05 * c->budget; }
 static double share_trunc(const build_ctx *c) { return 0.10 * c->budget; }
@@ -794,6 +843,22 @@ static void zero_stencil(const build_ctx *c, double *ia, size_t S, int side, siz
         memset(ia + (size_t)k * S, 0, top * sizeof *ia);
 }
 
+/* The truth at (mu_s, mu_f) in w->x on a grid of N fits series of up to N + 1 terms;
+   when the interpolated stencil is longer (its nodes' series converged on finer grids
+   than this pair's), the samples are taken again on the grid that fits it, so that
+   l1_gap sees all of it. Returns the grid. */
+static size_t truth_for(const build_ctx *c, build_ws *w, int side, double mu_s, double mu_f,
+                        size_t N, size_t mlen)
+{
+    if (mlen <= N + 1 || N >= c->nmax)
+        return N;
+    size_t N2 = N;
+    while (N2 + 1 < mlen && N2 < c->nmax)
+        N2 *= 2;
+    sample_grid(c, w, side, mu_s, mu_f, N2, c->nmax + 1, 1, 0, w->x);
+    return N2;
+}
+
 /* L1 over the circle, per stored channel relative to norm, of (interpolated series
    in w->ia, length mlen) minus the truth sampled in w->x on the grid of N. */
 static double l1_gap(build_ctx *c, build_ws *w, size_t N, size_t mlen, const double *norm)
@@ -851,6 +916,7 @@ static void job_colcheck(void *vctx, void *vws, size_t idx)
                     add_pair(c, side, r, (size_t)h, wt[b], w->ia, S, &mlen);
             }
         }
+        N = truth_for(c, w, side, c->P[r], x, N, mlen);
         /* relative to the DIRECT norm; the ADJOINT reading rescales (adj_ratio) */
         c->errc[side][r * c->nint + j] = l1_gap(c, w, N, mlen, c->Tn[r][side]);
     }
@@ -900,6 +966,7 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
                     add_pair(c, side, (size_t)h, col, wt[a], w->ia, S, &mlen);
             }
         }
+        N = truth_for(c, w, side, x, c->P[col], N, mlen);
         *gap = l1_gap(c, w, N, mlen, c->Tm[j][side]); /* DIRECT norm, as errc */
         total += 0.5 * (hi - lo) * *gap;
     }
@@ -1507,7 +1574,9 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         }
     }
     /* The lobe spans about 2/s rad of facet tilt; a first azimuth grid of about 8 s
-       points puts several samples across it, so no lobe falls between samples. */
+       points puts several samples across it, so no lobe falls between samples. The
+       narrowest pairs need that; a transmission pair starts on the grid its own lobe
+       and edges need (first_grid), at most this. */
     c.nmin = pow2_at_least(fmax(NMIN_PHI, 8.0 * p->smoothness));
     if (c.nmin > BTDF_SCATFUN_MAX_PHI / 2)
         c.nmin = BTDF_SCATFUN_MAX_PHI / 2;
