@@ -75,6 +75,11 @@ btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf
 int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
                         double mu_f);
 
+/* Y[0..N] = the DCT-I of x[0..N], Y_k = x_0 + (-1)^k x_N + 2 sum_{j=1}^{N-1} x_j
+   cos(pi j k / N), as the builder computes it (one real DFT of N points); N a power of
+   two from 2 to 2^20. 0 on success, -1 for another N or out of memory. */
+int scatfun_dct1(const double *x, size_t N, double *Y);
+
 /* msg <- the formatted text (when msg and msglen); returns st. */
 btdf_status scatfun_say(char *msg, size_t msglen, btdf_status st, const char *fmt, ...);
 /* Fills f->xd from f->nodes; 0 on success, -1 when out of memory. */
