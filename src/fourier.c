@@ -285,6 +285,7 @@ static const int blk_mask[NBLK] = {BTDF_SCATFUN_T_ENTER, BTDF_SCATFUN_T_LEAVE,
 typedef struct pair {
     double *a; /* nst * m coefficients, channel-major (Y, R, B) */
     uint32_t m;
+    uint32_t N; /* the azimuth grid its samples converged on */
     int done;  /* computed in an earlier pass with the same budget */
 } pair;
 
@@ -810,6 +811,7 @@ static int keep_series(build_ctx *c, build_ws *w, int side, size_t N, const doub
     free(pr->a);
     pr->a = NULL;
     pr->m = (uint32_t)m;
+    pr->N = (uint32_t)N; /* N <= nmax = 16384 */
     pr->done = 0;
     if (m) {
         pr->a = malloc((size_t)c->nst * m * sizeof(double));
@@ -903,6 +905,20 @@ static void zero_stencil(const build_ctx *c, double *ia, size_t S, int side, siz
         memset(ia + (size_t)k * S, 0, top * sizeof *ia);
 }
 
+/* A check whose series was kept from an earlier pass (its midpoint and the budget are
+   the same; only a neighbour's split changed its stencil) needs the truth samples
+   again, not the series: the samples on the grid they converged on, in w->x, the same
+   values converge() left there. Returns that grid, or 0 when the series must be
+   computed. */
+static size_t truth_again(const build_ctx *c, build_ws *w, int side, double mu_s,
+                          double mu_f, const pair *pr)
+{
+    if (!pr->done || pr->N == 0)
+        return 0;
+    sample_grid(c, w, side, mu_s, mu_f, pr->N, c->nmax + 1, 1, 0, w->x);
+    return pr->N;
+}
+
 /* The truth at (mu_s, mu_f) in w->x on a grid of N fits series of up to N + 1 terms;
    when the interpolated stencil is longer (its nodes' series converged on finer grids
    than this pair's), the samples are taken again on the grid that fits it, so that
@@ -960,10 +976,13 @@ static void job_colcheck(void *vctx, void *vws, size_t idx)
         if (c->okc[side][r * c->nint + j])
             continue; /* same row, same stencil, same budget as last pass */
         double x = c->mid[j];
-        pair_norm(c, side, c->Tn[r][side], c->Tm[j][side], norm);
-        size_t N = converge(c, w, side, c->P[r], x, norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, side, N, norm, &c->pcol[side][r * c->K + j]))
-            goto oom;
+        size_t N = truth_again(c, w, side, c->P[r], x, &c->pcol[side][r * c->K + j]);
+        if (N == 0) {
+            pair_norm(c, side, c->Tn[r][side], c->Tm[j][side], norm);
+            N = converge(c, w, side, c->P[r], x, norm, share_alias(c));
+            if (N == 0 || keep_series(c, w, side, N, norm, &c->pcol[side][r * c->K + j]))
+                goto oom;
+        }
         long off;
         double wt[4];
         size_t mlen = 0;
@@ -1013,10 +1032,13 @@ static void job_rowcheck(void *vctx, void *vws, size_t idx)
             total += 0.5 * (hi - lo) * *gap;
             continue;
         }
-        pair_norm(c, side, c->Tm[j][side], c->Tn[col][side], norm);
-        size_t N = converge(c, w, side, x, c->P[col], norm, share_alias(c));
-        if (N == 0 || keep_series(c, w, side, N, norm, &c->prow[side][j * c->K + col]))
-            goto oom;
+        size_t N = truth_again(c, w, side, x, c->P[col], &c->prow[side][j * c->K + col]);
+        if (N == 0) {
+            pair_norm(c, side, c->Tm[j][side], c->Tn[col][side], norm);
+            N = converge(c, w, side, x, c->P[col], norm, share_alias(c));
+            if (N == 0 || keep_series(c, w, side, N, norm, &c->prow[side][j * c->K + col]))
+                goto oom;
+        }
         size_t mlen = 0;
         if (ok) {
             zero_stencil(c, w->ia, S, side, col, off, wt, 0);
