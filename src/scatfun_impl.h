@@ -67,6 +67,19 @@ btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf
                                size_t angles, size_t ppa, uint64_t seed, int threads,
                                albedo_memo *memo, btdf_report *r);
 
+/* 1 when Eq. 25 is 0 at every azimuth for light at cosine mu_s and the view at cosine
+   -mu_f (a transmission pair of the builder, both in [0, 1]) for each of the channels'
+   indices ior[] and smoothness s: no facet refracts one into the other, or the slope
+   it would need underflows the exponential. 0 when some azimuth may reach, including
+   every case within rounding of the edge (the builder then samples). */
+int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
+                        double mu_f);
+
+/* Y[0..N] = the DCT-I of x[0..N], Y_k = x_0 + (-1)^k x_N + 2 sum_{j=1}^{N-1} x_j
+   cos(pi j k / N), as the builder computes it (one real DFT of N points); N a power of
+   two from 2 to 2^20. 0 on success, -1 for another N or out of memory. */
+int scatfun_dct1(const double *x, size_t N, double *Y);
+
 /* msg <- the formatted text (when msg and msglen); returns st. */
 btdf_status scatfun_say(char *msg, size_t msglen, btdf_status st, const char *fmt, ...);
 /* Fills f->xd from f->nodes; 0 on success, -1 when out of memory. */
