@@ -283,11 +283,13 @@ static const int blk_mask[NBLK] = {BTDF_SCATFUN_T_ENTER, BTDF_SCATFUN_T_LEAVE,
                                    BTDF_SCATFUN_R_TOP, BTDF_SCATFUN_R_BOTTOM};
 
 typedef struct pair {
-    double *a; /* nst * m coefficients, channel-major (Y, R, B) */
+    double *a;     /* nst * m coefficients, channel-major (Y, R, B) */
     uint32_t m;
-    uint32_t N; /* the azimuth grid its samples converged on */
-    int done;  /* computed in an earlier pass with the same budget */
+    uint16_t N;    /* the azimuth grid its samples converged on (<= nmax = 16384) */
+    uint16_t done; /* computed in an earlier pass with the same budget */
 } pair;
+/* pair.N holds any grid: a compile-time check that the largest fits */
+typedef char pair_grid_fits[BTDF_SCATFUN_MAX_PHI <= 65535 ? 1 : -1];
 
 typedef struct build_ctx {
     const btdf_params *p;
@@ -813,7 +815,7 @@ static int keep_series(build_ctx *c, build_ws *w, int side, size_t N, const doub
     free(pr->a);
     pr->a = NULL;
     pr->m = (uint32_t)m;
-    pr->N = (uint32_t)N; /* N <= nmax = 16384 */
+    pr->N = (uint16_t)N; /* N <= nmax = 16384 */
     pr->done = 0;
     if (m) {
         pr->a = malloc((size_t)c->nst * m * sizeof(double));
