@@ -283,11 +283,13 @@ static const int blk_mask[NBLK] = {BTDF_SCATFUN_T_ENTER, BTDF_SCATFUN_T_LEAVE,
                                    BTDF_SCATFUN_R_TOP, BTDF_SCATFUN_R_BOTTOM};
 
 typedef struct pair {
-    double *a; /* nst * m coefficients, channel-major (Y, R, B) */
+    double *a;     /* nst * m coefficients, channel-major (Y, R, B) */
     uint32_t m;
-    uint32_t N; /* the azimuth grid its samples converged on */
-    int done;  /* computed in an earlier pass with the same budget */
+    uint16_t N;    /* the azimuth grid its samples converged on (<= nmax = 16384) */
+    uint16_t done; /* computed in an earlier pass with the same budget */
 } pair;
+/* pair.N holds any grid: a compile-time check that the largest fits */
+typedef char pair_grid_fits[BTDF_SCATFUN_MAX_PHI <= 65535 ? 1 : -1];
 
 typedef struct build_ctx {
     const btdf_params *p;
@@ -521,14 +523,15 @@ int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
 /* The first azimuth grid of a transmission pair: enough points for the von Mises
    factor of its Gaussian (6 sqrt(kappa) harmonics, where its coefficients have fallen
    to e^-18 of the first) and 4 across the azimuths any facet reaches, at least
-   NMIN_PHI and at most the material's nmin (8 s, for the narrowest pairs); 2 nmin
-   for a pair that may be dark (the doubling below finds it so). converge() then doubles
-   it until the measured error is met, as for every pair. */
+   NMIN_PHI and at most the material's nmin (8 s, for the narrowest pairs; also where a
+   channel's v_z is too close to 0 to tell). converge() then doubles it until the
+   measured error is met, as for every pair. 0 when every channel is dark
+   (scatfun_unreachable's answer). */
 static size_t first_grid(const build_ctx *c, int b, double mu_s, double mu_f)
 {
     bt_io io;
     pair_io(mu_s, mu_f, &io);
-    double want = NMIN_PHI;
+    double want = 0.0;
     for (int k = 0; k < c->nc; k++) {
         double kappa = 0.0, width = 0.0;
         int r = pair_azimuth(c->ior[b][k], c->p->smoothness, &io, &kappa, &width);
@@ -536,10 +539,12 @@ static size_t first_grid(const build_ctx *c, int b, double mu_s, double mu_f)
             return c->nmin;
         if (r == 0)
             continue;
-        want = fmax(want, 6.0 * sqrt(kappa));
+        want = fmax(want, fmax(NMIN_PHI, 6.0 * sqrt(kappa)));
         /* width > 0 when reached; 4 pi / width may be huge: capped below */
         want = fmax(want, width > 0.0 ? 4.0 * M_PI / width : HUGE_VAL);
     }
+    if (want == 0.0)
+        return 0; /* no channel reaches any azimuth */
     return want >= (double)c->nmin ? c->nmin : pow2_at_least(want);
 }
 
@@ -591,8 +596,7 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
 {
     size_t S = c->nmax + 1;
     size_t N = blk_refl[side] ? c->nmin : first_grid(c, side, mu_s, mu_f);
-    if (!blk_refl[side] &&
-        scatfun_unreachable(c->ior[side], c->nc, c->p->smoothness, mu_s, mu_f)) {
+    if (N == 0) {
         /* No facet connects the pair at any azimuth (n = 1.5, s = 20 at 1e-3: 880,000
            of 1.86 million series): what the samples below would find on the material's
            grids, 0 (2 nmin <= nmax: build_impl), without sampling. */
@@ -811,7 +815,7 @@ static int keep_series(build_ctx *c, build_ws *w, int side, size_t N, const doub
     free(pr->a);
     pr->a = NULL;
     pr->m = (uint32_t)m;
-    pr->N = (uint32_t)N; /* N <= nmax = 16384 */
+    pr->N = (uint16_t)N; /* N <= nmax = 16384 */
     pr->done = 0;
     if (m) {
         pr->a = malloc((size_t)c->nst * m * sizeof(double));
