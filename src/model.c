@@ -699,6 +699,8 @@ BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *o
     if (!(ti >= 0.0 && ti <= M_PI / 2))
         return BTDF_EDOMAIN;
     for (int c = 0; c < p->channels; c++)
-        out[c] = reflectance_one(p->ior[c], p->smoothness, p->k0, ti, 16, 12);
+        out[c] = reflectance_one(p->ior[c], p->smoothness, p->k0, ti, 16, 6);
+    /* 16 x 6 panels: within 4.9e-8 of 128 x 32 (3.9e-7 of max(R, 0.01)) over the grid
+       of btdf_transmittance's note, at half the cost of 16 x 12 (1.0e-9). */
     return BTDF_OK;
 }
