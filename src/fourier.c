@@ -1081,13 +1081,13 @@ oom:
      reflection). So one pair's series may err by max(T', floor) mu / e^2 in the
      stored units; cos(camera) <= 1 leaves a factor 2 of margin. */
 /* The norms only set the shares the node checks allow (what decides is the file's own
-   measurement, with T converged to 1e-9), so T and R come from a quarter of the
-   converged rule's panels: 8 x 6 against 16 x 12 differs by at most 2.2e-2 of
-   max(T, 0.01) (n = 1/2.4, s = 20, near the critical angle) and 1e-5 of max(R, 0.01),
-   over n in {1.5, 1.33, 2.4, 1.0001} and their inverses, s in {1, 3, 20, 100, 1000},
-   ti in 0.5-degree steps; it costs a quarter. */
+   measurement, with T and R converged to about 3e-7), so T and R come from a coarser
+   rule: 8 x 3 panels differ from the converged ones by at most 6.9e-4 of max(T, 0.01)
+   (n = 1/2.4, s = 20, past the critical angle) and 1.9e-5 of max(R, 0.01), over n in
+   {1.5, 1.33, 2.4, 1.1, 1.0001} and their inverses, s in {0.5, 1, 3, 10, 20, 100,
+   1000}, ti in 0.5-degree steps, for a quarter of T's cost and an eighth of R's. */
 #define NORM_U_PANELS 8
-#define NORM_PSI_PANELS 6
+#define NORM_PSI_PANELS 3
 
 static void norms_at(const build_ctx *c, int side, double mu, double *out)
 {
@@ -1511,7 +1511,7 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
     btdf_report r;
     memset(&r, 0, sizeof r);
     /* btdf_scatfun_report's work, with T and R remembered from the last measurement */
-    if (scatfun_report_mis(f, p, side, 24, QUICK_PPA, seed, threads, memo, &r) != BTDF_OK) {
+    if (scatfun_report_mis(f, p, side, 24, QUICK_PPA, seed, threads, 1, memo, &r) != BTDF_OK) {
         free(r.per_ti);
         return HUGE_VAL;
     }
@@ -2495,8 +2495,10 @@ typedef struct mis_obj {
     const btdf_scatfun *f;
     btdf_side side; /* the block evaluated (eval_side's side) */
     btdf_scatfun_mode mode;
+    int both;             /* 1: mode is DIRECT and the ADJOINT reading comes second */
     albedo_memo *memo;    /* R remembered (refl_angle), or NULL */
     const fixed_read *fr; /* the reading at this angle (mis_prep), or NULL */
+    const fixed_read *fa; /* the ADJOINT one when both (NULL: not made) */
 } mis_obj;
 
 /* The per-angle context of the estimator: a copy of the reading with its fixed_read. */
@@ -2508,8 +2510,12 @@ static void *mis_prep(const void *obj, double ti)
         return NULL;
     *c = *m;
     /* ti in [0, pi/2]: cos ti in [0, 1] */
-    c->fr = fixed_new(m->f, m->side, m->mode, fmin(1.0, fmax(0.0, cos(ti))));
-    if (!c->fr) {
+    double ci = fmin(1.0, fmax(0.0, cos(ti)));
+    c->fr = fixed_new(m->f, m->side, m->mode, ci);
+    c->fa = m->both ? fixed_new(m->f, m->side, BTDF_SCATFUN_ADJOINT, ci) : NULL;
+    if (!c->fr || (m->both && !c->fa)) {
+        fixed_free((fixed_read *)c->fr);
+        fixed_free((fixed_read *)c->fa);
         free(c);
         return NULL;
     }
@@ -2520,6 +2526,7 @@ static void mis_done(void *ctx)
 {
     mis_obj *c = ctx;
     fixed_free((fixed_read *)c->fr);
+    fixed_free((fixed_read *)c->fa);
     free(c);
 }
 
@@ -2532,13 +2539,20 @@ static void mis_eval(const void *obj, double ti, const double *q, double *out)
        the clamps keep rounding inside the ranges eval_side_cos takes */
     double ci = fmin(1.0, fmax(0.0, q[1])), co = fmin(1.0, fabs(q[3]));
     double cpd = -fmin(1.0, fmax(-1.0, q[4]));
+    uint32_t ch = m->f->channels;
     if (m->fr) {
         fixed_eval(m->fr, co, cpd, out);
+        if (m->both)
+            fixed_eval(m->fa, co, cpd, out + ch);
         return;
     }
     if (eval_side_cos(m->f, m->side, m->mode, ci, co, cpd, out) != BTDF_OK)
-        for (uint32_t k = 0; k < m->f->channels; k++)
+        for (uint32_t k = 0; k < ch; k++)
             out[k] = 0.0;
+    if (m->both &&
+        eval_side_cos(m->f, m->side, BTDF_SCATFUN_ADJOINT, ci, co, cpd, out + ch) != BTDF_OK)
+        for (uint32_t k = 0; k < ch; k++)
+            out[ch + k] = 0.0;
 }
 
 /* splitmix64, as the tables' estimator uses (one stream per test angle) */
@@ -2573,13 +2587,37 @@ static double refl_h_measure(double u, double s, double dw, double dpsi)
  */
 /* btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, out), through fr when
    there is one (ti its angle). */
-static btdf_status refl_read(const mis_obj *m, const fixed_read *fr, double ti, double tr,
-                             double phi, double *out)
+static btdf_status refl_read(const mis_obj *m, btdf_scatfun_mode mode, const fixed_read *fr,
+                             double ti, double tr, double phi, double *out)
 {
     if (!fr)
-        return btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, out);
+        return btdf_scatfun_eval_side(m->f, m->side, mode, ti, tr, phi, out);
     fixed_eval(fr, fabs(cos(tr)), -cos(phi), out); /* as eval_side passes them */
     return BTDF_OK;
+}
+
+/* One reading's sums at one angle and channel (as the estimator's est_acc). */
+typedef struct refl_acc {
+    double l1, sgn, dmax, vmax;
+} refl_acc;
+
+/* Both readings (nr of them, m->mode then ADJOINT) of channel c at (tr, phi) against
+   rho, with weight wgt. */
+static void refl_both(const mis_obj *m, const fixed_read *const *fr, int nr, int c,
+                      double ti, double tr, double phi, double rho, double wgt,
+                      refl_acc *acc)
+{
+    double tab[BTDF_MAX_CHANNELS];
+    for (int e = 0; e < nr; e++) {
+        if (refl_read(m, e ? BTDF_SCATFUN_ADJOINT : m->mode, fr[e], ti, tr, phi, tab) !=
+            BTDF_OK)
+            tab[c] = 0.0;
+        double d = tab[c] - rho;
+        acc[e].l1 += fabs(d) * wgt;
+        acc[e].sgn += d * wgt;
+        acc[e].dmax = fmax(acc[e].dmax, fabs(d));
+        acc[e].vmax = fmax(acc[e].vmax, rho);
+    }
 }
 
 static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint64_t rng,
@@ -2591,16 +2629,24 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
     double wmax = -expm1(-U_EST_R * U_EST_R);
     double dw = wmax / (double)nu, dpsi = M_PI / (double)npsi;
     double dmu = 1.0 / (double)nmu, dphi = M_PI / (double)nphi;
-    double R[BTDF_MAX_CHANNELS], tab[BTDF_MAX_CHANNELS];
+    double R[BTDF_MAX_CHANNELS];
     if (albedo_memo_get(m->memo, p, 1, ti, R) != BTDF_OK)
         for (int c = 0; c < p->channels; c++)
             R[c] = 0.0;
     size_t pts = 0;
     /* the light's index combined once for the angle (NULL when out of memory: the
        plain evaluation, the same values) */
-    fixed_read *fr = fixed_new(m->f, m->side, m->mode, fmin(1.0, fmax(0.0, cti)));
+    int nr = m->both ? 2 : 1;
+    const fixed_read *fr[2] = {NULL, NULL};
+    fr[0] = fixed_new(m->f, m->side, m->mode, fmin(1.0, fmax(0.0, cti)));
+    if (m->both)
+        fr[1] = fixed_new(m->f, m->side, BTDF_SCATFUN_ADJOINT, fmin(1.0, fmax(0.0, cti)));
+    btdf_ti_error rr[2]; /* per reading; the angle's result is the worse */
+    memset(rr, 0, sizeof rr);
     for (int c = 0; c < p->channels; c++) {
-        double n = p->ior[c], l1 = 0.0, sgn = 0.0, dmax = 0.0, vmax = 0.0;
+        double n = p->ior[c];
+        refl_acc acc[2];
+        memset(acc, 0, sizeof acc);
         for (size_t iu = 0; iu < nu; iu++) {
             for (size_t ip = 0; ip < npsi; ip++) {
                 double w = wmax * ((double)iu + refl_unif(&rng)) / (double)nu;
@@ -2620,13 +2666,8 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
                 double va = rz * 4.0 * ca * refl_h_measure(u, s, dw, dpsi);
                 double vb = rz * dmu * dphi * 2.0;
                 double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
-                if (refl_read(m, fr, ti, tr, phi, tab) != BTDF_OK)
-                    tab[c] = 0.0;
-                double d = tab[c] - rho, wgt = va * vb / (va + vb); /* va, vb > 0 */
-                l1 += fabs(d) * wgt;
-                sgn += d * wgt;
-                dmax = fmax(dmax, fabs(d));
-                vmax = fmax(vmax, rho);
+                /* va, vb > 0 */
+                refl_both(m, fr, nr, c, ti, tr, phi, rho, va * vb / (va + vb), acc);
             }
         }
         for (size_t im = 0; im < nmu; im++) {
@@ -2651,38 +2692,45 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
                 }
                 double tr = atan2(sr, mu), phi = ph;
                 double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
-                if (refl_read(m, fr, ti, tr, phi, tab) != BTDF_OK)
-                    tab[c] = 0.0;
-                double d = tab[c] - rho;
-                l1 += fabs(d) * share;
-                sgn += d * share;
-                dmax = fmax(dmax, fabs(d));
-                vmax = fmax(vmax, rho);
+                refl_both(m, fr, nr, c, ti, tr, phi, rho, share, acc);
             }
         }
         double fl = fmax(R[c], T_FLOOR); /* MODEL.md section 6 floor, with R for T */
-        if (c == 0) {
-            res->T = R[c];
-            res->T_table = R[c] + sgn;
+        for (int e = 0; e < nr; e++) {
+            if (c == 0) {
+                rr[e].T = R[c];
+                rr[e].T_table = R[c] + acc[e].sgn;
+            }
+            rr[e].e_l1 = fmax(rr[e].e_l1, acc[e].l1 / fl);
+            rr[e].e_t = fmax(rr[e].e_t, fabs(acc[e].sgn) / fl);
+            if (R[c] >= T_FLOOR && acc[e].vmax > 0.0)
+                rr[e].e_max = fmax(rr[e].e_max, acc[e].dmax / acc[e].vmax);
         }
-        res->e_l1 = fmax(res->e_l1, l1 / fl);
-        res->e_t = fmax(res->e_t, fabs(sgn) / fl);
-        if (R[c] >= T_FLOOR && vmax > 0.0)
-            res->e_max = fmax(res->e_max, dmax / vmax);
     }
-    fixed_free(fr);
+    /* the worse reading, as the estimator's est_angle combines its readings */
+    int wr = nr == 2 && rr[1].e_l1 > rr[0].e_l1;
+    res->T = rr[0].T;
+    res->T_table = rr[wr].T_table;
+    res->e_l1 = rr[wr].e_l1;
+    res->e_t = fmax(rr[0].e_t, rr[1].e_t);
+    res->e_max = fmax(rr[0].e_max, rr[1].e_max);
+    fixed_free((fixed_read *)fr[0]);
+    fixed_free((fixed_read *)fr[1]);
     return pts;
 }
 
-/* One reading of a file against the truth: btdf_scatfun_eval_side's side names the
-   light's side in both modes (DIRECT reads that block, ADJOINT the block whose fast
-   index holds that light: the other transmission block, the same reflection block). */
+/* One reading of a file against the truth, or both (both = 1, mode DIRECT): then
+   every point's truth serves the two, and each test angle keeps the worse.
+   btdf_scatfun_eval_side's side names the light's side in both modes (DIRECT reads that
+   block, ADJOINT the block whose fast index holds that light: the other transmission
+   block, the same reflection block). */
 static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, int b,
-                                  btdf_scatfun_mode mode, size_t angles, size_t ppa,
-                                  uint64_t seed, int threads, albedo_memo *memo,
+                                  btdf_scatfun_mode mode, int both, size_t angles, size_t ppa,
+                                  uint64_t seed, int threads, int l1_only, albedo_memo *memo,
                                   btdf_report *r)
 {
-    mis_obj m = {f, (btdf_side)b, mode, memo, NULL};
+    mis_obj m = {f, (btdf_side)b, mode, both, memo, NULL, NULL};
+    est_opts opt = {l1_only, both ? 2 : 1};
     int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
     int below = b == BTDF_SCATFUN_T_LEAVE || b == BTDF_SCATFUN_R_BOTTOM;
     btdf_params q = *p;
@@ -2704,72 +2752,33 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
     btdf_status st;
     if (refl)
         st = btdf_estimate_angles(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots, nk,
-                                  refl_angle, &m, memo, r);
+                                  refl_angle, &m, &opt, memo, r);
     else
         st = btdf_estimate_knots_prep(&q, 0.0, M_PI / 2, angles, ppa, seed, threads, knots,
-                                      nk, mis_eval, mis_prep, mis_done, &m, memo, r);
+                                      nk, mis_eval, mis_prep, mis_done, &m, &opt, memo, r);
     free(knots);
     return st;
 }
 
-static int cmp_ti(const void *a, const void *b)
+btdf_status scatfun_report_reading(const btdf_scatfun *f, const btdf_params *p,
+                                   btdf_side side, btdf_scatfun_mode mode, int both,
+                                   size_t angles, size_t ppa, uint64_t seed, int threads,
+                                   btdf_report *r)
 {
-    double x = ((const btdf_ti_error *)a)->ti, y = ((const btdf_ti_error *)b)->ti;
-    return x < y ? -1 : x > y;
-}
-
-/* r := the worse of r and o at every test angle (angles both tested: the larger of each
-   error; the others: kept as they are). The maxima are the larger of the two; each
-   mean, which the estimator takes over its stratified angles only (both readings
-   share them: same seed, same range), is the worse reading's. */
-static btdf_status merge_reports(btdf_report *r, btdf_report *o)
-{
-    size_t n = r->test_angles + o->test_angles;
-    btdf_ti_error *u = malloc((n ? n : 1) * sizeof *u);
-    if (!u)
-        return BTDF_ENOMEM;
-    memcpy(u, r->per_ti, r->test_angles * sizeof *u);
-    memcpy(u + r->test_angles, o->per_ti, o->test_angles * sizeof *u);
-    qsort(u, n, sizeof *u, cmp_ti);
-    size_t m = 0, nmx = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (m > 0 && u[m - 1].ti == u[i].ti) {
-            btdf_ti_error *a = &u[m - 1];
-            if (u[i].e_l1 > a->e_l1)
-                a->T_table = u[i].T_table, a->e_l1 = u[i].e_l1;
-            a->e_t = fmax(a->e_t, u[i].e_t);
-            a->e_max = fmax(a->e_max, u[i].e_max);
-        } else {
-            u[m++] = u[i];
-        }
-    }
-    for (size_t i = 0; i < m; i++)
-        nmx += u[i].T >= T_FLOOR; /* where e_max is defined (btdf_ti_error) */
-    r->e_l1_max = fmax(r->e_l1_max, o->e_l1_max);
-    r->e_t_max = fmax(r->e_t_max, o->e_t_max);
-    r->e_max_max = fmax(r->e_max_max, o->e_max_max);
-    r->e_l1_mean = fmax(r->e_l1_mean, o->e_l1_mean);
-    r->e_t_mean = fmax(r->e_t_mean, o->e_t_mean);
-    r->e_max_mean = fmax(r->e_max_mean, o->e_max_mean);
-    r->e_max_angles = nmx;
-    r->test_points += o->test_points;
-    r->seconds_estimate += o->seconds_estimate;
-    free(r->per_ti);
-    r->per_ti = u;
-    r->test_angles = m;
-    return BTDF_OK;
+    return report_reading(f, p, (int)side, mode, both, angles, ppa, seed, threads, 0, NULL, r);
 }
 
 /* The report of one block, as renderers read it: light tracers (pbrt-v3's importance
    mode, DIRECT: the light in the slow index) and path tracers' camera rays (radiance
    mode, ADJOINT: the light in the fast index) read the same stored series along
    different axes and with different norms, so both readings are measured and the worse
-   kept at every test angle. A three-channel transmission block's fold is right on the
+   kept at every test angle (each sample's Eq. 25 serves the two; each mean is over the
+   stratified angles of that worse reading). A three-channel transmission block's fold is right on the
    radiance path only (build_impl): there the light side's report is that block's
    ADJOINT reading. */
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
-                               albedo_memo *memo, btdf_report *r)
+                               int l1_only, albedo_memo *memo, btdf_report *r)
 {
     int b = (int)side;
     int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
@@ -2778,19 +2787,11 @@ btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf
     int has_adj = refl || (f->sides & tb) != 0;
     if (f->channels == 3 && !refl)
         /* a file of this one block: its ADJOINT reading is the other side's light */
-        return report_reading(f, p, has_adj ? b : tb, BTDF_SCATFUN_ADJOINT, angles, ppa, seed,
-                              threads, memo, r);
-    btdf_status st =
-        report_reading(f, p, b, BTDF_SCATFUN_DIRECT, angles, ppa, seed, threads, memo, r);
-    if (st != BTDF_OK || !has_adj)
-        return st;
-    btdf_report o;
-    memset(&o, 0, sizeof o);
-    st = report_reading(f, p, b, BTDF_SCATFUN_ADJOINT, angles, ppa, seed, threads, memo, &o);
-    if (st == BTDF_OK)
-        st = merge_reports(r, &o);
-    free(o.per_ti);
-    return st;
+        return report_reading(f, p, has_adj ? b : tb, BTDF_SCATFUN_ADJOINT, 0, angles, ppa,
+                              seed, threads, l1_only, memo, r);
+    /* both readings at once where the file has both (one truth per point for the two) */
+    return report_reading(f, p, b, BTDF_SCATFUN_DIRECT, has_adj, angles, ppa, seed, threads,
+                          l1_only, memo, r);
 }
 
 BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_params *p,
@@ -2818,7 +2819,7 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
        near grazing incidence (1.9e-3 at ti = 86.7 deg for s = 3, where a
        1500 x 1500 brute-force integral agrees with this estimator). */
     btdf_status st = scatfun_report_mis(f, p, side, test_angles, points_per_angle, seed,
-                                        threads, f->memo, r);
+                                        threads, 0, f->memo, r);
     if (st != BTDF_OK)
         return st;
     r->slices = f->n;

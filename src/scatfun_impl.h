@@ -62,10 +62,18 @@ struct btdf_scatfun {
 };
 
 /* btdf_scatfun_report's work without its checks and summary fields, T and R taken from
-   memo (NULL: computed); fills r's errors and per-angle rows. */
+   memo (NULL: computed); fills r's errors and per-angle rows. l1_only: the test angles
+   are refined for e_L1 alone (btdf_estimate_knots_prep). */
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
-                               albedo_memo *memo, btdf_report *r);
+                               int l1_only, albedo_memo *memo, btdf_report *r);
+
+/* One reading (mode, both = 0) or both at once (both = 1, mode DIRECT) of block side of
+   f, as the reports make them, with T and R computed (no memo); for tests. */
+btdf_status scatfun_report_reading(const btdf_scatfun *f, const btdf_params *p,
+                                   btdf_side side, btdf_scatfun_mode mode, int both,
+                                   size_t angles, size_t ppa, uint64_t seed, int threads,
+                                   btdf_report *r);
 
 /* 1 when Eq. 25 is 0 at every azimuth for light at cosine mu_s and the view at cosine
    -mu_f (a transmission pair of the builder, both in [0, 1]) for each of the channels'

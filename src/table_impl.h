@@ -149,14 +149,25 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
 typedef void *(*est_prep_fn)(const void *obj, double ti);
 typedef void (*est_done_fn)(void *ctx);
 
+/* Options of the estimates below (NULL: both 0).
+   l1_only: the refinement rounds follow e_L1 alone (for a caller that reads no other
+     error; the other fields are still filled at the angles tested);
+   nread: 2 when fn returns two readings of the same truth per point (out[0..ch) and
+     out[ch..2 ch)): both are compared with one evaluation of Eq. 25 and each angle
+     reports the worse (each error's larger value, T_table of the larger e_L1). */
+typedef struct est_opts {
+    int l1_only;
+    int nread;
+} est_opts;
+
 /* btdf_estimate_knots with a per-angle context from prep (freed by done); fn then reads
    q[0..5] only (q[6] and q[7], the angles, are left 0: no atan2 per point). */
 btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double ti_max,
                                      size_t test_angles, size_t points_per_angle,
                                      uint64_t seed, int threads, const double *knots,
                                      size_t nknots, est_eval_fn fn, est_prep_fn prep,
-                                     est_done_fn done, const void *obj, albedo_memo *memo,
-                                     btdf_report *r);
+                                     est_done_fn done, const void *obj, const est_opts *opt,
+                                     albedo_memo *memo, btdf_report *r);
 
 /* A whole per-angle estimate: fills res (zeroed, res->ti set) at incidence ti with p
    the truth's parameters, from the generator state rng (fixed by ti and the seed);
@@ -165,12 +176,13 @@ typedef size_t (*est_angle_fn)(const void *obj, const btdf_params *p, double ti,
                                size_t points_per_angle, btdf_ti_error *res);
 
 /* The angle choice of btdf_estimate_knots (stratified, knot midpoints, refinement
-   rounds) around a per-angle estimate of the caller's. */
+   rounds) around a per-angle estimate of the caller's (opt->nread is fn's business:
+   it fills res with the worse of its readings). */
 btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
                                  size_t test_angles, size_t points_per_angle, uint64_t seed,
                                  int threads, const double *knots, size_t nknots,
-                                 est_angle_fn fn, const void *obj, albedo_memo *memo,
-                                btdf_report *r);
+                                 est_angle_fn fn, const void *obj, const est_opts *opt,
+                                 albedo_memo *memo, btdf_report *r);
 /* The same for an evaluation of the reflection: against rho_r (MODEL.md section 8)
    over the upper hemisphere, relative to max(R(ti), 0.01); q holds tr for to. */
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,

@@ -805,6 +805,64 @@ static void test_narrow_lobe_meets_tolerance(void **state)
    long double, for N = 2 to 4096 and random samples. Both carry rounding of at most a
    few N eps times sum |x_j| (N additions of terms bounded by 2 max |x|); the allowance
    is 8 N eps sum |x_j|. */
+/* Both readings of a block in one pass (one Eq. 25 per point serving the two) give at
+   every test angle exactly the worse of the two readings made apart with the same seed:
+   an angle's points depend on its ti and the seed only, and each reading's sums take
+   them in the same order, so the results agree to the bit. */
+static void check_joint(const btdf_scatfun *f, const btdf_params *p, btdf_side side)
+{
+    btdf_report j, d, a;
+    memset(&j, 0, sizeof j);
+    memset(&d, 0, sizeof d);
+    memset(&a, 0, sizeof a);
+    assert_int_equal(scatfun_report_reading(f, p, side, BTDF_SCATFUN_DIRECT, 1, 8, 1024, 7, 2,
+                                            &j), BTDF_OK);
+    assert_int_equal(scatfun_report_reading(f, p, side, BTDF_SCATFUN_DIRECT, 0, 8, 1024, 7, 2,
+                                            &d), BTDF_OK);
+    assert_int_equal(scatfun_report_reading(f, p, side, BTDF_SCATFUN_ADJOINT, 0, 8, 1024, 7,
+                                            2, &a), BTDF_OK);
+    size_t common = 0, adj_worse = 0;
+    for (size_t k = 0; k < j.test_angles; k++) {
+        const btdf_ti_error *x = &j.per_ti[k], *y = NULL, *z = NULL;
+        for (size_t i = 0; i < d.test_angles; i++)
+            if (d.per_ti[i].ti == x->ti)
+                y = &d.per_ti[i];
+        for (size_t i = 0; i < a.test_angles; i++)
+            if (a.per_ti[i].ti == x->ti)
+                z = &a.per_ti[i];
+        if (!y || !z)
+            continue; /* a refinement angle of one run only */
+        common++;
+        int aw = z->e_l1 > y->e_l1;
+        adj_worse += aw;
+        assert_true(x->e_l1 == fmax(y->e_l1, z->e_l1));
+        assert_true(x->e_t == fmax(y->e_t, z->e_t));
+        assert_true(x->e_max == fmax(y->e_max, z->e_max));
+        assert_true(x->T == y->T && x->T_table == (aw ? z->T_table : y->T_table));
+    }
+    fprintf(stderr, "block %d: %zu common angles, ADJOINT worse at %zu\n", (int)side, common,
+            adj_worse);
+    /* the 8 stratified angles, the ends and every knot midpoint at least */
+    assert_true(common >= 10 + btdf_scatfun_node_count(f) / 4);
+    assert_true(adj_worse > 0 && adj_worse < common); /* both readings decide somewhere */
+    free(j.per_ti);
+    free(d.per_ti);
+    free(a.per_ti);
+}
+
+static void test_joint_readings(void **state)
+{
+    (void)state;
+    check_joint(fx.f, &fx.p, BTDF_SIDE_ENTER);
+    btdf_scatfun *f = NULL;
+    char msg[256];
+    btdf_status st = btdf_scatfun_build(&fx.p, 0.05, (btdf_side)BTDF_SCATFUN_R_TOP, 2, &f, msg,
+                                        sizeof msg);
+    assert_int_equal(st, BTDF_OK);
+    check_joint(f, &fx.p, (btdf_side)BTDF_SCATFUN_R_TOP);
+    btdf_scatfun_free(f);
+}
+
 static void test_cosine_transform(void **state)
 {
     (void)state;
@@ -854,6 +912,7 @@ int main(void)
         cmocka_unit_test(test_unreachable_pairs),
         cmocka_unit_test(test_narrow_lobe_meets_tolerance),
         cmocka_unit_test(test_cosine_transform),
+        cmocka_unit_test(test_joint_readings),
     };
     return cmocka_run_group_tests_name("scatfun", tests, setup, teardown);
 }
