@@ -269,6 +269,15 @@ static int dct_inverse(fftbuf *b, const double *a, size_t m, size_t N, double *y
 static double series_l1(fftbuf *b, const double *a, size_t m, size_t N, const double *x,
                         double *y)
 {
+    if (m == 0 && !x)
+        return 0.0; /* an empty series alone */
+    if (m == 0) { /* an empty series is 0 at every point: the same sum, no transform */
+        double sum = 0.5 * fabs(x[0]); /* in the order of the loop below */
+        for (size_t j = 1; j < N; j++)
+            sum += fabs(x[j]);
+        sum += 0.5 * fabs(x[N]);
+        return 2.0 * sum * M_PI / (double)N; /* N >= 2 */
+    }
     if (dct_inverse(b, a, m, N, y))
         return -1.0;
     double sum = 0.0;
@@ -302,7 +311,8 @@ typedef struct pair {
     double *a;     /* nst * m coefficients, channel-major (Y, R, B) */
     uint32_t m;
     uint16_t N;    /* the azimuth grid its samples converged on (<= nmax = 16384) */
-    uint16_t done; /* computed in an earlier pass with the same budget */
+    uint16_t done; /* computed in an earlier pass with the same budget: 1, or 2 when
+                      dark (no facet connects it at any azimuth: its samples are 0) */
 } pair;
 /* pair.N holds any grid: a compile-time check that the largest fits */
 typedef char pair_grid_fits[BTDF_SCATFUN_MAX_PHI <= 65535 ? 1 : -1];
@@ -349,6 +359,7 @@ typedef struct build_ws {
     double *rho;     /* per model channel scratch */
     double *cosg, *sing; /* cos and sin of j pi / nmax, j = 0..nmax */
     double *h2g;         /* sin^2 of j pi / (2 nmax): bt_rho's azimuth term at phi_d */
+    int dark;            /* the last converge() found the pair dark (first_grid 0) */
 } build_ws;
 
 static void *build_ws_new(void *vctx)
@@ -612,6 +623,7 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
 {
     size_t S = c->nmax + 1;
     size_t N = blk_refl[side] ? c->nmin : first_grid(c, side, mu_s, mu_f);
+    w->dark = N == 0;
     if (N == 0) {
         /* No facet connects the pair at any azimuth (n = 1.5, s = 20 at 1e-3: 880,000
            of 1.86 million series): what the samples below would find on the material's
@@ -834,7 +846,7 @@ static int keep_series(build_ctx *c, build_ws *w, int side, size_t N, const doub
         for (int k = 0; k < c->nst; k++)
             memcpy(pr->a + (size_t)k * m, w->a + k * S, m * sizeof(double));
     }
-    pr->done = 1;
+    pr->done = w->dark ? 2 : 1; /* w->dark: set by the converge() of these coefficients */
     return 0;
 }
 
@@ -927,6 +939,11 @@ static size_t truth_again(const build_ctx *c, build_ws *w, int side, double mu_s
 {
     if (!pr->done || pr->N == 0)
         return 0;
+    if (pr->done == 2) { /* dark: the samples converge() wrote, all 0 */
+        for (int k = 0; k < c->nst; k++)
+            memset(w->x + (size_t)k * (c->nmax + 1), 0, ((size_t)pr->N + 1) * sizeof *w->x);
+        return pr->N;
+    }
     sample_grid(c, w, side, mu_s, mu_f, pr->N, c->nmax + 1, 1, 0, w->x);
     return pr->N;
 }
