@@ -141,6 +141,7 @@ typedef struct est_job {
     est_done_fn done;     /* frees what prep returned */
     int l1_only;          /* refinement follows e_L1 only */
     int nread;            /* readings fn returns per point (1 or 2; est_opts) */
+    double stop_above;    /* est_opts */
 } est_job;
 
 /*
@@ -397,6 +398,7 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
     j.done = done;
     j.l1_only = opt ? opt->l1_only : 0;
     j.nread = opt && opt->nread == 2 ? 2 : 1;
+    j.stop_above = opt ? opt->stop_above : 0.0;
     j.ppa = points_per_angle;
     j.obj = obj;
     j.npsi = 32;
@@ -440,7 +442,11 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
     run_angles(&j, threads, ti, nstrat, res, points);
     if (n > extra0)
         run_angles(&j, threads, ti + extra0, n - extra0, res + extra0, points + extra0);
-    for (int round = 0; round < REFINE_ROUNDS && span > 0.0; round++) {
+    int refine = 1;
+    if (j.stop_above > 0.0) /* the answer is known: the worst is above stop_above */
+        for (size_t k = 0; k < n && refine; k++)
+            refine = !(res[k].e_l1 > j.stop_above);
+    for (int round = 0; refine && round < REFINE_ROUNDS && span > 0.0; round++) {
         /* sorted copy of what we have */
         btdf_ti_error *srt = malloc(n * sizeof *srt);
         double *add = malloc((2 * n + 2) * sizeof *add);

@@ -1530,12 +1530,19 @@ static size_t pow2_at_least(double v)
    (half nodes P[0..K-1]; both sides share them); *nmark counts new marks. */
 static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads,
                        uint64_t seed, albedo_memo *memo, const double *P, size_t K,
-                       double mark_at, unsigned char *split, size_t *nmark)
+                       double mark_at, double accept_at, unsigned char *split,
+                       size_t *nmark)
 {
     btdf_report r;
     memset(&r, 0, sizeof r);
-    /* btdf_scatfun_report's work, with T and R remembered from the last measurement */
-    if (scatfun_report_mis(f, p, side, 24, QUICK_PPA, seed, threads, 1, memo, &r) != BTDF_OK) {
+    /* btdf_scatfun_report's work, with T and R remembered from the last measurement;
+       e_L1 is all the build reads, and once the first angles fail the acceptance
+       (stop_above) their marks are what the build needs: the refinement rounds, which
+       look for a larger worst, are left to the next measurement. stop_above is 0 for
+       the last measurement (split NULL), which must be whole. */
+    est_opts opt = {1, 1, split ? accept_at : 0.0};
+    if (scatfun_report_mis(f, p, side, 24, QUICK_PPA, seed, threads, &opt, memo, &r) !=
+        BTDF_OK) {
         free(r.per_ti);
         return HUGE_VAL;
     }
@@ -1893,8 +1900,12 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                 if (c.want[s])
                     e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
                                          QUICK_SEED + (uint64_t)local, memo, P, K,
-                                         MARK_SHARE * tolerance, split, &nmark));
-            if (e < best_err) {
+                                         MARK_SHARE * tolerance, ACCEPT_SHARE * tolerance,
+                                         split, &nmark));
+            /* A failing measurement may have skipped its refinement (stop_above): its
+               e is a lower bound, so such a file is not kept as the best; should the
+               budget run out, the last file is measured whole below. */
+            if (e < best_err && e <= ACCEPT_SHARE * tolerance) {
                 btdf_scatfun_free(best);
                 best = f;
                 best_err = e;
@@ -1985,7 +1996,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                     if (c.want[s])
                         e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
                                              QUICK_SEED + (uint64_t)local, memo, NULL, 0,
-                                             0.0, NULL, NULL));
+                                             0.0, 0.0, NULL, NULL));
                 if (e < best_err || !best) {
                     btdf_scatfun_free(best);
                     best = f;
@@ -2750,11 +2761,14 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
    block, the same reflection block). */
 static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, int b,
                                   btdf_scatfun_mode mode, int both, size_t angles, size_t ppa,
-                                  uint64_t seed, int threads, int l1_only, albedo_memo *memo,
-                                  btdf_report *r)
+                                  uint64_t seed, int threads, const est_opts *o,
+                                  albedo_memo *memo, btdf_report *r)
 {
     mis_obj m = {f, (btdf_side)b, mode, both, memo, NULL, NULL};
-    est_opts opt = {l1_only, both ? 2 : 1};
+    est_opts opt = {0, 1, 0.0};
+    if (o)
+        opt = *o;
+    opt.nread = both ? 2 : 1;
     int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
     int below = b == BTDF_SCATFUN_T_LEAVE || b == BTDF_SCATFUN_R_BOTTOM;
     btdf_params q = *p;
@@ -2789,7 +2803,8 @@ btdf_status scatfun_report_reading(const btdf_scatfun *f, const btdf_params *p,
                                    size_t angles, size_t ppa, uint64_t seed, int threads,
                                    btdf_report *r)
 {
-    return report_reading(f, p, (int)side, mode, both, angles, ppa, seed, threads, 0, NULL, r);
+    return report_reading(f, p, (int)side, mode, both, angles, ppa, seed, threads, NULL, NULL,
+                          r);
 }
 
 /* The report of one block, as renderers read it: light tracers (pbrt-v3's importance
@@ -2802,7 +2817,7 @@ btdf_status scatfun_report_reading(const btdf_scatfun *f, const btdf_params *p,
    ADJOINT reading. */
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
-                               int l1_only, albedo_memo *memo, btdf_report *r)
+                               const est_opts *opt, albedo_memo *memo, btdf_report *r)
 {
     int b = (int)side;
     int refl = b == BTDF_SCATFUN_R_TOP || b == BTDF_SCATFUN_R_BOTTOM;
@@ -2812,10 +2827,10 @@ btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf
     if (f->channels == 3 && !refl)
         /* a file of this one block: its ADJOINT reading is the other side's light */
         return report_reading(f, p, has_adj ? b : tb, BTDF_SCATFUN_ADJOINT, 0, angles, ppa,
-                              seed, threads, l1_only, memo, r);
+                              seed, threads, opt, memo, r);
     /* both readings at once where the file has both (one truth per point for the two) */
     return report_reading(f, p, b, BTDF_SCATFUN_DIRECT, has_adj, angles, ppa, seed, threads,
-                          l1_only, memo, r);
+                          opt, memo, r);
 }
 
 BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_params *p,
@@ -2843,7 +2858,7 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
        near grazing incidence (1.9e-3 at ti = 86.7 deg for s = 3, where a
        1500 x 1500 brute-force integral agrees with this estimator). */
     btdf_status st = scatfun_report_mis(f, p, side, test_angles, points_per_angle, seed,
-                                        threads, 0, f->memo, r);
+                                        threads, NULL, f->memo, r);
     if (st != BTDF_OK)
         return st;
     r->slices = f->n;

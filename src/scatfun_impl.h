@@ -37,6 +37,7 @@
    (the same knot midpoints each time, each block read twice) compute each once.
    Thread-safe; a value is the same whether it was remembered or computed. */
 typedef struct albedo_memo albedo_memo;
+struct est_opts; /* table_impl.h */
 albedo_memo *albedo_memo_new(void);
 void albedo_memo_free(albedo_memo *m);
 /* out[0..p->channels-1]; m may be NULL (computes). Returns btdf_transmittance's or
@@ -62,11 +63,12 @@ struct btdf_scatfun {
 };
 
 /* btdf_scatfun_report's work without its checks and summary fields, T and R taken from
-   memo (NULL: computed); fills r's errors and per-angle rows. l1_only: the test angles
-   are refined for e_L1 alone (btdf_estimate_knots_prep). */
+   memo (NULL: computed); fills r's errors and per-angle rows. opt (NULL: none) as
+   btdf_estimate_knots_prep's, but for nread, which the reading sets. */
 btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
-                               int l1_only, albedo_memo *memo, btdf_report *r);
+                               const struct est_opts *opt, albedo_memo *memo,
+                               btdf_report *r);
 
 /* One reading (mode, both = 0) or both at once (both = 1, mode DIRECT) of block side of
    f, as the reports make them, with T and R computed (no memo); for tests. */

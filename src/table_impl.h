@@ -154,10 +154,14 @@ typedef void (*est_done_fn)(void *ctx);
      error; the other fields are still filled at the angles tested);
    nread: 2 when fn returns two readings of the same truth per point (out[0..ch) and
      out[ch..2 ch)): both are compared with one evaluation of Eq. 25 and each angle
-     reports the worse (each error's larger value, T_table of the larger e_L1). */
+     reports the worse (each error's larger value, T_table of the larger e_L1);
+   stop_above: when > 0 and the first angles (stratified, ends, knot midpoints) already
+     hold an e_L1 above it, no refinement rounds (for a caller that only asks whether
+     the worst is below it, and where: the answer is already no). */
 typedef struct est_opts {
     int l1_only;
     int nread;
+    double stop_above;
 } est_opts;
 
 /* btdf_estimate_knots with a per-angle context from prep (freed by done); fn then reads
