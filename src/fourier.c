@@ -554,11 +554,10 @@ int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
    coefficients have fallen to e^-18 of the first) and 4 points across; at least
    FIRST_MIN_PHI (the doubled grid NMIN_PHI) and at most the material's nmin (8 s, for
    the narrowest pairs; also where a channel's v_z is too close to 0 to tell). Until
-   this version the first grid held the 6 sqrt(kappa) and 4 points itself, and most
-   pairs converged on its double: files of n = 1.5 (s = 3, 20 at 1e-3; s = 100 at
-   1e-2), 2.4 (s = 1) and 1.33 (s = 5, four blocks) have the same nodes and e_L1 to 3
-   digits either way, s = 100 built in 13 s instead of 29. 0 when every channel is
-   dark (scatfun_unreachable's answer). */
+   this version the first grid held the 6 sqrt(kappa) and 4 points itself: files of
+   n = 1.5 (s = 3, 20 at 1e-3; s = 100 at 1e-2), 2.4 (s = 1) and 1.33 (s = 5, four
+   blocks) have the same nodes and e_L1 to 3 digits either way, and s = 100 builds in
+   13 s instead of 29. 0 when every channel is dark (scatfun_unreachable's answer). */
 #define FIRST_MIN_PHI 16.0
 static size_t first_grid(const build_ctx *c, int b, double mu_s, double mu_f)
 {
@@ -2620,8 +2619,8 @@ static double refl_h_measure(double u, double s, double dw, double dpsi)
  * Both cover the half phi in [0, pi] and count twice (rho_r is even in phi). The
  * norm is max(R(ti), 0.01) (MODEL.md sections 6 and 8).
  */
-/* btdf_scatfun_eval_side(m->f, m->side, m->mode, ti, tr, phi, out), through fr when
-   there is one (ti its angle). */
+/* btdf_scatfun_eval_side(m->f, m->side, mode, ti, tr, phi, out), through fr when there
+   is one (the reading of mode at ti's angle). */
 static btdf_status refl_read(const mis_obj *m, btdf_scatfun_mode mode, const fixed_read *fr,
                              double ti, double tr, double phi, double *out)
 {

@@ -34,7 +34,7 @@
 
 /* T(ti) or R(ti) per channel (btdf_transmittance / btdf_reflectance), remembered by
    the parameters and the exact angle, so the builder's repeated measurements of a file
-   (the same knot midpoints each time, each block read twice) compute each once.
+   (the same knot midpoints each time) and the file's reports compute each once.
    Thread-safe; a value is the same whether it was remembered or computed. */
 typedef struct albedo_memo albedo_memo;
 struct est_opts; /* table_impl.h */

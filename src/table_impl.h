@@ -149,7 +149,7 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
 typedef void *(*est_prep_fn)(const void *obj, double ti);
 typedef void (*est_done_fn)(void *ctx);
 
-/* Options of the estimates below (NULL: both 0).
+/* Options of the estimates below (NULL: all 0, one reading).
    l1_only: the refinement rounds follow e_L1 alone (for a caller that reads no other
      error; the other fields are still filled at the angles tested);
    nread: 2 when fn returns two readings of the same truth per point (out[0..ch) and
