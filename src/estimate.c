@@ -159,17 +159,26 @@ typedef struct est_job {
  */
 #define U_EST 7.0 /* A's neglected tail holds exp(-49) of the facet distribution */
 
-typedef struct est_acc {
-    double l1, sgn, dmax, vmax;
-} est_acc;
-
-static void est_add(est_acc *e, double tab, double rho, double weight)
+void est_fold(btdf_ti_error *r, const est_acc *a, double T, int c)
 {
-    double d = tab - rho;
-    e->l1 += fabs(d) * weight;
-    e->sgn += d * weight;
-    e->dmax = fmax(e->dmax, fabs(d));
-    e->vmax = fmax(e->vmax, rho);
+    double fl = fmax(T, 0.01); /* MODEL.md section 6 floor */
+    if (c == 0) {
+        r->T = T;
+        r->T_table = T + a->sgn;
+    }
+    r->e_l1 = fmax(r->e_l1, a->l1 / fl);
+    r->e_t = fmax(r->e_t, fabs(a->sgn) / fl);
+    r->e_max = fmax(r->e_max, (T >= 0.01 && a->vmax > 0.0) ? a->dmax / a->vmax : 0.0);
+}
+
+void est_worse(const btdf_ti_error *rr, int nr, btdf_ti_error *out)
+{
+    int wr = nr == 2 && rr[1].e_l1 > rr[0].e_l1;
+    out->T = rr[0].T;
+    out->T_table = rr[wr].T_table;
+    out->e_l1 = rr[wr].e_l1;
+    out->e_t = nr == 2 ? fmax(rr[0].e_t, rr[1].e_t) : rr[0].e_t;
+    out->e_max = nr == 2 ? fmax(rr[0].e_max, rr[1].e_max) : rr[0].e_max;
 }
 
 /* Measure one A sample of slope u (tan tn = 2u/s) stands for, per unit outgoing
@@ -285,27 +294,10 @@ static void est_angle(void *arg, size_t k)
                     est_add(&acc[e], tab[e * p->channels + c], rho, share);
             }
         }
-        double fl = fmax(T, 0.01); /* MODEL.md section 6 floor */
-        for (int e = 0; e < nr; e++) {
-            double el1 = acc[e].l1 / fl, et = fabs(acc[e].sgn) / fl;
-            double em = (T >= 0.01 && acc[e].vmax > 0.0) ? acc[e].dmax / acc[e].vmax : 0.0;
-            if (c == 0) {
-                rr[e].T = T;
-                rr[e].T_table = T + acc[e].sgn;
-            }
-            rr[e].e_l1 = fmax(rr[e].e_l1, el1);
-            rr[e].e_t = fmax(rr[e].e_t, et);
-            rr[e].e_max = fmax(rr[e].e_max, em);
-        }
+        for (int e = 0; e < nr; e++)
+            est_fold(&rr[e], &acc[e], T, c);
     }
-    /* the worse reading at this angle: each error's larger value, T_table of the one
-       with the larger e_L1 (the first on a tie) */
-    int wr = nr == 2 && rr[1].e_l1 > rr[0].e_l1;
-    r->T = rr[0].T;
-    r->T_table = rr[wr].T_table;
-    r->e_l1 = rr[wr].e_l1;
-    r->e_t = nr == 2 ? fmax(rr[0].e_t, rr[1].e_t) : rr[0].e_t;
-    r->e_max = nr == 2 ? fmax(rr[0].e_max, rr[1].e_max) : rr[0].e_max;
+    est_worse(rr, nr, r); /* the worse reading at this angle */
     if (ctx)
         j->done(ctx);
     j->points[k] = pts;

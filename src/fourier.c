@@ -2630,27 +2630,18 @@ static btdf_status refl_read(const mis_obj *m, btdf_scatfun_mode mode, const fix
     return BTDF_OK;
 }
 
-/* One reading's sums at one angle and channel (as the estimator's est_acc). */
-typedef struct refl_acc {
-    double l1, sgn, dmax, vmax;
-} refl_acc;
-
 /* Both readings (nr of them, m->mode then ADJOINT) of channel c at (tr, phi) against
    rho, with weight wgt. */
 static void refl_both(const mis_obj *m, const fixed_read *const *fr, int nr, int c,
                       double ti, double tr, double phi, double rho, double wgt,
-                      refl_acc *acc)
+                      est_acc *acc)
 {
     double tab[BTDF_MAX_CHANNELS];
     for (int e = 0; e < nr; e++) {
         if (refl_read(m, e ? BTDF_SCATFUN_ADJOINT : m->mode, fr[e], ti, tr, phi, tab) !=
             BTDF_OK)
             tab[c] = 0.0;
-        double d = tab[c] - rho;
-        acc[e].l1 += fabs(d) * wgt;
-        acc[e].sgn += d * wgt;
-        acc[e].dmax = fmax(acc[e].dmax, fabs(d));
-        acc[e].vmax = fmax(acc[e].vmax, rho);
+        est_add(&acc[e], tab[c], rho, wgt);
     }
 }
 
@@ -2679,7 +2670,7 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
     memset(rr, 0, sizeof rr);
     for (int c = 0; c < p->channels; c++) {
         double n = p->ior[c];
-        refl_acc acc[2];
+        est_acc acc[2];
         memset(acc, 0, sizeof acc);
         for (size_t iu = 0; iu < nu; iu++) {
             for (size_t ip = 0; ip < npsi; ip++) {
@@ -2729,25 +2720,10 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
                 refl_both(m, fr, nr, c, ti, tr, phi, rho, share, acc);
             }
         }
-        double fl = fmax(R[c], T_FLOOR); /* MODEL.md section 6 floor, with R for T */
-        for (int e = 0; e < nr; e++) {
-            if (c == 0) {
-                rr[e].T = R[c];
-                rr[e].T_table = R[c] + acc[e].sgn;
-            }
-            rr[e].e_l1 = fmax(rr[e].e_l1, acc[e].l1 / fl);
-            rr[e].e_t = fmax(rr[e].e_t, fabs(acc[e].sgn) / fl);
-            if (R[c] >= T_FLOOR && acc[e].vmax > 0.0)
-                rr[e].e_max = fmax(rr[e].e_max, acc[e].dmax / acc[e].vmax);
-        }
+        for (int e = 0; e < nr; e++) /* R in T's place: MODEL.md sections 6 and 8 */
+            est_fold(&rr[e], &acc[e], R[c], c);
     }
-    /* the worse reading, as the estimator's est_angle combines its readings */
-    int wr = nr == 2 && rr[1].e_l1 > rr[0].e_l1;
-    res->T = rr[0].T;
-    res->T_table = rr[wr].T_table;
-    res->e_l1 = rr[wr].e_l1;
-    res->e_t = fmax(rr[0].e_t, rr[1].e_t);
-    res->e_max = fmax(rr[0].e_max, rr[1].e_max);
+    est_worse(rr, nr, res); /* the worse reading, as est_angle's */
     fixed_free((fixed_read *)fr[0]);
     fixed_free((fixed_read *)fr[1]);
     return pts;

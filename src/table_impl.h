@@ -3,6 +3,7 @@
 #ifndef BTDF_TABLE_IMPL_H
 #define BTDF_TABLE_IMPL_H
 
+#include <math.h>
 #include <stddef.h>
 
 #include "btdf.h"
@@ -148,6 +149,30 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
    passed to the est_eval_fn in obj's place (NULL: out of memory, obj is passed). */
 typedef void *(*est_prep_fn)(const void *obj, double ti);
 typedef void (*est_done_fn)(void *ctx);
+
+/* One reading's sums at one test angle and channel: the integrals of |difference| and of
+   the difference, the largest |difference| and the model's largest value. */
+typedef struct est_acc {
+    double l1, sgn, dmax, vmax;
+} est_acc;
+
+static inline void est_add(est_acc *e, double tab, double rho, double weight)
+{
+    double d = tab - rho;
+    e->l1 += fabs(d) * weight;
+    e->sgn += d * weight;
+    e->dmax = fmax(e->dmax, fabs(d));
+    e->vmax = fmax(e->vmax, rho);
+}
+
+/* Channel c's sums a into the angle's errors r, relative to max(T, 0.01) (T: the
+   model's T, or R for reflection; MODEL.md section 6), e_max where T >= 0.01; channel 0
+   sets r->T and r->T_table. */
+void est_fold(btdf_ti_error *r, const est_acc *a, double T, int c);
+
+/* out's errors := the worse of nr (1 or 2) readings rr at one angle: each error's
+   larger value, T_table of the larger e_L1 (the first on a tie); out->ti is kept. */
+void est_worse(const btdf_ti_error *rr, int nr, btdf_ti_error *out);
 
 /* Options of the estimates below (NULL: all 0, one reading).
    l1_only: the refinement rounds follow e_L1 alone (for a caller that reads no other
