@@ -2546,80 +2546,171 @@ static fixed_read *fixed_new(const btdf_scatfun *f, btdf_side side, btdf_scatfun
     return r;
 }
 
-/* eval_side_cos(f, side, mode, r->ci, co, cpd, out) through the combined series. */
-BT_CLONES static void fixed_eval(const fixed_read *r, double co, double cpd, double *out)
+/* One view of a fixed_read: the spline stencil of the view's cosine over the
+   combined series, and what the value's scaling needs. */
+typedef struct fixed_view {
+    const double *ser[4];
+    double wt[4];
+    uint32_t ln[4], mtop;
+    int np, ok, rad;
+    double ms, mf, rk;
+} fixed_view;
+
+static void fixed_view_at(const fixed_read *r, double co, fixed_view *v)
 {
     const btdf_scatfun *f = r->f;
-    for (uint32_t k = 0; k < f->channels; k++)
-        out[k] = 0.0;
+    v->ok = 0;
+    v->np = 0;
+    v->mtop = 0;
     if (!r->ok)
         return;
-    double ms, mf;
-    int rad;
-    side_mus(r->side, r->mode, r->ci, co, &ms, &mf, &rad);
-    double mu = r->slow_fixed ? mf : ms;
-    double rk = r->rk_fixed * cap_mu(f, &mu);
+    side_mus(r->side, r->mode, r->ci, co, &v->ms, &v->mf, &v->rad);
+    double mu = r->slow_fixed ? v->mf : v->ms;
+    v->rk = r->rk_fixed * cap_mu(f, &mu);
     if (r->slow_fixed)
-        mf = mu;
+        v->mf = mu;
     else
-        ms = mu;
+        v->ms = mu;
     long ov;
     double w[4];
     if (!cr_weights_f(f, mu, &ov, w))
         return;
-    const double *ser[4];
-    double wt[4];
-    uint32_t ln[4], mtop = 0;
-    int np = 0;
+    v->ok = 1;
     for (int b = 0; b < 4; b++) {
         long o = ov + b;
         if (w[b] == 0.0 || o < 0 || o >= (long)f->n || r->len[o] == 0)
             continue;
-        ser[np] = r->buf + r->off[o];
-        ln[np] = r->len[o];
-        wt[np] = w[b];
-        if (ln[np] > mtop)
-            mtop = ln[np];
-        np++;
+        v->ser[v->np] = r->buf + r->off[o];
+        v->ln[v->np] = r->len[o];
+        v->wt[v->np] = w[b];
+        if (v->ln[v->np] > v->mtop)
+            v->mtop = v->ln[v->np];
+        v->np++;
     }
-    double val[3] = {0.0, 0.0, 0.0};
-    cos_rec cr;
-    cos_rec_init(&cr, fmin(1.0, fmax(-1.0, cpd)), rk);
-    for (uint32_t q0 = 0; q0 < mtop; q0 += COS_CHUNK) {
-        uint32_t len = mtop - q0 < COS_CHUNK ? mtop - q0 : COS_CHUNK;
-        const double *ck = cos_rec_chunk(&cr, q0, len);
-        for (uint32_t k = 0; k < f->channels; k++) {
-            double comb[COS_CHUNK];
-            uint32_t used = 0;
-            for (int e = 0; e < np; e++) {
-                if (ln[e] <= q0)
-                    continue;
-                uint32_t l = ln[e] - q0 < len ? ln[e] - q0 : len;
-                const double *a = ser[e] + (size_t)k * ln[e] + q0;
-                for (uint32_t t = used; t < l; t++)
-                    comb[t] = 0.0;
-                if (l > used)
-                    used = l;
-                for (uint32_t t = 0; t < l; t++)
-                    comb[t] += wt[e] * a[t];
-            }
-            val[k] += cos_dot(comb, ck, used);
+}
+
+/* val[k] += the view's series over harmonics q0 .. q0 + len - 1 against ck: the
+   stencil's weighted sum at each harmonic times its cosine, in four running sums, as
+   eval_stored's combine-then-cos_dot does (the same additions in the same order:
+   each harmonic's combination starts from 0 and adds the series that reach it in
+   stencil order; harmonics in whole groups of four go to sums t mod 4, the rest to
+   the first), without storing the combination: filling and re-reading that buffer
+   was a quarter of a reading's time. */
+BT_INLINE void fixed_view_chunk(const fixed_view *v, uint32_t channels, uint32_t q0,
+                                uint32_t len, const double *ck, double *val)
+{
+    for (uint32_t k = 0; k < channels; k++) {
+        const double *a[4];
+        double w[4];
+        uint32_t l[4], used = 0, lmin = len;
+        int na = 0;
+        for (int e = 0; e < v->np; e++) {
+            if (v->ln[e] <= q0)
+                continue;
+            l[na] = v->ln[e] - q0 < len ? v->ln[e] - q0 : len;
+            a[na] = v->ser[e] + (size_t)k * v->ln[e] + q0;
+            w[na] = v->wt[e];
+            if (l[na] > used)
+                used = l[na];
+            if (l[na] < lmin)
+                lmin = l[na];
+            na++;
         }
+        if (na == 0)
+            continue;
+        uint32_t full = used & ~3u; /* cos_dot's groups of four */
+        uint32_t fast = (lmin < full ? lmin : full) & ~3u;
+        double s4[4] = {0.0, 0.0, 0.0, 0.0};
+        uint32_t t = 0;
+        if (na == 4) {
+            for (; t < fast; t += 4)
+                for (int u = 0; u < 4; u++) {
+                    double c = 0.0;
+                    c += w[0] * a[0][t + u];
+                    c += w[1] * a[1][t + u];
+                    c += w[2] * a[2][t + u];
+                    c += w[3] * a[3][t + u];
+                    s4[u] += c * ck[t + u];
+                }
+        } else if (na == 2) {
+            for (; t < fast; t += 4)
+                for (int u = 0; u < 4; u++) {
+                    double c = 0.0;
+                    c += w[0] * a[0][t + u];
+                    c += w[1] * a[1][t + u];
+                    s4[u] += c * ck[t + u];
+                }
+        }
+        for (; t < used; t++) {
+            double c = 0.0;
+            for (int e = 0; e < na; e++)
+                if (l[e] > t)
+                    c += w[e] * a[e][t];
+            s4[t < full ? t % 4 : 0] += c * ck[t];
+        }
+        val[k] += (s4[0] + s4[1]) + (s4[2] + s4[3]);
     }
+}
+
+/* The view's value from its series sums val, as eval_mu_rk scales it. */
+static void fixed_view_out(const btdf_scatfun *f, const fixed_view *v, const double *val,
+                           double *out)
+{
+    for (uint32_t k = 0; k < f->channels; k++)
+        out[k] = 0.0;
     /* f = value / |mu_f|: at mu_f = 0 (grazing) the stored value is 0 too; read 0 */
-    if (!(fabs(mf) > 0.0))
+    if (!v->ok || !(fabs(v->mf) > 0.0))
         return;
     stored_to_out(f->channels, val, out);
-    double scale = 1.0 / fabs(mf);
-    if (rad && ms * mf > 0.0) {
+    double scale = 1.0 / fabs(v->mf);
+    if (v->rad && v->ms * v->mf > 0.0) {
         /* pbrt-v3's radiance factor, as eval_mu_rk; eta finite and > 0 */
-        double e = mf > 0.0 ? 1.0 / (double)f->eta : (double)f->eta;
+        double e = v->mf > 0.0 ? 1.0 / (double)f->eta : (double)f->eta;
         scale *= e * e;
     }
     for (uint32_t k = 0; k < f->channels; k++) {
-        double v = out[k] * scale;
-        out[k] = isfinite(v) ? v : 0.0;
+        double x = out[k] * scale;
+        out[k] = isfinite(x) ? x : 0.0;
     }
+}
+
+/* eval_side_cos(f, side, mode, r[i]->ci, co, cpd, out + i channels) through the
+   combined series, for nr = 1 or 2 readings of one file at the same point (a block's
+   DIRECT and ADJOINT readings). Both readings' views have the same |mu| and so, for
+   this library's mirror-symmetric nodes, the same near-normal factor rk: then the
+   cosines cos(k phi) rk^k are made once for the two (the recurrence was about a
+   third of each evaluation). The values are those of one reading at a time, bit for
+   bit: the same cosines, the same sums in the same order. */
+BT_CLONES static void fixed_eval_n(const fixed_read *const *r, int nr, double co, double cpd,
+                                   double *out)
+{
+    const btdf_scatfun *f = r[0]->f;
+    uint32_t ch = f->channels;
+    fixed_view v[2];
+    double val[2][3] = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+    for (int i = 0; i < nr; i++)
+        fixed_view_at(r[i], co, &v[i]);
+    double cphi = fmin(1.0, fmax(-1.0, cpd));
+    int shared = nr == 2 && v[0].ok && v[1].ok && v[0].rk == v[1].rk;
+    for (int i = 0; i < nr; i++) {
+        if (!v[i].ok || (shared && i == 1))
+            continue;
+        uint32_t mtop = v[i].mtop;
+        if (shared && v[1].mtop > mtop)
+            mtop = v[1].mtop;
+        cos_rec cr;
+        cos_rec_init(&cr, cphi, v[i].rk);
+        for (uint32_t q0 = 0; q0 < mtop; q0 += COS_CHUNK) {
+            uint32_t len = mtop - q0 < COS_CHUNK ? mtop - q0 : COS_CHUNK;
+            const double *ck = cos_rec_chunk(&cr, q0, len);
+            if (q0 < v[i].mtop)
+                fixed_view_chunk(&v[i], ch, q0, len, ck, val[i]);
+            if (shared && q0 < v[1].mtop)
+                fixed_view_chunk(&v[1], ch, q0, len, ck, val[1]);
+        }
+    }
+    for (int i = 0; i < nr; i++)
+        fixed_view_out(f, &v[i], val[i], out + (size_t)i * ch);
 }
 
 typedef struct mis_obj {
@@ -2672,9 +2763,8 @@ static void mis_eval(const void *obj, double ti, const double *q, double *out)
     double cpd = -fmin(1.0, fmax(-1.0, q[4]));
     uint32_t ch = m->f->channels;
     if (m->fr) {
-        fixed_eval(m->fr, co, cpd, out);
-        if (m->both)
-            fixed_eval(m->fa, co, cpd, out + ch);
+        const fixed_read *rr[2] = {m->fr, m->fa};
+        fixed_eval_n(rr, m->both ? 2 : 1, co, cpd, out);
         return;
     }
     if (eval_side_cos(m->f, m->side, m->mode, ci, co, cpd, out) != BTDF_OK)
@@ -2723,7 +2813,7 @@ static btdf_status refl_read(const mis_obj *m, btdf_scatfun_mode mode, const fix
 {
     if (!fr)
         return btdf_scatfun_eval_side(m->f, m->side, mode, ti, tr, phi, out);
-    fixed_eval(fr, fabs(cos(tr)), -cos(phi), out); /* as eval_side passes them */
+    fixed_eval_n(&fr, 1, fabs(cos(tr)), -cos(phi), out); /* as eval_side passes them */
     return BTDF_OK;
 }
 
@@ -2733,7 +2823,14 @@ static void refl_both(const mis_obj *m, const fixed_read *const *fr, int nr, int
                       double ti, double tr, double phi, double rho, double wgt,
                       est_acc *acc)
 {
-    double tab[BTDF_MAX_CHANNELS];
+    double tab[2 * BTDF_MAX_CHANNELS];
+    if (nr <= 2 && fr[0] && (nr < 2 || fr[1])) { /* both at once (fixed_eval_n) */
+        uint32_t ch = m->f->channels;
+        fixed_eval_n(fr, nr, fabs(cos(tr)), -cos(phi), tab); /* as eval_side passes them */
+        for (int e = 0; e < nr; e++)
+            est_add(&acc[e], tab[(size_t)e * ch + (size_t)c], rho, wgt);
+        return;
+    }
     for (int e = 0; e < nr; e++) {
         if (refl_read(m, e ? BTDF_SCATFUN_ADJOINT : m->mode, fr[e], ti, tr, phi, tab) !=
             BTDF_OK)
