@@ -746,7 +746,9 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
 
 /* Shortest length m whose dropped tail costs at most eps_trunc (L1 over the circle,
    relative to norm[ch]) in every stored channel. */
-static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t N,
+enum { TRUNC_BLOCK = 64 };
+
+BT_CLONES static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t N,
                            const double *norm, double eps_trunc)
 {
     size_t m = 0;
@@ -756,13 +758,44 @@ static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t
            q >= 1, and 2 pi |a_0| */
         double tail = 0.0;
         size_t q = N + 1;
-        while (q > 0) {
-            /* norm >= T_FLOOR > 0 */
-            double add = (q - 1 == 0 ? 2.0 * M_PI : 4.0) * fabs(ak[q - 1]) / norm[k];
-            if (tail + add > eps_trunc)
-                break;
-            tail += add;
-            q--;
+        int stop = 0;
+        /* In blocks of TRUNC_BLOCK from the top (the one-at-a-time loop waited on a
+           division per coefficient, over thousands of coefficients per series: 8 % of
+           an s = 20 build). A block whose terms, summed in four lanes, keep the tail
+           below eps_trunc by more than their rounding (64 terms >= 0: at most 64 ulps
+           of the sum) cannot stop the walk anywhere inside, so it is taken whole; the
+           block where the tail would reach eps_trunc is walked term by term. Terms
+           are multiplied by 1/norm rather than divided. The same m as the
+           one-at-a-time walk with divisions except where the tail ties eps_trunc to
+           about 1e-12 (the files compared were byte for byte the same). */
+        double inv = 1.0 / norm[k]; /* norm >= T_FLOOR > 0 */
+        while (q > 0 && !stop) {
+            size_t nb = q < TRUNC_BLOCK ? q : TRUNC_BLOCK, lo = q - nb;
+            double add[TRUNC_BLOCK];
+            for (size_t i = 0; i < nb; i++)
+                add[i] = 4.0 * fabs(ak[lo + i]) * inv;
+            if (lo == 0)
+                add[0] = 2.0 * M_PI * fabs(ak[0]) * inv;
+            if (nb == TRUNC_BLOCK) {
+                double b4[4] = {0.0, 0.0, 0.0, 0.0};
+                for (size_t i4 = 0; i4 < TRUNC_BLOCK; i4 += 4)
+                    for (int v = 0; v < 4; v++)
+                        b4[v] += add[i4 + v];
+                double bs = (b4[0] + b4[1]) + (b4[2] + b4[3]);
+                if (tail + bs <= eps_trunc * (1.0 - 1e-12)) {
+                    tail += bs;
+                    q = lo;
+                    continue;
+                }
+            }
+            for (size_t i = nb; i-- > 0;) {
+                if (tail + add[i] > eps_trunc) {
+                    stop = 1;
+                    break;
+                }
+                tail += add[i];
+                q--;
+            }
         }
         if (q > m)
             m = q;
