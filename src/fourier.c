@@ -1354,11 +1354,6 @@ static int ensure_state(build_ctx *c)
 
 static int set_nodes(build_ctx *c, const double *P, size_t K);
 
-/* Moves everything still valid to the refined node set Q (KQ nodes, a superset of
-   c->P). ins[j] = 1 when old interval j got the node mid[j], whose check series
-   become pairs; 2 when it got another node. Series at unchanged nodes, checks
-   whose stencil is unchanged and norms are kept, so a pass only computes what the
-   new nodes touch. Returns 0 on success; on failure the old state is intact. */
 /* carry_over's work for one block: the block's pairs, check series and carried check
    results moved to their places in the new grid. Every loop walks its source row by
    row (the arrays are row-major: a column walk strides K records, and this runs on
@@ -1425,6 +1420,11 @@ static void carry_block(void *arg, size_t s)
     }
 }
 
+/* Moves everything still valid to the refined node set Q (KQ nodes, a superset of
+   c->P). ins[j] = 1 when old interval j got the node mid[j], whose check series
+   become pairs; 2 when it got another node. Series at unchanged nodes, checks
+   whose stencil is unchanged and norms are kept, so a pass only computes what the
+   new nodes touch. Returns 0 on success; on failure the old state is intact. */
 static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned char *ins,
                       int threads)
 {
@@ -2643,8 +2643,8 @@ static void fixed_view_at(const fixed_read *r, double co, fixed_view *v)
    eval_stored's combine-then-cos_dot does (the same additions in the same order:
    each harmonic's combination starts from 0 and adds the series that reach it in
    stencil order; harmonics in whole groups of four go to sums t mod 4, the rest to
-   the first), without storing the combination: filling and re-reading that buffer
-   was a quarter of a reading's time. */
+   the first), without storing the combination (zeroing that buffer alone was a
+   tenth of the reading's profile). */
 BT_INLINE void fixed_view_chunk(const fixed_view *v, uint32_t channels, uint32_t q0,
                                 uint32_t len, const double *ck, double *val)
 {
@@ -2727,9 +2727,9 @@ static void fixed_view_out(const btdf_scatfun *f, const fixed_view *v, const dou
    combined series, for nr = 1 or 2 readings of one file at the same point (a block's
    DIRECT and ADJOINT readings). Both readings' views have the same |mu| and so, for
    this library's mirror-symmetric nodes, the same near-normal factor rk: then the
-   cosines cos(k phi) rk^k are made once for the two (the recurrence was about a
-   third of each evaluation). The values are those of one reading at a time, bit for
-   bit: the same cosines, the same sums in the same order. */
+   cosines cos(k phi) rk^k are made once for the two. The values are those of one
+   reading at a time, bit for bit: the same cosines, the same sums in the same
+   order. */
 BT_CLONES static void fixed_eval_n(const fixed_read *const *r, int nr, double co, double cpd,
                                    double *out)
 {
