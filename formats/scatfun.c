@@ -512,6 +512,7 @@ BTDF_API void btdf_scatfun_free(btdf_scatfun *f)
         return;
     free(f->nodes);
     free(f->xd);
+    free(f->xcell);
     free(f->cdf);
     free(f->offsets);
     free(f->coeffs);

@@ -130,8 +130,8 @@ typedef struct est_job {
     const void *obj;
     const double *ti;     /* the test angles */
     est_angle_fn custom;  /* a whole per-angle estimate instead of est_angle's, or NULL */
-    size_t ppa;           /* points per angle asked for (for custom) */
-    size_t nu, npsi, nmu, nphi;
+    size_t ppa;           /* points per angle of this pass (for custom) */
+    size_t nu, npsi, nmu, nphi; /* this pass's sets (custom: nmu = nphi) */
     uint64_t seed;
     btdf_ti_error *res;
     size_t *points;
@@ -203,7 +203,7 @@ static void est_angle(void *arg, size_t k)
     if (j->custom) {
         memset(&j->res[k], 0, sizeof j->res[k]);
         j->res[k].ti = ti;
-        j->points[k] = j->custom(j->obj, p, ti, rng, j->ppa, &j->res[k]);
+        j->points[k] = j->custom(j->obj, p, ti, rng, j->ppa, j->nmu, &j->res[k]);
         return;
     }
     double sti = sin(ti), cti = cos(ti), s = p->smoothness;
@@ -431,9 +431,50 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
                 ti[n++] = 0.5 * (a + b);
         }
     }
+    /* Screening (est_opts): every first angle with the small sets, then with the full
+       ones those whose small reading reaches screen_at or is 0 (a screen that saw no
+       error knows nothing); the refinement rounds below read in full. */
+    int screen = opt && opt->l1_only && opt->screen_ppa > 0 && opt->screen_nuni > 0 &&
+                 opt->screen_ppa < points_per_angle && opt->screen_nuni < j.nmu;
+    size_t full_nu = j.nu, full_nuni = j.nmu;
+    if (screen) {
+        j.ppa = opt->screen_ppa;
+        j.nu = (opt->screen_ppa + 31) / 32;
+        j.nmu = j.nphi = opt->screen_nuni;
+    }
     run_angles(&j, threads, ti, nstrat, res, points);
     if (n > extra0)
         run_angles(&j, threads, ti + extra0, n - extra0, res + extra0, points + extra0);
+    if (screen) {
+        j.ppa = points_per_angle;
+        j.nu = full_nu;
+        j.nmu = j.nphi = full_nuni;
+        double *again = malloc(n * sizeof *again);
+        size_t *where = malloc(n * sizeof *where);
+        btdf_ti_error *res2 = calloc(n, sizeof *res2);
+        size_t *pts2 = calloc(n, sizeof *pts2);
+        size_t na = 0;
+        if (again && where && res2 && pts2) {
+            for (size_t k = 0; k < n; k++) {
+                int small = res[k].e_l1 < opt->screen_at && res[k].e_l1 > 0.0; /* NaN: no */
+                if (!small) {
+                    where[na] = k;
+                    again[na++] = ti[k];
+                }
+            }
+            run_angles(&j, threads, again, na, res2, pts2);
+            for (size_t q = 0; q < na; q++) {
+                res[where[q]] = res2[q];
+                points[where[q]] += pts2[q];
+            }
+        } else {
+            run_angles(&j, threads, ti, n, res, points); /* out of memory: all in full */
+        }
+        free(again);
+        free(where);
+        free(res2);
+        free(pts2);
+    }
     int refine = 1;
     if (j.stop_above > 0.0) /* the answer is known: the worst is above stop_above */
         for (size_t k = 0; k < n && refine; k++)

@@ -34,20 +34,12 @@ btdf_status scatfun_say(char *msg, size_t msglen, btdf_status st, const char *fm
 /* Catmull-Rom weights as pbrt-v3 computes them                              */
 /* ------------------------------------------------------------------------- */
 
-/* Weights of nodes off..off+3 for the spline through x[] at v. 0 when v lies outside
-   [x[0], x[n-1]] or the interval found has zero width (a malformed node list). */
-static int cr_weights(const double *x, size_t n, double v, long *off, double w[4])
+/* Weights of nodes off..off+3 for the spline through x[] at v, given i, the largest
+   index with x[i] <= v, and v in [x[0], x[n-1]], n >= 2. 0 when the interval found has
+   zero width (a malformed node list). */
+static int cr_weights_at(const double *x, size_t n, double v, size_t lo, long *off,
+                         double w[4])
 {
-    if (n < 2 || !(v >= x[0] && v <= x[n - 1]))
-        return 0;
-    size_t lo = 0, hi = n - 1; /* largest i with x[i] <= v */
-    while (lo < hi) {
-        size_t mid = lo + (hi - lo + 1) / 2;
-        if (x[mid] <= v)
-            lo = mid;
-        else
-            hi = mid - 1;
-    }
     size_t i = lo > n - 2 ? n - 2 : lo;
     double x0 = x[i], x1 = x[i + 1];
     if (!(x1 > x0))
@@ -78,6 +70,56 @@ static int cr_weights(const double *x, size_t n, double v, long *off, double w[4
         w[2] += w3;
     }
     return 1;
+}
+
+/* The largest i in [lo, hi] with x[i] <= v, given x[lo] <= v. */
+static size_t cr_search(const double *x, size_t lo, size_t hi, double v)
+{
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo + 1) / 2;
+        if (x[mid] <= v)
+            lo = mid;
+        else
+            hi = mid - 1;
+    }
+    return lo;
+}
+
+/* Weights of nodes off..off+3 for the spline through x[] at v. 0 when v lies outside
+   [x[0], x[n-1]] or the interval found has zero width (a malformed node list). */
+static int cr_weights(const double *x, size_t n, double v, long *off, double w[4])
+{
+    if (n < 2 || !(v >= x[0] && v <= x[n - 1]))
+        return 0;
+    return cr_weights_at(x, n, v, cr_search(x, 0, n - 1, v), off, w);
+}
+
+/* cr_weights over a file's nodes, the interval found through f->xcell: a walk of a
+   node or two from the cell's first instead of a binary search over all of them
+   (its ten unpredictable branches per call were 6 % of a .bsdf build's time). The
+   same interval, so the same weights, as cr_weights. */
+BT_INLINE int cr_weights_f(const btdf_scatfun *f, double v, long *off, double w[4])
+{
+    const double *x = f->xd;
+    size_t n = f->n;
+    if (!f->xcell)
+        return cr_weights(x, n, v, off, w);
+    if (n < 2 || !(v >= x[0] && v <= x[n - 1]))
+        return 0;
+    /* v - x[0] in [0, span] and scale = cells / span: c in [0, cells], clamped below
+       for v = x[n-1] */
+    size_t c = (size_t)((v - x[0]) * f->xcell_scale);
+    if (c >= f->nxcell)
+        c = f->nxcell - 1;
+    size_t i = f->xcell[c];
+    while (i > 0 && x[i] > v) /* rounding put v one cell too high */
+        i--;
+    /* the answer lies before the next cell's first node unless rounding put v one
+       cell too low: search up to the cell after next */
+    size_t hi = c + 2 <= f->nxcell ? f->xcell[c + 2] : n - 1;
+    if (hi + 1 < n && x[hi + 1] <= v)
+        hi = n - 1; /* never for sorted nodes and c within one cell of v's */
+    return cr_weights_at(x, n, v, cr_search(x, i, hi, v), off, w);
 }
 
 /* Exact integral of the Catmull-Rom spline through v[] over [x[0], x[n-1]], running
@@ -704,7 +746,9 @@ static size_t converge(build_ctx *c, build_ws *w, int side, double mu_s, double 
 
 /* Shortest length m whose dropped tail costs at most eps_trunc (L1 over the circle,
    relative to norm[ch]) in every stored channel. */
-static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t N,
+enum { TRUNC_BLOCK = 64 };
+
+BT_CLONES static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t N,
                            const double *norm, double eps_trunc)
 {
     size_t m = 0;
@@ -714,13 +758,44 @@ static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t
            q >= 1, and 2 pi |a_0| */
         double tail = 0.0;
         size_t q = N + 1;
-        while (q > 0) {
-            /* norm >= T_FLOOR > 0 */
-            double add = (q - 1 == 0 ? 2.0 * M_PI : 4.0) * fabs(ak[q - 1]) / norm[k];
-            if (tail + add > eps_trunc)
-                break;
-            tail += add;
-            q--;
+        int stop = 0;
+        /* In blocks of TRUNC_BLOCK from the top (the one-at-a-time loop waited on a
+           division per coefficient, over thousands of coefficients per series: 8 % of
+           an s = 20 build). A block whose terms, summed in four lanes, keep the tail
+           below eps_trunc by more than their rounding (64 terms >= 0: at most 64 ulps
+           of the sum) cannot stop the walk anywhere inside, so it is taken whole; the
+           block where the tail would reach eps_trunc is walked term by term. Terms
+           are multiplied by 1/norm rather than divided. The same m as the
+           one-at-a-time walk with divisions except where the tail ties eps_trunc to
+           about 1e-12 (the files compared were byte for byte the same). */
+        double inv = 1.0 / norm[k]; /* norm >= T_FLOOR > 0 */
+        while (q > 0 && !stop) {
+            size_t nb = q < TRUNC_BLOCK ? q : TRUNC_BLOCK, lo = q - nb;
+            double add[TRUNC_BLOCK];
+            for (size_t i = 0; i < nb; i++)
+                add[i] = 4.0 * fabs(ak[lo + i]) * inv;
+            if (lo == 0)
+                add[0] = 2.0 * M_PI * fabs(ak[0]) * inv;
+            if (nb == TRUNC_BLOCK) {
+                double b4[4] = {0.0, 0.0, 0.0, 0.0};
+                for (size_t i4 = 0; i4 < TRUNC_BLOCK; i4 += 4)
+                    for (int v = 0; v < 4; v++)
+                        b4[v] += add[i4 + v];
+                double bs = (b4[0] + b4[1]) + (b4[2] + b4[3]);
+                if (tail + bs <= eps_trunc * (1.0 - 1e-12)) {
+                    tail += bs;
+                    q = lo;
+                    continue;
+                }
+            }
+            for (size_t i = nb; i-- > 0;) {
+                if (tail + add[i] > eps_trunc) {
+                    stop = 1;
+                    break;
+                }
+                tail += add[i];
+                q--;
+            }
         }
         if (q > m)
             m = q;
@@ -754,6 +829,21 @@ static size_t truncate_len(const build_ctx *c, const double *a, size_t S, size_t
    ACCEPT_SHARE's margin. The measurement then costs 1.6 (s = 3) to 3.3 (s = 100)
    times less. */
 #define QUICK_PPA 2048
+/* The measurements screen their first angles (est_opts): each is read with 512 lobe
+   points and a 32 x 32 direction grid (a quarter of the points), and again with the
+   full sets where that reads at least SCREEN_SHARE of the acceptance level, or 0 (a
+   screen that saw no error knows nothing); the refinement rounds read in full. Three
+   angles in four stay screened. A screened reading can be several times off: over the
+   builds of ten materials (about 12,500 angles, docs/benchmarks.md) the full reading
+   was 0.34 to 2.4 times the screened one where that was read again, and up to 3.7
+   times where it was not (full readings above 0.05 of the acceptance level); the
+   screened angles read in full at most 0.36 of the acceptance level. A failing angle
+   would have to read 6.7 times too low to stay screened. The files of those builds
+   are byte for byte those built without screening. An angle read again equals its
+   unscreened reading to the bit (its points depend on ti and the seed only). */
+#define QUICK_SCREEN_PPA 512
+#define QUICK_SCREEN_NUNI 32
+#define SCREEN_SHARE 0.15
 
 static double share_alias(const build_ctx *c) { return 0.05 * c->budget; }
 static double share_trunc(const build_ctx *c) { return 0.10 * c->budget; }
@@ -1264,12 +1354,79 @@ static int ensure_state(build_ctx *c)
 
 static int set_nodes(build_ctx *c, const double *P, size_t K);
 
+/* carry_over's work for one block: the block's pairs, check series and carried check
+   results moved to their places in the new grid. Every loop walks its source row by
+   row (the arrays are row-major: a column walk strides K records, and this runs on
+   every pass). */
+typedef struct carry_job {
+    build_ctx *c;
+    size_t KQ;
+    const unsigned char *ins, *same, *sten;
+    const size_t *map, *qn;
+    pair *(*np)[3];
+    double **ne, **ng;
+    unsigned char **noc, **nor;
+} carry_job;
+
+static void carry_block(void *arg, size_t s)
+{
+    const carry_job *J = arg;
+    build_ctx *c = J->c;
+    size_t K = c->K, KQ = J->KQ;
+    const size_t *map = J->map, *qn = J->qn;
+    const unsigned char *ins = J->ins, *same = J->same, *sten = J->sten;
+    pair *pp = c->pairs[s], *pc = c->pcol[s], *pr = c->prow[s];
+    pair *n0 = J->np[s][0], *n1 = J->np[s][1], *n2 = J->np[s][2];
+    for (size_t r = 0; r < K; r++) {
+        pair *dst = n0 + map[r] * KQ;
+        for (size_t col = 0; col < K; col++) {
+            dst[map[col]] = pp[r * K + col];
+            pp[r * K + col].a = NULL;
+        }
+    }
+    /* column checks: pcol[r * K + j] is the series at (P[r], mid[j]) */
+    for (size_t r = 0; r < K; r++) {
+        for (size_t j = 0; j < K; j++) {
+            pair *src = &pc[r * K + j];
+            if (ins[j] == 1)
+                n0[map[r] * KQ + qn[j]] = *src; /* (P[r], new node) */
+            else if (same[j])
+                n1[map[r] * KQ + map[j]] = *src;
+            else
+                free(src->a);
+            src->a = NULL;
+            if (sten[j]) {
+                J->ne[s][map[r] * KQ + map[j]] = c->errc[s][r * K + j];
+                J->noc[s][map[r] * KQ + map[j]] = 1;
+            }
+        }
+    }
+    /* row checks: prow[j * K + col] is the series at (mid[j], P[col]) */
+    for (size_t j = 0; j < K; j++) {
+        for (size_t col = 0; col < K; col++) {
+            pair *src = &pr[j * K + col];
+            if (ins[j] == 1)
+                n0[qn[j] * KQ + map[col]] = *src; /* (new node, P[col]) */
+            else if (same[j])
+                n2[map[j] * KQ + map[col]] = *src;
+            else
+                free(src->a);
+            src->a = NULL;
+            if (sten[j]) {
+                J->ng[s][map[j] * KQ + map[col]] = c->gapr[s][j * K + col];
+                J->nor[s][map[j] * KQ + map[col]] = 1;
+            }
+        }
+    }
+}
+
 /* Moves everything still valid to the refined node set Q (KQ nodes, a superset of
    c->P). ins[j] = 1 when old interval j got the node mid[j], whose check series
    become pairs; 2 when it got another node. Series at unchanged nodes, checks
    whose stencil is unchanged and norms are kept, so a pass only computes what the
    new nodes touch. Returns 0 on success; on failure the old state is intact. */
-static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned char *ins)
+static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned char *ins,
+                      int threads)
 {
     size_t K = c->K, KK2 = KQ * KQ;
     size_t *map = malloc(K * sizeof *map), *qn = malloc(K * sizeof *qn);
@@ -1311,46 +1468,8 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
     }
     for (size_t j = 0; j < K; j++)
         sten[j] = same[j] && (j == 0 || same[j - 1]) && (j + 1 >= K || same[j + 1]);
-    for (int s = 0; s < NBLK; s++) {
-        pair *pp = c->pairs[s], *pc = c->pcol[s], *pr = c->prow[s];
-        for (size_t r = 0; r < K; r++)
-            for (size_t col = 0; col < K; col++) {
-                np[s][0][map[r] * KQ + map[col]] = pp[r * K + col];
-                pp[r * K + col].a = NULL;
-            }
-        for (size_t j = 0; j < K; j++) {
-            for (size_t r = 0; r < K; r++) {
-                pair *src = &pc[r * K + j];
-                if (ins[j] == 1)
-                    np[s][0][map[r] * KQ + qn[j]] = *src; /* (P[r], new node) */
-                else if (same[j])
-                    np[s][1][map[r] * KQ + map[j]] = *src;
-                else
-                    free(src->a);
-                src->a = NULL;
-            }
-            for (size_t col = 0; col < K; col++) {
-                pair *src = &pr[j * K + col];
-                if (ins[j] == 1)
-                    np[s][0][qn[j] * KQ + map[col]] = *src; /* (new node, P[col]) */
-                else if (same[j])
-                    np[s][2][map[j] * KQ + map[col]] = *src;
-                else
-                    free(src->a);
-                src->a = NULL;
-            }
-            if (sten[j]) {
-                for (size_t r = 0; r < K; r++) {
-                    ne[s][map[r] * KQ + map[j]] = c->errc[s][r * K + j];
-                    noc[s][map[r] * KQ + map[j]] = 1;
-                }
-                for (size_t col = 0; col < K; col++) {
-                    ng[s][map[j] * KQ + map[col]] = c->gapr[s][j * K + col];
-                    nor[s][map[j] * KQ + map[col]] = 1;
-                }
-            }
-        }
-    }
+    carry_job cj = {c, KQ, ins, same, sten, map, qn, np, ne, ng, noc, nor};
+    btdf_parallel_for(threads, NBLK, carry_block, &cj); /* the blocks share nothing */
     for (size_t r = 0; r < K; r++) {
         memcpy(tn[map[r]], c->Tn[r], sizeof tn[0]);
         htn[map[r]] = c->hasTn[r];
@@ -1539,7 +1658,8 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
        (stop_above) their marks are what the build needs: the refinement rounds, which
        look for a larger worst, are left to the next measurement. stop_above is 0 for
        the last measurement (split NULL), which must be whole. */
-    est_opts opt = {1, 1, split ? accept_at : 0.0};
+    est_opts opt = {1, 1, split ? accept_at : 0.0, split ? QUICK_SCREEN_PPA : 0,
+                    split ? QUICK_SCREEN_NUNI : 0, SCREEN_SHARE * accept_at};
     if (scatfun_report_mis(f, p, side, 24, QUICK_PPA, seed, threads, &opt, memo, &r) !=
         BTDF_OK) {
         free(r.per_ti);
@@ -1974,7 +2094,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             st = BTDF_EBUDGET; /* float spacing reached: nothing left to split */
             break;
         }
-        if (carry_over(&c, Q, KQ, ins)) {
+        if (carry_over(&c, Q, KQ, ins, threads)) {
             free(ins);
             st = BTDF_ENOMEM;
             goto done;
@@ -2052,6 +2172,32 @@ int scatfun_nodes_d(btdf_scatfun *f)
         return -1;
     for (uint32_t i = 0; i < f->n; i++)
         f->xd[i] = (double)f->nodes[i];
+    free(f->xcell);
+    f->xcell = NULL;
+    f->nxcell = 0;
+    if (f->n < 2)
+        return 0;
+    double lo = f->xd[0], span = f->xd[f->n - 1] - lo;
+    for (uint32_t i = 1; i < f->n; i++)
+        if (!(f->xd[i] >= f->xd[i - 1]))
+            return 0; /* unsorted: cr_weights' binary search as it stands */
+    if (!(span > 0.0) || f->n > UINT32_MAX / 4)
+        return 0; /* no width: the scale would divide by 0 */
+    /* four cells per node: this library's nodes crowd towards grazing, where a
+       cell then holds a node or two */
+    uint32_t cells = 4 * f->n;
+    f->xcell = malloc(((size_t)cells + 1) * sizeof *f->xcell);
+    if (!f->xcell)
+        return -1;
+    f->nxcell = cells;
+    f->xcell_scale = (double)cells / span; /* span > 0 (above) */
+    uint32_t i = 0;
+    for (uint32_t c = 0; c <= cells; c++) {
+        double edge = lo + (double)c / f->xcell_scale;
+        while (i + 1 < f->n && f->xd[i + 1] <= edge)
+            i++;
+        f->xcell[c] = i;
+    }
     return 0;
 }
 
@@ -2118,14 +2264,14 @@ BT_INLINE double cos_dot(const double *comb, const double *ck, uint32_t used)
    chunk the stencil's weighted series are added into one (as pbrt-v3 interpolates its
    coefficients) and that one is summed against the cosines. Only the order of the
    additions differs. */
-BT_CLONES static int eval_stored(const btdf_scatfun *f, const double *x, double mu_s,
-                                 double mu_f, double cphi, double rk, double *val)
+BT_CLONES static int eval_stored(const btdf_scatfun *f, double mu_s, double mu_f, double cphi,
+                                 double rk, double *val)
 {
     long os, of;
     double ws[4], wf[4];
     for (uint32_t k = 0; k < f->channels; k++)
         val[k] = 0.0;
-    if (!cr_weights(x, f->n, mu_s, &os, ws) || !cr_weights(x, f->n, mu_f, &of, wf))
+    if (!cr_weights_f(f, mu_s, &os, ws) || !cr_weights_f(f, mu_f, &of, wf))
         return 0;
     double pw[16];
     uint32_t poff[16], pm[16], mtop = 0;
@@ -2210,7 +2356,7 @@ static btdf_status eval_mu_rk(const btdf_scatfun *f, double mu_s, double mu_f,
         out[k] = 0.0;
     double val[3];
     double cphi = fmin(1.0, fmax(-1.0, cos_phi_d));
-    int ok = eval_stored(f, f->xd, mu_s, mu_f, cphi, rk, val);
+    int ok = eval_stored(f, mu_s, mu_f, cphi, rk, val);
     /* f = value / |mu_f|: at mu_f = 0 (grazing) the stored value is 0 too; return 0. */
     if (!ok || !(fabs(mu_f) > 0.0))
         return BTDF_OK;
@@ -2389,7 +2535,7 @@ static fixed_read *fixed_new(const btdf_scatfun *f, btdf_side side, btdf_scatfun
         fixed_free(r);
         return NULL;
     }
-    r->ok = cr_weights(f->xd, n, mu, &os, w);
+    r->ok = cr_weights_f(f, mu, &os, w);
     if (!r->ok) {
         memset(r->off, 0, (n + 1) * sizeof *r->off);
         return r;
@@ -2449,80 +2595,171 @@ static fixed_read *fixed_new(const btdf_scatfun *f, btdf_side side, btdf_scatfun
     return r;
 }
 
-/* eval_side_cos(f, side, mode, r->ci, co, cpd, out) through the combined series. */
-BT_CLONES static void fixed_eval(const fixed_read *r, double co, double cpd, double *out)
-{
-    const btdf_scatfun *f = r->f;
-    for (uint32_t k = 0; k < f->channels; k++)
-        out[k] = 0.0;
-    if (!r->ok)
-        return;
-    double ms, mf;
-    int rad;
-    side_mus(r->side, r->mode, r->ci, co, &ms, &mf, &rad);
-    double mu = r->slow_fixed ? mf : ms;
-    double rk = r->rk_fixed * cap_mu(f, &mu);
-    if (r->slow_fixed)
-        mf = mu;
-    else
-        ms = mu;
-    long ov;
-    double w[4];
-    if (!cr_weights(f->xd, f->n, mu, &ov, w))
-        return;
+/* One view of a fixed_read: the spline stencil of the view's cosine over the
+   combined series, and what the value's scaling needs. */
+typedef struct fixed_view {
     const double *ser[4];
     double wt[4];
-    uint32_t ln[4], mtop = 0;
-    int np = 0;
+    uint32_t ln[4], mtop;
+    int np, ok, rad;
+    double ms, mf, rk;
+} fixed_view;
+
+static void fixed_view_at(const fixed_read *r, double co, fixed_view *v)
+{
+    const btdf_scatfun *f = r->f;
+    v->ok = 0;
+    v->np = 0;
+    v->mtop = 0;
+    if (!r->ok)
+        return;
+    side_mus(r->side, r->mode, r->ci, co, &v->ms, &v->mf, &v->rad);
+    double mu = r->slow_fixed ? v->mf : v->ms;
+    v->rk = r->rk_fixed * cap_mu(f, &mu);
+    if (r->slow_fixed)
+        v->mf = mu;
+    else
+        v->ms = mu;
+    long ov;
+    double w[4];
+    if (!cr_weights_f(f, mu, &ov, w))
+        return;
+    v->ok = 1;
     for (int b = 0; b < 4; b++) {
         long o = ov + b;
         if (w[b] == 0.0 || o < 0 || o >= (long)f->n || r->len[o] == 0)
             continue;
-        ser[np] = r->buf + r->off[o];
-        ln[np] = r->len[o];
-        wt[np] = w[b];
-        if (ln[np] > mtop)
-            mtop = ln[np];
-        np++;
+        v->ser[v->np] = r->buf + r->off[o];
+        v->ln[v->np] = r->len[o];
+        v->wt[v->np] = w[b];
+        if (v->ln[v->np] > v->mtop)
+            v->mtop = v->ln[v->np];
+        v->np++;
     }
-    double val[3] = {0.0, 0.0, 0.0};
-    cos_rec cr;
-    cos_rec_init(&cr, fmin(1.0, fmax(-1.0, cpd)), rk);
-    for (uint32_t q0 = 0; q0 < mtop; q0 += COS_CHUNK) {
-        uint32_t len = mtop - q0 < COS_CHUNK ? mtop - q0 : COS_CHUNK;
-        const double *ck = cos_rec_chunk(&cr, q0, len);
-        for (uint32_t k = 0; k < f->channels; k++) {
-            double comb[COS_CHUNK];
-            uint32_t used = 0;
-            for (int e = 0; e < np; e++) {
-                if (ln[e] <= q0)
-                    continue;
-                uint32_t l = ln[e] - q0 < len ? ln[e] - q0 : len;
-                const double *a = ser[e] + (size_t)k * ln[e] + q0;
-                for (uint32_t t = used; t < l; t++)
-                    comb[t] = 0.0;
-                if (l > used)
-                    used = l;
-                for (uint32_t t = 0; t < l; t++)
-                    comb[t] += wt[e] * a[t];
-            }
-            val[k] += cos_dot(comb, ck, used);
+}
+
+/* val[k] += the view's series over harmonics q0 .. q0 + len - 1 against ck: the
+   stencil's weighted sum at each harmonic times its cosine, in four running sums, as
+   eval_stored's combine-then-cos_dot does (the same additions in the same order:
+   each harmonic's combination starts from 0 and adds the series that reach it in
+   stencil order; harmonics in whole groups of four go to sums t mod 4, the rest to
+   the first), without storing the combination (zeroing that buffer alone was a
+   tenth of the reading's profile). */
+BT_INLINE void fixed_view_chunk(const fixed_view *v, uint32_t channels, uint32_t q0,
+                                uint32_t len, const double *ck, double *val)
+{
+    for (uint32_t k = 0; k < channels; k++) {
+        const double *a[4];
+        double w[4];
+        uint32_t l[4], used = 0, lmin = len;
+        int na = 0;
+        for (int e = 0; e < v->np; e++) {
+            if (v->ln[e] <= q0)
+                continue;
+            l[na] = v->ln[e] - q0 < len ? v->ln[e] - q0 : len;
+            a[na] = v->ser[e] + (size_t)k * v->ln[e] + q0;
+            w[na] = v->wt[e];
+            if (l[na] > used)
+                used = l[na];
+            if (l[na] < lmin)
+                lmin = l[na];
+            na++;
         }
+        if (na == 0)
+            continue;
+        uint32_t full = used & ~3u; /* cos_dot's groups of four */
+        uint32_t fast = (lmin < full ? lmin : full) & ~3u;
+        double s4[4] = {0.0, 0.0, 0.0, 0.0};
+        uint32_t t = 0;
+        if (na == 4) {
+            for (; t < fast; t += 4)
+                for (int u = 0; u < 4; u++) {
+                    double c = 0.0;
+                    c += w[0] * a[0][t + u];
+                    c += w[1] * a[1][t + u];
+                    c += w[2] * a[2][t + u];
+                    c += w[3] * a[3][t + u];
+                    s4[u] += c * ck[t + u];
+                }
+        } else if (na == 2) {
+            for (; t < fast; t += 4)
+                for (int u = 0; u < 4; u++) {
+                    double c = 0.0;
+                    c += w[0] * a[0][t + u];
+                    c += w[1] * a[1][t + u];
+                    s4[u] += c * ck[t + u];
+                }
+        }
+        for (; t < used; t++) {
+            double c = 0.0;
+            for (int e = 0; e < na; e++)
+                if (l[e] > t)
+                    c += w[e] * a[e][t];
+            s4[t < full ? t % 4 : 0] += c * ck[t];
+        }
+        val[k] += (s4[0] + s4[1]) + (s4[2] + s4[3]);
     }
+}
+
+/* The view's value from its series sums val, as eval_mu_rk scales it. */
+static void fixed_view_out(const btdf_scatfun *f, const fixed_view *v, const double *val,
+                           double *out)
+{
+    for (uint32_t k = 0; k < f->channels; k++)
+        out[k] = 0.0;
     /* f = value / |mu_f|: at mu_f = 0 (grazing) the stored value is 0 too; read 0 */
-    if (!(fabs(mf) > 0.0))
+    if (!v->ok || !(fabs(v->mf) > 0.0))
         return;
     stored_to_out(f->channels, val, out);
-    double scale = 1.0 / fabs(mf);
-    if (rad && ms * mf > 0.0) {
+    double scale = 1.0 / fabs(v->mf);
+    if (v->rad && v->ms * v->mf > 0.0) {
         /* pbrt-v3's radiance factor, as eval_mu_rk; eta finite and > 0 */
-        double e = mf > 0.0 ? 1.0 / (double)f->eta : (double)f->eta;
+        double e = v->mf > 0.0 ? 1.0 / (double)f->eta : (double)f->eta;
         scale *= e * e;
     }
     for (uint32_t k = 0; k < f->channels; k++) {
-        double v = out[k] * scale;
-        out[k] = isfinite(v) ? v : 0.0;
+        double x = out[k] * scale;
+        out[k] = isfinite(x) ? x : 0.0;
     }
+}
+
+/* eval_side_cos(f, side, mode, r[i]->ci, co, cpd, out + i channels) through the
+   combined series, for nr = 1 or 2 readings of one file at the same point (a block's
+   DIRECT and ADJOINT readings). Both readings' views have the same |mu| and so, for
+   this library's mirror-symmetric nodes, the same near-normal factor rk: then the
+   cosines cos(k phi) rk^k are made once for the two. The values are those of one
+   reading at a time, bit for bit: the same cosines, the same sums in the same
+   order. */
+BT_CLONES static void fixed_eval_n(const fixed_read *const *r, int nr, double co, double cpd,
+                                   double *out)
+{
+    const btdf_scatfun *f = r[0]->f;
+    uint32_t ch = f->channels;
+    fixed_view v[2];
+    double val[2][3] = {{0.0, 0.0, 0.0}, {0.0, 0.0, 0.0}};
+    for (int i = 0; i < nr; i++)
+        fixed_view_at(r[i], co, &v[i]);
+    double cphi = fmin(1.0, fmax(-1.0, cpd));
+    int shared = nr == 2 && v[0].ok && v[1].ok && v[0].rk == v[1].rk;
+    for (int i = 0; i < nr; i++) {
+        if (!v[i].ok || (shared && i == 1))
+            continue;
+        uint32_t mtop = v[i].mtop;
+        if (shared && v[1].mtop > mtop)
+            mtop = v[1].mtop;
+        cos_rec cr;
+        cos_rec_init(&cr, cphi, v[i].rk);
+        for (uint32_t q0 = 0; q0 < mtop; q0 += COS_CHUNK) {
+            uint32_t len = mtop - q0 < COS_CHUNK ? mtop - q0 : COS_CHUNK;
+            const double *ck = cos_rec_chunk(&cr, q0, len);
+            if (q0 < v[i].mtop)
+                fixed_view_chunk(&v[i], ch, q0, len, ck, val[i]);
+            if (shared && q0 < v[1].mtop)
+                fixed_view_chunk(&v[1], ch, q0, len, ck, val[1]);
+        }
+    }
+    for (int i = 0; i < nr; i++)
+        fixed_view_out(f, &v[i], val[i], out + (size_t)i * ch);
 }
 
 typedef struct mis_obj {
@@ -2575,9 +2812,8 @@ static void mis_eval(const void *obj, double ti, const double *q, double *out)
     double cpd = -fmin(1.0, fmax(-1.0, q[4]));
     uint32_t ch = m->f->channels;
     if (m->fr) {
-        fixed_eval(m->fr, co, cpd, out);
-        if (m->both)
-            fixed_eval(m->fa, co, cpd, out + ch);
+        const fixed_read *rr[2] = {m->fr, m->fa};
+        fixed_eval_n(rr, m->both ? 2 : 1, co, cpd, out);
         return;
     }
     if (eval_side_cos(m->f, m->side, m->mode, ci, co, cpd, out) != BTDF_OK)
@@ -2626,7 +2862,7 @@ static btdf_status refl_read(const mis_obj *m, btdf_scatfun_mode mode, const fix
 {
     if (!fr)
         return btdf_scatfun_eval_side(m->f, m->side, mode, ti, tr, phi, out);
-    fixed_eval(fr, fabs(cos(tr)), -cos(phi), out); /* as eval_side passes them */
+    fixed_eval_n(&fr, 1, fabs(cos(tr)), -cos(phi), out); /* as eval_side passes them */
     return BTDF_OK;
 }
 
@@ -2636,7 +2872,14 @@ static void refl_both(const mis_obj *m, const fixed_read *const *fr, int nr, int
                       double ti, double tr, double phi, double rho, double wgt,
                       est_acc *acc)
 {
-    double tab[BTDF_MAX_CHANNELS];
+    double tab[2 * BTDF_MAX_CHANNELS];
+    if (nr <= 2 && fr[0] && (nr < 2 || fr[1])) { /* both at once (fixed_eval_n) */
+        uint32_t ch = m->f->channels;
+        fixed_eval_n(fr, nr, fabs(cos(tr)), -cos(phi), tab); /* as eval_side passes them */
+        for (int e = 0; e < nr; e++)
+            est_add(&acc[e], tab[(size_t)e * ch + (size_t)c], rho, wgt);
+        return;
+    }
     for (int e = 0; e < nr; e++) {
         if (refl_read(m, e ? BTDF_SCATFUN_ADJOINT : m->mode, fr[e], ti, tr, phi, tab) !=
             BTDF_OK)
@@ -2646,11 +2889,11 @@ static void refl_both(const mis_obj *m, const fixed_read *const *fr, int nr, int
 }
 
 static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint64_t rng,
-                         size_t ppa, btdf_ti_error *res)
+                         size_t ppa, size_t nuni, btdf_ti_error *res)
 {
     const mis_obj *m = obj;
     double s = p->smoothness, sti = sin(ti), cti = cos(ti);
-    const size_t npsi = 32, nu = (ppa + 31) / 32, nmu = 64, nphi = 64;
+    const size_t npsi = 32, nu = (ppa + 31) / 32, nmu = nuni, nphi = nuni;
     double wmax = -expm1(-U_EST_R * U_EST_R);
     double dw = wmax / (double)nu, dpsi = M_PI / (double)npsi;
     double dmu = 1.0 / (double)nmu, dphi = M_PI / (double)nphi;
@@ -2740,7 +2983,7 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
                                   albedo_memo *memo, btdf_report *r)
 {
     mis_obj m = {f, (btdf_side)b, mode, both, memo, NULL, NULL};
-    est_opts opt = {0, 1, 0.0};
+    est_opts opt = {0, 1, 0.0, 0, 0, 0.0};
     if (o)
         opt = *o;
     opt.nread = both ? 2 : 1;

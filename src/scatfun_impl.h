@@ -50,6 +50,11 @@ struct btdf_scatfun {
     float eta, alpha[2];
     float *nodes;      /* n */
     double *xd;        /* the nodes as doubles, for the spline weights */
+    uint32_t *xcell;   /* nxcell + 1 entries: the largest i with xd[i] <= the cell's
+                          lower edge, cells of equal width over [xd[0], xd[n-1]];
+                          NULL when the nodes span no width (binary search then) */
+    uint32_t nxcell;
+    double xcell_scale; /* cells per unit of mu */
     float *cdf;        /* n * n */
     uint32_t *offsets; /* 2 * n * n: offset, length */
     float *coeffs;     /* ncoeffs */
@@ -92,7 +97,7 @@ int scatfun_dct1(const double *x, size_t N, double *Y);
 
 /* msg <- the formatted text (when msg and msglen); returns st. */
 btdf_status scatfun_say(char *msg, size_t msglen, btdf_status st, const char *fmt, ...);
-/* Fills f->xd from f->nodes; 0 on success, -1 when out of memory. */
+/* Fills f->xd and f->xcell from f->nodes; 0 on success, -1 when out of memory. */
 int scatfun_nodes_d(btdf_scatfun *f);
 
 #endif /* BTDF_SCATFUN_IMPL_H */

@@ -187,6 +187,11 @@ typedef struct est_opts {
     int l1_only;
     int nread;
     double stop_above;
+    /* Screening (l1_only callers): the first angles are measured with screen_ppa
+       facet points and a screen_nuni x screen_nuni direction grid, and only those
+       whose e_L1 reaches screen_at again with the full sets; 0: no screening. */
+    size_t screen_ppa, screen_nuni;
+    double screen_at;
 } est_opts;
 
 /* btdf_estimate_knots with a per-angle context from prep (freed by done); fn then reads
@@ -199,10 +204,12 @@ btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double
                                      albedo_memo *memo, btdf_report *r);
 
 /* A whole per-angle estimate: fills res (zeroed, res->ti set) at incidence ti with p
-   the truth's parameters, from the generator state rng (fixed by ti and the seed);
-   res->T is the norm's quantity (T, or R for reflection). Returns the points used. */
+   the truth's parameters, from the generator state rng (fixed by ti and the seed),
+   with about points_per_angle lobe-following points and an nuni x nuni grid of
+   directions; res->T is the norm's quantity (T, or R for reflection). Returns the
+   points used. */
 typedef size_t (*est_angle_fn)(const void *obj, const btdf_params *p, double ti, uint64_t rng,
-                               size_t points_per_angle, btdf_ti_error *res);
+                               size_t points_per_angle, size_t nuni, btdf_ti_error *res);
 
 /* The angle choice of btdf_estimate_knots (stratified, knot midpoints, refinement
    rounds) around a per-angle estimate of the caller's (opt->nread is fn's business:
