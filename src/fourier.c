@@ -930,12 +930,12 @@ static size_t truncate_len_measured(const build_ctx *c, build_ws *w, size_t N, s
         lo = low < hi ? low : hi;
     }
     while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2, q;
+        size_t mid = lo + (hi - lo) / 2;
         int pass = 1;
         for (int k = 0; k < c->nst && pass; k++) {
-            /* tail coefficients a_q for q >= mid, in w->ia */
-            for (q = 0; q <= N; q++)
-                w->ia[q] = q >= mid ? w->a[k * S + q] : 0.0;
+            /* tail coefficients a_q for q >= mid, in w->ia (mid <= m0 <= N + 1) */
+            memset(w->ia, 0, mid * sizeof *w->ia);
+            memcpy(w->ia + mid, w->a + k * S + mid, (N + 1 - mid) * sizeof *w->ia);
             double l1 = series_l1(&w->fb, w->ia, N + 1, N, NULL, w->y);
             if (l1 < 0.0)
                 return m0;
