@@ -515,6 +515,31 @@ BT_CLONES static void sample_grid_t1(const build_ctx *c, const build_ws *w, int 
         xp[t * (long)step] = bt_rho(n, d, s, &io, h2p[t * sg], snp[t * sg]) * f;
 }
 
+/* sample_grid for a one-channel reflection block: rho_r (bt_rho_r, branch-free) along
+   the azimuth row in a counted loop the compiler vectorises, with the operations of
+   stored_values in the same order, so the same samples to the bit. */
+BT_CLONES static void sample_grid_r1(const build_ctx *c, const build_ws *w, int b,
+                                     double mu_s, double mu_f, size_t N, size_t step,
+                                     size_t phase, double *x)
+{
+    /* |mu| <= 1 for every node and midpoint; fmax guards rounding */
+    double ss = sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), sf = sqrt(fmax(0.0, 1.0 - mu_f * mu_f));
+    bt_ir ir;
+    memset(&ir, 0, sizeof ir);
+    /* ti = acos mu_s, tr = acos mu_f, both in [0, pi/2] */
+    bt_ir_rad(&ir, atan2(ss, mu_s), atan2(sf, mu_f), c->p->smoothness, c->p->k0);
+    double n = c->ior[b][0], d = n - 1.0, s = c->p->smoothness;
+    size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
+    long cnt = phase <= N ? (long)((N - phase) / step) + 1 : 0, sg = (long)(step * g);
+    const double *cg = w->cosg + phase * g, *sn = w->sing + phase * g;
+    double *xp = x + phase;
+    for (long t = 0; t < cnt; t++) {
+        /* phi_d = j pi / N, phi = pi - phi_d: cos phi = -cos phi_d (sample_grid) */
+        double cph = -cg[t * sg];
+        xp[t * (long)step] = bt_rho_r(n, d, s, &ir, 0.5 * (1.0 + cph), sn[t * sg]) * mu_f;
+    }
+}
+
 /* The first azimuth grid has at least NMIN_PHI intervals over [0, pi] (8 s for the
    narrowest pairs: first_grid); converge() doubles it until the series settle. */
 #define NMIN_PHI 32.0
@@ -632,6 +657,10 @@ static void sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_
 {
     if (!blk_refl[b] && c->nc == 1) {
         sample_grid_t1(c, w, b, mu_s, mu_f, N, step, phase, x);
+        return;
+    }
+    if (blk_refl[b] && c->nc == 1) {
+        sample_grid_r1(c, w, b, mu_s, mu_f, N, step, phase, x);
         return;
     }
     rho_in ri;
@@ -901,12 +930,12 @@ static size_t truncate_len_measured(const build_ctx *c, build_ws *w, size_t N, s
         lo = low < hi ? low : hi;
     }
     while (lo < hi) {
-        size_t mid = lo + (hi - lo) / 2, q;
+        size_t mid = lo + (hi - lo) / 2;
         int pass = 1;
         for (int k = 0; k < c->nst && pass; k++) {
-            /* tail coefficients a_q for q >= mid, in w->ia */
-            for (q = 0; q <= N; q++)
-                w->ia[q] = q >= mid ? w->a[k * S + q] : 0.0;
+            /* tail coefficients a_q for q >= mid, in w->ia (mid <= m0 <= N + 1) */
+            memset(w->ia, 0, mid * sizeof *w->ia);
+            memcpy(w->ia + mid, w->a + k * S + mid, (N + 1 - mid) * sizeof *w->ia);
             double l1 = series_l1(&w->fb, w->ia, N + 1, N, NULL, w->y);
             if (l1 < 0.0)
                 return m0;
@@ -2638,6 +2667,12 @@ static void fixed_view_at(const fixed_read *r, double co, fixed_view *v)
     }
 }
 
+/* Four doubles as one vector (GCC's vector extension): element-wise operations,
+   each lane rounded as the scalar operation is. Macros, not functions: a function
+   passing such a vector changes the ABI where AVX is not enabled. */
+typedef double v4d __attribute__((vector_size(4 * sizeof(double))));
+#define V4D_ALL(x) ((v4d){(x), (x), (x), (x)})
+
 /* val[k] += the view's series over harmonics q0 .. q0 + len - 1 against ck: the
    stencil's weighted sum at each harmonic times its cosine, in four running sums, as
    eval_stored's combine-then-cos_dot does (the same additions in the same order:
@@ -2671,22 +2706,47 @@ BT_INLINE void fixed_view_chunk(const fixed_view *v, uint32_t channels, uint32_t
         uint32_t fast = (lmin < full ? lmin : full) & ~3u;
         double s4[4] = {0.0, 0.0, 0.0, 0.0};
         uint32_t t = 0;
+        /* the common stencils with their pointers and weights in locals, so that the
+           four sums form one vector (the compiler did not vectorise these loops with
+           the pointers read from an array) */
         if (na == 4) {
+            const double *a0 = a[0], *a1 = a[1], *a2 = a[2], *a3 = a[3];
+            v4d w0 = V4D_ALL(w[0]), w1 = V4D_ALL(w[1]), w2 = V4D_ALL(w[2]),
+                w3 = V4D_ALL(w[3]), acc = V4D_ALL(0.0);
+            for (; t < fast; t += 4) {
+                v4d x0, x1, x2, x3, k4, c = V4D_ALL(0.0);
+                memcpy(&x0, a0 + t, sizeof x0); /* unaligned loads */
+                memcpy(&x1, a1 + t, sizeof x1);
+                memcpy(&x2, a2 + t, sizeof x2);
+                memcpy(&x3, a3 + t, sizeof x3);
+                memcpy(&k4, ck + t, sizeof k4);
+                c += w0 * x0;
+                c += w1 * x1;
+                c += w2 * x2;
+                c += w3 * x3;
+                acc += c * k4;
+            }
+            for (int u = 0; u < 4; u++)
+                s4[u] = acc[u];
+        } else if (na == 3) {
+            const double *a0 = a[0], *a1 = a[1], *a2 = a[2];
+            double w0 = w[0], w1 = w[1], w2 = w[2];
             for (; t < fast; t += 4)
                 for (int u = 0; u < 4; u++) {
                     double c = 0.0;
-                    c += w[0] * a[0][t + u];
-                    c += w[1] * a[1][t + u];
-                    c += w[2] * a[2][t + u];
-                    c += w[3] * a[3][t + u];
+                    c += w0 * a0[t + u];
+                    c += w1 * a1[t + u];
+                    c += w2 * a2[t + u];
                     s4[u] += c * ck[t + u];
                 }
         } else if (na == 2) {
+            const double *a0 = a[0], *a1 = a[1];
+            double w0 = w[0], w1 = w[1];
             for (; t < fast; t += 4)
                 for (int u = 0; u < 4; u++) {
                     double c = 0.0;
-                    c += w[0] * a[0][t + u];
-                    c += w[1] * a[1][t + u];
+                    c += w0 * a0[t + u];
+                    c += w1 * a1[t + u];
                     s4[u] += c * ck[t + u];
                 }
         }
