@@ -2706,9 +2706,9 @@ BT_INLINE void fixed_view_chunk(const fixed_view *v, uint32_t channels, uint32_t
         uint32_t fast = (lmin < full ? lmin : full) & ~3u;
         double s4[4] = {0.0, 0.0, 0.0, 0.0};
         uint32_t t = 0;
-        /* the common stencils with their pointers and weights in locals, so that the
-           four sums form one vector (the compiler did not vectorise these loops with
-           the pointers read from an array) */
+        /* Four series (the common stencil): the four running sums are one vector
+           (the compiler vectorised none of these loops as scalar code). Three or two:
+           the same sums in scalars. */
         if (na == 4) {
             const double *a0 = a[0], *a1 = a[1], *a2 = a[2], *a3 = a[3];
             v4d w0 = V4D_ALL(w[0]), w1 = V4D_ALL(w[1]), w2 = V4D_ALL(w[2]),
