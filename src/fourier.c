@@ -867,8 +867,8 @@ BT_CLONES static size_t truncate_len(const build_ctx *c, const double *a, size_t
    was 0.34 to 2.4 times the screened one where that was read again, and up to 3.7
    times where it was not (full readings above 0.05 of the acceptance level); the
    screened angles read in full at most 0.36 of the acceptance level. A failing angle
-   would have to read 6.7 times too low to stay screened. The files of those builds
-   are byte for byte those built without screening. An angle read again equals its
+   would have to read 6.7 times too low to stay screened. Ten files built with and
+   without screening were byte for byte the same. An angle read again equals its
    unscreened reading to the bit (its points depend on ti and the seed only). */
 #define QUICK_SCREEN_PPA 512
 #define QUICK_SCREEN_NUNI 32
