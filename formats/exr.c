@@ -87,7 +87,7 @@ static void on_exr_write_error(exr_const_context_t ctx, exr_result_t code, const
     pthread_mutex_unlock(&write_slots_lock);
 }
 
-#define say btdf_say /* model_impl.h */
+#define say core_say /* core/core.h */
 
 /* The OpenEXR message for a failed call rc, or its default text. */
 static const char *exr_text(const exr_err *e, exr_result_t rc)

@@ -8,6 +8,7 @@
 #include <sys/stat.h>
 
 #include "formats.h"
+#include "core/core.h"
 #include "tmpfile.h"
 
 #ifndef M_PI
@@ -18,14 +19,6 @@ static const btdf_format_ops *const all_formats[] = {&btdf_format_csv, &btdf_for
                                                      &btdf_format_bsdf, &btdf_format_png,
                                                      &btdf_format_xml};
 #define NFORMATS (sizeof all_formats / sizeof all_formats[0])
-
-static btdf_status say(char *msg, size_t msglen, btdf_status st, const char *fmt,
-                       const char *a, const char *b)
-{
-    if (msg && msglen)
-        snprintf(msg, msglen, fmt, a, b);
-    return st;
-}
 
 static int ext_is(const char *path, const char *ext)
 {
@@ -82,7 +75,7 @@ BTDF_API int btdf_format_available(const char *ext)
 
 static btdf_status switched_off(const btdf_format_ops *f, char *msg, size_t msglen)
 {
-    return say(msg, msglen, BTDF_ENOTSUP,
+    return core_say(BTDF_ENOTSUP, msg, msglen,
                "%s support was switched off at build time (-D%s=disabled)", f->name,
                f->feature ? f->feature : f->name);
 }
@@ -103,12 +96,12 @@ static btdf_status reg_write(void *ctx, const char *tmp, char *msg, size_t msgle
         return r->f->write_path(r->c, tmp, msg, msglen);
     FILE *fp = fopen(tmp, "wb");
     if (!fp)
-        return say(msg, msglen, BTDF_EIO, "cannot create %s: %s", tmp, strerror(errno));
+        return core_say(BTDF_EIO, msg, msglen, "cannot create %s: %s", tmp, strerror(errno));
     btdf_status st = r->f->write_stream(r->c, fp, msg, msglen);
     int bad = fflush(fp) != 0 || ferror(fp);
     bad |= fclose(fp) != 0;
     if (st == BTDF_OK && bad)
-        st = say(msg, msglen, BTDF_EIO, "writing %s failed: %s", tmp, strerror(errno));
+        st = core_say(BTDF_EIO, msg, msglen, "writing %s failed: %s", tmp, strerror(errno));
     return st;
 }
 
@@ -150,11 +143,11 @@ BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char 
                                 size_t msglen)
 {
     if (!what || !path || !*path)
-        return say(msg, msglen, BTDF_EINVAL, "no object or no file name%s%s", "", "");
+        return core_say(BTDF_EINVAL, msg, msglen, "no object or no file name%s%s", "", "");
     int to_stdout = !strcmp(path, "-");
     const btdf_format_ops *f = to_stdout ? &btdf_format_csv : btdf_format_for_path(path);
     if (!f)
-        return say(msg, msglen, BTDF_EINVAL, "unknown format of '%s': use %s", path,
+        return core_say(BTDF_EINVAL, msg, msglen, "unknown format of '%s': use %s", path,
                    btdf_format_list());
     if (!f->available)
         return switched_off(f, msg, msglen);
@@ -176,11 +169,11 @@ BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char 
     default: break;
     }
     if (!c.table && !c.scatfun && !c.rad)
-        return say(msg, msglen, BTDF_EINVAL, "%s: nothing to write as %s", path, f->name);
+        return core_say(BTDF_EINVAL, msg, msglen, "%s: nothing to write as %s", path, f->name);
     if (to_stdout) {
         btdf_status st = f->write_stream(&c, stdout, msg, msglen);
         if (st == BTDF_OK && fflush(stdout) != 0)
-            st = say(msg, msglen, BTDF_EIO, "standard output: %s%s", strerror(errno), "");
+            st = core_say(BTDF_EIO, msg, msglen, "standard output: %s%s", strerror(errno), "");
         return st;
     }
     return btdf_write_atomic(f, &c, path, msg, msglen);
@@ -193,7 +186,7 @@ BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
         return BTDF_EINVAL;
     const btdf_format_ops *f = btdf_format_for_path(path);
     if (!f || f->needs != BTDF_NEEDS_TABLE)
-        return say(msg, msglen, BTDF_EINVAL, "unknown table format of '%s': use .csv or .exr%s",
+        return core_say(BTDF_EINVAL, msg, msglen, "unknown table format of '%s': use .csv or .exr%s",
                    path, "");
     btdf_output what = {t, NULL, NULL, w, NULL, NULL};
     return btdf_write(&what, path, msg, msglen);
@@ -203,7 +196,7 @@ BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *
                                         char *msg, size_t msglen)
 {
     if (!path || !*path)
-        return say(msg, msglen, BTDF_EINVAL, "no file name%s%s", "", "");
+        return core_say(BTDF_EINVAL, msg, msglen, "no file name%s%s", "", "");
     if (!btdf_format_png.available)
         return switched_off(&btdf_format_png, msg, msglen);
     btdf_output_ctx c;
@@ -217,7 +210,7 @@ BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
                                         const char *metadata_json, char *msg, size_t msglen)
 {
     if (!f || !path || !*path)
-        return say(msg, msglen, BTDF_EINVAL, "file or path missing%s%s", "", "");
+        return core_say(BTDF_EINVAL, msg, msglen, "file or path missing%s%s", "", "");
     btdf_output_ctx c;
     memset(&c, 0, sizeof c);
     btdf_write_opts none = {NULL, NULL, NULL};
@@ -227,7 +220,7 @@ BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
     char why[256] = "";
     btdf_status st = btdf_write_atomic(&btdf_format_bsdf, &c, path, why, sizeof why);
     if (st != BTDF_OK)
-        say(msg, msglen, st, "%s: %s", path, why);
+        core_say(st, msg, msglen, "%s: %s", path, why);
     return st;
 }
 
@@ -240,7 +233,7 @@ BTDF_API btdf_status btdf_write_buffer(const char *path, const char *ext, const 
                                        size_t len, char *msg, size_t msglen)
 {
     if (!path || !*path || (!data && len))
-        return say(msg, msglen, BTDF_EINVAL, "no file name or no data%s%s", "", "");
+        return core_say(BTDF_EINVAL, msg, msglen, "no file name or no data%s%s", "", "");
     btdf_bytes b = {data, len};
     return btdf_write_file_atomic(path, ext, buffer_writer, &b, msg, msglen);
 }
@@ -261,14 +254,14 @@ BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size
     memset(in, 0, sizeof *in);
     const btdf_format_ops *f = btdf_format_for_path(path);
     if (!f || (!f->read_path && !f->read_series))
-        return say(msg, msglen, BTDF_EINVAL, "not a file format btdf reads: use .csv, .exr or "
+        return core_say(BTDF_EINVAL, msg, msglen, "not a file format btdf reads: use .csv, .exr or "
                    ".bsdf%s%s", "", "");
     if (!f->available)
         return switched_off(f, msg, msglen);
     /* One wording for a file that cannot be opened, whatever its format. */
     FILE *probe = fopen(path, "rb");
     if (!probe)
-        return say(msg, msglen, BTDF_EIO, "cannot open: %s%s", strerror(errno), "");
+        return core_say(BTDF_EIO, msg, msglen, "cannot open: %s%s", strerror(errno), "");
     fclose(probe);
     if (f->read_series)
         return f->read_series(path, &in->scatfun, msg, msglen);
@@ -282,7 +275,7 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
         return BTDF_EINVAL;
     const btdf_format_ops *f = btdf_format_for_path(path);
     if (!f || !f->read_path)
-        return say(msg, msglen, BTDF_EINVAL, "unknown table format of '%s': use .csv or .exr%s",
+        return core_say(BTDF_EINVAL, msg, msglen, "unknown table format of '%s': use .csv or .exr%s",
                    path, "");
     btdf_input in;
     btdf_status st = btdf_read(path, &in, msg, msglen);
@@ -386,7 +379,7 @@ BTDF_API btdf_status btdf_inspect(const char *path, FILE *out, char *msg, size_t
     if (st == BTDF_OK && fflush(out) != 0)
         st = BTDF_EIO;
     if (st != BTDF_OK)
-        say(msg, msglen, st, "%s: printing failed: %s", path, strerror(errno));
+        core_say(st, msg, msglen, "%s: printing failed: %s", path, strerror(errno));
     btdf_table_free(in.table);
     btdf_scatfun_free(in.scatfun);
     return st;

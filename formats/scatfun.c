@@ -13,6 +13,7 @@
 #include "btdf.h"
 #include "btdf_scatfun.h"
 #include "scatfun_impl.h"
+#include "core/core.h"
 #include "tmpfile.h"
 
 /* Layout constants of SCATFUN v1 (docs/scatfun.md). */
@@ -140,17 +141,17 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
                                          size_t msglen)
 {
     if (!f || !buf || !len)
-        return scatfun_say(msg, msglen, BTDF_EINVAL, "file, buffer or length pointer missing");
+        return core_say(BTDF_EINVAL, msg, msglen, "file, buffer or length pointer missing");
     char mb[512];
     const char *m;
     size_t ml;
     meta_bytes(f, metadata_json, mb, sizeof mb, &m, &ml);
     uint64_t size;
     if (ml > UINT32_MAX || declared_size(f->n, f->ncoeffs, ml, &size) || size > SIZE_MAX)
-        return scatfun_say(msg, msglen, BTDF_EOVERFLOW, "file would not fit the format's sizes");
+        return core_say(BTDF_EOVERFLOW, msg, msglen, "file would not fit the format's sizes");
     unsigned char *b = malloc((size_t)size);
     if (!b)
-        return scatfun_say(msg, msglen, BTDF_ENOMEM, "cannot allocate %llu bytes",
+        return core_say(BTDF_ENOMEM, msg, msglen, "cannot allocate %llu bytes",
                    (unsigned long long)size);
     memset(b, 0, HEADER_BYTES);
     memcpy(b, "SCATFUN", 7);
@@ -183,7 +184,7 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
     pos += ml;
     if (pos != size) { /* cannot happen: the layout above is the size formula */
         free(b);
-        return scatfun_say(msg, msglen, BTDF_EFORMAT, "internal size mismatch %zu != %llu", pos,
+        return core_say(BTDF_EFORMAT, msg, msglen, "internal size mismatch %zu != %llu", pos,
                    (unsigned long long)size);
     }
     *buf = b;
@@ -193,14 +194,14 @@ BTDF_API btdf_status btdf_scatfun_to_mem(const btdf_scatfun *f, const char *meta
 
 /* btdf_scatfun_write is the registry's (formats/registry.c): one atomic write path. */
 
-#define FMT_FAIL(...) scatfun_say(msg, msglen, BTDF_EFORMAT, __VA_ARGS__)
+#define FMT_FAIL(...) core_say(BTDF_EFORMAT, msg, msglen, __VA_ARGS__)
 
 BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_scatfun **out,
                                            char *msg, size_t msglen)
 {
     const unsigned char *b = vbuf;
     if (!out || (!b && len))
-        return scatfun_say(msg, msglen, BTDF_EINVAL, "buffer or output pointer missing");
+        return core_say(BTDF_EINVAL, msg, msglen, "buffer or output pointer missing");
     if (len < HEADER_BYTES)
         return FMT_FAIL("file of %zu bytes is shorter than the 64-byte SCATFUN header", len);
     if (memcmp(b, "SCATFUN", 7) != 0)
@@ -239,7 +240,7 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
     }
     btdf_scatfun *f = calloc(1, sizeof *f);
     if (!f)
-        return scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
+        return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
     f->memo = albedo_memo_new(); /* NULL is fine: the reports then compute every T */
     size_t nn = (size_t)n * n; /* fits: 12 n^2 <= len */
     f->n = n;
@@ -257,7 +258,7 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
     f->meta = malloc((size_t)nmeta + 1);
     btdf_status st = BTDF_OK;
     if (!f->nodes || !f->cdf || !f->offsets || !f->coeffs || !f->meta) {
-        st = scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
+        st = core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
         goto fail;
     }
     size_t pos = HEADER_BYTES;
@@ -316,7 +317,7 @@ BTDF_API btdf_status btdf_scatfun_read_mem(const void *vbuf, size_t len, btdf_sc
         f->coeffs[i] = v;
     }
     if (scatfun_nodes_d(f)) {
-        st = scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
+        st = core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
         goto fail;
     }
     memcpy(f->meta, b + pos, nmeta);
@@ -346,26 +347,26 @@ BTDF_API btdf_status btdf_scatfun_read(const char *path, btdf_scatfun **out, cha
                                        size_t msglen)
 {
     if (!path || !out)
-        return scatfun_say(msg, msglen, BTDF_EINVAL, "path or output pointer missing");
+        return core_say(BTDF_EINVAL, msg, msglen, "path or output pointer missing");
     FILE *fp = fopen(path, "rb");
     if (!fp)
-        return scatfun_say(msg, msglen, BTDF_EIO, "%s: %s", path, strerror(errno));
+        return core_say(BTDF_EIO, msg, msglen, "%s: %s", path, strerror(errno));
     size_t cap = 1 << 16, len = 0;
     unsigned char *b = malloc(cap);
     btdf_status st = BTDF_OK;
     if (!b) {
         fclose(fp);
-        return scatfun_say(msg, msglen, BTDF_ENOMEM, "out of memory");
+        return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
     }
     for (;;) {
         if (len == cap) {
             if (cap > SIZE_MAX / 2) {
-                st = scatfun_say(msg, msglen, BTDF_EOVERFLOW, "%s: file too large", path);
+                st = core_say(BTDF_EOVERFLOW, msg, msglen, "%s: file too large", path);
                 break;
             }
             unsigned char *nb = realloc(b, cap * 2);
             if (!nb) {
-                st = scatfun_say(msg, msglen, BTDF_ENOMEM, "%s: out of memory", path);
+                st = core_say(BTDF_ENOMEM, msg, msglen, "%s: out of memory", path);
                 break;
             }
             b = nb;
@@ -375,7 +376,7 @@ BTDF_API btdf_status btdf_scatfun_read(const char *path, btdf_scatfun **out, cha
         len += got;
         if (got == 0) {
             if (ferror(fp))
-                st = scatfun_say(msg, msglen, BTDF_EIO, "%s: read failed", path);
+                st = core_say(BTDF_EIO, msg, msglen, "%s: read failed", path);
             break;
         }
     }

@@ -38,63 +38,56 @@ BTDF_API void btdf_table_opts_default(btdf_table_opts *o)
 #define BUDGET_SLICE 4   /* one slice reached its share, an eighth of the smaller of the two */
 #define DEFAULT_MAX_BYTES ((size_t)256 << 20)
 
-static btdf_status bad(char *msg, size_t msglen, const char *fmt, double v)
-{
-    if (msg && msglen)
-        snprintf(msg, msglen, fmt, v);
-    return BTDF_EINVAL;
-}
-
 static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen)
 {
     btdf_status st = btdf_params_check(&o->params, msg, msglen);
     if (st != BTDF_OK)
         return st;
     if (!(o->ti_min >= 0.0 && o->ti_min <= M_PI / 2))
-        return bad(msg, msglen, "theta-i start %g deg: must lie in [0, 90]",
+        return core_say(BTDF_EINVAL, msg, msglen, "theta-i start %g deg: must lie in [0, 90]",
                    o->ti_min * 180 / M_PI);
     if (!(o->ti_max >= o->ti_min && o->ti_max <= M_PI / 2))
-        return bad(msg, msglen, "theta-i end %g deg: must lie in [start, 90]",
+        return core_say(BTDF_EINVAL, msg, msglen, "theta-i end %g deg: must lie in [start, 90]",
                    o->ti_max * 180 / M_PI);
     if (o->kind == BTDF_TABLE_GRID) {
         if (o->grid_ti < 1 || o->grid_ti > 100000)
-            return bad(msg, msglen, "grid theta-i count %g: must lie in [1, 100000]",
+            return core_say(BTDF_EINVAL, msg, msglen, "grid theta-i count %g: must lie in [1, 100000]",
                        (double)o->grid_ti);
         if (o->grid_to < 2 || o->grid_to > 100000)
-            return bad(msg, msglen, "grid theta-o count %g: must lie in [2, 100000]",
+            return core_say(BTDF_EINVAL, msg, msglen, "grid theta-o count %g: must lie in [2, 100000]",
                        (double)o->grid_to);
         if (o->grid_phi < 2 || o->grid_phi > 100000)
-            return bad(msg, msglen, "grid phi count %g: must lie in [2, 100000]",
+            return core_say(BTDF_EINVAL, msg, msglen, "grid phi count %g: must lie in [2, 100000]",
                        (double)o->grid_phi);
         if (!(o->to_min >= M_PI / 2 && o->to_min < o->to_max && o->to_max <= M_PI))
-            return bad(msg, msglen, "theta-o range starting at %g deg: need 90 <= A < B <= 180",
+            return core_say(BTDF_EINVAL, msg, msglen, "theta-o range starting at %g deg: need 90 <= A < B <= 180",
                        o->to_min * 180 / M_PI);
         if (!(o->phi_min >= 0.0 && o->phi_min < o->phi_max && o->phi_max <= M_PI))
-            return bad(msg, msglen, "phi range starting at %g deg: need 0 <= A < B <= 180 "
+            return core_say(BTDF_EINVAL, msg, msglen, "phi range starting at %g deg: need 0 <= A < B <= 180 "
                                     "(rho depends on cos phi only)", o->phi_min * 180 / M_PI);
         if (o->grid_ti > 1 && !(o->ti_max > o->ti_min))
-            return bad(msg, msglen, "theta-i range of width %g: several grid slices need "
+            return core_say(BTDF_EINVAL, msg, msglen, "theta-i range of width %g: several grid slices need "
                                     "start < end", o->ti_max - o->ti_min);
     } else if (o->kind == BTDF_TABLE_FACET || o->kind == BTDF_TABLE_FACET_RECIPROCAL) {
         if (!(o->tolerance >= 1e-7 && o->tolerance <= 1.0))
-            return bad(msg, msglen, "tolerance %g: must lie in [1e-7, 1]", o->tolerance);
+            return core_say(BTDF_EINVAL, msg, msglen, "tolerance %g: must lie in [1e-7, 1]", o->tolerance);
         if (o->estimate != BTDF_ESTIMATE_FULL && o->estimate != BTDF_ESTIMATE_FAST &&
             o->estimate != BTDF_ESTIMATE_NONE)
-            return bad(msg, msglen, "estimate mode %g: must be full (0), fast (1) or none (2)",
+            return core_say(BTDF_EINVAL, msg, msglen, "estimate mode %g: must be full (0), fast (1) or none (2)",
                        (double)o->estimate);
     } else {
-        return bad(msg, msglen, "table kind %g: must be facet (0) or grid (1)",
+        return core_say(BTDF_EINVAL, msg, msglen, "table kind %g: must be facet (0) or grid (1)",
                    (double)o->kind);
     }
     if (o->threads < 0 || o->threads > 256)
-        return bad(msg, msglen, "threads %g: must lie in [0, 256]", (double)o->threads);
+        return core_say(BTDF_EINVAL, msg, msglen, "threads %g: must lie in [0, 256]", (double)o->threads);
     /* part 0 (a zeroed struct) is the transmission, as before the field existed */
     if (o->part != 0 && o->part != BTDF_PART_TRANSMISSION && o->part != BTDF_PART_REFLECTION &&
         o->part != BTDF_PART_BOTH)
-        return bad(msg, msglen, "part %g: must be transmission (1), reflection (2) or both (3)",
+        return core_say(BTDF_EINVAL, msg, msglen, "part %g: must be transmission (1), reflection (2) or both (3)",
                    (double)o->part);
     if (o->kind == BTDF_TABLE_GRID && o->part != 0 && o->part != BTDF_PART_TRANSMISSION)
-        return bad(msg, msglen, "part %g: grid tables hold the transmission only; the "
+        return core_say(BTDF_EINVAL, msg, msglen, "part %g: grid tables hold the transmission only; the "
                                 "reflection needs a facet table", (double)o->part);
     return BTDF_OK;
 }
@@ -190,7 +183,7 @@ static btdf_status build_grid(const btdf_table_opts *o, btdf_table *t, char *msg
     }
     if (st == BTDF_OK) {
         grid_job g = {o, s};
-        btdf_parallel_for(o->threads, nt, grid_slice, &g);
+        core_parallel_for(o->threads, nt, grid_slice, &g);
         for (size_t k = 0; k < nt; k++)
             if (s[k].nr == 0)
                 st = BTDF_ENOMEM;
@@ -761,7 +754,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
     j.out = sl;
     if (o->progress)
         o->progress(o->progress_user, "slices", 0, n0);
-    btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
+    core_parallel_for(o->threads, n0, facet_slice_job, &j);
     btdf_status st = BTDF_OK;
     size_t nodes = 0;
     for (size_t k = 0; k < ns; k++)
@@ -773,7 +766,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         }
         j.max_nodes = node_cap / n0;
         *budget_hit |= facet_limit(o);
-        btdf_parallel_for(o->threads, n0, facet_slice_job, &j);
+        core_parallel_for(o->threads, n0, facet_slice_job, &j);
     }
     nodes = 0;
     for (size_t k = 0; k < ns; k++) {
@@ -888,7 +881,7 @@ static btdf_status build_facet_pass(const btdf_table_opts *o, double frac_slice,
         }
         size_t saved_max = j.max_nodes;
         j.max_each = need;
-        btdf_parallel_for(o->threads, nt, facet_slice_job, &j);
+        core_parallel_for(o->threads, nt, facet_slice_job, &j);
         j.max_nodes = saved_max;
         j.max_each = NULL;
         size_t keep = 0;

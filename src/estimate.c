@@ -11,18 +11,6 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
                    double cto, double cph, double sph, double phi_fold, double to,
                    double *out);
 
-/* splitmix64: a small, well-mixed generator; one stream per test angle, so the
-   points do not depend on which thread handles which angle. */
-static uint64_t mix(uint64_t *x)
-{
-    uint64_t z = (*x += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
-
-static double unif(uint64_t *x) { return (double)(mix(x) >> 11) * (1.0 / 9007199254740992.0); }
-
 /* ------------------------------------------------------------------------- */
 /* Remembered T and R                                                        */
 /* ------------------------------------------------------------------------- */
@@ -233,8 +221,8 @@ static void est_angle(void *arg, size_t k)
         est_acc acc[2] = {{0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0}};
         for (size_t iu = 0; iu < j->nu; iu++) {
             for (size_t ip = 0; ip < j->npsi; ip++) {
-                double w = wmax * ((double)iu + unif(&rng)) / (double)j->nu;
-                double psi = M_PI * ((double)ip + unif(&rng)) / (double)j->npsi;
+                double w = wmax * ((double)iu + core_unif(&rng)) / (double)j->nu;
+                double psi = M_PI * ((double)ip + core_unif(&rng)) / (double)j->npsi;
                 double u = sqrt(-log1p(-w)); /* w < 1: finite */
                 double rr = 2.0 * u / s;
                 double ctn = 1.0 / sqrt(1.0 + rr * rr), stn = rr * ctn;
@@ -260,9 +248,9 @@ static void est_angle(void *arg, size_t k)
         }
         for (size_t im = 0; im < j->nmu; im++) {
             for (size_t ip = 0; ip < j->nphi; ip++) {
-                double mu = ((double)im + unif(&rng)) / (double)j->nmu; /* |cos to| */
+                double mu = ((double)im + core_unif(&rng)) / (double)j->nmu; /* |cos to| */
                 mu = refl ? mu : -mu;
-                double ph = M_PI * ((double)ip + unif(&rng)) / (double)j->nphi;
+                double ph = M_PI * ((double)ip + core_unif(&rng)) / (double)j->nphi;
                 double sto = sqrt(fmax(0.0, 1.0 - mu * mu)), cph = cos(ph), sph = sin(ph);
                 double vb = fabs(mu) * dmu * dphi * 2.0, share = vb, tn, ps, ca_r;
                 pts++;
@@ -353,7 +341,7 @@ static void run_angles(est_job *j, int threads, const double *ti, size_t n, btdf
     j->ti = ti;
     j->res = res;
     j->points = points;
-    btdf_parallel_for(threads, n, est_angle, j);
+    core_parallel_for(threads, n, est_angle, j);
 }
 
 /* Largest ratio of two errors, with a floor so that noise near 0 does not count. */
@@ -379,7 +367,7 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
         points_per_angle = 8192;
     if (test_angles > 100000 || points_per_angle > 100000000 || nknots > 1000000)
         return BTDF_EINVAL;
-    double t0 = btdf_now();
+    double t0 = core_now();
     est_job j;
     memset(&j, 0, sizeof j);
     j.p = p;
@@ -416,7 +404,7 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
     uint64_t rng = seed ^ 0x243f6a8885a308d3ull;
     size_t n = 0;
     for (size_t k = 0; k < test_angles; k++) {
-        double x = ti_min + span * ((double)k + unif(&rng)) / (double)test_angles;
+        double x = ti_min + span * ((double)k + core_unif(&rng)) / (double)test_angles;
         ti[n++] = fmin(x, ti_max);
     }
     size_t nstrat = n;
@@ -564,7 +552,7 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
             r->e_max_angles++;
     }
     free(points);
-    r->seconds_estimate = btdf_now() - t0;
+    r->seconds_estimate = core_now() - t0;
     return BTDF_OK;
 }
 

@@ -19,17 +19,6 @@
 #include "scatfun_impl.h"
 #include "table_impl.h"
 
-btdf_status scatfun_say(char *msg, size_t msglen, btdf_status st, const char *fmt, ...)
-{
-    if (msg && msglen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, msglen, fmt, ap);
-        va_end(ap);
-    }
-    return st;
-}
-
 /* ------------------------------------------------------------------------- */
 /* Catmull-Rom weights as pbrt-v3 computes them                              */
 /* ------------------------------------------------------------------------- */
@@ -1498,7 +1487,7 @@ static int carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned c
     for (size_t j = 0; j < K; j++)
         sten[j] = same[j] && (j == 0 || same[j - 1]) && (j + 1 >= K || same[j + 1]);
     carry_job cj = {c, KQ, ins, same, sten, map, qn, np, ne, ng, noc, nor};
-    btdf_parallel_for(threads, NBLK, carry_block, &cj); /* the blocks share nothing */
+    core_parallel_for(threads, NBLK, carry_block, &cj); /* the blocks share nothing */
     for (size_t r = 0; r < K; r++) {
         memcpy(tn[map[r]], c->Tn[r], sizeof tn[0]);
         htn[map[r]] = c->hasTn[r];
@@ -1569,7 +1558,7 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
         }
     }
     if (total > UINT32_MAX)
-        return scatfun_say(msg, msglen, BTDF_EOVERFLOW, "%zu coefficients exceed the format's 32-bit count",
+        return core_say(BTDF_EOVERFLOW, msg, msglen, "%zu coefficients exceed the format's 32-bit count",
                    total);
     btdf_scatfun *f = calloc(1, sizeof *f);
     if (!f)
@@ -1744,9 +1733,9 @@ BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
     if (st != BTDF_OK)
         return st;
     if (!(tolerance >= 1e-6 && tolerance <= 0.5))
-        return scatfun_say(msg, msglen, BTDF_EINVAL, "tolerance %g: must lie in [1e-6, 0.5]", tolerance);
+        return core_say(BTDF_EINVAL, msg, msglen, "tolerance %g: must lie in [1e-6, 0.5]", tolerance);
     if ((int)side < 1 || (int)side > BTDF_SCATFUN_ALL)
-        return scatfun_say(msg, msglen, BTDF_EINVAL,
+        return core_say(BTDF_EINVAL, msg, msglen,
                            "blocks %d: must be a mask of 1 (transmission entering), 2 "
                            "(transmission leaving), 4 (reflection on top), 8 (reflection "
                            "below), from 1 to 15", (int)side);
@@ -1783,7 +1772,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                               char *msg, size_t msglen)
 {
     if (!out)
-        return scatfun_say(msg, msglen, BTDF_EINVAL, "output pointer missing");
+        return core_say(BTDF_EINVAL, msg, msglen, "output pointer missing");
     btdf_status st = btdf_scatfun_check(p, tolerance, side, msg, msglen);
     if (st != BTDF_OK)
         return st;
@@ -1802,7 +1791,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         }
         double least = (M_PI / 2) / (double)BTDF_SCATFUN_MAX_HALF_NODES;
         if (nw < least)
-            return scatfun_say(msg, msglen, BTDF_EBUDGET,
+            return core_say(BTDF_EBUDGET, msg, msglen,
                                "the transmitted lobe is about %.3g deg wide (n = %.9g, s = %g), "
                                "narrower than one elevation interval (%.3g deg) even with all "
                                "%d half nodes of the format's budget; nothing built: use a "
@@ -1811,11 +1800,11 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                                p->smoothness, least * 180.0 / M_PI,
                                BTDF_SCATFUN_MAX_HALF_NODES);
     }
-    double t0 = btdf_now();
+    double t0 = core_now();
     build_ctx c;
     memset(&c, 0, sizeof c);
     if (pthread_mutex_init(&c.lock, NULL) != 0)
-        return scatfun_say(msg, msglen, BTDF_ENOMEM, "cannot create a mutex");
+        return core_say(BTDF_ENOMEM, msg, msglen, "cannot create a mutex");
     c.p = p;
     c.nc = p->channels;
     c.nst = p->channels == 3 ? 3 : 1;
@@ -1888,10 +1877,10 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             c.mid[j] = to_float_node(split_point(P, K, j, 0.5));
         /* the norms of new nodes and midpoints (each its own job: same values on any
            number of threads) */
-        btdf_parallel_for(threads, K * NBLK * 2, job_norms, &c);
+        core_parallel_for(threads, K * NBLK * 2, job_norms, &c);
         for (size_t j = 0; j < K; j++)
             c.hasTn[j] = c.hasTm[j] = 1;
-        if (btdf_parallel_for_ws(threads, NBLK * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
+        if (core_parallel_for_ws(threads, NBLK * K, job_row, &c, build_ws_new, build_ws_free) || c.oom) {
             st = BTDF_ENOMEM;
             goto done;
         }
@@ -1909,8 +1898,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             st = BTDF_EBUDGET;
             break;
         }
-        if (btdf_parallel_for_ws(threads, NBLK * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
-            btdf_parallel_for_ws(threads, NBLK * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
+        if (core_parallel_for_ws(threads, NBLK * K, job_colcheck, &c, build_ws_new, build_ws_free) ||
+            core_parallel_for_ws(threads, NBLK * K, job_rowcheck, &c, build_ws_new, build_ws_free) ||
             c.oom) {
             st = BTDF_ENOMEM;
             goto done;
@@ -2175,14 +2164,14 @@ done:
         return st;
     }
     best->tolerance = tolerance;
-    best->seconds_build = btdf_now() - t0;
+    best->seconds_build = core_now() - t0;
     if (memo) { /* the file's reports test the same knot midpoints: hand over T and R */
         albedo_memo_free(best->memo);
         best->memo = memo;
     }
     *out = best;
     if (st == BTDF_EBUDGET)
-        return scatfun_say(msg, msglen, BTDF_EBUDGET,
+        return core_say(BTDF_EBUDGET, msg, msglen,
                    "%s budget reached (%u nodes, %u coefficients, mMax %u) with estimated "
                    "e_L1 %.3g > tolerance %g",
                    limit, best->n, best->ncoeffs, best->mmax, best_err, tolerance);
@@ -2885,16 +2874,6 @@ static void mis_eval(const void *obj, double ti, const double *q, double *out)
             out[ch + k] = 0.0;
 }
 
-/* splitmix64, as the tables' estimator uses (one stream per test angle) */
-static double refl_unif(uint64_t *x)
-{
-    uint64_t z = (*x += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    z ^= z >> 31;
-    return (double)(z >> 11) * (1.0 / 9007199254740992.0);
-}
-
 #define U_EST_R 7.0 /* facet slopes beyond u = 7 hold exp(-49) of the distribution */
 
 /* d(omega_h) of a stratum of facet slopes around u (tan tn = 2u/s) stratified in
@@ -2977,8 +2956,8 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
         memset(acc, 0, sizeof acc);
         for (size_t iu = 0; iu < nu; iu++) {
             for (size_t ip = 0; ip < npsi; ip++) {
-                double w = wmax * ((double)iu + refl_unif(&rng)) / (double)nu;
-                double psi = M_PI * ((double)ip + refl_unif(&rng)) / (double)npsi;
+                double w = wmax * ((double)iu + core_unif(&rng)) / (double)nu;
+                double psi = M_PI * ((double)ip + core_unif(&rng)) / (double)npsi;
                 double u = sqrt(-log1p(-w)); /* w < 1: finite */
                 double rr = 2.0 * u / s;     /* s > 0 (checked) */
                 double cth = 1.0 / sqrt(1.0 + rr * rr), sth = rr * cth;
@@ -3000,8 +2979,8 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
         }
         for (size_t im = 0; im < nmu; im++) {
             for (size_t ip = 0; ip < nphi; ip++) {
-                double mu = ((double)im + refl_unif(&rng)) / (double)nmu; /* cos tr */
-                double ph = M_PI * ((double)ip + refl_unif(&rng)) / (double)nphi;
+                double mu = ((double)im + core_unif(&rng)) / (double)nmu; /* cos tr */
+                double ph = M_PI * ((double)ip + core_unif(&rng)) / (double)nphi;
                 double sr = sqrt(fmax(0.0, 1.0 - mu * mu));
                 double rx = sr * cos(ph), ry = sr * sin(ph), rz = mu;
                 double vb = mu * dmu * dphi * 2.0, share = vb;

@@ -340,7 +340,7 @@ btdf_status rad_klems_acc(const btdf_params *p, double n, double scale, int refl
     }
     for (size_t k = 0; k < np * np; k++)
         j.acc[k] = NAN; /* sentinel: a column whose scratch could not be allocated */
-    btdf_parallel_for(threads, np, kl_column, &j);
+    core_parallel_for(threads, np, kl_column, &j);
     for (size_t k = 0; k < np * np; k++) {
         if (isnan(j.acc[k])) {
             free(j.acc);

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "btdf.h"
+#include "core/core.h"
 #include "model_impl.h"
 #include "table_impl.h"
 
@@ -34,54 +35,36 @@ BTDF_API void btdf_params_default(btdf_params *p)
     p->k0 = 0.7;
 }
 
-btdf_status btdf_say(btdf_status st, char *msg, size_t msglen, const char *fmt, ...)
-{
-    if (msg && msglen) {
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(msg, msglen, fmt, ap);
-        va_end(ap);
-    }
-    return st;
-}
-
-static btdf_status fail(char *msg, size_t msglen, const char *fmt, double v)
-{
-    if (msg && msglen)
-        snprintf(msg, msglen, fmt, v);
-    return BTDF_EINVAL;
-}
-
 BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t msglen)
 {
     if (!p)
-        return fail(msg, msglen, "parameters missing%.0s", 0.0);
+        return core_say(BTDF_EINVAL, msg, msglen, "parameters missing");
     if (p->channels != 1 && p->channels != 3)
-        return fail(msg, msglen, "channels %g: must be 1 or 3", (double)p->channels);
+        return core_say(BTDF_EINVAL, msg, msglen, "channels %g: must be 1 or 3", (double)p->channels);
     for (int c = 0; c < p->channels; c++) {
         double n = p->ior[c];
         if (!isfinite(n))
-            return fail(msg, msglen, "index of refraction %g: must be a finite number", n);
+            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %g: must be a finite number", n);
         if (n <= 0.0)
-            return fail(msg, msglen, "index of refraction %g: must be > 0", n);
+            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %g: must be > 0", n);
         if (fabs(n - 1.0) < BTDF_IOR_ONE_EPS)
-            return fail(msg, msglen,
+            return core_say(BTDF_EINVAL, msg, msglen,
                         "index of refraction %.17g: n = 1 has no BTDF (every facet transmits "
                         "undeviated, so the transmission is a delta); use n != 1, "
                         "e.g. 1.0001",
                         n);
         if (n < BTDF_IOR_MIN || n > BTDF_IOR_MAX)
-            return fail(msg, msglen, "index of refraction %g: must lie in [0.001, 1000]", n);
+            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %g: must lie in [0.001, 1000]", n);
     }
     double s = p->smoothness;
     if (!isfinite(s))
-        return fail(msg, msglen, "smoothness %g: must be a finite number", s);
+        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %g: must be a finite number", s);
     if (s <= 0.0)
-        return fail(msg, msglen, "smoothness %g: must be > 0", s);
+        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %g: must be > 0", s);
     if (s < BTDF_S_MIN || s > BTDF_S_MAX)
-        return fail(msg, msglen, "smoothness %g: must lie in [0.001, 1e6]", s);
+        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %g: must lie in [0.001, 1e6]", s);
     if (!isfinite(p->k0) || p->k0 < 0.0 || p->k0 > BTDF_K0_MAX)
-        return fail(msg, msglen, "k0 %g: must lie in [0, 100]", p->k0);
+        return core_say(BTDF_EINVAL, msg, msglen, "k0 %g: must lie in [0, 100]", p->k0);
     return BTDF_OK;
 }
 
@@ -397,7 +380,7 @@ BTDF_API btdf_status btdf_eval_grid(const btdf_params *p, size_t nti, const doub
         az[nphi + k] = a.sphi;
     }
     grid_job g = {p, nto, nphi, ti, to, az, az + nphi, out};
-    btdf_parallel_for(threads, nti * nto, grid_row, &g);
+    core_parallel_for(threads, nti * nto, grid_row, &g);
     free(az);
     return BTDF_OK;
 }

@@ -573,9 +573,6 @@ BT_INLINE double bt_rho_r(double n, double d, double s, const bt_ir *ir, double 
     return (ok & (r >= DBL_MIN)) ? r : 0.0;
 }
 
-/* Writes a formatted message to msg (if any) and returns st. */
-btdf_status btdf_say(btdf_status st, char *msg, size_t msglen, const char *fmt, ...);
-
 /* sin and cos of an angle in degrees, exact at multiples of 90 degrees, for tools
    and tests that speak degrees: reduces to [-45, 45] before converting. */
 void btdf_sincos_deg(double deg, double *s, double *c);

@@ -13,7 +13,7 @@
 #include "model_impl.h"
 #include "table_impl.h"
 
-#define say btdf_say /* model_impl.h */
+#define say core_say /* core/core.h */
 
 #if BTDF_HAVE_PNG
 

@@ -213,16 +213,6 @@ BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
 
 /* ------------------------------------------------------------ probe estimate */
 
-static uint64_t rad_mix(uint64_t *x)
-{
-    uint64_t z = (*x += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
-
-static double rad_unif(uint64_t *x) { return (double)(rad_mix(x) >> 11) * (1.0 / 9007199254740992.0); }
-
 /* Stratified probes of one block as a render reads it: m light angles, kv views each
    (stratified in sin^2 of the view's polar angle and its azimuth: equal projected solid
    angle), with the tree coordinates of each (view, light) pair and Eq. 25 (or rho_r) for
@@ -293,8 +283,8 @@ static void probe_angle(void *arg, size_t i)
     for (size_t s = 0; s < pr->ns; s++) {
         for (size_t ph = 0; ph < pr->nphi; ph++) {
             size_t j = i * pr->kv + s * pr->nphi + ph;
-            double u1 = ((double)s + rad_unif(&z)) / (double)pr->ns;
-            double phi = 2.0 * M_PI * ((double)ph + rad_unif(&z)) / (double)pr->nphi;
+            double u1 = ((double)s + core_unif(&z)) / (double)pr->ns;
+            double phi = 2.0 * M_PI * ((double)ph + core_unif(&z)) / (double)pr->nphi;
             double st = sqrt(u1), to = asin(st), f;
             if (b->reflect) {
                 f = btdf_rho_r(pr->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
@@ -356,7 +346,7 @@ static btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_ma
     uint64_t z = seed;
     for (size_t i = 0; i < m; i++) {
         if (i < m - extra) {
-            pr->ti[i] = pr->ti_max * ((double)i + rad_unif(&z)) / (double)(m - extra);
+            pr->ti[i] = pr->ti_max * ((double)i + core_unif(&z)) / (double)(m - extra);
         } else {
             size_t e = i - (m - extra);
             pr->ti[i] = asin(((double)(e / 2 + 1) + (e % 2 ? 1e-6 : -1e-6)) / RAD_EDGE_DIV);
@@ -371,7 +361,7 @@ static btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_ma
         pr->T[i] = v;
         pr->fl[i] = fmax(v, 0.01); /* MODEL.md section 6 floor */
     }
-    btdf_parallel_for(threads, m, probe_angle, pr);
+    core_parallel_for(threads, m, probe_angle, pr);
     return BTDF_OK;
 }
 
@@ -408,7 +398,7 @@ static void rad_probes_eval(rad_probes *pr, const rad_block *tree, int threads,
 {
     pr->tree = tree;
     pr->res = res;
-    btdf_parallel_for(threads, pr->m, probe_error, pr);
+    core_parallel_for(threads, pr->m, probe_error, pr);
 }
 
 static double res_max_l1(const btdf_ti_error *res, size_t m)
@@ -527,7 +517,7 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
         free(res);
         for (int i = 0; i < npr; i++)
             rad_probes_free(&pr[i]);
-        return btdf_say(BTDF_ENOMEM, msg, msglen, "out of memory building the tensor tree");
+        return core_say(BTDF_ENOMEM, msg, msglen, "out of memory building the tensor tree");
     }
     double aim = RAD_AIM * r->tolerance, ech[3], e3[3];
     /* per checked channel: its cut (lo) and what the tree is grown to (grown; 1e300: not
@@ -642,7 +632,7 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
         snprintf(msg, msglen, "%s: e_L1 %.3g above the tolerance %g with the node budget "
                               "(%zu nodes)", b->label, e, r->tolerance, (size_t)RAD_MAX_NODES);
     } else if (st != BTDF_OK) {
-        btdf_say(st, msg, msglen, "out of memory building the tensor tree");
+        core_say(st, msg, msglen, "out of memory building the tensor tree");
     }
     rad_tb_free(t);
     free(res);
@@ -680,7 +670,7 @@ btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t 
     for (int i = 0; i < 3 && st == BTDF_OK; i++) {
         out[i] = malloc(nn * sizeof *out[i]);
         if (!out[i]) {
-            st = btdf_say(BTDF_ENOMEM, msg, msglen, "out of memory for a Klems matrix");
+            st = core_say(BTDF_ENOMEM, msg, msglen, "out of memory for a Klems matrix");
             break;
         }
         for (size_t e = 0; e < nn; e++) {
@@ -732,7 +722,7 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     btdf_rad *r = calloc(1, sizeof *r);
     if (!r)
         return BTDF_ENOMEM;
-    double t0 = btdf_now();
+    double t0 = core_now();
     r->basis = basis;
     r->p = *p;
     r->tolerance = basis == RAD_BASIS_TREE3 ? tolerance : 0.0;
@@ -756,7 +746,7 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
         btdf_status sk = rad_tree_block(r, k, threads, progress, user, msg, msglen);
         st = sk != BTDF_OK ? sk : st;
     }
-    r->seconds_build = btdf_now() - t0;
+    r->seconds_build = core_now() - t0;
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
         btdf_rad_free(r);
         return st;
@@ -895,7 +885,7 @@ static btdf_status rad_reflect_report(const btdf_rad *r, int k, int c, int chose
                                       size_t test_angles, size_t points_per_angle,
                                       uint64_t seed, int threads, btdf_report *rep)
 {
-    double t0 = btdf_now();
+    double t0 = core_now();
     size_t m = test_angles ? test_angles : 48, ppa = points_per_angle ? points_per_angle : 8192;
     size_t ns = (size_t)sqrt((double)ppa / 2.0);
     ns = ns < 4 ? 4 : ns;
@@ -929,7 +919,7 @@ static btdf_status rad_reflect_report(const btdf_rad *r, int k, int c, int chose
     if (rep->e_max_angles)
         rep->e_max_mean /= (double)rep->e_max_angles;
     rad_probes_free(&pr);
-    rep->seconds_estimate = btdf_now() - t0;
+    rep->seconds_estimate = core_now() - t0;
     rep->seconds_build = r->seconds_build;
     rep->tolerance = r->tolerance;
     rep->metric = BTDF_METRIC_L1;

@@ -95,8 +95,6 @@ int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
    two from 2 to 2^20. 0 on success, -1 for another N or out of memory. */
 int scatfun_dct1(const double *x, size_t N, double *Y);
 
-/* msg <- the formatted text (when msg and msglen); returns st. */
-btdf_status scatfun_say(char *msg, size_t msglen, btdf_status st, const char *fmt, ...);
 /* Fills f->xd and f->xcell from f->nodes; 0 on success, -1 when out of memory. */
 int scatfun_nodes_d(btdf_scatfun *f);
 

@@ -10,104 +10,6 @@
 
 #include "table_impl.h"
 
-double btdf_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-int btdf_thread_count(int requested)
-{
-    if (requested > 0)
-        return requested > 256 ? 256 : requested;
-    long n = sysconf(_SC_NPROCESSORS_ONLN);
-    return n < 1 ? 1 : (n > 256 ? 256 : (int)n);
-}
-
-typedef struct pool {
-    pthread_mutex_t lock;
-    size_t next, count;
-    void (*fn)(void *ctx, void *ws, size_t i);
-    void *ctx;
-    void *(*ws_new)(void *ctx);
-    void (*ws_free)(void *ws);
-    int failed; /* a worker could not allocate its workspace */
-} pool;
-
-static void *pool_worker(void *v)
-{
-    pool *p = v;
-    void *ws = p->ws_new ? p->ws_new(p->ctx) : NULL;
-    if (p->ws_new && !ws) {
-        pthread_mutex_lock(&p->lock);
-        p->failed = 1;
-        pthread_mutex_unlock(&p->lock);
-        return NULL;
-    }
-    for (;;) {
-        pthread_mutex_lock(&p->lock);
-        size_t i = p->next < p->count ? p->next++ : p->count;
-        pthread_mutex_unlock(&p->lock);
-        if (i >= p->count)
-            break;
-        p->fn(p->ctx, ws, i);
-    }
-    if (p->ws_free)
-        p->ws_free(ws);
-    return NULL;
-}
-
-int btdf_parallel_for_ws(int threads, size_t count, void (*fn)(void *ctx, void *ws, size_t i),
-                         void *ctx, void *(*ws_new)(void *ctx), void (*ws_free)(void *ws))
-{
-    pool p;
-    p.next = 0;
-    p.count = count;
-    p.fn = fn;
-    p.ctx = ctx;
-    p.ws_new = ws_new;
-    p.ws_free = ws_free;
-    p.failed = 0;
-    if (pthread_mutex_init(&p.lock, NULL) != 0)
-        return -1;
-    int nt = btdf_thread_count(threads);
-    if ((size_t)nt > count)
-        nt = count > 0 ? (int)count : 1;
-    pthread_t tid[256];
-    int started = 0;
-    for (int k = 1; k < nt; k++)
-        if (pthread_create(&tid[started], NULL, pool_worker, &p) == 0)
-            started++; /* fewer threads only slow the loop down */
-    pool_worker(&p); /* the calling thread works too */
-    for (int k = 0; k < started; k++)
-        pthread_join(tid[k], NULL);
-    pthread_mutex_destroy(&p.lock);
-    /* A worker without a workspace did no items; the others did them all unless
-       every worker failed. */
-    return p.next < p.count || p.failed ? -1 : 0;
-}
-
-typedef struct plain {
-    void (*fn)(void *arg, size_t i);
-    void *arg;
-} plain;
-
-static void plain_fn(void *ctx, void *ws, size_t i)
-{
-    (void)ws;
-    const plain *p = ctx;
-    p->fn(p->arg, i);
-}
-
-void btdf_parallel_for(int threads, size_t count, void (*fn)(void *arg, size_t i), void *arg)
-{
-    plain p = {fn, arg};
-    if (btdf_parallel_for_ws(threads, count, plain_fn, &p, NULL, NULL) != 0)
-        for (size_t i = 0; i < count; i++) /* no mutex: run the loop here */
-            fn(arg, i);
-}
-
 /* ------------------------------------------------------------------------- */
 /* Facet geometry                                                            */
 /* ------------------------------------------------------------------------- */
@@ -411,12 +313,6 @@ int table_kind_parse(const char *name, btdf_table_kind *k)
 /* The object                                                                */
 /* ------------------------------------------------------------------------- */
 
-static void set_msg(char *msg, size_t msglen, const char *text)
-{
-    if (msg && msglen)
-        snprintf(msg, msglen, "%s", text);
-}
-
 BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
                                     btdf_table **out, char *msg, size_t msglen)
 {
@@ -424,7 +320,7 @@ BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
         return BTDF_EINVAL;
     if (kind != BTDF_TABLE_FACET && kind != BTDF_TABLE_GRID &&
         kind != BTDF_TABLE_FACET_RECIPROCAL && kind != BTDF_TABLE_FACET_REFLECTION) {
-        set_msg(msg, msglen,
+        core_say(BTDF_OK, msg, msglen, "%s",
                 "table kind: must be facet, grid, facet-reciprocal or facet-reflection");
         return BTDF_EINVAL;
     }
@@ -497,23 +393,23 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
         return BTDF_EINVAL;
     if (!(ti >= 0.0 && ti <= M_PI / 2)) {
         snprintf(buf, sizeof buf, "slice ti %g rad: must lie in [0, pi/2]", ti);
-        set_msg(msg, msglen, buf);
+        core_say(BTDF_OK, msg, msglen, "%s", buf);
         return BTDF_EINVAL;
     }
     if (t->ns > 0 && !(ti > t->s[t->ns - 1].ti)) {
         snprintf(buf, sizeof buf, "slice ti %.17g: must exceed the previous slice's %.17g",
                  ti, t->s[t->ns - 1].ti);
-        set_msg(msg, msglen, buf);
+        core_say(BTDF_OK, msg, msglen, "%s", buf);
         return BTDF_EINVAL;
     }
     if (nrows < 1 || ncols < 1 || nrows > 1u << 24 || ncols > 1u << 24) {
         snprintf(buf, sizeof buf, "slice size %zu x %zu: each must lie in [1, 2^24]", nrows,
                  ncols);
-        set_msg(msg, msglen, buf);
+        core_say(BTDF_OK, msg, msglen, "%s", buf);
         return BTDF_EINVAL;
     }
     if (!strictly_increasing(rows, nrows) || !strictly_increasing(cols, ncols)) {
-        set_msg(msg, msglen, "slice coordinates: must be finite and strictly increasing");
+        core_say(BTDF_OK, msg, msglen, "%s", "slice coordinates: must be finite and strictly increasing");
         return BTDF_EINVAL;
     }
     size_t nch = (size_t)t->p.channels;
@@ -524,7 +420,7 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
         if (!isfinite(values[i]) || values[i] < 0.0) {
             snprintf(buf, sizeof buf, "slice value %g at index %zu: must be finite and >= 0",
                      values[i], i);
-            set_msg(msg, msglen, buf);
+            core_say(BTDF_OK, msg, msglen, "%s", buf);
             return BTDF_EINVAL;
         }
     }
@@ -554,19 +450,19 @@ BTDF_API btdf_status btdf_table_set_rule(btdf_table *t, btdf_table_rule rule, ch
     if (!t)
         return BTDF_EINVAL;
     if (rule != BTDF_RULE_PLAIN && rule != BTDF_RULE_CHI && rule != BTDF_RULE_FRESNEL) {
-        set_msg(msg, msglen, "table rule: must be plain (0), chi (1) or fresnel (2)");
+        core_say(BTDF_OK, msg, msglen, "%s", "table rule: must be plain (0), chi (1) or fresnel (2)");
         return BTDF_EINVAL;
     }
     if (t->ns > 0) {
-        set_msg(msg, msglen, "table rule: must be set before the first slice is added");
+        core_say(BTDF_OK, msg, msglen, "%s", "table rule: must be set before the first slice is added");
         return BTDF_EINVAL;
     }
     if (rule == BTDF_RULE_CHI && (t->kind == BTDF_TABLE_GRID || kind_is_reflection(t->kind))) {
-        set_msg(msg, msglen, "table rule chi: only for facet and facet-reciprocal tables");
+        core_say(BTDF_OK, msg, msglen, "%s", "table rule chi: only for facet and facet-reciprocal tables");
         return BTDF_EINVAL;
     }
     if (rule == BTDF_RULE_FRESNEL && !kind_is_reflection(t->kind)) {
-        set_msg(msg, msglen, "table rule fresnel: only for facet-reflection tables");
+        core_say(BTDF_OK, msg, msglen, "%s", "table rule fresnel: only for facet-reflection tables");
         return BTDF_EINVAL;
     }
     t->rule = rule;

@@ -7,6 +7,7 @@
 #include <stddef.h>
 
 #include "btdf.h"
+#include "core/core.h"
 #include "model_impl.h"
 #include "scatfun_impl.h"
 
@@ -224,21 +225,5 @@ btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
                                size_t test_angles, size_t points_per_angle, uint64_t seed,
                                int threads, est_eval_fn fn, const void *obj, btdf_report *r);
-
-/* Monotonic wall clock in seconds. */
-double btdf_now(void);
-
-/* Number of worker threads for a request (0 = all cores), at least 1. */
-int btdf_thread_count(int requested);
-
-/* Runs fn(arg, i) for i in [0, count) on up to `threads` threads. Which thread runs
-   which i does not change any result: each i writes only its own output. */
-void btdf_parallel_for(int threads, size_t count, void (*fn)(void *arg, size_t i), void *arg);
-
-/* The same with a workspace per thread from ws_new (NULL: none), freed by ws_free.
-   Returns 0, or -1 when some items were not run (no mutex, or no workspace could be
-   made). */
-int btdf_parallel_for_ws(int threads, size_t count, void (*fn)(void *ctx, void *ws, size_t i),
-                         void *ctx, void *(*ws_new)(void *ctx), void (*ws_free)(void *ws));
 
 #endif

@@ -15,6 +15,7 @@
 
 #include "btdf_io.h"
 #include "tmpfile.h"
+#include "core/core.h"
 
 /*
  * Every writer of the library writes `path` under a temporary name beside it and
@@ -39,11 +40,8 @@ static volatile sig_atomic_t used[SLOTS];
 static pthread_mutex_t lock = PTHREAD_MUTEX_INITIALIZER;
 static unsigned long counter;
 
-static void say(char *msg, size_t msglen, const char *fmt, const char *a, const char *b)
-{
-    if (msg && msglen)
-        snprintf(msg, msglen, fmt, a, b);
-}
+/* The one message helper (core/core.h), in this file's argument order. */
+#define say(msg, msglen, ...) ((void)core_say(BTDF_OK, msg, msglen, __VA_ARGS__))
 
 int btdf_tmp_begin(const char *path, const char *ext, char *tmp, size_t tmplen)
 {

@@ -573,7 +573,7 @@ btdf_status rad_tb_grow3(rad_tb *t, const double eps[3], size_t max_nodes)
         t->j.bufs[k].max = t->j.bufs[k].n + (max_nodes > used ? max_nodes - used : 0);
     for (int c = 0; c < 3; c++)
         t->j.eps[c] = eps[c];
-    btdf_parallel_for(t->threads, t->ntask, tt_task, &t->j);
+    core_parallel_for(t->threads, t->ntask, tt_task, &t->j);
     int nomem = 0, hit = 0;
     for (size_t k = 0; k < t->ntask; k++) {
         nomem |= t->j.bufs[k].nomem || !t->j.bufs[k].v;
@@ -740,7 +740,7 @@ btdf_status rad_tree_build(const btdf_params *p, double eps, int threads, size_t
 {
     rad_tb *t = rad_tb_new(p, blk, threads);
     if (!t)
-        return btdf_say(BTDF_ENOMEM, msg, msglen, "out of memory building the tensor tree");
+        return core_say(BTDF_ENOMEM, msg, msglen, "out of memory building the tensor tree");
     btdf_status st = rad_tb_grow(t, eps, max_nodes);
     if (st == BTDF_OK || st == BTDF_EBUDGET) {
         btdf_status se = rad_tb_extract(t, eps, blk);
@@ -748,8 +748,8 @@ btdf_status rad_tree_build(const btdf_params *p, double eps, int threads, size_t
     }
     rad_tb_free(t);
     if (st == BTDF_ENOMEM)
-        return btdf_say(st, msg, msglen, "out of memory building the tensor tree");
+        return core_say(st, msg, msglen, "out of memory building the tensor tree");
     if (st == BTDF_EBUDGET)
-        return btdf_say(st, msg, msglen, "tensor tree node budget (%zu) reached", max_nodes);
+        return core_say(st, msg, msglen, "tensor tree node budget (%zu) reached", max_nodes);
     return st;
 }

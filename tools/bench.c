@@ -274,7 +274,7 @@ static void api_grid_fn(api_grid *g)
 static eval_job api_kernel_job;
 static void api_kernel(api_grid *g)
 {
-    btdf_parallel_for(api_threads, g->NI, eval_slice, &api_kernel_job);
+    core_parallel_for(api_threads, g->NI, eval_slice, &api_kernel_job);
 }
 
 static double cpu_now(void)
@@ -733,7 +733,7 @@ int main(int argc, char **argv)
             double v[9];
             for (int k = -1; k < 9; k++) {
                 double t0 = now();
-                btdf_parallel_for(th2[a], NI, eval_slice, &ej);
+                core_parallel_for(th2[a], NI, eval_slice, &ej);
                 if (k >= 0)
                     v[k] = now() - t0;
             }
