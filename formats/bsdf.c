@@ -2,8 +2,8 @@
 /* bsdf.c: the SCATFUN v1 (.bsdf) entry of the format registry; the byte layout is scatfun.c's. */
 #include <stdlib.h>
 
-#include "formats.h"
-#include "tmpfile.h"
+#include "formats/formats.h"
+#include "io/tmpfile.h"
 
 static btdf_status bsdf_write(const btdf_output_ctx *c, const char *path, char *msg,
                               size_t msglen)

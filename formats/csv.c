@@ -6,8 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "formats.h"
-#include "table_impl.h"
+#include "formats/formats.h"
+#include "table/table.h"
 
 /*
  * Layout (docs/formats.md): a header row; then comment lines starting with '#' carry

@@ -13,9 +13,9 @@
 #include <openexr.h>
 #include <pthread.h>
 
-#include "formats.h"
-#include "model_impl.h"
-#include "table_impl.h"
+#include "formats/formats.h"
+#include "model/kernel.h"
+#include "table/table.h"
 
 /* Layout (docs/formats.md is the reference):
  *   part k = slice k, scanline storage, ZIP, FLOAT channels "Y" or "B","G","R";

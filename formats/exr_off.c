@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* exr_off.c: the OpenEXR entry of a build without OpenEXR, so errors can name the switch. */
-#include "formats.h"
+#include "formats/formats.h"
 
 const btdf_format_ops btdf_format_exr = {
     .name = "OpenEXR", .ext = ".exr", .feature = "openexr", .needs = BTDF_NEEDS_TABLE};

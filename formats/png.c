@@ -9,7 +9,7 @@
 
 #include <png.h>
 
-#include "formats.h"
+#include "formats/formats.h"
 
 /* Where libpng's messages go: the first error, for the caller's buffer. */
 typedef struct png_err {

@@ -7,9 +7,9 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "formats.h"
+#include "formats/formats.h"
 #include "core/core.h"
-#include "tmpfile.h"
+#include "io/tmpfile.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846

@@ -14,7 +14,7 @@
 #include "btdf_scatfun.h"
 #include "scatfun_impl.h"
 #include "core/core.h"
-#include "tmpfile.h"
+#include "io/tmpfile.h"
 
 /* Layout constants of SCATFUN v1 (docs/scatfun.md). */
 #define HEADER_BYTES 64u

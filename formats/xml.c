@@ -4,7 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "formats.h"
+#include "formats/formats.h"
 #include "radiance.h"
 
 /* Text a reader takes literally: &, < and > escaped, control characters dropped. */

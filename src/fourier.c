@@ -15,9 +15,11 @@
 
 #include "btdf.h"
 #include "btdf_scatfun.h"
-#include "model_impl.h"
+#include "model/kernel.h"
 #include "scatfun_impl.h"
-#include "table_impl.h"
+#include "core/core.h"
+#include "estimate/estimate.h"
+#include "model/facet.h"
 
 /* ------------------------------------------------------------------------- */
 /* Catmull-Rom weights as pbrt-v3 computes them                              */

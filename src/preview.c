@@ -10,8 +10,8 @@
 #include <string.h>
 
 #include "btdf_preview.h"
-#include "model_impl.h"
-#include "table_impl.h"
+#include "model/kernel.h"
+#include "table/table.h"
 
 #define say core_say /* core/core.h */
 

@@ -3,9 +3,11 @@
 #ifndef BTDF_RADIANCE_IMPL_H
 #define BTDF_RADIANCE_IMPL_H
 
-#include "model_impl.h"
+#include "model/kernel.h"
 #include "radiance.h"
-#include "table_impl.h"
+#include "core/core.h"
+#include "estimate/estimate.h"
+#include "model/facet.h"
 
 /* Radiance's first tree coordinate from the sine of the incident polar angle. */
 double rad_u0_of_sin(double sin_ti);

@@ -8,6 +8,7 @@
 
 #include "btdf.h"
 #include "btdf_scatfun.h"
+#include "estimate/estimate.h"
 
 /* Rec. 709 luminance weights used by pbrt-v3 and layerlab, and pbrt's inverse for G. */
 #define LUM_R 0.212671
@@ -31,19 +32,6 @@
    nodes) and a view with cos = +-1 lies outside the nodes, where the renderer returns
    no sample (pdf 0) instead of NaN. docs/scatfun.md, "Views on the normal". */
 #define POLE_NODE 0.999999940395355224609375
-
-/* T(ti) or R(ti) per channel (btdf_transmittance / btdf_reflectance), remembered by
-   the parameters and the exact angle, so the builder's repeated measurements of a file
-   (the same knot midpoints each time) and the file's reports compute each once.
-   Thread-safe; a value is the same whether it was remembered or computed. */
-typedef struct albedo_memo albedo_memo;
-struct est_opts; /* table_impl.h */
-albedo_memo *albedo_memo_new(void);
-void albedo_memo_free(albedo_memo *m);
-/* out[0..p->channels-1]; m may be NULL (computes). Returns btdf_transmittance's or
-   btdf_reflectance's status. */
-btdf_status albedo_memo_get(albedo_memo *m, const btdf_params *p, int refl, double ti,
-                            double *out);
 
 struct btdf_scatfun {
     uint32_t n, ncoeffs, mmax, channels;

@@ -15,7 +15,7 @@
 #include <openexr.h>
 
 #include "btdf.h"
-#include "formats.h"
+#include "formats/formats.h"
 
 #define NSLICES 3
 

@@ -13,7 +13,7 @@
 
 #include "btdf_test.h"
 #include "btdf_io.h"
-#include "tmpfile.h"
+#include "io/tmpfile.h"
 
 static char dir[256];
 

@@ -16,7 +16,7 @@
 #include "btdf.h"
 #include "btdf_scatfun.h"
 #include "scatfun_impl.h"
-#include "table_impl.h"
+#include "table/table.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846

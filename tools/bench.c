@@ -15,8 +15,8 @@
 #include "btdf.h"
 #include "btdf_scatfun.h"
 #include "fastnum.h"
-#include "model_impl.h"
-#include "table_impl.h"
+#include "model/kernel.h"
+#include "table/table.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846

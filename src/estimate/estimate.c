@@ -5,11 +5,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "table_impl.h"
-
-void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, double sto,
-                   double cto, double cph, double sph, double phi_fold, double to,
-                   double *out);
+#include "core/core.h"
+#include "estimate/estimate.h"
+#include "model/facet.h"
+#include "model/kernel.h"
 
 /* ------------------------------------------------------------------------- */
 /* Remembered T and R                                                        */
@@ -289,11 +288,6 @@ static void est_angle(void *arg, size_t k)
     if (ctx)
         j->done(ctx);
     j->points[k] = pts;
-}
-
-static void table_fn(const void *obj, double ti, const double *q, double *out)
-{
-    table_eval_sc(obj, ti, q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], out);
 }
 
 /* ------------------------------------------------------------------------- */
@@ -595,54 +589,22 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
                          NULL, 0, fn, NULL, NULL, NULL, obj, NULL, NULL, r);
 }
 
+btdf_status btdf_estimate_knots_part(const btdf_params *p, int refl, double ti_min,
+                                     double ti_max, size_t test_angles,
+                                     size_t points_per_angle, uint64_t seed, int threads,
+                                     const double *knots, size_t nknots, est_eval_fn fn,
+                                     const void *obj, btdf_report *r)
+{
+    return estimate_impl(p, refl, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         knots, nknots, fn, NULL, NULL, NULL, obj, NULL, NULL, r);
+}
+
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
                                size_t test_angles, size_t points_per_angle, uint64_t seed,
                                int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
     return estimate_impl(p, 1, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
                          NULL, 0, fn, NULL, NULL, NULL, obj, NULL, NULL, r);
-}
-
-BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
-                                         size_t test_angles, size_t points_per_angle,
-                                         uint64_t seed, int threads, btdf_report *r)
-{
-    if (!t)
-        return BTDF_EINVAL;
-    if (t->check_valid && t->check_ti0 == ti_min && t->check_ti1 == ti_max &&
-        t->check_angles == test_angles && t->check_ppa == points_per_angle &&
-        t->check_seed == seed) {
-        *r = t->check;
-        r->per_ti = malloc(t->check.test_angles * sizeof *r->per_ti);
-        if (!r->per_ti)
-            return BTDF_ENOMEM;
-        memcpy(r->per_ti, t->check.per_ti, t->check.test_angles * sizeof *r->per_ti);
-        r->slices = t->ns;
-        r->samples = btdf_table_node_count(t);
-        r->estimate_in_build = 1;
-        return BTDF_OK;
-    }
-    /* The knots are the slice angles, in the table's own ti: for the reciprocal kind
-       those are outgoing angles and say nothing about the incidence, so none. */
-    double *knots = NULL;
-    size_t nk = 0;
-    if (t->kind != BTDF_TABLE_FACET_RECIPROCAL && t->ns > 1) {
-        knots = malloc(t->ns * sizeof *knots);
-        if (!knots)
-            return BTDF_ENOMEM;
-        for (size_t k = 0; k < t->ns; k++)
-            knots[k] = t->s[k].ti;
-        nk = t->ns;
-    }
-    btdf_status st = estimate_impl(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
-                                   test_angles, points_per_angle, seed, threads, knots, nk,
-                                   table_fn, NULL, NULL, NULL, t, NULL, NULL, r);
-    free(knots);
-    if (st == BTDF_OK) {
-        r->slices = t->ns;
-        r->samples = btdf_table_node_count(t);
-    }
-    return st;
 }
 
 BTDF_API void btdf_report_clear(btdf_report *r)

@@ -14,7 +14,7 @@
 #include <unistd.h>
 
 #include "btdf_io.h"
-#include "tmpfile.h"
+#include "io/tmpfile.h"
 #include "core/core.h"
 
 /*

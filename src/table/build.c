@@ -5,9 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "table_impl.h"
-
-btdf_status table_push_slice(btdf_table *t, tslice *s);
+#include "table/table.h"
 
 BTDF_API void btdf_table_opts_default(btdf_table_opts *o)
 {

@@ -1,100 +1,11 @@
 /* SPDX-License-Identifier: MIT */
-/* table.c: the table object, its interpolation rule, threads and the facet geometry. */
+/* table.c: the table object, its interpolation rule, evaluation and estimate. */
 #include <math.h>
-#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-#include <unistd.h>
 
-#include "table_impl.h"
-
-/* ------------------------------------------------------------------------- */
-/* Facet geometry                                                            */
-/* ------------------------------------------------------------------------- */
-
-int facet_eval(double n, double s, double k0, const rho_in *a, double stn, double ctn,
-               double cpsi, double spsi, facet_geo *g)
-{
-    g->rho = 0.0;
-    g->weight = 0.0;
-    facet_ray r;
-    if (!facet_refract(n, a->sin_ti, a->cos_ti, stn, ctn, cpsi, spsi, &r))
-        return 0;
-    double st = sqrt(r.ox * r.ox + r.oy * r.oy);
-    g->sin_to = st;
-    g->cos_to = r.oz;
-    /* e_o on the axis: phi is undefined and does not matter, take phi = 0. */
-    g->cos_phi = st > 0.0 ? r.ox / st : 1.0;
-    g->sin_phi = st > 0.0 ? r.oy / st : 0.0;
-    rho_out b;
-    rho_out_init(&b, st, r.oz, s, k0);
-    g->rho = rho_kernel(n, s, a, &b, g->cos_phi, g->sin_phi);
-    double d = r.ca - n * r.cb; /* |v| with v = e_i + n e_o = (ca - n cb) h; != 0 for n != 1 */
-    g->weight = -r.oz * d * d / (n * n * r.cb);
-    return 1;
-}
-
-int facet_eval_r(double n, double s, double k0, const rho_in *a, double stn, double ctn,
-                 double cpsi, double spsi, facet_geo *g)
-{
-    g->rho = 0.0;
-    g->weight = 0.0;
-    double ca, rx, ry, rz;
-    if (!facet_mirror(a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz))
-        return 0; /* no reflected direction in the upper medium */
-    double st = sqrt(rx * rx + ry * ry);
-    g->sin_to = st;
-    g->cos_to = rz;
-    /* e_r on the axis: phi is undefined and does not matter, take phi = 0. */
-    g->cos_phi = st > 0.0 ? rx / st : 1.0;
-    g->sin_phi = st > 0.0 ? ry / st : 0.0;
-    /* rho_r from the model's own evaluator at e_r's angles, not from this geometry */
-    g->rho = btdf_rho_r(n, s, k0, atan2(a->sin_ti, a->cos_ti), atan2(st, rz),
-                        atan2(g->sin_phi, g->cos_phi));
-    g->weight = rz * 4.0 * ca; /* d(omega_r) = 4 (e_i.h) d(omega_h) */
-    return 1;
-}
-
-int facet_of_r(double sti, double cti, double str, double ctr, double cph, double sph,
-               double *tn, double *psi, double *ca)
-{
-    double hx = sti + str * cph, hy = str * sph, hz = cti + ctr;
-    if (!(hz > 0.0))
-        return 0; /* both directions graze: no facet, and rho_r is 0 there */
-    hy = fabs(hy);
-    *ca = 0.5 * sqrt(hx * hx + hy * hy + hz * hz);
-    *tn = atan2(sqrt(hx * hx + hy * hy), hz);
-    *psi = atan2(hy, hx);
-    return 1;
-}
-
-int facet_of(double n, double sti, double cti, double sto, double cto, double cph,
-             double sph, double *tn, double *psi)
-{
-    return facet_of_ca(n, sti, cti, sto, cto, cph, sph, tn, psi, NULL);
-}
-
-int facet_of_ca(double n, double sti, double cti, double sto, double cto, double cph,
-                double sph, double *tn, double *psi, double *ca_out)
-{
-    double vx = sti + n * sto * cph, vy = n * sto * sph, vz = cti + n * cto;
-    double sg = vz < 0.0 ? -1.0 : 1.0; /* h = sg v / |v| has h_z >= 0 */
-    double ca = sg * (sti * vx + cti * vz);
-    double cb = -sg * (sto * (cph * vx + sph * vy) + cto * vz);
-    if (!(ca > 0.0 && cb > 0.0) || vz == 0.0)
-        return 0; /* no facet refracts e_i into e_o */
-    double hx = sg * vx, hy = fabs(vy), hz = sg * vz;
-    *tn = atan2(sqrt(hx * hx + hy * hy), hz);
-    *psi = atan2(hy, hx);
-    if (ca_out) {
-        /* |v| > 0: vz != 0 was checked above */
-        double len = sqrt(hx * hx + hy * hy + hz * hz);
-        *ca_out = fmin(1.0, ca / len);
-    }
-    return 1;
-}
+#include "table/table.h"
 
 double chi_shape(double n, double ca)
 {
@@ -353,7 +264,6 @@ BTDF_API void btdf_table_free(btdf_table *t)
 }
 
 /* Takes ownership of the three arrays of s on success. */
-btdf_status table_push_slice(btdf_table *t, tslice *s);
 btdf_status table_push_slice(btdf_table *t, tslice *s)
 {
     if (t->ns == t->cap) {
@@ -518,9 +428,6 @@ BTDF_API btdf_status btdf_table_slice(const btdf_table *t, size_t k, btdf_slice 
 /* The rule of btdf.h for one query given its sines and cosines. */
 void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, double sto,
                    double cto, double cph, double sph, double phi_fold, double to,
-                   double *out);
-void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, double sto,
-                   double cto, double cph, double sph, double phi_fold, double to,
                    double *out)
 {
     int nch = t->p.channels;
@@ -600,4 +507,55 @@ BTDF_API btdf_status btdf_table_eval(const btdf_table *t, double ti, double to, 
         f = 2.0 * M_PI - f; /* rho depends on cos phi only */
     table_eval_sc(t, ti, sin(ti), cos(ti), sin(to), cos(to), cos(phi), sin(phi), f, to, out);
     return BTDF_OK;
+}
+
+/* ------------------------------------------------------------------------- */
+/* The estimate of a table                                                   */
+/* ------------------------------------------------------------------------- */
+
+static void table_fn(const void *obj, double ti, const double *q, double *out)
+{
+    table_eval_sc(obj, ti, q[0], q[1], q[2], q[3], q[4], q[5], q[6], q[7], out);
+}
+
+BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, double ti_max,
+                                         size_t test_angles, size_t points_per_angle,
+                                         uint64_t seed, int threads, btdf_report *r)
+{
+    if (!t)
+        return BTDF_EINVAL;
+    if (t->check_valid && t->check_ti0 == ti_min && t->check_ti1 == ti_max &&
+        t->check_angles == test_angles && t->check_ppa == points_per_angle &&
+        t->check_seed == seed) {
+        *r = t->check;
+        r->per_ti = malloc(t->check.test_angles * sizeof *r->per_ti);
+        if (!r->per_ti)
+            return BTDF_ENOMEM;
+        memcpy(r->per_ti, t->check.per_ti, t->check.test_angles * sizeof *r->per_ti);
+        r->slices = t->ns;
+        r->samples = btdf_table_node_count(t);
+        r->estimate_in_build = 1;
+        return BTDF_OK;
+    }
+    /* The knots are the slice angles, in the table's own ti: for the reciprocal kind
+       those are outgoing angles and say nothing about the incidence, so none. */
+    double *knots = NULL;
+    size_t nk = 0;
+    if (t->kind != BTDF_TABLE_FACET_RECIPROCAL && t->ns > 1) {
+        knots = malloc(t->ns * sizeof *knots);
+        if (!knots)
+            return BTDF_ENOMEM;
+        for (size_t k = 0; k < t->ns; k++)
+            knots[k] = t->s[k].ti;
+        nk = t->ns;
+    }
+    btdf_status st = btdf_estimate_knots_part(&t->p, kind_is_reflection(t->kind), ti_min,
+                                              ti_max, test_angles, points_per_angle, seed,
+                                              threads, knots, nk, table_fn, t, r);
+    free(knots);
+    if (st == BTDF_OK) {
+        r->slices = t->ns;
+        r->samples = btdf_table_node_count(t);
+    }
+    return st;
 }

@@ -9,8 +9,7 @@
 
 #include "btdf.h"
 #include "core/core.h"
-#include "model_impl.h"
-#include "table_impl.h"
+#include "model/kernel.h"
 
 BTDF_API const char *btdf_version_string(void) { return BTDF_VERSION_STRING; }
 

@@ -1,0 +1,96 @@
+/* SPDX-License-Identifier: MIT */
+/* table.h: the table object, its slices and interpolation rule, shared by table.c, build.c
+   and the table formats. */
+#ifndef BTDF_TABLE_H
+#define BTDF_TABLE_H
+
+#include <math.h>
+#include <stddef.h>
+
+#include "btdf.h"
+#include "core/core.h"
+#include "estimate/estimate.h"
+#include "model/facet.h"
+#include "model/kernel.h"
+
+typedef struct tslice {
+    double ti;
+    size_t nr, nc;
+    double *rows, *cols, *vals; /* vals[(r * nc + c) * channels + ch] */
+    double g;                   /* incident factor V(ti)/cos ti, set when the slice is added */
+    double *geo; /* BTDF_RULE_CHI facet slices: sin tn (nr), cos tn (nr), cos psi (nc) of the
+                    nodes, set when the slice is added; NULL otherwise */
+} tslice;
+
+struct btdf_table {
+    btdf_table_kind kind;
+    btdf_table_rule rule; /* how slices interpolate: rho itself or rho / chi_shape */
+    btdf_params p;
+    size_t ns, cap;
+    tslice *s;
+    /* The builder's last check, which btdf_table_estimate returns for the same request
+       (the estimate is deterministic); cleared when a slice is added. */
+    btdf_report check;
+    int check_valid;
+    double check_ti0, check_ti1;
+    size_t check_angles, check_ppa;
+    uint64_t check_seed;
+    /* A table holding both parts: the reflection (kind FACET_REFLECTION), owned. */
+    struct btdf_table *refl;
+    size_t build_evals; /* points where the builder evaluated Eq. 25, over all its passes */
+};
+
+/* 1 for the kinds that hold rho_r (MODEL.md section 8). */
+static inline int kind_is_reflection(btdf_table_kind k)
+{
+    return k == BTDF_TABLE_FACET_REFLECTION;
+}
+
+/* Interpolates slice k of t at facet or grid coordinates (x = row coordinate,
+   y = col coordinate) for channel ch: rho at the slice's own ti. 0 outside the node range. */
+double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch);
+
+/* The slice's reduced value at (x, y): under BTDF_RULE_CHI the bilinear interpolant of
+   rho / chi_shape at the nodes (chi_shape of the slice's own ti); under the plain rule
+   rho's. slice_interp is this times chi_shape at (x, y). */
+double slice_interp_red(const btdf_table *t, size_t k, double x, double y, int ch);
+
+/* The rule's reduction factor for a facet with cos a = ca (between e_i and h) and index
+   n: cb (ca + n cb)^2, cb = sqrt(1 - (1 - ca^2)/n^2) the refracted cosine. It is the
+   Jacobian chi = n^2 cb / (ca - n cb)^2 times the constant (n^2 - 1)^2 / n^2, since
+   ca - n cb = -(n^2 - 1)/(ca + n cb): chi's shape without its (n - 1)^-2 scale, so it
+   stays finite at n = 1. 0 where the facet refracts nothing (ca <= 0 or total internal
+   reflection). */
+double chi_shape(double n, double ca);
+
+/* The factor K a rule divides the nodes by: chi_shape for CHI, the facet's Fresnel
+   reflectance Fr(ca) (1 past the critical angle, > 0 for every ca > 0 and n != 1) for
+   FRESNEL, 1 for PLAIN; 0 where ca <= 0. */
+double rule_factor(btdf_table_rule rule, double n, double ca);
+
+/* Sets up s->geo for table t's rule (no-op for the plain rule and grid tables);
+   0 when out of memory. */
+int slice_prepare(const btdf_table *t, tslice *s);
+
+/* Eq. 25's incident factor V(ti)/cos ti (0 at grazing incidence). */
+double incident_factor(const btdf_params *p, double ti);
+
+/* The rule's blend of two slice values at weight w in ti, with the incident factors
+   g (query), g0, g1 (the two slices): g ((1 - w) v0/g0 + w v1/g1). */
+double blend_ti(double v0, double v1, double w, double g, double g0, double g1);
+
+/* "facet", "grid" or "facet-reciprocal", as files name the kinds; parse returns 0
+   for an unknown name. */
+const char *table_kind_name(btdf_table_kind k);
+int table_kind_parse(const char *name, btdf_table_kind *k);
+
+/* Adds slice s to t, taking ownership of its three arrays on success. */
+btdf_status table_push_slice(btdf_table *t, tslice *s);
+
+/* rho~ of t for every channel at one query given its sines and cosines (the rule of
+   btdf.h); phi_fold is |phi| folded to [0, pi], to the outgoing polar angle. */
+void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, double sto,
+                   double cto, double cph, double sph, double phi_fold, double to,
+                   double *out);
+
+#endif
