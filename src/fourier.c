@@ -16,7 +16,7 @@
 #include "btdf.h"
 #include "btdf_scatfun.h"
 #include "model/kernel.h"
-#include "scatfun_impl.h"
+#include "scatfun/scatfun.h"
 #include "core/core.h"
 #include "estimate/estimate.h"
 #include "model/facet.h"
@@ -248,7 +248,7 @@ static int dct1(fftbuf *b, const double *x, size_t N, double *Y)
     return 0;
 }
 
-/* Declared in scatfun_impl.h: dct1 with tables of its own, for the tests. */
+/* Declared in scatfun/scatfun.h: dct1 with tables of its own, for the tests. */
 int scatfun_dct1(const double *x, size_t N, double *Y)
 {
     if (N < 2 || (N & (N - 1)) != 0 || N > ((size_t)1 << 20))
@@ -591,7 +591,7 @@ static void pair_io(double mu_s, double mu_f, bt_io *io)
     bt_io_set(io, ss, mu_s, sf, mu_f, sp, cp, sm);
 }
 
-/* Declared in scatfun_impl.h: pair_azimuth finds no azimuth for any channel. */
+/* Declared in scatfun/scatfun.h: pair_azimuth finds no azimuth for any channel. */
 int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
                         double mu_f)
 {
@@ -1562,24 +1562,16 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     if (total > UINT32_MAX)
         return core_say(BTDF_EOVERFLOW, msg, msglen, "%zu coefficients exceed the format's 32-bit count",
                    total);
-    btdf_scatfun *f = calloc(1, sizeof *f);
+    btdf_scatfun *f = sf_alloc((uint32_t)n, (uint32_t)total, (uint32_t)mmax, (uint32_t)c->nst,
+                               0, 0);
     if (!f)
         return BTDF_ENOMEM;
-    f->memo = albedo_memo_new(); /* NULL is fine: the reports then compute every T */
-    f->n = (uint32_t)n;
-    f->ncoeffs = (uint32_t)total;
-    f->mmax = (uint32_t)mmax;
-    f->channels = (uint32_t)c->nst;
     f->eta = (float)(c->nc == 3 ? c->p->ior[1] : c->p->ior[0]);
     /* Beckmann alpha of Eq. 25's facet distribution: RMS slope 2/s (MODEL.md 2);
        s >= BTDF_S_MIN > 0 was checked */
     f->alpha[0] = f->alpha[1] = (float)(2.0 / c->p->smoothness);
-    f->nodes = malloc(n * sizeof(float));
-    f->cdf = malloc(n * n * sizeof(float));
-    f->offsets = malloc(2 * n * n * sizeof(uint32_t));
-    f->coeffs = malloc((total ? total : 1) * sizeof(float));
     double *v = malloc(n * sizeof(double)), *cd = malloc(n * sizeof(double));
-    if (!f->nodes || !f->cdf || !f->offsets || !f->coeffs || !v || !cd) {
+    if (!v || !cd) {
         free(v);
         free(cd);
         btdf_scatfun_free(f);
@@ -1587,7 +1579,7 @@ static btdf_status assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t 
     }
     for (size_t i = 0; i < n; i++)
         f->nodes[i] = (float)c->full[i];
-    if (scatfun_nodes_d(f)) {
+    if (sf_index(f)) {
         free(v);
         free(cd);
         btdf_scatfun_free(f);
@@ -2185,42 +2177,6 @@ done:
 /* ------------------------------------------------------------------------- */
 
 /* Fills f->xd from f->nodes; 0 on success. */
-int scatfun_nodes_d(btdf_scatfun *f)
-{
-    f->xd = malloc(f->n * sizeof *f->xd);
-    if (!f->xd)
-        return -1;
-    for (uint32_t i = 0; i < f->n; i++)
-        f->xd[i] = (double)f->nodes[i];
-    free(f->xcell);
-    f->xcell = NULL;
-    f->nxcell = 0;
-    if (f->n < 2)
-        return 0;
-    double lo = f->xd[0], span = f->xd[f->n - 1] - lo;
-    for (uint32_t i = 1; i < f->n; i++)
-        if (!(f->xd[i] >= f->xd[i - 1]))
-            return 0; /* unsorted: cr_weights' binary search as it stands */
-    if (!(span > 0.0) || f->n > UINT32_MAX / 4)
-        return 0; /* no width: the scale would divide by 0 */
-    /* four cells per node: this library's nodes crowd towards grazing, where a
-       cell then holds a node or two */
-    uint32_t cells = 4 * f->n;
-    f->xcell = malloc(((size_t)cells + 1) * sizeof *f->xcell);
-    if (!f->xcell)
-        return -1;
-    f->nxcell = cells;
-    f->xcell_scale = (double)cells / span; /* span > 0 (above) */
-    uint32_t i = 0;
-    for (uint32_t c = 0; c <= cells; c++) {
-        double edge = lo + (double)c / f->xcell_scale;
-        while (i + 1 < f->n && f->xd[i + 1] <= edge)
-            i++;
-        f->xcell[c] = i;
-    }
-    return 0;
-}
-
 /* u_k = rk^k cos(k phi), generated in chunks of COS_CHUNK terms. The first COS_LAG by
    u_{k+1} = 2 rk c u_k - rk^2 u_{k-1} from u_0 = 1 and u_{-1} = cos(-phi) / rk (rk = 1:
    the plain recurrence); then four interleaved chains, u_k = 2 u_4 u_{k-4} - rk^8 u_{k-8}

@@ -15,7 +15,7 @@
 
 #include "btdf.h"
 #include "btdf_scatfun.h"
-#include "scatfun_impl.h"
+#include "scatfun/scatfun.h"
 #include "table/table.h"
 
 #ifndef M_PI

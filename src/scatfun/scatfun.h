@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: MIT */
-/* scatfun_impl.h: the in-memory SCATFUN v1 file shared by the builder (src/fourier.c) and the byte layout (formats/scatfun.c). */
-#ifndef BTDF_SCATFUN_IMPL_H
-#define BTDF_SCATFUN_IMPL_H
+/* scatfun.h: the in-memory SCATFUN v1 file shared by the builder (src/fourier.c), the
+   object (object.c) and the byte layout (formats/bsdf.c). */
+#ifndef BTDF_SF_OBJECT_H
+#define BTDF_SF_OBJECT_H
 
 #include <stddef.h>
 #include <stdint.h>
@@ -83,7 +84,13 @@ int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
    two from 2 to 2^20. 0 on success, -1 for another N or out of memory. */
 int scatfun_dct1(const double *x, size_t N, double *Y);
 
-/* Fills f->xd and f->xcell from f->nodes; 0 on success, -1 when out of memory. */
-int scatfun_nodes_d(btdf_scatfun *f);
+/* A file of n nodes, ncoeffs coefficients and channels channels, with its arrays
+   allocated but not filled, and metalen + 1 bytes of metadata when with_meta; NULL when
+   out of memory. */
+btdf_scatfun *sf_alloc(uint32_t n, uint32_t ncoeffs, uint32_t mmax, uint32_t channels,
+                       int with_meta, size_t metalen);
 
-#endif /* BTDF_SCATFUN_IMPL_H */
+/* Fills f->xd and f->xcell from f->nodes; 0 on success, -1 when out of memory. */
+int sf_index(btdf_scatfun *f);
+
+#endif /* BTDF_SF_OBJECT_H */
