@@ -3067,7 +3067,7 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
         points_per_angle = 8192;
     if (test_angles > 100000 || points_per_angle > ((size_t)1 << 26))
         return BTDF_EINVAL;
-    /* The estimator tables use (src/estimate.c): facet-space samples that follow the
+    /* The estimator tables use (src/estimate/estimate.c): facet-space samples that follow the
        lobe combined with uniform (cos to, phi) samples by the balance heuristic. An
        earlier sampler of this file, uniform in (mu_f, phi) only, missed the error
        near grazing incidence (1.9e-3 at ti = 86.7 deg for s = 3, where a
