@@ -189,10 +189,21 @@ expect 1 "standard output" "albedo into a full disk" -- sh -c "'$B' albedo > /de
 expect 1 "standard output" "eval into a full disk" -- sh -c "'$B' eval 30 150 180 > /dev/full"
 expect 1 "standard output" "--version into a full disk" -- sh -c "'$B' --version > /dev/full"
 expect 2 "takes nothing after it" "--version extra" -- "$B" --version extra
-gone=$(sh -c 'echo $$') # a process that has ended: its temporary is stale
-echo half > "$W/.k.csv.tmp$gone-0.csv"
-"$B" tabulate -q --grid 2,3,3 -o "$W/k.csv" && [ ! -e "$W/.k.csv.tmp$gone-0.csv" ] && \
+# a killed run's temporary: our name's shape, an hour old, no writer's lock
+echo half > "$W/.k.csv.btdftmp0123456789abcdef.csv"
+touch -d '1 hour ago' "$W/.k.csv.btdftmp0123456789abcdef.csv"
+echo mine > "$W/.mydata.tmp4000000-0.txt" # a user's file of a like shape
+touch -d '1 hour ago' "$W/.mydata.tmp4000000-0.txt"
+"$B" tabulate -q --grid 2,3,3 -o "$W/k.csv" && [ ! -e "$W/.k.csv.btdftmp0123456789abcdef.csv" ] && \
     ok "a killed run's temporary is removed by the next write into its folder" || no "stale temporary kept"
+[ "$(cat "$W/.mydata.tmp4000000-0.txt")" = mine ] && ok "a user's look-alike file is kept" || no "look-alike swept"
+rm -f "$W/.mydata.tmp4000000-0.txt"
+# a symbolic link planted at the name an earlier scheme predicted is never followed
+echo precious > "$W/victim.txt"
+sh -c 'ln -s "$1/victim.txt" "$1/.x.csv.tmp$$-0.csv"; exec "$2" tabulate -o "$1/x.csv" --grid 2,3,3 --quiet' sh "$W" "$B"
+[ "$(cat "$W/victim.txt")" = precious ] && [ -f "$W/x.csv" ] && [ ! -L "$W/x.csv" ] && \
+    ok "a planted link at a temporary's name is not followed" || no "planted link followed"
+rm -f "$W/victim.txt" "$W"/.x.csv.tmp* "$W/x.csv"
 rm -f "$W/k.csv"
 pad=$(printf ' %.0s' $(seq 1 2000))
 n=$(printf '%s30 150 180\n' "$pad" | "$B" eval | wc -l)
