@@ -24,8 +24,8 @@
  * Every writer of the library writes `path` under a temporary name beside it and
  * renames at the end. The names of the files being written are kept here, so that a
  * program (the btdftab tool does) can remove them from a SIGINT or SIGTERM handler
- * with btdf_tmp_remove_all, which only reads flags and calls unlink: both are
- * async-signal-safe. The library itself installs no signal handler.
+ * with btdf_tmp_remove_all, which only reads flags and calls unlink and rename: all
+ * are async-signal-safe. The library itself installs no signal handler.
  *
  * The temporary name is `.NAME.btdftmpR.EXT` beside the output: NAME is the output's
  * own name, cut short where needed so that the whole name stays within the 255 bytes a
@@ -47,8 +47,16 @@
 #define BAK_MARK ".btdfbak" /* copies kept during a commit; never swept */
 #define RAND_DIGITS 16
 
+#ifdef BTDF_TMP_SEAM
+/* A test build replaces these to inject faults (tests/test_tmpfaults.c). */
+int btdf_tmp_seam_link(const char *from, const char *to);
+int btdf_tmp_seam_rename(const char *from, const char *to);
+#define LINK btdf_tmp_seam_link
+#define RENAME btdf_tmp_seam_rename
+#else
 #define LINK link
 #define RENAME rename
+#endif
 
 static char names[SLOTS][NAME];
 static volatile sig_atomic_t used[SLOTS];
@@ -412,8 +420,47 @@ void btdf_tmp_group_abort(void)
     grp.failed = 0;
 }
 
-/* Keeps the file at p->path (if any) under a backup name, a hard link, so that a failed
-   commit can put it back. */
+/* Copies the file at from into a new file at to (created as a temporary is); 0 or -1. */
+static int copy_file(const char *from, const char *to)
+{
+    int in = open(from, O_RDONLY | O_NOFOLLOW | O_CLOEXEC);
+    if (in < 0)
+        return -1;
+    int out = open(to, O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0666);
+    if (out < 0) {
+        close(in);
+        return -1;
+    }
+    char buf[65536];
+    int bad = 0;
+    for (;;) {
+        ssize_t r = read(in, buf, sizeof buf);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0) {
+            bad = r < 0;
+            break;
+        }
+        for (ssize_t off = 0; off < r && !bad;) {
+            ssize_t w = write(out, buf + off, (size_t)(r - off));
+            if (w < 0 && errno == EINTR)
+                continue;
+            bad = w <= 0;
+            off += w > 0 ? w : 0;
+        }
+        if (bad)
+            break;
+    }
+    bad |= close(out) != 0;
+    close(in);
+    if (bad)
+        unlink(to);
+    return bad ? -1 : 0;
+}
+
+/* Keeps the file at p->path (if any) under a backup name, so that a failed commit can put
+   it back: a hard link, or a copy where the file system has no links (FAT, some network
+   and FUSE file systems refuse link with EPERM or ENOTSUP). 0, or -1 with msg set. */
 static int keep_backup(pending *p, char *msg, size_t msglen)
 {
     p->have_bak = 0;
@@ -423,16 +470,16 @@ static int keep_backup(pending *p, char *msg, size_t msglen)
     for (int attempt = 0; attempt < 16; attempt++) {
         if (make_name(p->path, BAK_MARK, "", p->bak, sizeof p->bak) != 0)
             break;
-        if (LINK(p->path, p->bak) == 0) {
+        if (LINK(p->path, p->bak) == 0 || copy_file(p->path, p->bak) == 0) {
             p->have_bak = 1;
             return 0;
         }
         if (errno != EEXIST)
             break;
     }
-    (void)msg;
-    (void)msglen;
-    return 0;
+    say(msg, msglen, "%s: cannot keep a copy of the earlier file to put back if the commit "
+        "failed (%s): nothing was replaced", p->path, strerror(errno));
+    return -1;
 }
 
 btdf_status btdf_tmp_group_commit(char *msg, size_t msglen)

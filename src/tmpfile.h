@@ -47,8 +47,10 @@ int btdf_tmp_name_ours(const char *name);
 /* Outputs of one run that appear together or not at all. Between group_begin and
    group_commit, every btdf_write_file_atomic of this process leaves its finished file
    under its temporary name; commit renames them all into place (if one rename fails,
-   those already renamed are undone and the earlier files put back), and fails without
-   renaming anything if any write of the group failed. abort removes them. One group at a time, from one thread. */
+   those already renamed are undone and the earlier files put back: kept as hard links,
+   or as copies where links are refused), and fails without renaming anything if any
+   write of the group failed or an earlier file cannot be kept.
+   abort removes them. One group at a time, from one thread. */
 void btdf_tmp_group_begin(void);
 btdf_status btdf_tmp_group_commit(char *msg, size_t msglen);
 void btdf_tmp_group_abort(void);
