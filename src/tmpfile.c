@@ -388,8 +388,20 @@ static struct group {
     pending p[SLOTS];
 } grp;
 
+/* Set while a group's files are renamed into place: a signal handler then completes the
+   renames (rename is async-signal-safe) rather than leave half of a group new. */
+static volatile sig_atomic_t committing;
+
 void btdf_tmp_remove_all(void)
 {
+    if (committing) {
+        for (size_t i = 0; i < grp.n; i++)
+            if (!grp.p[i].done && RENAME(grp.p[i].tmp, grp.p[i].path) == 0)
+                grp.p[i].done = 1;
+        for (size_t i = 0; i < grp.n; i++)
+            if (grp.p[i].have_bak)
+                unlink(grp.p[i].bak);
+    }
     for (int i = 0; i < SLOTS; i++)
         if (used[i])
             unlink(names[i]);
@@ -498,6 +510,17 @@ btdf_status btdf_tmp_group_commit(char *msg, size_t msglen)
     for (size_t i = 0; i < grp.n && st == BTDF_OK; i++)
         if (keep_backup(&grp.p[i], msg, msglen) != 0)
             st = BTDF_EIO;
+    /* The renames are not interrupted: the signals a tool catches to clean up wait until
+       the group is in place (and a handler running in another thread completes it). */
+    sigset_t block, old;
+    sigemptyset(&block);
+    sigaddset(&block, SIGINT);
+    sigaddset(&block, SIGTERM);
+    sigaddset(&block, SIGHUP);
+    sigaddset(&block, SIGQUIT);
+    int masked = pthread_sigmask(SIG_BLOCK, &block, &old) == 0;
+    if (st == BTDF_OK)
+        committing = 1;
     for (size_t i = 0; i < grp.n && st == BTDF_OK; i++) {
         if (grp.p[i].done)
             continue;
@@ -509,6 +532,7 @@ btdf_status btdf_tmp_group_commit(char *msg, size_t msglen)
         }
         grp.p[i].done = 1;
     }
+    committing = 0;
     for (size_t k = 0; k < grp.n; k++) {
         pending *p = &grp.p[k];
         if (st != BTDF_OK && p->done) { /* undo: the earlier file, or none */
@@ -528,6 +552,8 @@ btdf_status btdf_tmp_group_commit(char *msg, size_t msglen)
     grp.n = 0;
     grp.open = 0;
     grp.failed = 0;
+    if (masked)
+        pthread_sigmask(SIG_SETMASK, &old, NULL); /* a signal that came in is delivered now */
     return st;
 }
 

@@ -49,7 +49,9 @@ int btdf_tmp_name_ours(const char *name);
    under its temporary name; commit renames them all into place (if one rename fails,
    those already renamed are undone and the earlier files put back: kept as hard links,
    or as copies where links are refused), and fails without renaming anything if any
-   write of the group failed or an earlier file cannot be kept.
+   write of the group failed or an earlier file cannot be kept. SIGINT, SIGTERM, SIGHUP
+   and SIGQUIT wait while the files are renamed, and btdf_tmp_remove_all run from a
+   handler in another thread completes the renames: a group is never left half new.
    abort removes them. One group at a time, from one thread. */
 void btdf_tmp_group_begin(void);
 btdf_status btdf_tmp_group_commit(char *msg, size_t msglen);

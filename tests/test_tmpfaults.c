@@ -58,6 +58,13 @@ int btdf_tmp_seam_rename(const char *from, const char *to)
     return r;
 }
 
+static void on_sigint(int sig)
+{
+    (void)sig;
+    renames_seen_by_handler = renames;
+    btdf_tmp_remove_all(); /* what btdftab's handler does before it dies */
+}
+
 static int setup(void **state)
 {
     (void)state;
@@ -154,11 +161,48 @@ static void rollback_with_links(void **state)
     assert_int_equal(entries(), 2);
 }
 
+/* SIGINT after the first rename of a commit: the handler runs once the whole group is in
+   place, so a.csv and a.json are both of the second run. */
+static void sigint_during_commit(void **state)
+{
+    (void)state;
+    char a[512], j[512], msg[256] = "";
+    struct sigaction sa, old;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigemptyset(&sa.sa_mask);
+    assert_int_equal(sigaction(SIGINT, &sa, &old), 0);
+    first_run(a, j);
+    signal_after = 3; /* the first run made two */
+    assert_int_equal(btdf_tmp_group_commit(msg, sizeof msg), BTDF_OK);
+    sigaction(SIGINT, &old, NULL);
+    assert_int_equal(renames_seen_by_handler, 4);
+    assert_string_equal(slurp(a), "A2");
+    assert_string_equal(slurp(j), "J2");
+    assert_int_equal(entries(), 2);
+}
+
+/* A handler running in another thread (where the commit's mask does not reach) while the
+   group is renamed: it completes the renames rather than leave half of the group new. */
+static void handler_elsewhere_completes_the_group(void **state)
+{
+    (void)state;
+    char a[512], j[512], msg[256] = "";
+    first_run(a, j);
+    call_handler_after = 3;
+    btdf_tmp_group_commit(msg, sizeof msg);
+    assert_string_equal(slurp(a), "A2");
+    assert_string_equal(slurp(j), "J2");
+    assert_int_equal(entries(), 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test_setup_teardown(rollback_without_links, setup, teardown),
         cmocka_unit_test_setup_teardown(rollback_with_links, setup, teardown),
+        cmocka_unit_test_setup_teardown(sigint_during_commit, setup, teardown),
+        cmocka_unit_test_setup_teardown(handler_elsewhere_completes_the_group, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
