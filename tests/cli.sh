@@ -178,6 +178,11 @@ expect 1 "not a regular file" "--report onto a pipe" -- "$B" tabulate -q --grid 
 [ -p "$W/t.json" ] && ok "the pipe is still a pipe" || no "the pipe was replaced"
 rm -f "$W/t.json"
 expect 2 "are the same file" "--report and -o naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/./t.csv"
+echo keep > "$W/same.xml"; echo keep > "$W/same.bsdf"
+expect 2 "are the same file" "--report and an .xml output naming one file" -- "$B" tabulate -q -o "$W/same.xml" --report "$W/same.xml"
+expect 2 "are the same file" "--report and a .bsdf output naming one file" -- "$B" tabulate -q -o "$W/same.bsdf" --report "$W/./same.bsdf"
+[ "$(cat "$W/same.xml")$(cat "$W/same.bsdf")" = keepkeep ] && ok "both kept" || no "an output was replaced by its report"
+rm -f "$W/same.xml" "$W/same.bsdf"
 expect 1 "nowhere" "--report into a missing folder: no table either" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/nowhere/r.json"
 if "$B" --version | grep -q 'PNG on'; then
     expect 1 "nowhere" "--preview into a missing folder: no table either" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --preview "$W/nowhere/p.png"

@@ -793,6 +793,26 @@ static int write_report(const char *path, const btdf_table_opts *o, btdf_table_k
     return 0;
 }
 
+/* Two outputs of one run must be two files, whatever the format: -o (unless standard
+   output), --report and every --preview. 0, or the exit code after the message. */
+static int distinct_outputs(const char *out, const cli *c)
+{
+    const char *outs[MAX_PREVIEWS + 3];
+    int nouts = 0;
+    if (out && strcmp(out, "-"))
+        outs[nouts++] = out;
+    if (c->report)
+        outs[nouts++] = c->report;
+    for (int k = 0; k < c->npreview; k++)
+        outs[nouts++] = c->previews[k].path;
+    for (int i = 0; i < nouts; i++)
+        for (int j = 0; j < i; j++)
+            if (btdf_same_file(outs[i], outs[j]))
+                return fail(EXIT_USAGE, "'%s' and '%s' are the same file: each output of a run "
+                                        "needs its own", outs[j], outs[i]);
+    return 0;
+}
+
 /* A .bsdf is built from Eq. 25 directly: the table's options do not apply. */
 static int tabulate_series(const cli *c, const char *prov)
 {
@@ -872,6 +892,9 @@ static int cmd_tabulate(cli *c, const char *prov)
             return fail(EXIT_USAGE, "%s: --part %s applies to .csv, .exr and .bsdf; an .xml "
                                     "holds both parts, light from either side", out,
                         btdf_part_name(c->part));
+        int same = distinct_outputs(out, c);
+        if (same)
+            return same;
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)
@@ -934,20 +957,9 @@ static int cmd_tabulate(cli *c, const char *prov)
     for (int k = 0; k < c->npreview; k++)
         if (!folder_writable(c->previews[k].path))
             return 1;
-    /* Two outputs of one run must be two files. */
-    const char *outs[MAX_PREVIEWS + 3];
-    int nouts = 0;
-    if (out && strcmp(out, "-"))
-        outs[nouts++] = out;
-    if (c->report)
-        outs[nouts++] = c->report;
-    for (int k = 0; k < c->npreview; k++)
-        outs[nouts++] = c->previews[k].path;
-    for (int i = 0; i < nouts; i++)
-        for (int j = 0; j < i; j++)
-            if (btdf_same_file(outs[i], outs[j]))
-                return fail(EXIT_USAGE, "'%s' and '%s' are the same file: each output of a run "
-                                        "needs its own", outs[j], outs[i]);
+    int same = distinct_outputs(out, c);
+    if (same)
+        return same;
     o.params = p;
     o.threads = c->threads;
     o.ti_min = c->ti0 * M_PI / 180.0;
