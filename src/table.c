@@ -520,10 +520,16 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
     size_t nv = nrows * ncols; /* < 2^48: no overflow */
     if (nv > SIZE_MAX / (nch * sizeof(double)))
         return BTDF_EOVERFLOW;
+    /* No parameters the model takes give a value near this (s = 1000 peaks near 6e5,
+       docs: MODEL.md; the peak grows as s^2 up to s = 1e6); below it, any interpolation's
+       weighted sum of a few values stays far from overflow, so a read table never gives
+       inf. */
+    const double value_max = 1e100;
     for (size_t i = 0; i < nv * nch; i++) {
-        if (!isfinite(values[i]) || values[i] < 0.0) {
-            snprintf(buf, sizeof buf, "slice value %g at index %zu: must be finite and >= 0",
-                     values[i], i);
+        if (!(values[i] >= 0.0 && values[i] <= value_max)) {
+            snprintf(buf, sizeof buf,
+                     "slice value %g at index %zu: must be finite, >= 0 and <= 1e100 (no "
+                     "model gives more)", values[i], i);
             set_msg(msg, msglen, buf);
             return BTDF_EINVAL;
         }
