@@ -183,6 +183,7 @@ expect 1 "not a regular file" "--report onto a pipe" -- "$B" tabulate -q --grid 
 [ -p "$W/t.json" ] && ok "the pipe is still a pipe" || no "the pipe was replaced"
 rm -f "$W/t.json"
 expect 2 "are the same file" "--report and -o naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/./t.csv"
+expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --tolerance 1e-3 --max-samples 1000 --report "$W/t.json"
 echo keep > "$W/same.xml"; echo keep > "$W/same.bsdf"
 expect 2 "are the same file" "--report and an .xml output naming one file" -- "$B" tabulate -q -o "$W/same.xml" --report "$W/same.xml"
 expect 2 "are the same file" "--report and a .bsdf output naming one file" -- "$B" tabulate -q -o "$W/same.bsdf" --report "$W/./same.bsdf"
