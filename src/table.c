@@ -371,13 +371,16 @@ BTDF_API btdf_part btdf_table_parts(const btdf_table *t)
 BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, char *msg,
                                                   size_t msglen)
 {
-    if (!t || !r)
-        return BTDF_EINVAL;
     const char *why = NULL;
-    if (kind_is_reflection(t->kind) || t->refl)
+    if (!t || !r)
+        why = "no table (NULL)";
+    else if (kind_is_reflection(t->kind) || t->refl)
         why = "the table is a reflection or holds one already";
     else if (!kind_is_reflection(r->kind) || r->refl)
         why = "the table to attach is not a reflection table";
+    else if (r->attached)
+        why = "the reflection table is attached to another table already (each table owns "
+              "its reflection, and frees it)";
     else if (t->p.channels != r->p.channels || t->p.smoothness != r->p.smoothness ||
              t->p.k0 != r->p.k0 || memcmp(t->p.ior, r->p.ior, sizeof t->p.ior) != 0)
         why = "the two parts have different parameters";
@@ -387,6 +390,7 @@ BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, 
         return BTDF_EINVAL;
     }
     t->refl = r;
+    r->attached = 1;
     return BTDF_OK;
 }
 
@@ -420,8 +424,10 @@ static void set_msg(char *msg, size_t msglen, const char *text)
 BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
                                     btdf_table **out, char *msg, size_t msglen)
 {
-    if (!out)
+    if (!out) {
+        set_msg(msg, msglen, "no place for the table (out is NULL)");
         return BTDF_EINVAL;
+    }
     if (kind != BTDF_TABLE_FACET && kind != BTDF_TABLE_GRID &&
         kind != BTDF_TABLE_FACET_RECIPROCAL && kind != BTDF_TABLE_FACET_REFLECTION) {
         set_msg(msg, msglen,
@@ -493,8 +499,12 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
                                           char *msg, size_t msglen)
 {
     char buf[160];
-    if (!t || !rows || !cols || !values)
+    if (!t || !rows || !cols || !values) {
+        set_msg(msg, msglen, !t ? "no table (NULL)"
+                                : "slice rows, columns or values missing (NULL): a slice has "
+                                  "at least 1 x 1 nodes");
         return BTDF_EINVAL;
+    }
     if (!(ti >= 0.0 && ti <= M_PI / 2)) {
         snprintf(buf, sizeof buf, "slice ti %g rad: must lie in [0, pi/2]", ti);
         set_msg(msg, msglen, buf);
@@ -588,6 +598,8 @@ BTDF_API const char *btdf_table_rule_name(btdf_table_rule rule)
 
 BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule)
 {
+    if (!name || !rule)
+        return 0;
     if (!strcmp(name, "chi"))
         *rule = BTDF_RULE_CHI;
     else if (!strcmp(name, "fresnel"))
