@@ -184,6 +184,14 @@ expect 1 "not a regular file" "--report onto a pipe" -- "$B" tabulate -q --grid 
 rm -f "$W/t.json"
 expect 2 "are the same file" "--report and -o naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/./t.csv"
 expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --tolerance 1e-3 --max-samples 1000 --report "$W/t.json"
+nl="$W/n
+l.csv"
+"$B" tabulate -q --grid 2,3,3 -o "$nl" && "$B" inspect "$nl" > "$W/out" && \
+    grep -q '^provenance: .*n\\nl.csv' "$W/out" && ok "a newline in an argument is escaped in the provenance" || no "provenance broken by a newline"
+rm -f "$nl"
+for sh in ' 1/2' '+1/+2' '4294967297/4294967298' '1/2 ' '1/' '/2' '3/2'; do
+    expect 2 "expected K/N" "--shard '$sh' refused" -- "$B" build --shard "$sh" "$W/none.ini"
+done
 echo keep > "$W/same.xml"; echo keep > "$W/same.bsdf"
 expect 2 "are the same file" "--report and an .xml output naming one file" -- "$B" tabulate -q -o "$W/same.xml" --report "$W/same.xml"
 expect 2 "are the same file" "--report and a .bsdf output naming one file" -- "$B" tabulate -q -o "$W/same.bsdf" --report "$W/./same.bsdf"
