@@ -322,14 +322,25 @@ static int apply(cli *c, const opt_hit *h)
     case OPT_FORCE: c->force = 1; return 1;
     case OPT_DRY_RUN: c->dry_run = 1; return 1;
     case OPT_SHARD: {
-        int k, n;
-        char tail;
-        if (sscanf(v, "%d/%d%c", &k, &n, &tail) != 2 || n < 1 || n > 100000 || k < 1 || k > n) {
+        /* digits only on both sides of the slash, at most 6 each (N <= 100000): no
+           blanks, no signs, nothing sscanf's %d would wrap */
+        long k = 0, n = 0;
+        const char *q = v;
+        int dk = 0, dn = 0;
+        for (; *q >= '0' && *q <= '9' && dk < 7; q++, dk++)
+            k = k * 10 + (*q - '0');
+        int slash = *q == '/';
+        if (slash)
+            q++;
+        for (; *q >= '0' && *q <= '9' && dn < 7; q++, dn++)
+            n = n * 10 + (*q - '0');
+        if (!slash || *q || dk == 0 || dn == 0 || dk > 6 || dn > 6 || n < 1 || n > 100000 ||
+            k < 1 || k > n) {
             fail(EXIT_USAGE, "--shard: '%s': expected K/N with 1 <= K <= N, e.g. 3/8", v);
             return 0;
         }
-        c->shard_k = k;
-        c->shard_n = n;
+        c->shard_k = (int)k;
+        c->shard_n = (int)n;
         return 1;
     }
     case OPT_BEST_EFFORT: c->best_effort = 1; return 1;
