@@ -450,7 +450,7 @@ BTDF_API btdf_status btdf_scatfun_info(const btdf_scatfun *f, FILE *out)
 /* The registry's entry                                                      */
 /* ------------------------------------------------------------------------- */
 
-static btdf_status bsdf_write(const btdf_output_ctx *c, const char *path, char *msg,
+static btdf_status bsdf_write(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
                               size_t msglen)
 {
     unsigned char *b = NULL;
@@ -459,7 +459,7 @@ static btdf_status bsdf_write(const btdf_output_ctx *c, const char *path, char *
     if (st != BTDF_OK)
         return st;
     btdf_bytes bytes = {b, len};
-    st = btdf_write_bytes(&bytes, path, msg, msglen);
+    st = btdf_write_bytes(&bytes, f, path, msg, msglen);
     free(b);
     return st;
 }

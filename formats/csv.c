@@ -112,6 +112,27 @@ static const char *rule_text(const btdf_table *t)
                  "into e_o, linear in theta_i after dividing by V(theta_i)/cos(theta_i)";
 }
 
+/* Text on one comment line: a newline or other control byte in it (an argument of the
+   command line may hold one) would end the comment and start a bad row, so control
+   bytes and the backslash are written as C escapes (\n, \r, \t, \\, \xHH). */
+static void comment_text(FILE *f, const char *s)
+{
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '\n')
+            fputs("\\n", f);
+        else if (*p == '\r')
+            fputs("\\r", f);
+        else if (*p == '\t')
+            fputs("\\t", f);
+        else if (*p == '\\')
+            fputs("\\\\", f);
+        else if (*p < 0x20 || *p == 0x7f)
+            fprintf(f, "\\x%02x", *p);
+        else
+            fputc(*p, f);
+    }
+}
+
 static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
 {
     (void)msg;
@@ -158,8 +179,11 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     if (t->kind == BTDF_TABLE_FACET_RECIPROCAL)
         fprintf(f, "# reciprocal: slices hold the table of index 1/n, indexed by ti_rad = pi - "
                    "theta_o; rho(n; ti, to, phi) = n^2 rho(1/n; pi - to, pi - ti, phi)\n");
-    if (c->opts->provenance)
-        fprintf(f, "# provenance: %s\n", c->opts->provenance);
+    if (c->opts->provenance) {
+        fputs("# provenance: ", f);
+        comment_text(f, c->opts->provenance);
+        fputc('\n', f);
+    }
     if (c->opts->report)
         csv_error_line(f, "error", c->opts->report);
     if (tr && c->opts->report_reflection)

@@ -9,6 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
 
 #include <openexr.h>
 #include <pthread.h>
@@ -379,9 +381,37 @@ static btdf_status write_part_pixels(exr_context_t ctx, int part, const btdf_sli
     return BTDF_OK;
 }
 
-static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *msg,
+/* OpenEXR's custom stream: pwrite on the descriptor of the temporary the caller created
+   safely (OpenEXR never opens the file by its name). */
+static int64_t exr_pwrite(exr_const_context_t ctx, void *user, const void *buf, uint64_t sz,
+                          uint64_t offset, exr_stream_error_func_ptr_t error_cb)
+{
+    int fd = *(const int *)user;
+    const char *p = buf;
+    uint64_t done = 0;
+    while (done < sz) {
+        if (offset + done > (uint64_t)INT64_MAX) {
+            error_cb(ctx, EXR_ERR_WRITE_IO, "offset beyond what a file can hold");
+            return -1;
+        }
+        size_t chunk = sz - done > (uint64_t)(1u << 30) ? (size_t)1 << 30 : (size_t)(sz - done);
+        ssize_t w = pwrite(fd, p + done, chunk, (off_t)(offset + done));
+        if (w < 0 && errno == EINTR)
+            continue;
+        if (w <= 0) {
+            error_cb(ctx, EXR_ERR_WRITE_IO, "writing failed: %s",
+                     w < 0 ? strerror(errno) : "no progress");
+            return -1;
+        }
+        done += (uint64_t)w;
+    }
+    return (int64_t)done;
+}
+
+static btdf_status exr_write(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
                              size_t msglen)
 {
+    int fd = fileno(f); /* nothing is buffered in f: OpenEXR writes through fd alone */
     const btdf_table *t = c->table;
     const btdf_params *p = btdf_table_get_params(t);
     size_t nslices = btdf_table_slice_count(t) + btdf_table_slice_count(t->refl);
@@ -424,6 +454,8 @@ static btdf_status exr_write(const btdf_output_ctx *c, const char *path, char *m
     exr_err err = {0, {0}};
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = on_exr_write_error;
+    init.write_fn = exr_pwrite;
+    init.user_data = &fd;
     exr_context_t ctx = NULL;
     btdf_status st = BTDF_OK;
     exr_result_t rc = exr_start_write(&ctx, path, EXR_WRITE_FILE_DIRECTLY, &init);

@@ -28,8 +28,10 @@ typedef struct btdf_format_ops {
     btdf_needs needs;    /* what the writer is made from */
     /* Writes to a stream (formats that can go to standard output), or NULL. */
     btdf_status (*write_stream)(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen);
-    /* Writes to a file path (the caller passes a temporary name and renames). */
-    btdf_status (*write_path)(const btdf_output_ctx *c, const char *path, char *msg,
+    /* Writes a file that cannot go to a pipe (it seeks, or is made whole in memory): f is
+       a new empty file opened safely under a temporary name, path that name for
+       messages; the caller closes f and renames. Never opens path itself. */
+    btdf_status (*write_path)(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
                               size_t msglen);
     /* Reads a table back (BTDF_NEEDS_TABLE), or NULL. */
     btdf_status (*read_path)(const char *path, btdf_table **out, char *msg, size_t msglen);

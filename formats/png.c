@@ -72,7 +72,7 @@ static int encode(FILE *f, const unsigned char *rgb, int width, int height,
 }
 
 /* Writes the picture of c (drawn by the registry) to path. */
-static btdf_status png_write(const btdf_output_ctx *c, const char *path, char *msg,
+static btdf_status png_write(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
                              size_t msglen)
 {
     const unsigned char *rgb = c->rgb;
@@ -83,18 +83,13 @@ static btdf_status png_write(const btdf_output_ctx *c, const char *path, char *m
             snprintf(msg, msglen, "empty picture (%d x %d)", width, height);
         return BTDF_EINVAL;
     }
-    FILE *f = fopen(path, "wb");
-    if (!f) {
-        if (msg && msglen)
-            snprintf(msg, msglen, "cannot create the file: %s", strerror(errno));
-        return BTDF_EIO;
-    }
+    (void)path;
     png_err err;
     err.text[0] = '\0';
     int bad = encode(f, rgb, width, height, description, &err);
-    if (fclose(f) != 0 && !bad) {
+    if (fflush(f) != 0 && !bad) {
         bad = 1;
-        snprintf(err.text, sizeof err.text, "closing the file failed");
+        snprintf(err.text, sizeof err.text, "writing the file failed: %s", strerror(errno));
     }
     if (bad) {
         if (msg && msglen)

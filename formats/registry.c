@@ -89,20 +89,12 @@ typedef struct reg_ctx {
     const btdf_output_ctx *c;
 } reg_ctx;
 
-static btdf_status reg_write(void *ctx, const char *tmp, char *msg, size_t msglen)
+static btdf_status reg_write(void *ctx, FILE *fp, const char *tmp, char *msg, size_t msglen)
 {
     const reg_ctx *r = ctx;
     if (r->f->write_path)
-        return r->f->write_path(r->c, tmp, msg, msglen);
-    FILE *fp = fopen(tmp, "wb");
-    if (!fp)
-        return core_say(BTDF_EIO, msg, msglen, "cannot create %s: %s", tmp, strerror(errno));
-    btdf_status st = r->f->write_stream(r->c, fp, msg, msglen);
-    int bad = fflush(fp) != 0 || ferror(fp);
-    bad |= fclose(fp) != 0;
-    if (st == BTDF_OK && bad)
-        st = core_say(BTDF_EIO, msg, msglen, "writing %s failed: %s", tmp, strerror(errno));
-    return st;
+        return r->f->write_path(r->c, fp, tmp, msg, msglen);
+    return r->f->write_stream(r->c, fp, msg, msglen);
 }
 
 btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c,
@@ -224,9 +216,9 @@ BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
     return st;
 }
 
-static btdf_status buffer_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
+static btdf_status buffer_writer(void *ctx, FILE *f, const char *tmp, char *msg, size_t msglen)
 {
-    return btdf_write_bytes(ctx, tmp, msg, msglen);
+    return btdf_write_bytes(ctx, f, tmp, msg, msglen);
 }
 
 BTDF_API btdf_status btdf_write_buffer(const char *path, const char *ext, const void *data,

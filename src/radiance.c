@@ -701,11 +701,20 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
                                              btdf_progress_fn progress, void *user,
                                              btdf_rad **out, char *msg, size_t msglen)
 {
+    if (!out) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "no place for the file's object (out is NULL)");
+        return BTDF_EINVAL;
+    }
     btdf_status st = btdf_params_check(p, msg, msglen);
     if (st != BTDF_OK)
         return st;
-    if ((unsigned)basis > RAD_BASIS_KLEMS_QUARTER)
+    if ((unsigned)basis > RAD_BASIS_KLEMS_QUARTER) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "basis %lld: must be tree3 (0), klems-full (1), klems-half "
+                                  "(2) or klems-quarter (3)", (long long)basis);
         return BTDF_EINVAL;
+    }
     if (p->channels != 1 && p->channels != 3) {
         if (msg && msglen)
             snprintf(msg, msglen, "a Radiance BSDF file holds one channel (Visible) or three "

@@ -143,6 +143,11 @@ rm -f "$W/m/afile"
 expect 2 "v.ini:12: output .* is also written by \[a\] at line 6" "manifest: two materials, one file" -- "$B" build "$W/m/v.ini"
 { mat a; echo "enter = $W/t.csv $W/t.csv"; } > "$W/m/v.ini"
 expect 2 "v.ini:6: .*also written by \[a\]" "manifest: one output twice in a material" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/nd/t.csv"; mat b; echo "leave = $W/nd//t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:12: output .* is also written by \[a\] at line 6" "manifest: one file twice in a folder not made yet" -- "$B" build "$W/m/v.ini"
+{ mat a; echo "enter = $W/d/t.csv"; mat b; echo "leave = $W/d/../d/t.csv"; } > "$W/m/v.ini"
+expect 2 "v.ini:12: output .* is also written by \[a\] at line 6" "manifest: d/../d/ in a folder not made yet" -- "$B" build "$W/m/v.ini"
+[ ! -e "$W/nd" ] && [ ! -e "$W/d" ] && ok "no folder made for a refused manifest" || no "folder made"
 { mat a; echo "smoothness = 4"; echo "enter = $W/t.csv"; } > "$W/m/v.ini"
 expect 2 "v.ini:6: 'smoothness' given twice in \[a\] (first at line 3)" "manifest: duplicate key" -- "$B" build "$W/m/v.ini"
 { mat a; echo "enter = $W/t.csv"; printf '[a]\nk0 = 0.6\n'; } > "$W/m/v.ini"
@@ -178,6 +183,20 @@ expect 1 "not a regular file" "--report onto a pipe" -- "$B" tabulate -q --grid 
 [ -p "$W/t.json" ] && ok "the pipe is still a pipe" || no "the pipe was replaced"
 rm -f "$W/t.json"
 expect 2 "are the same file" "--report and -o naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/./t.csv"
+expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --tolerance 1e-3 --max-samples 1000 --report "$W/t.json"
+nl="$W/n
+l.csv"
+"$B" tabulate -q --grid 2,3,3 -o "$nl" && "$B" inspect "$nl" > "$W/out" && \
+    grep -q '^provenance: .*n\\nl.csv' "$W/out" && ok "a newline in an argument is escaped in the provenance" || no "provenance broken by a newline"
+rm -f "$nl"
+for sh in ' 1/2' '+1/+2' '4294967297/4294967298' '1/2 ' '1/' '/2' '3/2'; do
+    expect 2 "expected K/N" "--shard '$sh' refused" -- "$B" build --shard "$sh" "$W/none.ini"
+done
+echo keep > "$W/same.xml"; echo keep > "$W/same.bsdf"
+expect 2 "are the same file" "--report and an .xml output naming one file" -- "$B" tabulate -q -o "$W/same.xml" --report "$W/same.xml"
+expect 2 "are the same file" "--report and a .bsdf output naming one file" -- "$B" tabulate -q -o "$W/same.bsdf" --report "$W/./same.bsdf"
+[ "$(cat "$W/same.xml")$(cat "$W/same.bsdf")" = keepkeep ] && ok "both kept" || no "an output was replaced by its report"
+rm -f "$W/same.xml" "$W/same.bsdf"
 expect 1 "nowhere" "--report into a missing folder: no table either" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/nowhere/r.json"
 if "$B" --version | grep -q 'PNG on'; then
     expect 1 "nowhere" "--preview into a missing folder: no table either" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --preview "$W/nowhere/p.png"
@@ -189,10 +208,21 @@ expect 1 "standard output" "albedo into a full disk" -- sh -c "'$B' albedo > /de
 expect 1 "standard output" "eval into a full disk" -- sh -c "'$B' eval 30 150 180 > /dev/full"
 expect 1 "standard output" "--version into a full disk" -- sh -c "'$B' --version > /dev/full"
 expect 2 "takes nothing after it" "--version extra" -- "$B" --version extra
-gone=$(sh -c 'echo $$') # a process that has ended: its temporary is stale
-echo half > "$W/.k.csv.tmp$gone-0.csv"
-"$B" tabulate -q --grid 2,3,3 -o "$W/k.csv" && [ ! -e "$W/.k.csv.tmp$gone-0.csv" ] && \
+# a killed run's temporary: our name's shape, an hour old, no writer's lock
+echo half > "$W/.k.csv.btdftmp0123456789abcdef.csv"
+touch -d '1 hour ago' "$W/.k.csv.btdftmp0123456789abcdef.csv"
+echo mine > "$W/.mydata.tmp4000000-0.txt" # a user's file of a like shape
+touch -d '1 hour ago' "$W/.mydata.tmp4000000-0.txt"
+"$B" tabulate -q --grid 2,3,3 -o "$W/k.csv" && [ ! -e "$W/.k.csv.btdftmp0123456789abcdef.csv" ] && \
     ok "a killed run's temporary is removed by the next write into its folder" || no "stale temporary kept"
+[ "$(cat "$W/.mydata.tmp4000000-0.txt")" = mine ] && ok "a user's look-alike file is kept" || no "look-alike swept"
+rm -f "$W/.mydata.tmp4000000-0.txt"
+# a symbolic link planted at the name an earlier scheme predicted is never followed
+echo precious > "$W/victim.txt"
+sh -c 'ln -s "$1/victim.txt" "$1/.x.csv.tmp$$-0.csv"; exec "$2" tabulate -o "$1/x.csv" --grid 2,3,3 --quiet' sh "$W" "$B"
+[ "$(cat "$W/victim.txt")" = precious ] && [ -f "$W/x.csv" ] && [ ! -L "$W/x.csv" ] && \
+    ok "a planted link at a temporary's name is not followed" || no "planted link followed"
+rm -f "$W/victim.txt" "$W"/.x.csv.tmp* "$W/x.csv"
 rm -f "$W/k.csv"
 pad=$(printf ' %.0s' $(seq 1 2000))
 n=$(printf '%s30 150 180\n' "$pad" | "$B" eval | wc -l)

@@ -75,7 +75,13 @@ static btdf_status write_exr(const btdf_table *t, const char *path, const btdf_w
 {
     btdf_write_opts none = {NULL, NULL, NULL};
     btdf_output_ctx c = {.table = t, .opts = w ? w : &none};
-    return btdf_format_exr.write_path(&c, path, msg, msglen);
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return BTDF_EIO;
+    btdf_status st = btdf_format_exr.write_path(&c, f, path, msg, msglen);
+    if (fclose(f) != 0 && st == BTDF_OK)
+        st = BTDF_EIO;
+    return st;
 }
 
 static int setup_rgb(void **state)

@@ -6,9 +6,12 @@
 #include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "btdf_test.h"
@@ -53,14 +56,12 @@ static btdf_status put(const char *path, const char *text)
     return btdf_write_file_atomic(path, ".txt", btdf_write_bytes, &b, msg, sizeof msg);
 }
 
-static btdf_status failing_writer(void *ctx, const char *tmp, char *msg, size_t msglen)
+static btdf_status failing_writer(void *ctx, FILE *f, const char *tmp, char *msg,
+                                  size_t msglen)
 {
     (void)ctx;
-    FILE *f = fopen(tmp, "wb");
-    if (f) {
-        fputs("half", f);
-        fclose(f);
-    }
+    (void)tmp;
+    fputs("half", f);
     snprintf(msg, msglen, "disk full (simulated)");
     return BTDF_EIO;
 }
@@ -134,43 +135,119 @@ static void missing_folder(void **state)
     assert_status(BTDF_EIO, put(p, "x"));
 }
 
-/* A pid that certainly belonged to a process that is gone: a reaped child. */
-static long dead_pid(void)
+/* A file of our scheme's shape, last changed age seconds ago. */
+static void aged(const char *path, const char *text, long age)
 {
-    pid_t c = fork();
-    if (c == 0)
-        _exit(0);
-    int ws;
-    waitpid(c, &ws, 0);
-    return (long)c;
+    raw(path, text);
+    struct timespec t[2];
+    clock_gettime(CLOCK_REALTIME, &t[0]);
+    t[0].tv_sec -= age;
+    t[1] = t[0];
+    assert_int_equal(utimensat(AT_FDCWD, path, t, 0), 0);
 }
 
+/* Only abandoned temporaries of our own are removed: our name's shape, this user's, over
+   a minute old and locked by no writer. A live writer's lock protects it whatever its
+   PID (another PID namespace gives no PID to test); look-alike names of users never go. */
 static void stale_temporaries_removed(void **state)
 {
     (void)state;
-    long gone = dead_pid();
-    char stale[512], live[512], other[512], out[512], name[128];
-    snprintf(name, sizeof name, ".x.csv.tmp%ld-7.csv", gone);
-    at(stale, sizeof stale, name);
-    snprintf(name, sizeof name, ".x.csv.tmp%ld-7.csv", (long)getppid()); /* alive */
-    at(live, sizeof live, name);
-    at(other, sizeof other, ".x.csv.tmpnotapid-7.csv");
+    char stale[512], live[512], fresh[512], u1[512], u2[512], u3[512], out[512];
+    at(stale, sizeof stale, ".x.csv.btdftmp0123456789abcdef.csv");
+    at(live, sizeof live, ".x.csv.btdftmpfedcba9876543210.csv");
+    at(fresh, sizeof fresh, ".x.csv.btdftmp00000000000000aa.csv");
+    at(u1, sizeof u1, ".mydata.tmp4000000-0.txt");
+    at(u2, sizeof u2, ".backup.tmp3999999-12");
+    at(u3, sizeof u3, ".x.csv.btdftmp0123.csv"); /* not sixteen digits */
     at(out, sizeof out, "x.csv");
-    assert_int_equal(btdf_tmp_name_pid(strrchr(stale, '/') + 1), gone);
-    assert_int_equal(btdf_tmp_name_pid("x.csv"), 0);
-    assert_int_equal(btdf_tmp_name_pid(".x.tmp12-3.c-v"), 0);
-    assert_int_equal(btdf_tmp_name_pid(".x.tmp.tmp12-3"), 12);
-    raw(stale, "s");
-    raw(live, "l");
-    raw(other, "o");
-    assert_int_equal(access(stale, F_OK), 0);
+    assert_true(btdf_tmp_name_ours(strrchr(stale, '/') + 1));
+    assert_false(btdf_tmp_name_ours("x.csv"));
+    assert_false(btdf_tmp_name_ours(".mydata.tmp4000000-0.txt"));
+    assert_false(btdf_tmp_name_ours(".x.btdftmp0123456789abcdef.c-v"));
+    assert_false(btdf_tmp_name_ours(".btdftmp0123456789abcdef.csv"));
+    aged(stale, "s", 3600);
+    aged(live, "l", 3600);
+    aged(fresh, "f", 0);
+    aged(u1, "1", 3600);
+    aged(u2, "2", 3600);
+    aged(u3, "3", 3600);
+    /* the live writer: another process holding the lock, as a writer does */
+    int ready[2];
+    assert_int_equal(pipe(ready), 0);
+    pid_t child = fork();
+    if (child == 0) {
+        int fd = open(live, O_RDWR);
+        char c = flock(fd, LOCK_EX) == 0 ? 'y' : 'n';
+        if (write(ready[1], &c, 1) != 1)
+            _exit(1);
+        pause();
+        _exit(0);
+    }
+    char c = 0;
+    assert_int_equal(read(ready[0], &c, 1), 1);
+    assert_int_equal(c, 'y');
     assert_status(BTDF_OK, put(out, "new"));
+    kill(child, SIGKILL);
+    waitpid(child, NULL, 0);
+    close(ready[0]);
+    close(ready[1]);
     assert_int_equal(access(stale, F_OK), -1);
     assert_int_equal(access(live, F_OK), 0);
-    assert_int_equal(access(other, F_OK), 0);
+    assert_int_equal(access(fresh, F_OK), 0);
+    assert_int_equal(access(u1, F_OK), 0);
+    assert_int_equal(access(u2, F_OK), 0);
+    assert_int_equal(access(u3, F_OK), 0);
     assert_string_equal(slurp(out), "new");
-    unlink(live);
-    unlink(other);
+    /* once its writer is gone, the lock goes with it and the next write removes it */
+    assert_status(BTDF_OK, put(out, "newer"));
+    assert_int_equal(access(live, F_OK), -1);
+    unlink(fresh);
+    unlink(u1);
+    unlink(u2);
+    unlink(u3);
+    unlink(out);
+}
+
+/* Symbolic links planted at names a writer might choose are never followed: the names
+   are not predictable, and the file is created with O_EXCL|O_NOFOLLOW. The names an
+   earlier scheme made from the PID and a counter from 0 are planted here. */
+static void planted_links_not_followed(void **state)
+{
+    (void)state;
+    char victim[512], out[512], name[128], plant[20][512];
+    at(victim, sizeof victim, "victim.txt");
+    at(out, sizeof out, "x.csv");
+    raw(victim, "precious");
+    for (int k = 0; k < 20; k++) {
+        snprintf(name, sizeof name, ".x.csv.tmp%ld-%d.txt", (long)getpid(), k);
+        at(plant[k], sizeof plant[k], name);
+        assert_int_equal(symlink(victim, plant[k]), 0);
+    }
+    for (int k = 0; k < 3; k++)
+        assert_status(BTDF_OK, put(out, "table"));
+    assert_string_equal(slurp(victim), "precious");
+    struct stat st;
+    assert_int_equal(lstat(out, &st), 0);
+    assert_true(S_ISREG(st.st_mode));
+    assert_string_equal(slurp(out), "table");
+    /* two names drawn for the same output differ in their sixteen random digits */
+    char t1[600], t2[600];
+    int s1 = btdf_tmp_begin(out, ".csv", t1, sizeof t1);
+    int s2 = btdf_tmp_begin(out, ".csv", t2, sizeof t2);
+    assert_true(s1 >= 0 && s2 >= 0);
+    btdf_tmp_end(s1);
+    btdf_tmp_end(s2);
+    assert_string_not_equal(t1, t2);
+    assert_true(btdf_tmp_name_ours(strrchr(t1, '/') + 1));
+    /* the mode is 0666 less the umask, as fopen gives */
+    mode_t old = umask(027);
+    assert_status(BTDF_OK, put(out, "masked"));
+    umask(old);
+    assert_int_equal(stat(out, &st), 0);
+    assert_int_equal(st.st_mode & 0777, 0640);
+    for (int k = 0; k < 20; k++)
+        unlink(plant[k]);
+    unlink(victim);
     unlink(out);
 }
 
@@ -265,6 +342,7 @@ static void same_file(void **state)
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(planted_links_not_followed),
         cmocka_unit_test(never_replaces_a_non_file),
         cmocka_unit_test(missing_folder),
         cmocka_unit_test(stale_temporaries_removed),

@@ -472,9 +472,34 @@ static void grazing_band(void **state)
     btdf_table_free(t);
 }
 
+/* Values beyond what any model gives are refused: 1.79e308 in every node would read
+   back and interpolate to inf. 1e100 is the stated bound (src/table.c). */
+static void huge_values_refused(void **state)
+{
+    (void)state;
+    btdf_params p;
+    btdf_params_default(&p);
+    btdf_table *t = NULL;
+    char msg[256] = "";
+    assert_status(BTDF_OK, btdf_table_new(BTDF_TABLE_GRID, &p, &t, msg, sizeof msg));
+    double rows[2] = {0.1, 0.2}, cols[2] = {0.0, 1.0};
+    double huge[4] = {1.79e308, 1.79e308, 1.79e308, 1.79e308};
+    double big[4] = {1e12, 1e12, 1e12, 1e12};
+    assert_status(BTDF_EINVAL,
+                  btdf_table_add_slice(t, 0.1, 2, rows, 2, cols, huge, msg, sizeof msg));
+    assert_non_null(strstr(msg, "1e100"));
+    huge[0] = 1e12;
+    huge[3] = 1.0000001e100;
+    assert_status(BTDF_EINVAL,
+                  btdf_table_add_slice(t, 0.1, 2, rows, 2, cols, huge, msg, sizeof msg));
+    assert_status(BTDF_OK, btdf_table_add_slice(t, 0.1, 2, rows, 2, cols, big, msg, sizeof msg));
+    btdf_table_free(t);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(huge_values_refused),
         cmocka_unit_test(tolerance_met),
         cmocka_unit_test(tolerances_behave),
         cmocka_unit_test(grazing_band),

@@ -322,14 +322,25 @@ static int apply(cli *c, const opt_hit *h)
     case OPT_FORCE: c->force = 1; return 1;
     case OPT_DRY_RUN: c->dry_run = 1; return 1;
     case OPT_SHARD: {
-        int k, n;
-        char tail;
-        if (sscanf(v, "%d/%d%c", &k, &n, &tail) != 2 || n < 1 || n > 100000 || k < 1 || k > n) {
+        /* digits only on both sides of the slash, at most 6 each (N <= 100000): no
+           blanks, no signs, nothing sscanf's %d would wrap */
+        long k = 0, n = 0;
+        const char *q = v;
+        int dk = 0, dn = 0;
+        for (; *q >= '0' && *q <= '9' && dk < 7; q++, dk++)
+            k = k * 10 + (*q - '0');
+        int slash = *q == '/';
+        if (slash)
+            q++;
+        for (; *q >= '0' && *q <= '9' && dn < 7; q++, dn++)
+            n = n * 10 + (*q - '0');
+        if (!slash || *q || dk == 0 || dn == 0 || dk > 6 || dn > 6 || n < 1 || n > 100000 ||
+            k < 1 || k > n) {
             fail(EXIT_USAGE, "--shard: '%s': expected K/N with 1 <= K <= N, e.g. 3/8", v);
             return 0;
         }
-        c->shard_k = k;
-        c->shard_n = n;
+        c->shard_k = (int)k;
+        c->shard_n = (int)n;
         return 1;
     }
     case OPT_BEST_EFFORT: c->best_effort = 1; return 1;
@@ -793,6 +804,26 @@ static int write_report(const char *path, const btdf_table_opts *o, btdf_table_k
     return 0;
 }
 
+/* Two outputs of one run must be two files, whatever the format: -o (unless standard
+   output), --report and every --preview. 0, or the exit code after the message. */
+static int distinct_outputs(const char *out, const cli *c)
+{
+    const char *outs[MAX_PREVIEWS + 3];
+    int nouts = 0;
+    if (out && strcmp(out, "-"))
+        outs[nouts++] = out;
+    if (c->report)
+        outs[nouts++] = c->report;
+    for (int k = 0; k < c->npreview; k++)
+        outs[nouts++] = c->previews[k].path;
+    for (int i = 0; i < nouts; i++)
+        for (int j = 0; j < i; j++)
+            if (btdf_same_file(outs[i], outs[j]))
+                return fail(EXIT_USAGE, "'%s' and '%s' are the same file: each output of a run "
+                                        "needs its own", outs[j], outs[i]);
+    return 0;
+}
+
 /* A .bsdf is built from Eq. 25 directly: the table's options do not apply. */
 static int tabulate_series(const cli *c, const char *prov)
 {
@@ -872,6 +903,9 @@ static int cmd_tabulate(cli *c, const char *prov)
             return fail(EXIT_USAGE, "%s: --part %s applies to .csv, .exr and .bsdf; an .xml "
                                     "holds both parts, light from either side", out,
                         btdf_part_name(c->part));
+        int same = distinct_outputs(out, c);
+        if (same)
+            return same;
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)
@@ -934,20 +968,9 @@ static int cmd_tabulate(cli *c, const char *prov)
     for (int k = 0; k < c->npreview; k++)
         if (!folder_writable(c->previews[k].path))
             return 1;
-    /* Two outputs of one run must be two files. */
-    const char *outs[MAX_PREVIEWS + 3];
-    int nouts = 0;
-    if (out && strcmp(out, "-"))
-        outs[nouts++] = out;
-    if (c->report)
-        outs[nouts++] = c->report;
-    for (int k = 0; k < c->npreview; k++)
-        outs[nouts++] = c->previews[k].path;
-    for (int i = 0; i < nouts; i++)
-        for (int j = 0; j < i; j++)
-            if (btdf_same_file(outs[i], outs[j]))
-                return fail(EXIT_USAGE, "'%s' and '%s' are the same file: each output of a run "
-                                        "needs its own", outs[j], outs[i]);
+    int same = distinct_outputs(out, c);
+    if (same)
+        return same;
     o.params = p;
     o.threads = c->threads;
     o.ti_min = c->ti0 * M_PI / 180.0;

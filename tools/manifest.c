@@ -14,6 +14,7 @@
 #include <btdf/btdf.h>
 
 #include "manifest.h"
+#include "pathnorm.h"
 #include "run.h"
 
 #ifndef M_PI
@@ -716,7 +717,7 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
                     const char *o2 = qk == K_ENTER   ? q->enter[r]
                                      : qk == K_LEAVE ? q->leave[r - q->nenter]
                                                      : q->bsdf[r - q->nenter - q->nleave];
-                    if (btdf_same_file(out, o2)) {
+                    if (path_same(out, o2)) {
                         snprintf(why, whylen, "output '%.300s' is also written by [%s] at line %d",
                                  out, q->name, q->key_line[qk]);
                         return m->key_line[key];

@@ -322,29 +322,38 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
     if (k > 0 && (size_t)k < sizeof meta)
         snprintf(meta + k, sizeof meta - (size_t)k, ", \"command\": \"%s\"}", prov ? prov : "");
     int code = 0;
-    if (report)
-        code = write_series_report(prog, report, p, f, reps, tol, t1 - t0, met, prov);
-    for (int q = 0; q < 4; q++)
-        btdf_report_clear(&reps[q]);
-    if (code == 0 && !met && !best_effort) {
+    if (!met && !best_effort) {
         fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
                         "to write it anyway)\n",
                 prog, path, tol, msg[0] ? ": " : "", msg);
         code = 3;
-    } else if (code == 0) {
+    } else {
+        /* the file and its report appear together or not at all */
+        btdf_outputs_begin();
         btdf_output what = {NULL, f, NULL, NULL, meta, NULL};
         run_progress_stage(pr, "writing");
         st = btdf_write(&what, path, msg, sizeof msg);
         run_progress_end(pr);
-        if (st != BTDF_OK) {
+        if (st == BTDF_OK && report &&
+            write_series_report(prog, report, p, f, reps, tol, t1 - t0, met, prov) != 0) {
+            btdf_outputs_abort();
+            code = 1; /* the report's failure is said */
+        } else if (st == BTDF_OK) {
+            st = btdf_outputs_commit(msg, sizeof msg);
+        } else {
+            btdf_outputs_abort();
+        }
+        if (code == 0 && st != BTDF_OK) {
             code = fail(prog, 1, path, msg[0] ? msg : btdf_strerror(st));
-        } else if (!met) {
+        } else if (code == 0 && !met) {
             /* --best-effort wrote it, but the run did not do what was asked */
             fprintf(stderr, "%s: %s: tolerance %g not met%s%s; written anyway (--best-effort), "
                             "exit 3\n", prog, path, tol, msg[0] ? ": " : "", msg);
             code = 3;
         }
     }
+    for (int q = 0; q < 4; q++)
+        btdf_report_clear(&reps[q]);
     btdf_scatfun_free(f);
     return code;
 }

@@ -37,9 +37,9 @@ BTDF_API void btdf_params_default(btdf_params *p)
 BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t msglen)
 {
     if (!p)
-        return core_say(BTDF_EINVAL, msg, msglen, "parameters missing");
+        return core_say(BTDF_EINVAL, msg, msglen, "parameters missing (NULL)");
     if (p->channels != 1 && p->channels != 3)
-        return core_say(BTDF_EINVAL, msg, msglen, "channels %g: must be 1 or 3", (double)p->channels);
+        return core_say(BTDF_EINVAL, msg, msglen, "channels %d: must be 1 or 3", p->channels);
     for (int c = 0; c < p->channels; c++) {
         double n = p->ior[c];
         if (!isfinite(n))
@@ -157,7 +157,20 @@ BTDF_API double btdf_fresnel_r(double n, double ti)
     if (!(n > 0.0) || !isfinite(n) || !(ti >= 0.0 && ti <= M_PI / 2))
         return 0.0;
     double c = cos(ti);
-    return bt_fresnel_r(n, n - 1.0, c > 0.0 ? c : 0.0);
+    c = c > 0.0 ? c : 0.0;
+    if (n > 1e4) {
+        /* The kernel's form squares n twice (n^4 overflows past 1e77, giving inf / inf);
+           far from n = 1 it needs no care for cancellation, so the textbook form with
+           g = n cos b taken as n sqrt(1 - (sin ti / n)^2) serves, scaled by 1/n where it
+           would overflow. 1e4: both forms agree to a few ulps there (tests/test_model.c). */
+        double sa = sin(ti), r = sa / n;
+        double gn = sqrt(1.0 - r * r); /* g / n = cos b, in (0, 1] for n > 1 */
+        double g = n * gn;
+        double rs = (c - g) / (c + g);         /* c + g >= g > 0 */
+        double rp = (n * c - gn) / (n * c + gn); /* n c + gn >= gn > 0 */
+        return 0.5 * (rs * rs + rp * rp);
+    }
+    return bt_fresnel_r(n, n - 1.0, c);
 }
 
 BTDF_API double btdf_fresnel_t(double n, double ti)

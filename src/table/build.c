@@ -49,14 +49,14 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
                    o->ti_max * 180 / M_PI);
     if (o->kind == BTDF_TABLE_GRID) {
         if (o->grid_ti < 1 || o->grid_ti > 100000)
-            return core_say(BTDF_EINVAL, msg, msglen, "grid theta-i count %g: must lie in [1, 100000]",
-                       (double)o->grid_ti);
+            return core_say(BTDF_EINVAL, msg, msglen, "grid theta-i count %lld: must lie in [1, 100000]",
+                           (long long)o->grid_ti);
         if (o->grid_to < 2 || o->grid_to > 100000)
-            return core_say(BTDF_EINVAL, msg, msglen, "grid theta-o count %g: must lie in [2, 100000]",
-                       (double)o->grid_to);
+            return core_say(BTDF_EINVAL, msg, msglen, "grid theta-o count %lld: must lie in [2, 100000]",
+                           (long long)o->grid_to);
         if (o->grid_phi < 2 || o->grid_phi > 100000)
-            return core_say(BTDF_EINVAL, msg, msglen, "grid phi count %g: must lie in [2, 100000]",
-                       (double)o->grid_phi);
+            return core_say(BTDF_EINVAL, msg, msglen, "grid phi count %lld: must lie in [2, 100000]",
+                           (long long)o->grid_phi);
         if (!(o->to_min >= M_PI / 2 && o->to_min < o->to_max && o->to_max <= M_PI))
             return core_say(BTDF_EINVAL, msg, msglen, "theta-o range starting at %g deg: need 90 <= A < B <= 180",
                        o->to_min * 180 / M_PI);
@@ -71,28 +71,36 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
             return core_say(BTDF_EINVAL, msg, msglen, "tolerance %g: must lie in [1e-7, 1]", o->tolerance);
         if (o->estimate != BTDF_ESTIMATE_FULL && o->estimate != BTDF_ESTIMATE_FAST &&
             o->estimate != BTDF_ESTIMATE_NONE)
-            return core_say(BTDF_EINVAL, msg, msglen, "estimate mode %g: must be full (0), fast (1) or none (2)",
-                       (double)o->estimate);
+            return core_say(BTDF_EINVAL, msg, msglen, "estimate mode %lld: must be full (0), fast (1) or none (2)",
+                           (long long)o->estimate);
+        if (o->metric != BTDF_METRIC_L1 && o->metric != BTDF_METRIC_MAX)
+            return core_say(BTDF_EINVAL, msg, msglen, "metric %lld: must be l1 (0) or max (1)",
+                           (long long)o->metric);
     } else {
-        return core_say(BTDF_EINVAL, msg, msglen, "table kind %g: must be facet (0) or grid (1)",
-                   (double)o->kind);
+        return core_say(BTDF_EINVAL, msg, msglen, "table kind %lld: must be facet (0) or grid (1)",
+                       (long long)o->kind);
     }
     if (o->threads < 0 || o->threads > 256)
-        return core_say(BTDF_EINVAL, msg, msglen, "threads %g: must lie in [0, 256]", (double)o->threads);
+        return core_say(BTDF_EINVAL, msg, msglen, "threads %lld: must lie in [0, 256]", (long long)o->threads);
     /* part 0 (a zeroed struct) is the transmission, as before the field existed */
     if (o->part != 0 && o->part != BTDF_PART_TRANSMISSION && o->part != BTDF_PART_REFLECTION &&
         o->part != BTDF_PART_BOTH)
-        return core_say(BTDF_EINVAL, msg, msglen, "part %g: must be transmission (1), reflection (2) or both (3)",
-                   (double)o->part);
+        return core_say(BTDF_EINVAL, msg, msglen, "part %lld: must be transmission (1), reflection (2) or both (3)",
+                       (long long)o->part);
     if (o->kind == BTDF_TABLE_GRID && o->part != 0 && o->part != BTDF_PART_TRANSMISSION)
-        return core_say(BTDF_EINVAL, msg, msglen, "part %g: grid tables hold the transmission only; the "
-                                "reflection needs a facet table", (double)o->part);
+        return core_say(BTDF_EINVAL, msg, msglen, "part %lld: grid tables hold the transmission only; the "
+                                    "reflection needs a facet table", (long long)o->part);
     return BTDF_OK;
 }
 
 BTDF_API btdf_status btdf_table_opts_check(const btdf_table_opts *o, char *msg, size_t msglen)
 {
-    return o ? check_opts(o, msg, msglen) : BTDF_EINVAL;
+    if (!o) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "no options (NULL)");
+        return BTDF_EINVAL;
+    }
+    return check_opts(o, msg, msglen);
 }
 
 /* ------------------------------------------------------------------------- */
@@ -1213,8 +1221,12 @@ static btdf_status build_part(const btdf_table_opts *o, btdf_table **out, char *
 BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out, char *msg,
                                       size_t msglen)
 {
-    if (!o || !out)
+    if (!o || !out) {
+        if (msg && msglen)
+            snprintf(msg, msglen, "%s",
+                     !o ? "no options (NULL)" : "no place for the table (out is NULL)");
         return BTDF_EINVAL;
+    }
     btdf_status st = check_opts(o, msg, msglen);
     if (st != BTDF_OK)
         return st;

@@ -184,13 +184,16 @@ BTDF_API btdf_part btdf_table_parts(const btdf_table *t)
 BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, char *msg,
                                                   size_t msglen)
 {
-    if (!t || !r)
-        return BTDF_EINVAL;
     const char *why = NULL;
-    if (kind_is_reflection(t->kind) || t->refl)
+    if (!t || !r)
+        why = "no table (NULL)";
+    else if (kind_is_reflection(t->kind) || t->refl)
         why = "the table is a reflection or holds one already";
     else if (!kind_is_reflection(r->kind) || r->refl)
         why = "the table to attach is not a reflection table";
+    else if (r->attached)
+        why = "the reflection table is attached to another table already (each table owns "
+              "its reflection, and frees it)";
     else if (t->p.channels != r->p.channels || t->p.smoothness != r->p.smoothness ||
              t->p.k0 != r->p.k0 || memcmp(t->p.ior, r->p.ior, sizeof t->p.ior) != 0)
         why = "the two parts have different parameters";
@@ -200,6 +203,7 @@ BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, 
         return BTDF_EINVAL;
     }
     t->refl = r;
+    r->attached = 1;
     return BTDF_OK;
 }
 
@@ -227,8 +231,10 @@ int table_kind_parse(const char *name, btdf_table_kind *k)
 BTDF_API btdf_status btdf_table_new(btdf_table_kind kind, const btdf_params *p,
                                     btdf_table **out, char *msg, size_t msglen)
 {
-    if (!out)
+    if (!out) {
+        core_say(BTDF_OK, msg, msglen, "%s", "no place for the table (out is NULL)");
         return BTDF_EINVAL;
+    }
     if (kind != BTDF_TABLE_FACET && kind != BTDF_TABLE_GRID &&
         kind != BTDF_TABLE_FACET_RECIPROCAL && kind != BTDF_TABLE_FACET_REFLECTION) {
         core_say(BTDF_OK, msg, msglen, "%s",
@@ -299,8 +305,12 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
                                           char *msg, size_t msglen)
 {
     char buf[160];
-    if (!t || !rows || !cols || !values)
+    if (!t || !rows || !cols || !values) {
+        core_say(BTDF_OK, msg, msglen, "%s", !t ? "no table (NULL)"
+                                : "slice rows, columns or values missing (NULL): a slice has "
+                                  "at least 1 x 1 nodes");
         return BTDF_EINVAL;
+    }
     if (!(ti >= 0.0 && ti <= M_PI / 2)) {
         snprintf(buf, sizeof buf, "slice ti %g rad: must lie in [0, pi/2]", ti);
         core_say(BTDF_OK, msg, msglen, "%s", buf);
@@ -326,10 +336,16 @@ BTDF_API btdf_status btdf_table_add_slice(btdf_table *t, double ti, size_t nrows
     size_t nv = nrows * ncols; /* < 2^48: no overflow */
     if (nv > SIZE_MAX / (nch * sizeof(double)))
         return BTDF_EOVERFLOW;
+    /* No parameters the model takes give a value near this (s = 1000 peaks near 6e5,
+       docs: MODEL.md; the peak grows as s^2 up to s = 1e6); below it, any interpolation's
+       weighted sum of a few values stays far from overflow, so a read table never gives
+       inf. */
+    const double value_max = 1e100;
     for (size_t i = 0; i < nv * nch; i++) {
-        if (!isfinite(values[i]) || values[i] < 0.0) {
-            snprintf(buf, sizeof buf, "slice value %g at index %zu: must be finite and >= 0",
-                     values[i], i);
+        if (!(values[i] >= 0.0 && values[i] <= value_max)) {
+            snprintf(buf, sizeof buf,
+                     "slice value %g at index %zu: must be finite, >= 0 and <= 1e100 (no "
+                     "model gives more)", values[i], i);
             core_say(BTDF_OK, msg, msglen, "%s", buf);
             return BTDF_EINVAL;
         }
@@ -388,6 +404,8 @@ BTDF_API const char *btdf_table_rule_name(btdf_table_rule rule)
 
 BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule)
 {
+    if (!name || !rule)
+        return 0;
     if (!strcmp(name, "chi"))
         *rule = BTDF_RULE_CHI;
     else if (!strcmp(name, "fresnel"))

@@ -37,6 +37,7 @@ struct btdf_table {
     uint64_t check_seed;
     /* A table holding both parts: the reflection (kind FACET_REFLECTION), owned. */
     struct btdf_table *refl;
+    int attached; /* this reflection table is owned by a transmission table */
     size_t build_evals; /* points where the builder evaluated Eq. 25, over all its passes */
 };
 
