@@ -181,6 +181,7 @@ typedef struct cli {
     double ti0, ti1, to0, to1, ph0, ph1;
     double log_decades; /* render previews: 0 linear */
     double zoom;        /* render previews: 0 the whole face */
+    int digits;         /* albedo: significant digits (default 7) */
     preview_req previews[MAX_PREVIEWS + 1]; /* + 1: -o F.png */
     int npreview, pic_w, pic_h;
     double mat_n[BTDF_PREVIEW_MAX_CURVES], mat_s[BTDF_PREVIEW_MAX_CURVES];
@@ -198,6 +199,7 @@ static void cli_defaults(cli *c)
     btdf_params_default(&c->p);
     btdf_table_opts_default(&c->o);
     c->part = BTDF_PART_TRANSMISSION;
+    c->digits = 7;
     c->mib = 256;
     c->ti1 = 90.0;
     c->to0 = 90.0;
@@ -346,6 +348,13 @@ static int apply(cli *c, const opt_hit *h)
         }
         return 1;
     case OPT_QUIET: c->quiet = 1; return 1;
+    case OPT_DIGITS: {
+        size_t d;
+        if (!parse_size("--digits", v, 1, 17, &d))
+            return 0;
+        c->digits = (int)d;
+        return 1;
+    }
     case OPT_HELP:
     case OPT_END: break;
     }
@@ -672,12 +681,15 @@ static int cmd_albedo(const cli *c)
         double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS];
         btdf_transmittance(p, ti, T);
         btdf_reflectance(p, ti, R);
-        /* 7 significant digits: T and R are accurate to 1e-7 absolute or better
-           (btdf.h), and a small value keeps its digits (8.01e-06, not 0.000008010) */
+        /* 7 significant digits by default: T and R are accurate to 1e-7 absolute or
+           better (btdf.h), and a small value keeps its digits (8.01e-06, not
+           0.000008010); --digits 17 prints the doubles themselves */
+        int d = c->digits;
         printf("%s", num(angles[k]));
-        for (int ch = 0; ch < p->channels; ch++)
-            printf(",%.7g,%.7g,%.7g,%.7g", T[ch], btdf_fresnel_t(p->ior[ch], ti), R[ch],
-                   R[ch] + T[ch]);
+        for (int ch = 0; ch < p->channels; ch++) {
+            printf(",%.*g,%.*g,%.*g,%.*g", d, T[ch], d, btdf_fresnel_t(p->ior[ch], ti), d,
+                   R[ch], d, R[ch] + T[ch]);
+        }
         printf("\n");
     }
     return stdout_done(0);

@@ -96,6 +96,9 @@ const opt_def opt_table[] = {
     {OPT_SHARD, "shard", 0, "K/N", 0, CMD_BUILD,
      "build only the K-th of N deterministic shares of the jobs (1 <= K <= N), e.g.\n"
      "one per task of a Slurm job array; shards write disjoint files"},
+    {OPT_DIGITS, "digits", 0, "D", 0, CMD_ALBEDO,
+     "significant digits of T, Ft, R and R + T, 1 to 17 (default 7: T and R are\n"
+     "accurate to 1e-7; 17 gives the double itself)"},
     {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD,
      "no report lines on standard error"},
     {OPT_HELP, "help", 'h', NULL, 0, ALL, "this help"},
