@@ -474,5 +474,18 @@ expect 3 "the sample budget (20000 samples, 256 MiB) stopped refinement: the tab
     "a budget failure names the limit and how close" -- "$B" tabulate --tolerance 1e-3 --max-samples 20000 -o "$W/t.csv"
 rm -f "$W/none.csv" "$W/none.err" "$W/fast.csv" "$W/fast.err"
 
+# the light the model loses at small s is said on standard error, not with --quiet
+"$B" albedo -s 0.3 0 30 >/dev/null 2>"$W/a.err" && \
+    grep -q 'warning: R + T = 0.0351 at theta_i 30 degrees.*loses 96% of the light' "$W/a.err" && \
+    "$B" albedo -q -s 0.3 0 30 2>&1 >/dev/null | wc -c | grep -qx 0 && \
+    "$B" albedo --ior 1.5 -s 100 0 30 60 2>&1 >/dev/null | wc -c | grep -qx 0 && \
+    ok "albedo warns when R + T < 0.9 (not with --quiet, not for s = 100)" || { no "albedo warning"; cat "$W/a.err"; }
+"$B" tabulate -s 0.3 --tolerance 3e-2 --estimate none -o "$W/s03.csv" 2>"$W/a.err" && \
+    grep -q 'warning: R + T = 0.143 at theta_i 0 degrees' "$W/a.err" && \
+    "$B" tabulate -q -s 0.3 --tolerance 3e-2 --estimate none -o "$W/s03.csv" 2>&1 | wc -c | grep -qx 0 && \
+    ! "$B" tabulate -s 3 --tolerance 3e-2 --estimate none -o "$W/s03.csv" 2>&1 | grep -q warning && \
+    ok "tabulate warns when R + T < 0.9 at its first incidence angle (s = 0.3, not s = 3)" || { no "tabulate warning"; cat "$W/a.err"; }
+rm -f "$W/a.err" "$W/s03.csv"
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

@@ -652,6 +652,34 @@ static int cmd_eval(const cli *c)
 /* albedo                                                                    */
 /* ------------------------------------------------------------------------- */
 
+/* Below this R + T the model has lost more light than a user would guess: its single
+   scattering and the shadowing term V(ti) V(to) drop what real rough surfaces scatter
+   again (docs/model.md, "Where the model holds"). */
+#define ALBEDO_WARN 0.9
+
+/* One warning line when R(ti) + T(ti) < ALBEDO_WARN for some channel; `what` says
+   where the angle comes from. */
+static void warn_albedo(const btdf_params *p, double ti_deg, double rt, const char *what)
+{
+    fprintf(stderr,
+            "%s: warning: R + T = %.3g at theta_i %s degrees (%s; n = %g, s = %g): the "
+            "model loses %.0f%% of the light there, to its shadowing term; it holds for "
+            "smoother surfaces and smaller angles (docs/model.md, \"Where the model "
+            "holds\"; --quiet silences this)\n",
+            prog, rt, num(ti_deg), what, p->ior[0], p->smoothness, 100.0 * (1.0 - rt));
+}
+
+/* The smallest R + T over the channels at ti (radians). */
+static double albedo_min(const btdf_params *p, double ti)
+{
+    double T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS], lo = 1.0;
+    btdf_transmittance(p, ti, T);
+    btdf_reflectance(p, ti, R);
+    for (int ch = 0; ch < p->channels; ch++)
+        lo = R[ch] + T[ch] < lo ? R[ch] + T[ch] : lo;
+    return lo;
+}
+
 static int cmd_albedo(const cli *c)
 {
     double angles[256];
@@ -677,6 +705,8 @@ static int cmd_albedo(const cli *c)
         printf(",T%s,Ft%s,R%s,R+T%s", x, x, x, x);
     }
     printf("\n");
+    int low = -1; /* the angle of the lowest R + T below ALBEDO_WARN */
+    double low_rt = ALBEDO_WARN;
     for (int k = 0; k < na; k++) {
         double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS];
         btdf_transmittance(p, ti, T);
@@ -689,9 +719,15 @@ static int cmd_albedo(const cli *c)
         for (int ch = 0; ch < p->channels; ch++) {
             printf(",%.*g,%.*g,%.*g,%.*g", d, T[ch], d, btdf_fresnel_t(p->ior[ch], ti), d,
                    R[ch], d, R[ch] + T[ch]);
+            if (R[ch] + T[ch] < low_rt) {
+                low = k;
+                low_rt = R[ch] + T[ch];
+            }
         }
         printf("\n");
     }
+    if (low >= 0 && !c->quiet)
+        warn_albedo(p, angles[low], low_rt, "the lowest of these angles");
     return stdout_done(0);
 }
 
@@ -873,6 +909,13 @@ static int cmd_tabulate(cli *c, const char *prov)
     if (c->npos)
         return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
                     c->pos[0]);
+    /* The light the model loses at the table's first incidence angle (normal incidence
+       by default): a warning, not an error, since the table is Eq. 25 all the same. */
+    if (!c->quiet && btdf_params_check(&c->p, NULL, 0) == BTDF_OK) {
+        double rt = albedo_min(&c->p, c->ti0 * M_PI / 180.0);
+        if (rt < ALBEDO_WARN)
+            warn_albedo(&c->p, c->ti0, rt, "the table's first incidence angle");
+    }
     btdf_format_info fi = {0};
     const char *out = c->out;
     if (out && strcmp(out, "-")) {

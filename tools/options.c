@@ -99,8 +99,8 @@ const opt_def opt_table[] = {
     {OPT_DIGITS, "digits", 0, "D", 0, CMD_ALBEDO,
      "significant digits of T, Ft, R and R + T, 1 to 17 (default 7: T and R are\n"
      "accurate to 1e-7; 17 gives the double itself)"},
-    {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD,
-     "no report lines on standard error"},
+    {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD | CMD_ALBEDO,
+     "no report lines or warnings on standard error"},
     {OPT_HELP, "help", 'h', NULL, 0, ALL, "this help"},
     {OPT_END, NULL, 0, NULL, 0, 0, NULL},
 };
