@@ -474,6 +474,11 @@ expect 3 "the sample budget (20000 samples, 256 MiB) stopped refinement: the tab
     "a budget failure names the limit and how close" -- "$B" tabulate --tolerance 1e-3 --max-samples 20000 -o "$W/t.csv"
 rm -f "$W/none.csv" "$W/none.err" "$W/fast.csv" "$W/fast.err"
 
+# an .xml holds both parts: any --part is refused, also the default's name
+expect 2 "--part transmission applies to .csv, .exr and .bsdf" "--part transmission for .xml" -- \
+    "$B" tabulate --part transmission -o "$W/p.xml"
+[ ! -e "$W/p.xml" ] && ok "--part for .xml: nothing written" || no "--part .xml wrote a file"
+
 # the light the model loses at small s is said on standard error, not with --quiet
 "$B" albedo -s 0.3 0 30 >/dev/null 2>"$W/a.err" && \
     grep -q 'warning: R + T = 0.0351 at theta_i 30 degrees.*loses 96% of the light' "$W/a.err" && \

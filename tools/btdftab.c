@@ -923,7 +923,7 @@ static int cmd_tabulate(cli *c, const char *prov)
             return fail(EXIT_USAGE, "%s: unknown output format: use %s", out,
                         btdf_format_list());
         /* an .xml holds every block (both parts, light from either side) */
-        if (fi.needs == BTDF_NEEDS_RADIANCE && c->part != BTDF_PART_TRANSMISSION)
+        if (fi.needs == BTDF_NEEDS_RADIANCE && GIVEN(c, OPT_PART))
             return fail(EXIT_USAGE, "%s: --part %s applies to .csv, .exr and .bsdf; an .xml "
                                     "holds both parts, light from either side", out,
                         btdf_part_name(c->part));
