@@ -474,6 +474,22 @@ expect 3 "the sample budget (20000 samples, 256 MiB) stopped refinement: the tab
     "a budget failure names the limit and how close" -- "$B" tabulate --tolerance 1e-3 --max-samples 20000 -o "$W/t.csv"
 rm -f "$W/none.csv" "$W/none.err" "$W/fast.csv" "$W/fast.err"
 
+# a reader that stops early: exit status 1 and a message, not a silent SIGPIPE
+for tab in "" "--table $W/pipe.csv"; do
+    [ -n "$tab" ] && "$B" tabulate -q --grid 5,5,5 -o "$W/pipe.csv"
+    # shellcheck disable=SC2086
+    { awk 'BEGIN { for (i = 0; i < 400000; i++) print "30 150 180" }' |
+        "$B" eval $tab 2>"$W/pipe.err"; echo $? >"$W/pipe.rc"; } | head -n 1 >/dev/null
+    [ "$(cat "$W/pipe.rc")" = 1 ] && grep -q 'standard output: Broken pipe' "$W/pipe.err" && \
+        ok "eval ${tab:+--table }| head -1: exit 1, 'standard output: Broken pipe'" || \
+        { no "eval $tab | head -1: status $(cat "$W/pipe.rc")"; cat "$W/pipe.err"; }
+done
+rm -f "$W/pipe.csv" "$W/pipe.err" "$W/pipe.rc"
+
+expect 2 "unknown command 'tabluate'; did you mean 'tabulate'?" "a mistyped command is named" -- "$B" tabluate
+expect 2 "unknown command 'evl'; did you mean 'eval'?" "a short mistyped command" -- "$B" evl
+expect 2 "unknown command 'frobnicate'$" "no suggestion for another word" -- "$B" frobnicate
+
 # an .xml holds both parts: any --part is refused, also the default's name
 expect 2 "--part transmission applies to .csv, .exr and .bsdf" "--part transmission for .xml" -- \
     "$B" tabulate --part transmission -o "$W/p.xml"

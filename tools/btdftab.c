@@ -641,6 +641,8 @@ static int cmd_eval(const cli *c)
                 out[ch] = btdf_rho_deg(p.ior[ch], p.smoothness, p.k0, v[0], v[1], v[2]);
         }
         print_values(out, p.channels);
+        if (ferror(stdout))
+            break; /* the reader is gone: stdout_done says so */
     }
     free(line);
     btdf_table_free(in.table);
@@ -1310,6 +1312,9 @@ int main(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGHUP, &sa, NULL);
+    /* A closed pipe (btdftab eval | head -1) is a write error, exit status 1 with a
+       message, as for a full disk; not a silent death by SIGPIPE. */
+    signal(SIGPIPE, SIG_IGN);
     if (argc < 2)
         return short_usage();
     const char *name = argv[1];
@@ -1344,7 +1349,11 @@ int main(int argc, char **argv)
     }
     const cmd_def *cmd = cmd_find(name);
     if (!cmd) {
-        fail(EXIT_USAGE, "unknown command '%s'", name);
+        const cmd_def *near = cmd_nearest(name);
+        if (near)
+            fail(EXIT_USAGE, "unknown command '%s'; did you mean '%s'?", name, near->name);
+        else
+            fail(EXIT_USAGE, "unknown command '%s'", name);
         return short_usage();
     }
     /* The command line, recorded in outputs as their provenance. */

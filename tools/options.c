@@ -177,6 +177,21 @@ static size_t distance(const char *a, const char *b)
     return row[lb];
 }
 
+const cmd_def *cmd_nearest(const char *name)
+{
+    const cmd_def *best = NULL;
+    size_t bestd = (size_t)-1, len = strlen(name);
+    for (const cmd_def *c = cmd_table; c->name; c++) {
+        size_t d = len && !strncmp(c->name, name, len) ? 1 : distance(name, c->name);
+        if (d < bestd) {
+            bestd = d;
+            best = c;
+        }
+    }
+    /* the thresholds of the options' suggestions: a slip, not another word */
+    return len && bestd <= (len > 5 ? 3 : len > 2 ? 2 : len - 1) ? best : NULL;
+}
+
 /* Says an option is unknown, with the nearest of this command's options, or the
    commands that take it when it belongs to another. */
 static void unknown_option(const char *prog, const cmd_def *cmd, const char *arg)
