@@ -22,6 +22,8 @@
  * tables that of channel 0; empty where no facet refracts into the lower hemisphere).
  * A comment line "# rows: N" before the first node row gives the number of them, and
  * the last line is "# end: N rows": a file cut anywhere, or missing rows, is refused.
+ * Files of btdftab 0.3.0 and earlier have neither line (nor the part column): they are
+ * read to their end, which must be a complete line (docs/formats.md).
  * A file holding both parts (transmission and reflection, docs/formats.md) has a last
  * column, part, and a "# parts:" line; the reflection's rows follow the transmission's.
  */
@@ -310,7 +312,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     btdf_params p;
     btdf_params_default(&p);
     int have_kind = 0, have_ch = 0, have_ior = 0, have_s = 0, have_k0 = 0, header = 0;
-    int have_rows = 0, have_end = 0;
+    int have_rows = 0, have_end = 0, last_nl = 1;
+    char version[80] = "an unnamed version"; /* from "# btdftab VERSION table" */
     int part_col = 0, have_parts = 0; /* a file holding both parts */
     size_t declared = 0, ended = 0, seen = 0;
     btdf_table_kind kind = BTDF_TABLE_FACET;
@@ -324,7 +327,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     btdf_status st = BTDF_OK;
     while (st == BTDF_OK && fgets(line, sizeof line, f)) {
         ln++;
-        if (!strchr(line, '\n') && !feof(f)) {
+        last_nl = strchr(line, '\n') != NULL;
+        if (!last_nl && !feof(f)) {
             st = ferr(msg, msglen, path, ln, "line longer than 4095 bytes");
             break;
         }
@@ -337,6 +341,11 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
             char word[64];
             if (header && !strncmp(line, "# end:", 6)) {
                 char tail;
+                if (!have_rows) {
+                    st = ferr(msg, msglen, path, ln,
+                              "an '# end' line but no '# rows' line before the node rows");
+                    break;
+                }
                 if (sscanf(line, "# end: %zu rows%c", &ended, &tail) != 2 || tail != '\n' ||
                     line[7] < '0' || line[7] > '9')
                     st = ferr(msg, msglen, path, ln, "malformed '# end: N rows' line");
@@ -347,6 +356,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                     line[8] < '0' || line[8] > '9')
                     st = ferr(msg, msglen, path, ln, "malformed '# rows: N' line");
                 have_rows = 1;
+            } else if (!t && sscanf(line, "# btdftab %63s table", word) == 1) {
+                snprintf(version, sizeof version, "btdftab %s", word);
             } else if (sscanf(line, "# kind: %63s", word) == 1) {
                 have_kind = 1;
                 if (!table_kind_parse(word, &kind))
@@ -391,11 +402,31 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                           "and a transmission kind, and that line the column");
                 break;
             }
-            if (!have_kind || !have_ch || !have_s || !have_k0 || have_ior != p.channels ||
-                !have_rows) {
+            /* Name every missing key, and the writer: a file of another version
+               says so rather than look damaged. '# rows' is not required: without it
+               the file is of the format before row counts (0.3.0 and earlier). */
+            if (!have_kind || !have_ch || !have_s || !have_k0 || have_ior <= 0) {
+                char why[320];
+                snprintf(why, sizeof why,
+                         "missing%s%s%s%s%s comment before the first node row (the file "
+                         "says it was written by %s; this reader is btdftab %s)",
+                         have_kind ? "" : " '# kind'", have_ch ? "" : " '# channels'",
+                         have_ior > 0 ? "" : " '# ior'", have_s ? "" : " '# smoothness'",
+                         have_k0 ? "" : " '# k0'", version, BTDF_VERSION_STRING);
+                st = ferr(msg, msglen, path, ln, why);
+                break;
+            }
+            if (have_ior != p.channels) {
+                char why[160];
+                snprintf(why, sizeof why,
+                         "'# ior' gives %d values but '# channels' says %d (written by %s)",
+                         have_ior, p.channels, version);
+                st = ferr(msg, msglen, path, ln, why);
+                break;
+            }
+            if (!have_rows && part_col) {
                 st = ferr(msg, msglen, path, ln,
-                          "missing '# kind', '# channels', '# ior', '# smoothness', '# k0' or "
-                          "'# rows' comment before the first node row");
+                          "a part column needs the '# rows' line before the node rows");
                 break;
             }
             char why[200];
@@ -450,7 +481,7 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
             st = ferr(msg, msglen, path, ln, "a number is malformed or not finite");
             break;
         }
-        if (++seen > declared) {
+        if (++seen > declared && have_rows) {
             st = ferr(msg, msglen, path, ln, "more node rows than '# rows' declares");
             break;
         }
@@ -468,14 +499,17 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
         st = ferr(msg, msglen, path, ln, "read error");
     if (st == BTDF_OK && !header)
         st = ferr(msg, msglen, path, ln, "no header row: empty or foreign file");
-    if (st == BTDF_OK && !have_end) {
+    if (st == BTDF_OK && !have_rows && t && !last_nl)
+        st = ferr(msg, msglen, path, ln,
+                  "the last node row has no line end: the file is cut short");
+    if (st == BTDF_OK && !have_end && (have_rows || !t)) {
         char why[160];
         snprintf(why, sizeof why,
                  "the file is cut short: no '# end' line (%zu of the %zu declared rows read)",
                  seen, declared);
         st = ferr(msg, msglen, path, ln, why);
     }
-    if (st == BTDF_OK && (ended != declared || seen != declared)) {
+    if (st == BTDF_OK && have_rows && (ended != declared || seen != declared)) {
         char why[160];
         snprintf(why, sizeof why, "'# rows: %zu' and '# end: %zu rows' but %zu node rows",
                  declared, ended, seen);

@@ -504,5 +504,39 @@ expect 3 "the sample budget (20000 samples, 256 MiB) stopped refinement: the tab
     "a budget failure names the limit and how close" -- "$B" tabulate --tolerance 1e-3 --max-samples 20000 -o "$W/t.csv"
 rm -f "$W/none.csv" "$W/none.err" "$W/fast.csv" "$W/fast.err"
 
+# a reader that stops early: exit status 1 and a message, not a silent SIGPIPE
+for tab in "" "--table $W/pipe.csv"; do
+    [ -n "$tab" ] && "$B" tabulate -q --grid 5,5,5 -o "$W/pipe.csv"
+    # shellcheck disable=SC2086
+    { awk 'BEGIN { for (i = 0; i < 400000; i++) print "30 150 180" }' |
+        "$B" eval $tab 2>"$W/pipe.err"; echo $? >"$W/pipe.rc"; } | head -n 1 >/dev/null
+    [ "$(cat "$W/pipe.rc")" = 1 ] && grep -q 'standard output: Broken pipe' "$W/pipe.err" && \
+        ok "eval ${tab:+--table }| head -1: exit 1, 'standard output: Broken pipe'" || \
+        { no "eval $tab | head -1: status $(cat "$W/pipe.rc")"; cat "$W/pipe.err"; }
+done
+rm -f "$W/pipe.csv" "$W/pipe.err" "$W/pipe.rc"
+
+expect 2 "unknown command 'tabluate'; did you mean 'tabulate'?" "a mistyped command is named" -- "$B" tabluate
+expect 2 "unknown command 'evl'; did you mean 'eval'?" "a short mistyped command" -- "$B" evl
+expect 2 "unknown command 'frobnicate'$" "no suggestion for another word" -- "$B" frobnicate
+
+# an .xml holds both parts: any --part is refused, also the default's name
+expect 2 "--part transmission applies to .csv, .exr and .bsdf" "--part transmission for .xml" -- \
+    "$B" tabulate --part transmission -o "$W/p.xml"
+[ ! -e "$W/p.xml" ] && ok "--part for .xml: nothing written" || no "--part .xml wrote a file"
+
+# the light the model loses at small s is said on standard error, not with --quiet
+"$B" albedo -s 0.3 0 30 >/dev/null 2>"$W/a.err" && \
+    grep -q 'warning: R + T = 0.0351 at theta_i 30 degrees.*loses 96% of the light' "$W/a.err" && \
+    "$B" albedo -q -s 0.3 0 30 2>&1 >/dev/null | wc -c | grep -qx 0 && \
+    "$B" albedo --ior 1.5 -s 100 0 30 60 2>&1 >/dev/null | wc -c | grep -qx 0 && \
+    ok "albedo warns when R + T < 0.9 (not with --quiet, not for s = 100)" || { no "albedo warning"; cat "$W/a.err"; }
+"$B" tabulate -s 0.3 --tolerance 3e-2 --estimate none -o "$W/s03.csv" 2>"$W/a.err" && \
+    grep -q 'warning: R + T = 0.143 at theta_i 0 degrees' "$W/a.err" && \
+    "$B" tabulate -q -s 0.3 --tolerance 3e-2 --estimate none -o "$W/s03.csv" 2>&1 | wc -c | grep -qx 0 && \
+    ! "$B" tabulate -s 3 --tolerance 3e-2 --estimate none -o "$W/s03.csv" 2>&1 | grep -q warning && \
+    ok "tabulate warns when R + T < 0.9 at its first incidence angle (s = 0.3, not s = 3)" || { no "tabulate warning"; cat "$W/a.err"; }
+rm -f "$W/a.err" "$W/s03.csv"
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

@@ -156,6 +156,70 @@ static void csv_rows_lost_or_added(void **state)
     btdf_table_free(t);
 }
 
+/* The file with its lines "# rows: N" and "# end: N rows" removed and its comment block
+   moved before the header row: the layout btdftab 0.3.0 wrote before row counts. */
+static size_t legacy_layout(const unsigned char *b, size_t n, unsigned char *c)
+{
+    const char *s = (const char *)b, *hdr_end = strchr(s, '\n') + 1;
+    const char *rows = strstr(s, "# rows:"), *rows_end = strchr(rows, '\n') + 1;
+    const char *end = strstr(s, "# end:");
+    size_t k = 0, hl = (size_t)(hdr_end - s);
+    memcpy(c + k, hdr_end, (size_t)(rows - hdr_end)); /* the comments */
+    k += (size_t)(rows - hdr_end);
+    memcpy(c + k, s, hl); /* the header row */
+    k += hl;
+    memcpy(c + k, rows_end, (size_t)(end - rows_end)); /* the node rows */
+    k += (size_t)(end - rows_end);
+    (void)n;
+    return k;
+}
+
+/* Tables of the format before row counts are read, to the same table; a file lacking
+   a key names exactly that key and the version that wrote it. */
+static void csv_previous_format(void **state)
+{
+    (void)state;
+    char path[512], old[512], again[512];
+    snprintf(path, sizeof path, "%s/t.csv", dir);
+    snprintf(old, sizeof old, "%s/old.csv", dir);
+    snprintf(again, sizeof again, "%s/again.csv", dir);
+    btdf_table *t = small_grid(3);
+    assert_status(BTDF_OK, btdf_table_write(t, path, NULL, NULL, 0));
+    size_t n, m;
+    unsigned char *b = slurp(path, &n);
+    unsigned char *c = malloc(n + 1);
+    assert_non_null(c);
+    size_t k = legacy_layout(b, n, c);
+    spill(old, c, k);
+    btdf_table *back = NULL;
+    char msg[512] = "";
+    assert_status(BTDF_OK, btdf_table_read(old, &back, msg, sizeof msg));
+    /* the same nodes and values: written again it is the original file, byte for byte */
+    assert_status(BTDF_OK, btdf_table_write(back, again, NULL, NULL, 0));
+    unsigned char *b2 = slurp(again, &m);
+    assert_int_equal(m, n);
+    assert_memory_equal(b2, b, n);
+    free(b2);
+    btdf_table_free(back);
+    /* its last row cut inside a number: refused (no line end) */
+    spill(old, c, k - 3);
+    assert_non_null(strstr(refused(old), "cut short"));
+    /* without '# smoothness': that key alone is named, and the writer */
+    char *sm = strstr((char *)c, "# smoothness:");
+    assert_non_null(sm);
+    size_t so = (size_t)(sm - (char *)c), sl = (size_t)(strchr(sm, '\n') + 1 - sm);
+    memmove(c + so, c + so + sl, k - so - sl);
+    spill(old, c, k - sl);
+    const char *why = refused(old);
+    assert_non_null(strstr(why, "missing '# smoothness' comment"));
+    assert_null(strstr(why, "'# k0'"));
+    assert_null(strstr(why, "'# rows'"));
+    assert_non_null(strstr(why, "written by btdftab " BTDF_VERSION_STRING));
+    free(c);
+    free(b);
+    btdf_table_free(t);
+}
+
 #if BTDF_HAVE_OPENEXR
 /* Sets the data window of the first part to (0,0)-(mx,my) in the header bytes. */
 static int patch_window(unsigned char *b, size_t n, int32_t mx, int32_t my)
@@ -224,6 +288,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(csv_cuts),
         cmocka_unit_test(csv_rows_lost_or_added),
+        cmocka_unit_test(csv_previous_format),
 #if BTDF_HAVE_OPENEXR
         cmocka_unit_test(exr_declared_sizes),
 #endif

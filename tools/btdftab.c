@@ -181,6 +181,7 @@ typedef struct cli {
     double ti0, ti1, to0, to1, ph0, ph1;
     double log_decades; /* render previews: 0 linear */
     double zoom;        /* render previews: 0 the whole face */
+    int digits;         /* albedo: significant digits (default 7) */
     preview_req previews[MAX_PREVIEWS + 1]; /* + 1: -o F.png */
     int npreview, pic_w, pic_h;
     double mat_n[BTDF_PREVIEW_MAX_CURVES], mat_s[BTDF_PREVIEW_MAX_CURVES];
@@ -198,6 +199,7 @@ static void cli_defaults(cli *c)
     btdf_params_default(&c->p);
     btdf_table_opts_default(&c->o);
     c->part = BTDF_PART_TRANSMISSION;
+    c->digits = 7;
     c->mib = 256;
     c->ti1 = 90.0;
     c->to0 = 90.0;
@@ -357,6 +359,13 @@ static int apply(cli *c, const opt_hit *h)
         }
         return 1;
     case OPT_QUIET: c->quiet = 1; return 1;
+    case OPT_DIGITS: {
+        size_t d;
+        if (!parse_size("--digits", v, 1, 17, &d))
+            return 0;
+        c->digits = (int)d;
+        return 1;
+    }
     case OPT_HELP:
     case OPT_END: break;
     }
@@ -643,6 +652,8 @@ static int cmd_eval(const cli *c)
                 out[ch] = btdf_rho_deg(p.ior[ch], p.smoothness, p.k0, v[0], v[1], v[2]);
         }
         print_values(out, p.channels);
+        if (ferror(stdout))
+            break; /* the reader is gone: stdout_done says so */
     }
     free(line);
     btdf_table_free(in.table);
@@ -653,6 +664,34 @@ static int cmd_eval(const cli *c)
 /* ------------------------------------------------------------------------- */
 /* albedo                                                                    */
 /* ------------------------------------------------------------------------- */
+
+/* Below this R + T the model has lost more light than a user would guess: its single
+   scattering and the shadowing term V(ti) V(to) drop what real rough surfaces scatter
+   again (docs/model.md, "Where the model holds"). */
+#define ALBEDO_WARN 0.9
+
+/* One warning line when R(ti) + T(ti) < ALBEDO_WARN for some channel; `what` says
+   where the angle comes from. */
+static void warn_albedo(const btdf_params *p, double ti_deg, double rt, const char *what)
+{
+    fprintf(stderr,
+            "%s: warning: R + T = %.3g at theta_i %s degrees (%s; n = %g, s = %g): the "
+            "model loses %.0f%% of the light there, to its shadowing term; it holds for "
+            "smoother surfaces and smaller angles (docs/model.md, \"Where the model "
+            "holds\"; --quiet silences this)\n",
+            prog, rt, num(ti_deg), what, p->ior[0], p->smoothness, 100.0 * (1.0 - rt));
+}
+
+/* The smallest R + T over the channels at ti (radians). */
+static double albedo_min(const btdf_params *p, double ti)
+{
+    double T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS], lo = 1.0;
+    btdf_transmittance(p, ti, T);
+    btdf_reflectance(p, ti, R);
+    for (int ch = 0; ch < p->channels; ch++)
+        lo = R[ch] + T[ch] < lo ? R[ch] + T[ch] : lo;
+    return lo;
+}
 
 static int cmd_albedo(const cli *c)
 {
@@ -679,18 +718,29 @@ static int cmd_albedo(const cli *c)
         printf(",T%s,Ft%s,R%s,R+T%s", x, x, x, x);
     }
     printf("\n");
+    int low = -1; /* the angle of the lowest R + T below ALBEDO_WARN */
+    double low_rt = ALBEDO_WARN;
     for (int k = 0; k < na; k++) {
         double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS];
         btdf_transmittance(p, ti, T);
         btdf_reflectance(p, ti, R);
-        /* 7 significant digits: T and R are accurate to 1e-7 absolute or better
-           (btdf.h), and a small value keeps its digits (8.01e-06, not 0.000008010) */
+        /* 7 significant digits by default: T and R are accurate to 1e-7 absolute or
+           better (btdf.h), and a small value keeps its digits (8.01e-06, not
+           0.000008010); --digits 17 prints the doubles themselves */
+        int d = c->digits;
         printf("%s", num(angles[k]));
-        for (int ch = 0; ch < p->channels; ch++)
-            printf(",%.7g,%.7g,%.7g,%.7g", T[ch], btdf_fresnel_t(p->ior[ch], ti), R[ch],
-                   R[ch] + T[ch]);
+        for (int ch = 0; ch < p->channels; ch++) {
+            printf(",%.*g,%.*g,%.*g,%.*g", d, T[ch], d, btdf_fresnel_t(p->ior[ch], ti), d,
+                   R[ch], d, R[ch] + T[ch]);
+            if (R[ch] + T[ch] < low_rt) {
+                low = k;
+                low_rt = R[ch] + T[ch];
+            }
+        }
         printf("\n");
     }
+    if (low >= 0 && !c->quiet)
+        warn_albedo(p, angles[low], low_rt, "the lowest of these angles");
     return stdout_done(0);
 }
 
@@ -892,6 +942,13 @@ static int cmd_tabulate(cli *c, const char *prov)
     if (c->npos)
         return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
                     c->pos[0]);
+    /* The light the model loses at the table's first incidence angle (normal incidence
+       by default): a warning, not an error, since the table is Eq. 25 all the same. */
+    if (!c->quiet && btdf_params_check(&c->p, NULL, 0) == BTDF_OK) {
+        double rt = albedo_min(&c->p, c->ti0 * M_PI / 180.0);
+        if (rt < ALBEDO_WARN)
+            warn_albedo(&c->p, c->ti0, rt, "the table's first incidence angle");
+    }
     btdf_format_info fi = {0};
     const char *out = c->out;
     if (out && strcmp(out, "-")) {
@@ -899,7 +956,7 @@ static int cmd_tabulate(cli *c, const char *prov)
             return fail(EXIT_USAGE, "%s: unknown output format: use %s", out,
                         btdf_format_list());
         /* an .xml holds every block (both parts, light from either side) */
-        if (fi.needs == BTDF_NEEDS_RADIANCE && c->part != BTDF_PART_TRANSMISSION)
+        if (fi.needs == BTDF_NEEDS_RADIANCE && GIVEN(c, OPT_PART))
             return fail(EXIT_USAGE, "%s: --part %s applies to .csv, .exr and .bsdf; an .xml "
                                     "holds both parts, light from either side", out,
                         btdf_part_name(c->part));
@@ -1278,6 +1335,9 @@ int main(int argc, char **argv)
     sigaction(SIGINT, &sa, NULL);
     sigaction(SIGTERM, &sa, NULL);
     sigaction(SIGHUP, &sa, NULL);
+    /* A closed pipe (btdftab eval | head -1) is a write error, exit status 1 with a
+       message, as for a full disk; not a silent death by SIGPIPE. */
+    signal(SIGPIPE, SIG_IGN);
     if (argc < 2)
         return short_usage();
     const char *name = argv[1];
@@ -1312,7 +1372,11 @@ int main(int argc, char **argv)
     }
     const cmd_def *cmd = cmd_find(name);
     if (!cmd) {
-        fail(EXIT_USAGE, "unknown command '%s'", name);
+        const cmd_def *near = cmd_nearest(name);
+        if (near)
+            fail(EXIT_USAGE, "unknown command '%s'; did you mean '%s'?", name, near->name);
+        else
+            fail(EXIT_USAGE, "unknown command '%s'", name);
         return short_usage();
     }
     /* The command line, recorded in outputs as their provenance. */

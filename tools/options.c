@@ -96,8 +96,11 @@ const opt_def opt_table[] = {
     {OPT_SHARD, "shard", 0, "K/N", 0, CMD_BUILD,
      "build only the K-th of N deterministic shares of the jobs (1 <= K <= N), e.g.\n"
      "one per task of a Slurm job array; shards write disjoint files"},
-    {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD,
-     "no report lines on standard error"},
+    {OPT_DIGITS, "digits", 0, "D", 0, CMD_ALBEDO,
+     "significant digits of T, Ft, R and R + T, 1 to 17 (default 7: T and R are\n"
+     "accurate to 1e-7; 17 gives the double itself)"},
+    {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD | CMD_ALBEDO,
+     "no report lines or warnings on standard error"},
     {OPT_HELP, "help", 'h', NULL, 0, ALL, "this help"},
     {OPT_END, NULL, 0, NULL, 0, 0, NULL},
 };
@@ -172,6 +175,21 @@ static size_t distance(const char *a, const char *b)
         }
     }
     return row[lb];
+}
+
+const cmd_def *cmd_nearest(const char *name)
+{
+    const cmd_def *best = NULL;
+    size_t bestd = (size_t)-1, len = strlen(name);
+    for (const cmd_def *c = cmd_table; c->name; c++) {
+        size_t d = len && !strncmp(c->name, name, len) ? 1 : distance(name, c->name);
+        if (d < bestd) {
+            bestd = d;
+            best = c;
+        }
+    }
+    /* the thresholds of the options' suggestions: a slip, not another word */
+    return len && bestd <= (len > 5 ? 3 : len > 2 ? 2 : len - 1) ? best : NULL;
 }
 
 /* Says an option is unknown, with the nearest of this command's options, or the

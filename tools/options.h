@@ -49,6 +49,7 @@ typedef enum {
     OPT_QUIET,
     OPT_LOG_DECADES,
     OPT_ZOOM,
+    OPT_DIGITS,
     OPT_END
 } opt_id;
 
@@ -77,6 +78,8 @@ extern const cmd_def cmd_table[];
 
 /* The command of that name, or NULL. */
 const cmd_def *cmd_find(const char *name);
+/* The command a mistyped name most likely meant (a prefix, or a few edits away), or NULL. */
+const cmd_def *cmd_nearest(const char *name);
 
 /* An option's definition by identity. */
 const opt_def *opt_find(opt_id id);

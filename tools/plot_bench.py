@@ -3,7 +3,15 @@
 # plot_bench.py CSV PNG: error against run time from `btdf-bench sweep` (log-log, one
 # curve per method and case). Needs matplotlib; only for the picture in docs/.
 import csv
+import os
 import sys
+
+if len(sys.argv) != 3:
+    sys.exit("usage: plot_bench.py CSV PNG")
+if os.path.realpath(sys.argv[1]) == os.path.realpath(sys.argv[2]):
+    sys.stderr.write("plot_bench.py: the picture %s would replace the input CSV: name "
+                     "another PNG\n" % sys.argv[2])
+    sys.exit(2)
 
 import matplotlib
 

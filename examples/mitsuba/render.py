@@ -8,7 +8,9 @@
 face: examples/mitsuba/face.xml, the rough face of a block lit from inside (the paper's
 Fig. 11), 256 x 256 by default; glass: examples/mitsuba/glass.xml, a rough glass sphere
 holding both lobes, 160 x 160 by default (--part applies to it only).
-Writes OUT.png (sRGB) and OUT.exr (linear), and prints the render time.
+Writes OUT.png (sRGB) and OUT-linear.exr (linear), and prints the render time. An
+output that would replace an input (the table, the scene) or the other output is
+refused before any work (exit status 2).
 """
 import argparse
 import os
@@ -32,6 +34,23 @@ ap.add_argument("--spp", type=int, default=64)
 ap.add_argument("--res", type=int, default=0, help="image side in pixels (0: the scene's)")
 a = ap.parse_args()
 res = a.res or RES[a.scene]
+scene_xml = os.path.join(HERE, a.scene + ".xml")
+out_exr = os.path.splitext(a.out)[0] + "-linear.exr"
+
+
+def same_file(p, q):
+    """True when paths p and q name one file (existing or not)."""
+    if os.path.exists(p) and os.path.exists(q):
+        return os.path.samefile(p, q)
+    return os.path.realpath(p) == os.path.realpath(q)
+
+
+for o in (a.out, out_exr):
+    for name, i in (("the table", a.table), ("the scene", scene_xml)):
+        if same_file(o, i):
+            ap.error("output %s would replace %s %s: choose another OUT" % (o, name, i))
+if same_file(a.out, out_exr):
+    ap.error("OUT %s is also the linear picture's name: give OUT a .png name" % a.out)
 try:
     mi.set_variant(a.variant)
 except (ImportError, AttributeError) as e:
@@ -44,10 +63,10 @@ import btdftab_mitsuba  # noqa: E402,F401  (registers `btdftab`)
 params = dict(filename=os.path.abspath(a.table), mode=a.mode, spp=str(a.spp), res=str(res))
 if a.scene == "glass":
     params["part"] = a.part  # face.xml holds one part and has no $part
-scene = mi.load_file(os.path.join(HERE, a.scene + ".xml"), **params)
+scene = mi.load_file(scene_xml, **params)
 t = time.perf_counter()
 img = mi.render(scene)
-mi.util.write_bitmap(os.path.splitext(a.out)[0] + ".exr", img, write_async=False)
+mi.util.write_bitmap(out_exr, img, write_async=False)
 mi.util.write_bitmap(a.out, img, write_async=False)
 print("%s: %s, %dx%d, %d spp, %s%s, %s: %.2f s (including JIT compilation)"
       % (a.out, a.scene, res, res, a.spp, a.mode,

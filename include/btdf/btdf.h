@@ -59,9 +59,9 @@ extern "C" {
  */
 
 #define BTDF_VERSION_MAJOR 0
-#define BTDF_VERSION_MINOR 3
+#define BTDF_VERSION_MINOR 4
 #define BTDF_VERSION_PATCH 0
-#define BTDF_VERSION_STRING "0.3.0"
+#define BTDF_VERSION_STRING "0.4.0"
 
 /* The library's own version, which may differ from the header it was built against. */
 BTDF_API const char *btdf_version_string(void);

@@ -1,0 +1,546 @@
+# SPDX-License-Identifier: MIT
+"""btdftab: Eq. 25 of Xu & Sun (2008), its reflection and its tables, from Python.
+
+A thin layer over libbtdf (ctypes): every number comes from the C library, bit for bit.
+The functions are spelled as the C API and take numpy arrays (or numbers), which
+broadcast against each other; angles in radians (the *_deg forms take degrees, as the
+btdftab tool does), conventions of btdf/btdf.h: theta_i in [0, pi/2], theta_o in
+[pi/2, pi], phi = pi the forward (specular) plane, rho in 1/sr without a cosine factor.
+
+    import numpy as np, btdftab
+    ti = np.radians([0, 30, 60])
+    btdftab.rho(1.5, 3, ti, np.radians(150), np.pi)   # Eq. 25 at three angles
+    btdftab.T(1.5, 3, ti), btdftab.R(1.5, 3, ti)        # hemispherical integrals
+    t = btdftab.build(1.5, 3, tolerance=1e-2)         # a table; t.write("glass.csv")
+    btdftab.open("glass.bsdf").eval(ti, np.radians(150), np.pi)
+
+Bad parameters or angles raise ValueError naming the value and what is allowed; a
+failed library call raises BtdfError with the library's message.
+"""
+import ctypes
+import ctypes.util
+import os
+
+import numpy as np
+
+__all__ = ["rho", "rho_deg", "rho_r", "rho_r_deg", "T", "R", "albedo", "fresnel_t",
+           "fresnel_r", "Table", "Bsdf", "open", "build", "version", "BtdfError",
+           "library_path"]
+
+MAX_CHANNELS = 3
+_KINDS = {0: "facet", 1: "grid", 2: "facet-reciprocal", 3: "facet-reflection"}
+_PARTS = {"transmission": 1, "reflection": 2, "both": 3}
+_STATUS_EDOMAIN = None  # set from the library (btdf_strerror) on load
+
+
+class BtdfError(RuntimeError):
+    """A libbtdf call failed; the message names the call, the status and the reason."""
+
+
+class _Params(ctypes.Structure):
+    _fields_ = [("channels", ctypes.c_int),
+                ("ior", ctypes.c_double * MAX_CHANNELS),
+                ("smoothness", ctypes.c_double),
+                ("k0", ctypes.c_double)]
+
+
+class _Slice(ctypes.Structure):
+    _fields_ = [("ti", ctypes.c_double), ("nrows", ctypes.c_size_t),
+                ("ncols", ctypes.c_size_t), ("rows", ctypes.POINTER(ctypes.c_double)),
+                ("cols", ctypes.POINTER(ctypes.c_double)),
+                ("values", ctypes.POINTER(ctypes.c_double))]
+
+
+_PROGRESS = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_size_t,
+                             ctypes.c_size_t)
+
+
+class _TableOpts(ctypes.Structure):
+    """btdf_table_opts of btdf/btdf.h, field for field (filled by btdf_table_opts_default)."""
+    _fields_ = [("params", _Params), ("ti_min", ctypes.c_double),
+                ("ti_max", ctypes.c_double), ("kind", ctypes.c_int),
+                ("tolerance", ctypes.c_double), ("metric", ctypes.c_int),
+                ("grid_ti", ctypes.c_size_t), ("grid_to", ctypes.c_size_t),
+                ("grid_phi", ctypes.c_size_t), ("max_samples", ctypes.c_size_t),
+                ("max_bytes", ctypes.c_size_t), ("threads", ctypes.c_int),
+                ("to_min", ctypes.c_double), ("to_max", ctypes.c_double),
+                ("phi_min", ctypes.c_double), ("phi_max", ctypes.c_double),
+                ("progress", _PROGRESS), ("progress_user", ctypes.c_void_p),
+                ("estimate", ctypes.c_int), ("part", ctypes.c_int)]
+
+
+def _candidates():
+    env = os.environ.get("BTDFTAB_LIBRARY")
+    if env:
+        yield env
+        return  # an explicit choice is not second-guessed
+    here = os.path.dirname(os.path.abspath(__file__))
+    for name in sorted(os.listdir(here)):  # a wheel carries the library in the package
+        if name.startswith("libbtdf") and ".so" in name:
+            yield os.path.join(here, name)
+    try:
+        from . import _installed  # written by meson install
+        yield _installed.LIBRARY
+    except ImportError:
+        pass
+    root = os.path.dirname(os.path.dirname(here))  # a checkout: python/btdftab
+    for b in ("build", "builddir"):
+        yield os.path.join(root, b, "libbtdf.so")
+    found = ctypes.util.find_library("btdf")
+    if found:
+        yield found
+
+
+_lib = None
+_lib_path = None
+
+
+def _library():
+    global _lib, _lib_path
+    if _lib is not None:
+        return _lib
+    tried = []
+    for path in _candidates():
+        if os.path.sep in path and not os.path.exists(path):
+            tried.append(path + " (absent)")
+            continue
+        try:
+            lib = ctypes.CDLL(path)
+        except OSError as e:
+            tried.append("%s (%s)" % (path, e))
+            continue
+        _declare(lib)
+        _lib, _lib_path = lib, path
+        return lib
+    raise BtdfError("libbtdf not found; tried: %s. Install the package (pip install .), "
+                    "build the project (meson compile -C build) or set BTDFTAB_LIBRARY"
+                    % ("; ".join(tried) or "nothing"))
+
+
+def _declare(lib):
+    d, i, sz, vp, cp = (ctypes.c_double, ctypes.c_int, ctypes.c_size_t, ctypes.c_void_p,
+                        ctypes.c_char_p)
+    dp, pp = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(_Params)
+
+    def f(name, res, *args):
+        fn = getattr(lib, name)
+        fn.restype, fn.argtypes = res, list(args)
+
+    f("btdf_version_string", cp)
+    f("btdf_strerror", cp, i)
+    f("btdf_params_check", i, pp, cp, sz)
+    f("btdf_eval_batch", i, pp, sz, dp, dp, dp, dp, ctypes.POINTER(sz))
+    for name in ("btdf_rho_deg", "btdf_rho_r_deg", "btdf_rho_r"):
+        f(name, d, d, d, d, d, d, d)
+    f("btdf_fresnel_t", d, d, d)
+    f("btdf_fresnel_r", d, d, d)
+    f("btdf_transmittance", i, pp, d, dp)
+    f("btdf_reflectance", i, pp, d, dp)
+    f("btdf_eval_r", i, pp, d, d, d, dp)
+    f("btdf_table_read", i, cp, ctypes.POINTER(vp), cp, sz)
+    f("btdf_table_write", i, vp, cp, vp, cp, sz)
+    f("btdf_table_free", None, vp)
+    f("btdf_table_get_kind", i, vp)
+    f("btdf_table_get_params", pp, vp)
+    f("btdf_table_slice_count", sz, vp)
+    f("btdf_table_node_count", sz, vp)
+    f("btdf_table_slice", i, vp, sz, ctypes.POINTER(_Slice))
+    f("btdf_table_eval", i, vp, d, d, d, dp)
+    f("btdf_table_part", vp, vp, i)
+    f("btdf_table_parts", i, vp)
+    f("btdf_table_opts_default", None, ctypes.POINTER(_TableOpts))
+    f("btdf_table_build", i, ctypes.POINTER(_TableOpts), ctypes.POINTER(vp), cp, sz)
+    f("btdf_scatfun_read", i, cp, ctypes.POINTER(vp), cp, sz)
+    f("btdf_scatfun_free", None, vp)
+    f("btdf_scatfun_eval_side", i, vp, i, i, d, d, d, dp)
+    f("btdf_scatfun_channels", i, vp)
+    f("btdf_scatfun_eta", d, vp)
+    f("btdf_scatfun_sides", i, vp)
+    f("btdf_scatfun_build", i, pp, d, i, i, ctypes.POINTER(vp), cp, sz)
+    f("btdf_scatfun_write", i, vp, cp, cp, cp, sz)
+
+
+def _check(status, what, msg=None):
+    if status != 0:
+        reason = msg.value.decode("utf-8", "replace") if msg is not None else ""
+        raise BtdfError("%s: %s%s" % (what, _library().btdf_strerror(status).decode(),
+                                      (": " + reason) if reason else ""))
+
+
+def version():
+    """The library's version string."""
+    return _library().btdf_version_string().decode()
+
+
+def library_path():
+    """The path of the libbtdf this module loaded."""
+    _library()
+    return _lib_path
+
+
+def _params(n, s, k0):
+    p = _Params()
+    p.channels = 1
+    p.ior[0] = float(n)
+    p.smoothness = float(s)
+    p.k0 = float(k0)
+    msg = ctypes.create_string_buffer(256)
+    if _library().btdf_params_check(ctypes.byref(p), msg, 256) != 0:
+        raise ValueError("model parameters: " + msg.value.decode("utf-8", "replace"))
+    return p
+
+
+def _f64(*xs):
+    """The arguments as float64 arrays broadcast to one shape (contiguous)."""
+    arrs = np.broadcast_arrays(*[np.asarray(x, dtype=np.float64) for x in xs])
+    return [np.array(a, dtype=np.float64, order="C") for a in arrs]  # 0-d stays 0-d
+
+
+def _groups(n, s, k0):
+    """(params, index array) for each distinct (n, s, k0) of the flat arrays."""
+    key = np.stack([n, s, k0], axis=-1)
+    uniq, inv = np.unique(key, axis=0, return_inverse=True)
+    inv = inv.reshape(-1)
+    return [(_params(*uniq[g]), np.nonzero(inv == g)[0]) for g in range(len(uniq))]
+
+
+def _out(arr, shape):
+    a = arr.reshape(shape)
+    return a if a.ndim else float(a)
+
+
+def _dp(a):
+    return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def rho(ior, smoothness, ti, to, phi, k0=0.7):
+    """Eq. 25 (btdf_eval, 1/sr), radians: ti in [0, pi/2], to in [pi/2, pi], finite phi."""
+    n, s, k, a, b, c = _f64(ior, smoothness, k0, ti, to, phi)
+    shape = a.shape
+    n, s, k, a, b, c = (x.reshape(-1) for x in (n, s, k, a, b, c))
+    out = np.empty(a.size)
+    lib = _library()
+    for p, idx in _groups(n, s, k):
+        ta, tb, tc = (np.ascontiguousarray(x[idx]) for x in (a, b, c))
+        o = np.empty(idx.size)
+        bad = ctypes.c_size_t(0)
+        st = lib.btdf_eval_batch(ctypes.byref(p), idx.size, _dp(ta), _dp(tb), _dp(tc),
+                                 _dp(o), ctypes.byref(bad))
+        if st != 0:
+            j = bad.value
+            if j < idx.size and not (0 <= ta[j] <= np.pi / 2 and np.pi / 2 <= tb[j] <= np.pi
+                                     and np.isfinite(tc[j])):
+                raise ValueError("rho: angles (%r, %r, %r) at flat index %d: need ti in "
+                                 "[0, pi/2], to in [pi/2, pi], finite phi (radians)"
+                                 % (ta[j], tb[j], tc[j], int(idx[j])))
+            _check(st, "btdf_eval_batch")
+        out[idx] = o
+    return _out(out, shape)
+
+
+def _scalar(fn, args, check, what):
+    """fn over the broadcast arrays, element by element, each element checked."""
+    arrs = _f64(*args)
+    shape = arrs[0].shape
+    flat = [x.reshape(-1) for x in arrs]
+    out = np.empty(flat[0].size)
+    for j in range(out.size):
+        v = [float(x[j]) for x in flat]
+        why = check(*v)
+        if why:
+            raise ValueError("%s: %s at flat index %d" % (what, why, j))
+        out[j] = fn(*v)
+    return _out(out, shape)
+
+
+def _param_why(n, s, k0):
+    try:
+        _params(n, s, k0)
+    except ValueError as e:
+        return str(e)
+    return None
+
+
+_pcache = {}
+
+
+def _pc(n, s, k0):
+    """_params, remembered (the per-element paths call it once per element)."""
+    key = (n, s, k0)
+    if key not in _pcache:
+        if len(_pcache) > 4096:
+            _pcache.clear()
+        _pcache[key] = _param_why(n, s, k0)
+    return _pcache[key]
+
+
+def rho_deg(ior, smoothness, ti, to, phi, k0=0.7):
+    """Eq. 25 with the angles in degrees (btdf_rho_deg, what `btdftab eval` prints)."""
+    def check(n, s, k0_, a, b, c):
+        return _pc(n, s, k0_) or (None if 0 <= a <= 90 and 90 <= b <= 180 and np.isfinite(c)
+                                  else "angles (%r, %r, %r): need ti in [0, 90], to in "
+                                  "[90, 180] degrees, finite phi" % (a, b, c))
+    return _scalar(_library().btdf_rho_deg, (ior, smoothness, k0, ti, to, phi), check,
+                   "rho_deg")
+
+
+def rho_r(ior, smoothness, ti, tr, phi, k0=0.7):
+    """The same facets' reflection rho_r (btdf_eval_r, 1/sr), radians: ti, tr in
+    [0, pi/2], phi = pi the specular plane."""
+    lib = _library()
+    out1 = (ctypes.c_double * MAX_CHANNELS)()
+
+    def one(n, s, k0_, a, b, c):
+        _check(lib.btdf_eval_r(ctypes.byref(_params(n, s, k0_)), a, b, c, out1),
+               "btdf_eval_r")
+        return out1[0]
+
+    def check(n, s, k0_, a, b, c):
+        return _pc(n, s, k0_) or (None if 0 <= a <= np.pi / 2 and 0 <= b <= np.pi / 2
+                                  and np.isfinite(c) else
+                                  "angles (%r, %r, %r): need ti, tr in [0, pi/2], finite "
+                                  "phi (radians)" % (a, b, c))
+    return _scalar(one, (ior, smoothness, k0, ti, tr, phi), check, "rho_r")
+
+
+def rho_r_deg(ior, smoothness, ti, tr, phi, k0=0.7):
+    """rho_r with the angles in degrees (btdf_rho_r_deg, `btdftab eval --part reflection`)."""
+    def check(n, s, k0_, a, b, c):
+        return _pc(n, s, k0_) or (None if 0 <= a <= 90 and 0 <= b <= 90 and np.isfinite(c)
+                                  else "angles (%r, %r, %r): need ti, tr in [0, 90] "
+                                  "degrees, finite phi" % (a, b, c))
+    return _scalar(_library().btdf_rho_r_deg, (ior, smoothness, k0, ti, tr, phi), check,
+                   "rho_r_deg")
+
+
+def _integral(cname, ior, smoothness, ti, k0):
+    lib = _library()
+    fn = getattr(lib, cname)
+    out1 = (ctypes.c_double * MAX_CHANNELS)()
+
+    def one(n, s, k0_, a):
+        _check(fn(ctypes.byref(_params(n, s, k0_)), a, out1), cname)
+        return out1[0]
+
+    def check(n, s, k0_, a):
+        return _pc(n, s, k0_) or (None if 0 <= a <= np.pi / 2 else
+                                  "ti %r: need [0, pi/2] (radians)" % a)
+    return _scalar(one, (ior, smoothness, k0, ti), check, cname)
+
+
+def T(ior, smoothness, ti, k0=0.7):
+    """Hemispherical transmittance T(ti) (btdf_transmittance), ti in radians."""
+    return _integral("btdf_transmittance", ior, smoothness, ti, k0)
+
+
+def R(ior, smoothness, ti, k0=0.7):
+    """Hemispherical reflectance R(ti) of the same facets (btdf_reflectance)."""
+    return _integral("btdf_reflectance", ior, smoothness, ti, k0)
+
+
+def albedo(ior, smoothness, ti, k0=0.7):
+    """R(ti) + T(ti): what the surface scatters at all (the rest is lost to the
+    shadowing term; `btdftab albedo` prints it as R+T)."""
+    return np.add(R(ior, smoothness, ti, k0), T(ior, smoothness, ti, k0))
+
+
+def fresnel_t(ior, ti):
+    """Flat-interface Fresnel transmittance Ft(ti) (btdf_fresnel_t), radians."""
+    return _scalar(_library().btdf_fresnel_t, (ior, ti), lambda n, a: None, "fresnel_t")
+
+
+def fresnel_r(ior, ti):
+    """Flat-interface Fresnel reflectance Fr(ti) (btdf_fresnel_r), radians."""
+    return _scalar(_library().btdf_fresnel_r, (ior, ti), lambda n, a: None, "fresnel_r")
+
+
+class Table:
+    """A table (.csv, .exr) read by btdf_table_read, or built by build()."""
+
+    def __init__(self, path=None, _handle=None):
+        lib = _library()
+        if _handle is None:
+            h = ctypes.c_void_p()
+            msg = ctypes.create_string_buffer(1024)
+            _check(lib.btdf_table_read(os.fsencode(path), ctypes.byref(h), msg, 1024),
+                   "reading table '%s'" % path, msg)
+            _handle = h
+        self._h = _handle
+        self.path = path
+        p = lib.btdf_table_get_params(self._h).contents
+        self.channels = p.channels
+        self.ior = [p.ior[c] for c in range(p.channels)]
+        self.smoothness = p.smoothness
+        self.k0 = p.k0
+        self.kind = _KINDS.get(lib.btdf_table_get_kind(self._h), "unknown")
+        self.parts = {1: "transmission", 2: "reflection", 3: "both"}.get(
+            lib.btdf_table_parts(self._h), "unknown")
+
+    def __len__(self):
+        """The number of nodes."""
+        return _library().btdf_table_node_count(self._h)
+
+    def slices(self):
+        """[(ti, rows, cols, values)]: each slice's nodes (values rows x cols x channels)."""
+        lib = _library()
+        res = []
+        for k in range(lib.btdf_table_slice_count(self._h)):
+            s = _Slice()
+            _check(lib.btdf_table_slice(self._h, k, ctypes.byref(s)), "btdf_table_slice")
+            rows = np.ctypeslib.as_array(s.rows, (s.nrows,)).copy()
+            cols = np.ctypeslib.as_array(s.cols, (s.ncols,)).copy()
+            vals = np.ctypeslib.as_array(s.values, (s.nrows * s.ncols * self.channels,))
+            res.append((s.ti, rows, cols,
+                        vals.copy().reshape(s.nrows, s.ncols, self.channels)))
+        return res
+
+    def eval(self, ti, to, phi, part="transmission"):
+        """The table's value (btdf_table_eval) at radians; part "reflection" reads the
+        reflection a table holding both parts carries (to is then tr). Shape: the
+        broadcast of the angles, with a last axis of 3 for a three-channel table."""
+        lib = _library()
+        if part not in ("transmission", "reflection"):
+            raise ValueError("part %r: transmission or reflection" % (part,))
+        h = lib.btdf_table_part(self._h, _PARTS[part])
+        if not h:
+            raise ValueError("table '%s' holds no %s" % (self.path, part))
+        a, b, c = _f64(ti, to, phi)
+        shape = a.shape
+        a, b, c = (x.reshape(-1) for x in (a, b, c))
+        out = np.empty((a.size, self.channels))
+        o = (ctypes.c_double * MAX_CHANNELS)()
+        for j in range(a.size):
+            st = lib.btdf_table_eval(h, a[j], b[j], c[j], o)
+            if st != 0:
+                raise ValueError("Table.eval: angles (%r, %r, %r) at flat index %d: %s"
+                                 % (a[j], b[j], c[j], j, lib.btdf_strerror(st).decode()))
+            out[j] = o[:self.channels]
+        return _out(out, shape + (3,)) if self.channels == 3 else _out(out[:, 0], shape)
+
+    def write(self, path):
+        """Writes the table (.csv or .exr: btdf_table_write; temporary file renamed)."""
+        msg = ctypes.create_string_buffer(1024)
+        _check(_library().btdf_table_write(self._h, os.fsencode(path), None, msg, 1024),
+               "writing '%s'" % path, msg)
+
+    def close(self):
+        if getattr(self, "_h", None):
+            _library().btdf_table_free(self._h)
+            self._h = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # interpreter shutdown: the process frees it anyway
+            pass
+
+
+_SIDES = {"enter": 1, "leave": 2, "top": 4, "bottom": 8}
+
+
+class Bsdf:
+    """A SCATFUN .bsdf file (pbrt-v3 "fourier") read by btdf_scatfun_read."""
+
+    def __init__(self, path=None, _handle=None):
+        lib = _library()
+        if _handle is None:
+            h = ctypes.c_void_p()
+            msg = ctypes.create_string_buffer(1024)
+            _check(lib.btdf_scatfun_read(os.fsencode(path), ctypes.byref(h), msg, 1024),
+                   "reading '%s'" % path, msg)
+            _handle = h
+        self._h = _handle
+        self.path = path
+        self.channels = lib.btdf_scatfun_channels(self._h)
+        self.eta = lib.btdf_scatfun_eta(self._h)
+
+    def eval(self, ti, to, phi, block="enter", adjoint=False):
+        """rho read back from the file (btdf_scatfun_eval_side), radians. block:
+        "enter" (Eq. 25, index n), "leave" (index 1/n), "top" or "bottom" (rho_r,
+        `to` the reflected angle tr); adjoint: pbrt-v3's radiance-mode path."""
+        lib = _library()
+        if block not in _SIDES:
+            raise ValueError("block %r: one of %s" % (block, ", ".join(_SIDES)))
+        a, b, c = _f64(ti, to, phi)
+        shape = a.shape
+        a, b, c = (x.reshape(-1) for x in (a, b, c))
+        out = np.empty((a.size, self.channels))
+        o = (ctypes.c_double * MAX_CHANNELS)()
+        for j in range(a.size):
+            st = lib.btdf_scatfun_eval_side(self._h, _SIDES[block], 1 if adjoint else 0,
+                                            a[j], b[j], c[j], o)
+            if st != 0:
+                raise ValueError("Bsdf.eval: angles (%r, %r, %r) at flat index %d: %s"
+                                 % (a[j], b[j], c[j], j, lib.btdf_strerror(st).decode()))
+            out[j] = o[:self.channels]
+        return _out(out, shape + (3,)) if self.channels == 3 else _out(out[:, 0], shape)
+
+    def write(self, path):
+        msg = ctypes.create_string_buffer(1024)
+        _check(_library().btdf_scatfun_write(self._h, os.fsencode(path), None, msg, 1024),
+               "writing '%s'" % path, msg)
+
+    def close(self):
+        if getattr(self, "_h", None):
+            _library().btdf_scatfun_free(self._h)
+            self._h = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:
+            pass
+
+
+def open(path):  # noqa: A001  (the module's reader, as btdftab's --table)
+    """A Table (.csv, .exr) or a Bsdf (.bsdf), by the file's extension."""
+    return Bsdf(path) if str(path).lower().endswith(".bsdf") else Table(path)
+
+
+def _ior_params(ior, smoothness, k0):
+    iors = list(np.ravel(np.asarray(ior, dtype=np.float64)))
+    if len(iors) not in (1, 3):
+        raise ValueError("ior: one value or three (R, G, B), not %d" % len(iors))
+    p = _Params()
+    p.channels = len(iors)
+    for c, v in enumerate(iors):
+        p.ior[c] = v
+    p.smoothness, p.k0 = float(smoothness), float(k0)
+    msg = ctypes.create_string_buffer(256)
+    if _library().btdf_params_check(ctypes.byref(p), msg, 256) != 0:
+        raise ValueError("model parameters: " + msg.value.decode("utf-8", "replace"))
+    return p
+
+
+def build(ior, smoothness, k0=0.7, tolerance=1e-3, part="transmission", threads=0,
+          ti_range=None, format="table"):  # noqa: A002
+    """Builds an adaptive table (btdf_table_build, the default of `btdftab tabulate`)
+    or, with format="bsdf", a .bsdf file's contents (btdf_scatfun_build, all four
+    blocks). ior: one index or three; ti_range: (min, max) radians. Returns a Table
+    or a Bsdf; a budget that stops refinement first raises BtdfError."""
+    lib = _library()
+    p = _ior_params(ior, smoothness, k0)
+    msg = ctypes.create_string_buffer(1024)
+    h = ctypes.c_void_p()
+    if format == "bsdf":
+        _check(lib.btdf_scatfun_build(ctypes.byref(p), float(tolerance), 15, int(threads),
+                                      ctypes.byref(h), msg, 1024), "btdf_scatfun_build", msg)
+        return Bsdf(_handle=h)
+    if format != "table":
+        raise ValueError("format %r: table or bsdf" % (format,))
+    if part not in _PARTS:
+        raise ValueError("part %r: transmission, reflection or both" % (part,))
+    o = _TableOpts()
+    lib.btdf_table_opts_default(ctypes.byref(o))
+    o.params = p
+    o.tolerance = float(tolerance)
+    o.threads = int(threads)
+    o.part = _PARTS[part]
+    if ti_range is not None:
+        o.ti_min, o.ti_max = float(ti_range[0]), float(ti_range[1])
+    st = lib.btdf_table_build(ctypes.byref(o), ctypes.byref(h), msg, 1024)
+    if st != 0:
+        if h:
+            lib.btdf_table_free(h)
+        _check(st, "btdf_table_build", msg)
+    return Table(_handle=h)

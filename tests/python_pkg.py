@@ -1,0 +1,216 @@
+# SPDX-License-Identifier: MIT
+"""python_pkg.py BTDFTAB: the Python package btdftab against the btdftab tool, bit for bit.
+
+Run in a venv where `pip install .` put the package (.ci/run does), or with the
+checkout's python/ on PYTHONPATH and a build folder beside it. Every value the package
+returns is compared with the tool's output at 17 significant digits, which names one
+double: parsed back, the two must be equal, not close. The tool takes degrees and turns
+them into radians as x * pi / 180 (tools/btdftab.c), so the radian forms are given
+the same doubles; Eq. 25 itself the tool evaluates in degrees (btdf_rho_deg), which
+the package's rho_deg is. Prints "N passed, N failed".
+"""
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+import numpy as np
+
+import btdftab
+
+BT = os.path.abspath(sys.argv[1])
+passed = failed = 0
+
+
+def check(ok, what):
+    global passed, failed
+    if ok:
+        passed += 1
+        print("ok %d - %s" % (passed, what))
+    else:
+        failed += 1
+        print("not ok - %s" % what)
+
+
+def tool(*args, stdin=None):
+    r = subprocess.run([BT] + [str(a) for a in args], input=stdin, capture_output=True,
+                       text=True)
+    if r.returncode != 0:
+        raise RuntimeError("btdftab %s: exit %d: %s" % (" ".join(map(str, args)),
+                                                       r.returncode, r.stderr))
+    return r.stdout
+
+
+def rows_of(text):
+    return np.array([[float(v) for v in ln.replace(",", " ").split()]
+                     for ln in text.splitlines() if ln.strip()])
+
+
+def same(a, b):
+    """Equal doubles, shape for shape (no NaN can occur: the library never returns one)."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    return a.shape == b.shape and bool(np.all(a == b))
+
+
+def rounding_bound(f_deg, n, s, a, b, c, dom):
+    """How far the radian form may differ from the degree form at each point: the
+    degree form reduces its angles exactly, the radian form gets x * pi / 180 rounded
+    (half an ulp, about 1.1e-16 relative, plus the library's own reduction of a radian
+    angle: a few ulps). rho moves by |theta d(rho)/d(theta)| times that relative
+    change, summed over the three angles; the slopes are central differences of the
+    degree form over 1e-5 degrees. Bound: 16 ulps of rho itself plus 16 ulps of angle
+    through each slope (16: the rounding of the angles and of rho's few dozen
+    operations, with a margin of 2 over the 8 they sum to at most here)."""
+    eps = np.finfo(np.float64).eps
+    h = 1e-5
+    val = f_deg(n, s, a, b, c)
+    slope = np.zeros_like(val)
+    for k, x in enumerate((a, b, c)):
+        lo, hi = [list((a, b, c)) for _ in range(2)]
+        # inside the domain dom[k] = (low, high) at its ends: one-sided there
+        lo[k], hi[k] = np.maximum(x - h, dom[k][0]), np.minimum(x + h, dom[k][1])
+        d = (f_deg(n, s, *hi) - f_deg(n, s, *lo)) / np.maximum(hi[k] - lo[k], h)
+        slope += np.abs(x * d)  # d(rho) per unit relative change of the angle
+    return 16 * eps * (np.abs(val) + slope)
+
+
+DOM_T = ((0, 90), (90, 180), (-1e9, 1e9))  # the domains in degrees (btdf.h)
+DOM_R = ((0, 90), (0, 90), (-1e9, 1e9))
+
+
+def rad(x):
+    return np.asarray(x, dtype=np.float64) * math.pi / 180.0  # as the tool does
+
+
+print("# package %s, library %s (%s)" % (btdftab.__file__, btdftab.library_path(),
+                                         btdftab.version()))
+rng = np.random.default_rng(29)
+N = 200
+ti = np.concatenate([[0, 0, 30, 45, 89.9, 90], rng.uniform(0, 90, N)])
+to = np.concatenate([[180, 170, 150, 120, 90.5, 90], rng.uniform(90, 180, N)])
+phi = np.concatenate([[180, 90, 180, 0, 180, 180], rng.uniform(0, 360, N)])
+tr = 180 - to
+stdin = "".join("%.17g %.17g %.17g\n" % v for v in zip(ti, to, phi))
+stdin_r = "".join("%.17g %.17g %.17g\n" % v for v in zip(ti, tr, phi))
+mats = [(1.5, 3), (1.4, 1), (0.6666667, 6), (1.5, 100), (1.0001, 3), (1.5, 0.3)]
+
+# Eq. 25 and its reflection, angles in degrees as the tool reads them
+for n, s in mats:
+    want = rows_of(tool("eval", "--ior", n, "-s", s, stdin=stdin))[:, 0]
+    check(same(btdftab.rho_deg(n, s, ti, to, phi), want),
+          "rho_deg n = %g, s = %g: %d values equal btdftab eval's" % (n, s, len(ti)))
+    want = rows_of(tool("eval", "--ior", n, "-s", s, "--part", "reflection", stdin=stdin_r))
+    check(same(btdftab.rho_r_deg(n, s, ti, tr, phi), want[:, 0]),
+          "rho_r_deg n = %g, s = %g: equal btdftab eval --part reflection's" % (n, s))
+    # rho_r in radians takes the tool's own radians for the reflection (btdf_rho_r_deg
+    # and btdf_eval_r share the formula past the angles: compared, not assumed)
+    got = btdftab.rho_r(n, s, rad(ti), rad(tr), rad(phi))
+    bound = rounding_bound(btdftab.rho_r_deg, n, s, ti, tr, phi, DOM_R)
+    err = np.abs(got - want[:, 0])
+    check(bool(np.all(err <= bound)),
+          "rho_r (radians) n = %g, s = %g: within the angles' rounding of the degree form "
+          "(worst error / bound %.2g)" % (n, s, (err / np.maximum(bound, 1e-300)).max()))
+
+# three channels: the index broadcasts against the angles
+want = rows_of(tool("eval", "--ior", "1.51,1.52,1.53", "-s", 3, stdin=stdin))
+got = btdftab.rho_deg(np.array([1.51, 1.52, 1.53]), 3, ti[:, None], to[:, None],
+                      phi[:, None])
+check(same(got, want), "rho_deg with ior (3,) against angles (N, 1): shape (N, 3), "
+      "equal the tool's three channels")
+
+# rho in radians: the degree form reduces its angles exactly, the radian one gets them
+# rounded to a double, so the two agree to the rounding_bound; and the array call is
+# bit for bit the scalar calls.
+for n, s in mats:
+    want = rows_of(tool("eval", "--ior", n, "-s", s, stdin=stdin))[:, 0]
+    got = btdftab.rho(n, s, rad(ti), rad(to), rad(phi))
+    bound = rounding_bound(btdftab.rho_deg, n, s, ti, to, phi, DOM_T)
+    err = np.abs(got - want)
+    check(bool(np.all(err <= bound)),
+          "rho (radians) n = %g, s = %g: within the angles' rounding of btdftab eval "
+          "(worst error / bound %.2g)" % (n, s, (err / np.maximum(bound, 1e-300)).max()))
+    one = np.array([btdftab.rho(n, s, float(a), float(b), float(c))
+                    for a, b, c in zip(rad(ti), rad(to), rad(phi))])
+    check(same(got, one), "rho n = %g, s = %g: the array call equals the scalar calls" % (n, s))
+    grid = btdftab.rho([[n], [n]], s, rad(ti), rad(to), rad(phi))
+    check(same(grid, np.stack([got, got])), "rho n = %g: ior (2, 1) against angles (N,) "
+          "gives (2, N)" % n)
+
+# T, R, Ft and R + T against albedo --digits 17 (radians: the tool's x * pi / 180)
+ang = np.array([0, 10, 30, 45, 60, 80, 89.9, 90])
+for n, s in mats:
+    w = rows_of("\n".join(tool("albedo", "--digits", 17, "--ior", n, "-s", s,
+                               *ang).splitlines()[1:]))
+    a = rad(ang)
+    check(same(btdftab.T(n, s, a), w[:, 1]), "T n = %g, s = %g equals albedo's" % (n, s))
+    check(same(btdftab.fresnel_t(n, a), w[:, 2]), "fresnel_t n = %g equals albedo's Ft" % n)
+    check(same(btdftab.R(n, s, a), w[:, 3]), "R n = %g, s = %g equals albedo's" % (n, s))
+    check(same(btdftab.albedo(n, s, a), w[:, 4]), "albedo n = %g, s = %g equals R + T" % (n, s))
+
+W = tempfile.mkdtemp()
+# tables: one written by the tool, read by the package; one built by the package
+q = rng.uniform(0, 1, (60, 3)) * [80, 89, 180] + [0, 90.5, 0]
+qin = "".join("%.17g %.17g %.17g\n" % tuple(v) for v in q)
+for ext in ("csv", "exr"):
+    path = os.path.join(W, "t." + ext)
+    try:
+        tool("tabulate", "-q", "--ior", 1.5, "-s", 3, "--tolerance", "1e-2", "-o", path)
+    except RuntimeError as e:
+        if ext == "exr" and "OpenEXR" in str(e):
+            print("# .exr: this build has no OpenEXR (%s)" % str(e).strip())
+            continue
+        raise
+    want = rows_of(tool("eval", "--table", path, stdin=qin))[:, 0]
+    t = btdftab.open(path)
+    check(t.kind == "facet" and t.ior == [1.5] and t.smoothness == 3 and len(t) > 0,
+          ".%s table: kind, n, s, node count read" % ext)
+    check(same(t.eval(rad(q[:, 0]), rad(q[:, 1]), rad(q[:, 2])), want),
+          "Table.eval on the tool's .%s table equals btdftab eval --table" % ext)
+both = os.path.join(W, "both.csv")
+tool("tabulate", "-q", "--ior", 1.5, "-s", 3, "--tolerance", "1e-2", "--part", "both",
+     "-o", both)
+qr = np.column_stack([q[:, 0], 180 - q[:, 1], q[:, 2]])
+want = rows_of(tool("eval", "--table", both, "--part", "reflection",
+                    stdin="".join("%.17g %.17g %.17g\n" % tuple(v) for v in qr)))[:, 0]
+t = btdftab.open(both)
+check(t.parts == "both" and same(t.eval(rad(qr[:, 0]), rad(qr[:, 1]), rad(qr[:, 2]),
+                                        part="reflection"), want),
+      "Table.eval part reflection equals btdftab eval --table --part reflection")
+# built by the package: the same table as the tool's (same nodes), written and read back
+tb = btdftab.build(1.5, 3, tolerance=1e-2)
+mine = os.path.join(W, "mine.csv")
+tb.write(mine)
+want = rows_of(tool("eval", "--table", os.path.join(W, "t.csv"), stdin=qin))[:, 0]
+check(len(tb) == len(btdftab.open(os.path.join(W, "t.csv"))) and
+      same(btdftab.open(mine).eval(rad(q[:, 0]), rad(q[:, 1]), rad(q[:, 2])), want),
+      "build(1.5, 3, tolerance=1e-2): the nodes and values of btdftab tabulate's table")
+# a .bsdf written by the tool
+bsdf = os.path.join(W, "t.bsdf")
+tool("tabulate", "-q", "--ior", 1.5, "-s", 3, "--tolerance", "5e-2", "-o", bsdf)
+want = rows_of(tool("eval", "--table", bsdf, stdin=qin))[:, 0]
+f = btdftab.open(bsdf)
+check(isinstance(f, btdftab.Bsdf) and f.eta == 1.5 and f.channels == 1 and
+      same(f.eval(rad(q[:, 0]), rad(q[:, 1]), rad(q[:, 2])), want),
+      "Bsdf.eval (light entering) equals btdftab eval --table on a .bsdf")
+
+# bad input: ValueError naming the value
+for call, word in ((lambda: btdftab.rho(1.5, 3, 2.0, 2.5, 0), "2.0"),
+                   (lambda: btdftab.rho(1, 3, 0, 3, 0), "n = 1"),
+                   (lambda: btdftab.T(1.5, -1, 0), "-1"),
+                   (lambda: btdftab.rho_deg(1.5, 3, 30, 60, 0), "60")):
+    try:
+        call()
+        check(False, "bad input raises ValueError (%s)" % word)
+    except ValueError as e:
+        check(word in str(e), "bad input raises ValueError naming %s: %s" % (word, e))
+try:
+    btdftab.open(os.path.join(W, "none.csv"))
+    check(False, "a missing table raises BtdfError")
+except btdftab.BtdfError as e:
+    check("none.csv" in str(e), "a missing table raises BtdfError: %s" % e)
+
+shutil.rmtree(W)
+print("%d passed, %d failed" % (passed, failed))
+sys.exit(1 if failed else 0)
