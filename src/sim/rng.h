@@ -1,0 +1,47 @@
+/* SPDX-License-Identifier: MIT */
+/* rng.h: the simulator's random numbers. One stream per (seed, purpose, index), so a
+   batch of rays or a surface realisation draws the same numbers on any thread. */
+#ifndef SIM_RNG_H
+#define SIM_RNG_H
+
+#include <math.h>
+#include <stdint.h>
+
+/* Same as the project's splitmix64 (Steele, Lea & Flood 2014): a full-period 64-bit
+   generator, used here both to derive stream seeds and as the stream itself. */
+static inline uint64_t sim_splitmix64(uint64_t *state)
+{
+    uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+/* The state of stream `index` of kind `purpose` for a run seeded with `seed`: the three
+   words go through the mixer one after another, so nearby seeds and indices give
+   unrelated streams. */
+static inline uint64_t sim_stream(uint64_t seed, uint64_t purpose, uint64_t index)
+{
+    uint64_t s = seed;
+    uint64_t a = sim_splitmix64(&s);
+    s = a ^ (purpose * 0xD1B54A32D192ED03ull);
+    uint64_t b = sim_splitmix64(&s);
+    s = b ^ (index * 0x8CB92BA72F3D8DD7ull);
+    return sim_splitmix64(&s);
+}
+
+/* Uniform in [0, 1): the top 53 bits. */
+static inline double sim_uniform(uint64_t *state)
+{
+    return (double)(sim_splitmix64(state) >> 11) * 0x1.0p-53;
+}
+
+/* Standard normal by Box-Muller; u1 is taken in (0, 1] so log never sees 0. */
+static inline double sim_gauss(uint64_t *state)
+{
+    double u1 = 1.0 - sim_uniform(state);
+    double u2 = sim_uniform(state);
+    return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
+}
+
+#endif
