@@ -48,7 +48,7 @@ extern "C" {
  */
 
 /* Accepted ranges (inclusive). */
-#define BTDF_SIM_RAYS_MAX 1000000000000ull /* 1e12 per angle and channel */
+#define BTDF_SIM_RAYS_MAX 100000000000ull /* 1e11 per angle and channel */
 #define BTDF_SIM_CELLS_PER_TAU_MIN 2
 #define BTDF_SIM_CELLS_PER_TAU_MAX 64
 #define BTDF_SIM_TILE_TAU_MIN 4
@@ -65,9 +65,8 @@ typedef struct btdf_sim_opts {
     uint64_t rays;                 /* rays per incident angle and channel */
     uint64_t seed;
     int threads;          /* 0: as many as the machine has */
-    int cells_per_tau;    /* grid spacing dx = tau / this; default 8 */
+    int cells_per_tau;    /* grid spacing dx = tau / this; default 16 */
     int tile_tau;         /* tile side in units of tau; default 16 */
-    int realisations;     /* independent surfaces, used in turn by the batches; 16 */
     uint64_t batch_rays;  /* rays per batch; 0: chosen from rays (at least 32 batches) */
     int accel;            /* 1: min/max hierarchy (default); 0: plain grid DDA */
     int theta_bins;       /* histogram bins in theta per hemisphere; 0: no histogram */
@@ -81,7 +80,7 @@ typedef struct btdf_sim_opts {
 } btdf_sim_opts;
 
 /* Defaults: n = 1.5, s = 3, one angle (none set: theta_i must be given), 1e6 rays,
-   seed 1, cells_per_tau 8, tile_tau 16, 16 realisations, hierarchy on, no histogram. */
+   seed 1, cells_per_tau 16, tile_tau 16, hierarchy on, no histogram. */
 BTDF_API void btdf_sim_opts_default(btdf_sim_opts *o);
 
 /* BTDF_OK, or BTDF_EINVAL naming the value: NaN/inf, channels not 1 or 3, n outside
@@ -115,12 +114,13 @@ typedef struct btdf_sim_tally {
     btdf_sim_est *hist_R, *hist_R1;
 } btdf_sim_tally;
 
-/* The surfaces' realised statistics, averaged over the realisations (sigma = 1). */
+/* The surfaces' realised statistics (sigma = 1), averaged over the first 32
+   realisations (every batch has its own). */
 typedef struct btdf_sim_surface {
     int n;                 /* grid points per side */
     double dx;             /* spacing */
     double tile;           /* tile side */
-    int realisations;
+    int realisations;      /* measured */
     double rms_height;     /* target 1 */
     double rms_slope;      /* of the triangles, target 2/s */
     double corr_length;    /* where the realised autocorrelation falls to 1/e, target s */

@@ -44,4 +44,14 @@ static inline double sim_gauss(uint64_t *state)
     return sqrt(-2.0 * log(u1)) * cos(6.283185307179586 * u2);
 }
 
+/* Two independent standard normals, both of Box-Muller's outputs. */
+static inline void sim_gauss2(uint64_t *state, double *a, double *b)
+{
+    double u1 = 1.0 - sim_uniform(state);
+    double u2 = sim_uniform(state);
+    double r = sqrt(-2.0 * log(u1)), t = 6.283185307179586 * u2;
+    *a = r * cos(t);
+    *b = r * sin(t);
+}
+
 #endif

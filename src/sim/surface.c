@@ -237,8 +237,8 @@ int sim_gen_surface(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surfa
     if (!s->h)
         return -1;
     uint64_t rs = stream;
-    for (size_t q = 0; q < nn; q++)
-        w->real[q] = sim_gauss(&rs);
+    for (size_t q = 0; q + 1 < nn; q += 2)
+        sim_gauss2(&rs, &w->real[q], &w->real[q + 1]);
     fftw_execute_dft_r2c(g->fwd, w->real, w->spec);
     for (size_t q = 0; q < nc; q++) {
         double ar = w->spec[q][0], ai = w->spec[q][1];

@@ -26,7 +26,8 @@
 typedef struct walk_ctx {
     const sim_surface *s;
     const double *o, *d;
-    double sgn; /* +1: ray above the surface, -1: below */
+    double inv[2]; /* 1 / d[0], 1 / d[1] (inf for 0, never used then) */
+    double sgn;    /* +1: ray above the surface, -1: below */
     double t;   /* the hit */
     double b, c; /* its plane's slopes per grid unit */
 } walk_ctx;
@@ -91,17 +92,17 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
     const sim_surface *s = w->s;
     const double *o = w->o, *d = w->d;
     int sh = s->shift[k];
-    double S = (double)((int64_t)1 << sh);
+    double S = (double)((int64_t)1 << sh), invS = 1.0 / S; /* powers of two: exact */
     uint64_t side_m = ((uint64_t)s->n >> sh) - 1u;
     int sideshift = s->log2n - sh;
-    int64_t i = (int64_t)floor((o[0] + ta * d[0]) / S);
-    int64_t j = (int64_t)floor((o[1] + ta * d[1]) / S);
+    int64_t i = (int64_t)floor((o[0] + ta * d[0]) * invS);
+    int64_t j = (int64_t)floor((o[1] + ta * d[1]) * invS);
     i = i < ilo ? ilo : i > ihi ? ihi : i;
     j = j < jlo ? jlo : j > jhi ? jhi : j;
     int64_t si = d[0] > 0.0 ? 1 : -1, sj = d[1] > 0.0 ? 1 : -1;
     /* d = 0 along an axis: that axis is never crossed */
-    double tx = d[0] != 0.0 ? ((double)(i + (si > 0)) * S - o[0]) / d[0] : INFINITY;
-    double ty = d[1] != 0.0 ? ((double)(j + (sj > 0)) * S - o[1]) / d[1] : INFINITY;
+    double tx = d[0] != 0.0 ? ((double)(i + (si > 0)) * S - o[0]) * w->inv[0] : INFINITY;
+    double ty = d[1] != 0.0 ? ((double)(j + (sj > 0)) * S - o[1]) * w->inv[1] : INFINITY;
     const double *lo = s->lo[k], *hi = s->hi[k];
     double t0 = ta;
     for (;;) {
@@ -127,12 +128,12 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
             i += si;
             if (i < ilo || i > ihi)
                 return 0;
-            tx = ((double)(i + (si > 0)) * S - o[0]) / d[0];
+            tx = ((double)(i + (si > 0)) * S - o[0]) * w->inv[0];
         } else {
             j += sj;
             if (j < jlo || j > jhi)
                 return 0;
-            ty = ((double)(j + (sj > 0)) * S - o[1]) / d[1];
+            ty = ((double)(j + (sj > 0)) * S - o[1]) * w->inv[1];
         }
         t0 = t1;
     }
@@ -141,7 +142,8 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
 int sim_first_hit(const sim_surface *s, const double o[3], const double d[3], int above,
                   double tmax, int accel, double *t, double nrm[3])
 {
-    walk_ctx w = {s, o, d, above ? 1.0 : -1.0, 0.0, 0.0, 0.0};
+    /* a zero component gives inf, which walk never multiplies (it tests d first) */
+    walk_ctx w = {s, o, d, {1.0 / d[0], 1.0 / d[1]}, above ? 1.0 : -1.0, 0.0, 0.0, 0.0};
     int top = accel ? s->levels - 1 : 0;
     if (!walk(&w, top, INT64_MIN / 8, INT64_MAX / 8, INT64_MIN / 8, INT64_MAX / 8, 0.0, tmax))
         return 0;
