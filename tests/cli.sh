@@ -387,7 +387,7 @@ fi
 "$B" --man > "$W/man.1" && head -n 3 "$W/man.1" | grep -q '^\.TH BTDFTAB 1' && ok "--man writes a manual page" || no "--man"
 sed 's/\\-/-/g' "$W/man.1" > "$W/man.txt" # troff's \- is a plain dash
 missing=""
-for c in eval tabulate albedo polar build inspect; do
+for c in eval tabulate albedo polar build inspect simulate; do
     for o in $("$B" help "$c" | sed -n 's/^ *\(-., \)\{0,1\}--\([a-z0-9-]*\).*/\2/p'); do
         grep -q -- "--$o" "$W/man.txt" || missing="$missing $c:--$o"
     done
@@ -537,6 +537,23 @@ expect 2 "--part transmission applies to .csv, .exr and .bsdf" "--part transmiss
     ! "$B" tabulate -s 3 --tolerance 3e-2 --estimate none -o "$W/s03.csv" 2>&1 | grep -q warning && \
     ok "tabulate warns when R + T < 0.9 at its first incidence angle (s = 0.3, not s = 3)" || { no "tabulate warning"; cat "$W/a.err"; }
 rm -f "$W/a.err" "$W/s03.csv"
+# simulate: the Monte Carlo surface; report keys, same bytes on 1 and 2 threads but the time
+"$B" simulate -q -n 1.5 -s 3 --theta-i 30 --rays 20000 --threads 1 --report "$W/s1.json" && \
+    "$B" simulate -q -n 1.5 -s 3 --theta-i 30 --rays 20000 --threads 2 --report "$W/s2.json" && \
+    grep -q '"T": 0\.9' "$W/s1.json" && grep -q '"orders": {"T": \[' "$W/s1.json" && \
+    [ "$(grep -v 'seconds\|command' "$W/s1.json")" = "$(grep -v 'seconds\|command' "$W/s2.json")" ] && \
+    ok "simulate: report, same numbers on 1 and 2 threads" || no "simulate report"
+"$B" simulate -q --theta-i 0:60:30 --rays 2000 --report "$W/s3.json" && \
+    grep -q '"T": \[0\.[0-9]*, 0\.[0-9]*, 0\.[0-9]*\]' "$W/s3.json" && \
+    ok "simulate: a list per angle" || no "simulate angle list"
+rm -f "$W/s1.json" "$W/s2.json" "$W/s3.json"
+expect 2 "smoothness 0: must be > 0" "simulate s = 0" -- "$B" simulate -s 0 --report "$W/t.json"
+expect 2 "n = 1 has no BTDF" "simulate n = 1" -- "$B" simulate -n 1 --report "$W/t.json"
+expect 2 "'nan'" "simulate NaN" -- "$B" simulate -n nan --report "$W/t.json"
+expect 2 "--rays: '1e20'" "simulate absurd rays" -- "$B" simulate --rays 1e20 --report "$W/t.json"
+expect 2 "theta-i: 90: must lie in" "simulate grazing angle" -- "$B" simulate --theta-i 90 --report "$W/t.json"
+expect 3 "above the memory limit of 1 MB" "simulate tile over --max-memory" -- "$B" simulate --max-memory 1 --report "$W/t.json"
+expect 1 "cannot write in the folder" "simulate unwritable report" -- "$B" simulate --rays 100 --report "$W/nodir/t.json"
 
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

@@ -31,9 +31,11 @@ PENDING = {
 TOP_HEADERS = {'radiance.h': 'radiance', 'radiance_impl.h': 'radiance', 'plot.h': 'preview'}
 # Public headers: include/btdf/ and the generated configuration.
 PUBLIC = {'btdf.h', 'btdf_io.h', 'btdf_preview.h', 'btdf_radiance.h', 'btdf_scatfun.h',
-          'btdf_config.h'}
+          'btdf_sim.h', 'btdf_config.h'}
 # System headers confined to one place (layout: STYLE section 9).
-CONFINED = {'fftw3.h': ('src/fourier.c', 'src/scatfun/dct.c'),
+# FFTW: the .bsdf builder's cosine transforms, and the simulator's spectral filter that
+# makes its Gaussian surfaces (src/sim/surface.c).
+CONFINED = {'fftw3.h': ('src/fourier.c', 'src/scatfun/dct.c', 'src/sim/surface.c'),
             'openexr.h': ('formats/exr.c',), 'png.h': ('formats/png.c',)}
 
 INC = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)

@@ -14,6 +14,7 @@
 
 #include "btdf.h"
 #include "btdf_scatfun.h"
+#include "btdf_sim.h"
 #include "fastnum.h"
 #include "model/kernel.h"
 #include "table/table.h"
@@ -575,6 +576,55 @@ static void bsdf_bench(int reps)
     }
 }
 
+/* The Monte Carlo surface (btdf_sim.h): rays per second on one thread at n = 1.5,
+   ti = 30, for the min/max hierarchy and the plain cell DDA on the same rays (both
+   find the same hits, so T agrees to the bit), with the hits per ray and the time a
+   standard error of 1e-3 on T would take. CPU seconds of this process: the machine
+   may be shared, and one thread's CPU time is what a thread costs. */
+static void bench_sim(FILE *f, int reps)
+{
+    fprintf(f, "method,s,rays,cpu_seconds,rays_per_s_thread,mean_hits,T,T_se,"
+               "seconds_to_T_se_1e-3,tile_mib\n");
+    const double ss[] = {0.5, 1, 3, 6, 30};
+    double ti = 30.0 * M_PI / 180.0;
+    for (int k = 0; k < 5; k++)
+        for (int accel = 1; accel >= 0; accel--) {
+            btdf_sim_opts o;
+            btdf_sim_opts_default(&o);
+            o.smoothness = ss[k];
+            o.theta_i = &ti;
+            o.n_theta = 1;
+            o.rays = 400000;
+            o.threads = 1;
+            o.accel = accel;
+            double best = INFINITY;
+            btdf_sim_result *keep = NULL;
+            for (int r = 0; r < reps; r++) {
+                btdf_sim_result *res = NULL;
+                clock_t c0 = clock();
+                if (btdf_sim_run(&o, &res, NULL, 0) != BTDF_OK)
+                    return;
+                double cpu = (double)(clock() - c0) / CLOCKS_PER_SEC;
+                if (cpu < best) {
+                    best = cpu;
+                    btdf_sim_result_free(keep);
+                    keep = res;
+                } else {
+                    btdf_sim_result_free(res);
+                }
+            }
+            const btdf_sim_tally *t = &keep->tally[0];
+            double rate = (double)o.rays / (best > 0 ? best : 1e-9);
+            double need = (double)o.rays * (t->T.se / 1e-3) * (t->T.se / 1e-3);
+            fprintf(f, "%s,%g,%llu,%.3f,%.4g,%.4f,%.5f,%.2g,%.3g,%.2f\n",
+                    accel ? "hierarchy" : "plain-dda", ss[k], (unsigned long long)o.rays, best,
+                    rate, t->mean_hits.mean, t->T.mean, t->T.se, need / rate,
+                    (double)keep->surface.tile_bytes / 1048576.0);
+            fflush(f);
+            btdf_sim_result_free(keep);
+        }
+}
+
 static const char usage[] =
     "usage: btdf-bench [SECTION [REPS]]\n"
     "Prints the machine, then CSV rows of timings and errors (docs/benchmarks.md).\n"
@@ -586,7 +636,9 @@ static const char usage[] =
     "           public evaluation entry points beside the\n"
     "           internal kernel, at least 5 runs), or throughput (Eq. 25 evaluations\n"
     "           per second), or bsdf (.bsdf builds: time, bytes, nodes, series\n"
-    "           length and measured error for s = 3, 20, 100, 1000)\n"
+    "           length and measured error for s = 3, 20, 100, 1000), or sim (the\n"
+    "           Monte Carlo surface: rays/s/thread at s = 0.5 to 30, hierarchy and\n"
+    "           plain DDA; not part of all)\n"
     "  REPS     runs per table, 1 to 9 (default 3); each row reports the median\n"
     "Timings depend on the machine's load: quote medians and the machine line.\n";
 
@@ -601,7 +653,8 @@ int main(int argc, char **argv)
     long r = argc > 2 ? strtol(argv[2], &end, 10) : 3;
     if (strcmp(what, "all") && strcmp(what, "sweep") && strcmp(what, "scaling") &&
         strcmp(what, "api") && strcmp(what, "throughput") && strcmp(what, "tolerances") &&
-        strcmp(what, "fullrange") && strcmp(what, "nearone") && strcmp(what, "bsdf")) {
+        strcmp(what, "fullrange") && strcmp(what, "nearone") && strcmp(what, "bsdf") &&
+        strcmp(what, "sim")) {
         fprintf(stderr, "btdf-bench: unknown section '%s'\n%s", what, usage);
         return 2;
     }
@@ -611,6 +664,10 @@ int main(int argc, char **argv)
     }
     int reps = (int)r;
     machine(stdout);
+    if (!strcmp(what, "sim")) {
+        bench_sim(stdout, reps);
+        return 0;
+    }
     const char *header = "method,case,n,s,tolerance,ti_max_deg,samples,seconds_tabulation,"
                          "seconds_estimate,peak_rss_mib,e_l1,e_max,e_t,status\n";
     if (!strcmp(what, "all") || !strcmp(what, "sweep")) {

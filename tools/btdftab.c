@@ -13,6 +13,7 @@
 
 #include <btdf/btdf.h>
 
+#include "cmd_simulate.h"
 #include "evalstream.h"
 #include "fastnum.h"
 #include "manifest.h"
@@ -366,6 +367,10 @@ static int apply(cli *c, const opt_hit *h)
         c->digits = (int)d;
         return 1;
     }
+    case OPT_RAYS: /* simulate's own: tools/cmd_simulate.c */
+    case OPT_SEED:
+    case OPT_CELLS:
+    case OPT_TILE:
     case OPT_HELP:
     case OPT_END: break;
     }
@@ -1385,6 +1390,8 @@ int main(int argc, char **argv)
         size_t l = strlen(prov);
         snprintf(prov + l, sizeof prov - l, " %s", argv[i]);
     }
+    if (cmd->bit == CMD_SIMULATE)
+        return cmd_simulate(prog, argc - 1, argv + 1, prov);
     static cli c; /* large: off the stack */
     int code = parse_command(cmd, argc - 1, argv + 1, &c);
     if (code >= 0)

@@ -9,7 +9,9 @@
 #include "options.h"
 
 #define MAT (CMD_EVAL | CMD_TABULATE | CMD_ALBEDO | CMD_POLAR)
-#define ALL (CMD_EVAL | CMD_TABULATE | CMD_ALBEDO | CMD_POLAR | CMD_BUILD | CMD_INSPECT)
+#define ALL (CMD_EVAL | CMD_TABULATE | CMD_ALBEDO | CMD_POLAR | CMD_BUILD | CMD_INSPECT | \
+             CMD_SIMULATE)
+#define SIM CMD_SIMULATE
 
 const opt_def opt_table[] = {
     {OPT_IOR, "ior", 'n', "N|R,G,B", 0, MAT,
@@ -101,6 +103,26 @@ const opt_def opt_table[] = {
      "accurate to 1e-7; 17 gives the double itself)"},
     {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD | CMD_ALBEDO,
      "no report lines or warnings on standard error"},
+    {OPT_IOR, "ior", 'n', "N|R,G,B", 0, SIM,
+     "relative index n = n_lower / n_upper (default 1.5); n < 1 is light from the dense\n"
+     "side; n != 1"},
+    {OPT_SMOOTHNESS, "smoothness", 's', "S", 0, SIM,
+     "s = correlation length / RMS height of the generated surface (default 3)"},
+    {OPT_THETA_I, "theta-i", 0, "A|A,B,..|A:B:STEP", 0, SIM,
+     "incident angles in degrees, in [0, 90) (default 30)"},
+    {OPT_RAYS, "rays", 0, "K", 0, SIM, "rays per angle and channel (default 1000000)"},
+    {OPT_SEED, "seed", 0, "X", 0, SIM, "seed of the surfaces and rays (default 1)"},
+    {OPT_CELLS, "cells-per-tau", 0, "C", 0, SIM,
+     "grid points per correlation length (default 16)"},
+    {OPT_TILE, "tile", 0, "L", 0, SIM, "tile side in correlation lengths (default 16)"},
+    {OPT_THREADS, "threads", 0, "N", 0, SIM,
+     "worker threads, 0 = all cores (default 0); results do not depend on it"},
+    {OPT_MAX_MEMORY, "max-memory", 0, "MIB", 0, SIM,
+     "memory cap for the surfaces and tallies (default 1024)"},
+    {OPT_REPORT, "report", 0, "FILE.json", 0, SIM,
+     "write R, T, their orders and errors, Eq. 25 beside them, and the surface's\n"
+     "realised statistics as JSON"},
+    {OPT_QUIET, "quiet", 'q', NULL, 0, SIM, "no progress bar and no summary"},
     {OPT_HELP, "help", 'h', NULL, 0, ALL, "this help"},
     {OPT_END, NULL, 0, NULL, 0, 0, NULL},
 };
@@ -129,6 +151,11 @@ const cmd_def cmd_table[] = {
      "are relative to the manifest's folder; missing folders are created."},
     {"inspect", CMD_INSPECT, "FILE", "header and statistics of a file",
      "Prints the header and statistics of a table (.csv, .exr) or a .bsdf."},
+    {"simulate", CMD_SIMULATE, "[options] [--report F.json]",
+     "Monte Carlo rays on generated rough surfaces",
+     "Traces rays through periodic Gaussian random surfaces of smoothness S (exact\n"
+     "intersections, Fresnel at every hit, every order) and prints R and T with their\n"
+     "standard errors, split by order (1, 2, 3+), beside Eq. 25 (docs/simulation.md)."},
     {NULL, 0, NULL, NULL, NULL},
 };
 
@@ -218,6 +245,8 @@ static void unknown_option(const char *prog, const cmd_def *cmd, const char *arg
             best = o;
         }
     }
+    if (elsewhere && best && !strcmp(best->name, elsewhere->name))
+        elsewhere = NULL; /* a name this command has too, spelled wrong ("-ior") */
     if (elsewhere) {
         fprintf(stderr, ": --%s is an option of", elsewhere->name);
         const char *sep = " ";

@@ -13,7 +13,8 @@ enum {
     CMD_ALBEDO = 1 << 2,
     CMD_POLAR = 1 << 3,
     CMD_BUILD = 1 << 4,
-    CMD_INSPECT = 1 << 5
+    CMD_INSPECT = 1 << 5,
+    CMD_SIMULATE = 1 << 6
 };
 
 /* Option identities (getopt_long's return values; above every short option letter). */
@@ -50,6 +51,10 @@ typedef enum {
     OPT_LOG_DECADES,
     OPT_ZOOM,
     OPT_DIGITS,
+    OPT_RAYS,
+    OPT_SEED,
+    OPT_CELLS,
+    OPT_TILE,
     OPT_END
 } opt_id;
 

@@ -1,0 +1,154 @@
+/* SPDX-License-Identifier: MIT */
+/* btdf_sim.h: a Monte Carlo goniophotometer on generated Gaussian rough surfaces,
+   the ground truth Eq. 25 is checked against (Xu & Sun 2008, Sec. 4). */
+#ifndef BTDF_SIM_H
+#define BTDF_SIM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "btdf.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/*
+ * Conventions (those of btdf.h, plus)
+ * ------------------------------------
+ * Surface: a periodic square tile of a Gaussian random height field z = h(x, y) with
+ *   mean 0 and autocorrelation C(r) = sigma^2 exp(-r^2 / tau^2), sigma = 1 and
+ *   tau = s (so s = tau / sigma, and the facet slopes are Beckmann with RMS slope
+ *   2/s, the D of Eq. 25). It is made by filtering white noise with FFTW and sampled
+ *   on an N x N grid of spacing dx = tau / cells_per_tau, N = tile_tau *
+ *   cells_per_tau (a power of two). Representation: two planar triangles per grid
+ *   cell, split along the diagonal from (i, j) to (i+1, j+1); the surface is
+ *   continuous and every intersection is exact (up to rounding).
+ *
+ * Light: unpolarised, from the upper medium (z > h) towards -z, at polar angle ti,
+ *   landing uniformly over the tile. At every hit, the Fresnel reflectance of the
+ *   local facet normal picks reflection or refraction (total internal reflection when
+ *   there is no refracted ray), so every ray ends, with weight one, in R (leaving
+ *   upward above the highest point) or T (leaving downward below the lowest). Orders
+ *   count the surface hits of a ray: 1, 2, and 3 or more.
+ *
+ * Index: n = (lower index) / (upper index), as in btdf.h; n < 1 is light from the
+ *   dense side.
+ *
+ * Errors: Monte Carlo standard errors are batch means: the rays are cut into batches
+ *   (each on one surface realisation, with its own random stream seeded from the seed
+ *   and the batch index), and the error of a mean is the spread of the batch means
+ *   over sqrt(batches). Batches are summed in batch order, so the same options give
+ *   the same bytes whatever the thread count.
+ *
+ * Outgoing distribution: optional histograms over (theta, |phi|) per hemisphere, as
+ *   the fraction of the incident flux per bin; divided by a bin's solid angle this is
+ *   rho |cos t| (btdf_sim_bin_solid_angle). phi is folded into [0, pi] (the surface is
+ *   isotropic); phi = pi is the forward plane.
+ */
+
+/* Accepted ranges (inclusive). */
+#define BTDF_SIM_RAYS_MAX 100000000000ull /* 1e11 per angle and channel */
+#define BTDF_SIM_CELLS_PER_TAU_MIN 2
+#define BTDF_SIM_CELLS_PER_TAU_MAX 64
+#define BTDF_SIM_TILE_TAU_MIN 4
+#define BTDF_SIM_TILE_TAU_MAX 256
+#define BTDF_SIM_N_MAX 4096 /* grid points per side */
+#define BTDF_SIM_ORDERS 3   /* order 1, 2, 3 or more */
+
+typedef struct btdf_sim_opts {
+    int channels;                  /* 1, or 3 for R, G, B */
+    double ior[BTDF_MAX_CHANNELS]; /* n per channel */
+    double smoothness;             /* s = tau / sigma */
+    size_t n_theta;                /* incident angles */
+    const double *theta_i;         /* radians, [0, pi/2) */
+    uint64_t rays;                 /* rays per incident angle and channel */
+    uint64_t seed;
+    int threads;          /* 0: as many as the machine has */
+    int cells_per_tau;    /* grid spacing dx = tau / this; default 16 */
+    int tile_tau;         /* tile side in units of tau; default 16 */
+    uint64_t batch_rays;  /* rays per batch; 0: chosen from rays (at least 32 batches) */
+    int accel;            /* 1: min/max hierarchy (default); 0: plain grid DDA */
+    int theta_bins;       /* histogram bins in theta per hemisphere; 0: no histogram */
+    int phi_bins;         /* bins of |phi| over [0, pi]; used when theta_bins > 0 */
+    size_t max_memory;    /* bytes the surfaces and tallies may take; 0: no limit */
+    /* Called after each finished batch with the rays done so far, the total, and the
+       standard error of T of the angle in progress (NaN until it is known). From any
+       thread, one call at a time; it must not call back into the simulator. */
+    void (*progress)(void *ctx, uint64_t done, uint64_t total, double t_se);
+    void *progress_ctx;
+} btdf_sim_opts;
+
+/* Defaults: n = 1.5, s = 3, one angle (none set: theta_i must be given), 1e6 rays,
+   seed 1, cells_per_tau 16, tile_tau 16, hierarchy on, no histogram. */
+BTDF_API void btdf_sim_opts_default(btdf_sim_opts *o);
+
+/* BTDF_OK, or BTDF_EINVAL naming the value: NaN/inf, channels not 1 or 3, n outside
+   [BTDF_IOR_MIN, BTDF_IOR_MAX] or within BTDF_IOR_ONE_EPS of 1, s outside
+   [BTDF_S_MIN, BTDF_S_MAX], no angle or one outside [0, pi/2), rays 0 or above
+   BTDF_SIM_RAYS_MAX, grid sizes out of range, N not a power of two or above
+   BTDF_SIM_N_MAX, bins out of [0, 3600]; BTDF_EBUDGET when the tiles and tallies do
+   not fit max_memory (the message gives what they need). */
+BTDF_API btdf_status btdf_sim_opts_check(const btdf_sim_opts *o, char *msg, size_t msglen);
+
+/* A mean and its standard error. */
+typedef struct btdf_sim_est {
+    double mean, se;
+} btdf_sim_est;
+
+/* What one incident angle and channel gave. */
+typedef struct btdf_sim_tally {
+    double theta_i;
+    int channel;
+    double ior;
+    btdf_sim_est R, T;                       /* all orders */
+    btdf_sim_est R_order[BTDF_SIM_ORDERS];   /* order 1, 2, 3+ */
+    btdf_sim_est T_order[BTDF_SIM_ORDERS];
+    btdf_sim_est mean_hits;                  /* surface hits per ray */
+    uint64_t rays;
+    uint64_t lost;       /* rays stopped by the path limit (counted in neither R nor T) */
+    uint64_t batches;
+    /* Histograms (NULL without): [theta_bin * phi_bins + phi_bin], theta_bin 0 at the
+       mean normal of its hemisphere (t = 0 for R, t = pi for T). */
+    btdf_sim_est *hist_T, *hist_T1; /* transmitted, all orders and order 1 */
+    btdf_sim_est *hist_R, *hist_R1;
+} btdf_sim_tally;
+
+/* The surfaces' realised statistics (sigma = 1), averaged over the first 32
+   realisations (every batch has its own). */
+typedef struct btdf_sim_surface {
+    int n;                 /* grid points per side */
+    double dx;             /* spacing */
+    double tile;           /* tile side */
+    int realisations;      /* measured */
+    double rms_height;     /* target 1 */
+    double rms_slope;      /* of the triangles, target 2/s */
+    double corr_length;    /* where the realised autocorrelation falls to 1/e, target s */
+    size_t tile_bytes;     /* memory of one tile with its hierarchy */
+} btdf_sim_surface;
+
+typedef struct btdf_sim_result {
+    size_t count;          /* n_theta * channels */
+    btdf_sim_tally *tally; /* [channel * n_theta + k] */
+    btdf_sim_surface surface;
+    int theta_bins, phi_bins;
+    double seconds;        /* wall time of the tracing */
+    uint64_t rays_traced;  /* over every angle and channel */
+    uint64_t hits_traced;
+} btdf_sim_result;
+
+/* Runs the simulation. BTDF_EINVAL/BTDF_EBUDGET as btdf_sim_opts_check, BTDF_ENOMEM. */
+BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out, char *msg,
+                                  size_t msglen);
+
+BTDF_API void btdf_sim_result_free(btdf_sim_result *r);
+
+/* Solid angle of histogram bin (theta_bin, phi_bin), both halves of |phi| counted. */
+BTDF_API double btdf_sim_bin_solid_angle(int theta_bins, int phi_bins, int theta_bin,
+                                         int phi_bin);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,369 @@
+/* SPDX-License-Identifier: MIT */
+/* test_sim.c: the Monte Carlo goniophotometer (btdf_sim.h) against what must hold:
+   Fresnel on a flat surface, energy, Eq. 25 where single scattering is exact,
+   reciprocity, independence of the grid, and bytes independent of threads and of the
+   traversal. Tolerances are multiples of the run's own standard errors; each says why. */
+#include <string.h>
+
+#include "btdf_sim.h"
+#include "btdf_test.h"
+
+#define DEG (M_PI / 180.0)
+
+static btdf_sim_result *run(double n, double s, const double *ti, size_t nti, uint64_t rays,
+                            void (*tweak)(btdf_sim_opts *))
+{
+    btdf_sim_opts o;
+    btdf_sim_opts_default(&o);
+    o.ior[0] = n;
+    o.smoothness = s;
+    o.theta_i = ti;
+    o.n_theta = nti;
+    o.rays = rays;
+    o.seed = 7;
+    o.threads = 2;
+    if (tweak)
+        tweak(&o);
+    btdf_sim_result *r = NULL;
+    char msg[256] = "";
+    btdf_status st = btdf_sim_run(&o, &r, msg, sizeof msg);
+    if (st != BTDF_OK)
+        print_error("%s\n", msg);
+    assert_status(BTDF_OK, st);
+    assert_non_null(r);
+    return r;
+}
+
+/* Within k combined standard errors. */
+static void assert_within_se(double a, double b, double se, double k, const char *what)
+{
+    if (!(fabs(a - b) <= k * se)) {
+        print_error("%s: %.6f vs %.6f, %.2f standard errors (allowed %g)\n", what, a, b,
+                    se > 0 ? fabs(a - b) / se : INFINITY, k);
+        fail();
+    }
+}
+
+/* s = 1e6: slopes of RMS 2e-6, so every facet is flat to 1e-11 in Fresnel's terms and
+   R must be the flat-interface Fresnel reflectance. The paths pick reflection with
+   probability R, so the estimate is binomial, with a standard error of about
+   sqrt(R(1-R)/rays) (3e-4 here); 4 standard errors is a false alarm once in 16,000
+   for a correct tracer. Past the critical angle every path reflects: R = 1 exactly. */
+static void flat_is_fresnel(void **state)
+{
+    (void)state;
+    const struct { double n, ti; } c[] = {{1.5, 0}, {1.5, 30}, {1.5, 75}, {1 / 1.5, 0},
+                                           {1 / 1.5, 35}, {1 / 1.4, 20}};
+    for (size_t k = 0; k < sizeof c / sizeof c[0]; k++) {
+        double ti = c[k].ti * DEG;
+        btdf_sim_result *r = run(c[k].n, 1e6, &ti, 1, 200000, NULL);
+        const btdf_sim_tally *t = &r->tally[0];
+        double fr = btdf_fresnel_r(c[k].n, ti);
+        assert_true(t->R.se > 0.0);
+        assert_within_se(t->R.mean, fr, t->R.se, 4.0, "flat R");
+        assert_within_se(t->T.mean, 1.0 - fr, t->T.se, 4.0, "flat T");
+        /* a facet tilted by 1e-5 rad sends nothing back into the surface */
+        assert_true(t->R_order[1].mean == 0.0 && t->T_order[1].mean == 0.0);
+        btdf_sim_result_free(r);
+    }
+    double ti = 60 * DEG; /* sin 60 = 0.866 > 1/1.5: total internal reflection */
+    btdf_sim_result *r = run(1 / 1.5, 1e6, &ti, 1, 20000, NULL);
+    assert_true(r->tally[0].R.mean == 1.0 && r->tally[0].T.mean == 0.0);
+    btdf_sim_result_free(r);
+}
+
+/* Every path ends in R or T with weight one, so R + T = 1 and the orders add up, to
+   the rounding of the divisions (1e-12 is 4500 ulps of 1); no path may be lost. */
+static void energy_is_conserved(void **state)
+{
+    (void)state;
+    const double ti[] = {0, 30 * DEG, 60 * DEG, 80 * DEG};
+    const double ns[] = {1.5, 1 / 1.5};
+    const double ss[] = {0.5, 1, 3};
+    for (size_t a = 0; a < 2; a++)
+        for (size_t b = 0; b < 3; b++) {
+            btdf_sim_result *r = run(ns[a], ss[b], ti, 4, 20000, NULL);
+            for (size_t k = 0; k < r->count; k++) {
+                const btdf_sim_tally *t = &r->tally[k];
+                assert_int_equal(t->lost, 0);
+                assert_close(t->R.mean + t->T.mean, 1.0, 0, 1e-12);
+                double sr = 0, st = 0;
+                for (int o = 0; o < BTDF_SIM_ORDERS; o++) {
+                    assert_true(t->R_order[o].mean >= 0 && t->T_order[o].mean >= 0);
+                    sr += t->R_order[o].mean;
+                    st += t->T_order[o].mean;
+                }
+                assert_close(sr, t->R.mean, 0, 1e-12);
+                assert_close(st, t->T.mean, 0, 1e-12);
+                assert_true(t->mean_hits.mean >= 1.0);
+            }
+            btdf_sim_result_free(r);
+        }
+}
+
+static void hist_fine(btdf_sim_opts *o)
+{
+    o->theta_bins = 360; /* 0.25 degree */
+    o->phi_bins = 1;
+}
+
+/* Fraction of the incident flux Eq. 25 sends into polar bin [a, b] of the lower
+   hemisphere (angles from the downward normal), all azimuths: Gauss-Legendre in theta
+   (4 points) times the midpoint rule in phi on 4000 points over [0, pi] (0.045
+   degree; the lobe at s = 30 is about 4 degrees wide in phi here). */
+static double eq25_bin(double n, double s, double ti, double a, double b)
+{
+    static const double x[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
+                                0.8611363115940526};
+    static const double w[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
+                                0.3478548451374538};
+    double sum = 0;
+    for (int g = 0; g < 4; g++) {
+        double th = 0.5 * (a + b) + 0.5 * (b - a) * x[g];
+        double inner = 0;
+        for (int p = 0; p < 4000; p++) {
+            double phi = (p + 0.5) * (M_PI / 4000);
+            inner += btdf_rho(n, s, 0.7, ti, M_PI - th, phi);
+        }
+        inner *= 2 * (M_PI / 4000);
+        sum += w[g] * 0.5 * (b - a) * inner * cos(th) * sin(th);
+    }
+    return sum;
+}
+
+/* chi^2 of the one-hit histogram against Eq. 25 of smoothness s_model, over the bins
+   where Eq. 25 expects at least 50 paths (the normal approximation of each count). */
+static double chi2_one_hit(const btdf_sim_result *r, double n, double s_model, double ti,
+                           int *dof)
+{
+    const btdf_sim_tally *t = &r->tally[0];
+    double chi = 0, w = (M_PI / 2) / r->theta_bins;
+    *dof = 0;
+    for (int i = 0; i < r->theta_bins; i++) {
+        double m = eq25_bin(n, s_model, ti, i * w, (i + 1) * w);
+        if (m * (double)t->rays < 50)
+            continue;
+        const btdf_sim_est *e = &t->hist_T1[i];
+        /* The batch-means error: it holds the spread between surface realisations as
+           well as the paths' own (binomial) noise. A bin expecting 50 paths has one
+           in every batch only rarely empty, so se > 0; the guard is for safety. */
+        double se = e->se > 0 ? e->se : sqrt(m * (1 - m) / (double)t->rays);
+        chi += (e->mean - m) * (e->mean - m) / (se * se);
+        (*dof)++;
+    }
+    return chi;
+}
+
+/* At s = 30 the surface has RMS slope 0.067: V = 1 to 1e-200 at 30 degrees, and a path
+   that hits twice is rare (0.0 % here), so one hit is Eq. 25's single scattering, and
+   the one-hit histogram must be Eq. 25's transmitted lobe. The bound dof + 5 sqrt(2 dof)
+   is five standard deviations of the chi^2 distribution: a correct simulation fails it
+   once in millions. That the test can fail: Eq. 25 of s = 28 (a lobe 7 % wider) is
+   rejected by the same bound. */
+static void large_s_is_eq25(void **state)
+{
+    (void)state;
+    const double n = 1.5, s = 30, ti = 30 * DEG;
+    btdf_sim_result *r = run(n, s, &ti, 1, 400000, hist_fine);
+    int dof = 0, dof2 = 0;
+    double chi = chi2_one_hit(r, n, s, ti, &dof);
+    double chi_wrong = chi2_one_hit(r, n, 28, ti, &dof2);
+    print_message("s = 30: chi2 %.1f on %d bins; against s = 28: %.1f on %d\n", chi, dof,
+                  chi_wrong, dof2);
+    assert_true(dof >= 10);
+    assert_true(chi < dof + 5 * sqrt(2.0 * dof));
+    assert_true(chi_wrong > dof2 + 5 * sqrt(2.0 * dof2));
+    /* The batch-means errors against the binomial ones: each batch has its own
+       surface, whose lobe differs a little from the ensemble's, so the variance is
+       binomial plus that spread, never less. 128 batches give an error's error of
+       1/sqrt(2 * 127) = 6.3 %: the ratio must exceed 0.8 (over 3 of those below 1).
+       Above, the spread between 16 tau tiles made it at most 1.4 here; 2 bounds it. */
+    for (int i = 0; i < r->theta_bins; i++) {
+        const btdf_sim_est *e = &r->tally[0].hist_T1[i];
+        if (e->mean * (double)r->tally[0].rays < 1000)
+            continue;
+        double bin_se = sqrt(e->mean * (1 - e->mean) / (double)r->tally[0].rays);
+        assert_true(e->se > 0.8 * bin_se && e->se < 2.0 * bin_se);
+    }
+    btdf_sim_result_free(r);
+}
+
+static void hist_recip(btdf_sim_opts *o)
+{
+    o->theta_bins = 45; /* 2 degrees */
+    o->phi_bins = 18;   /* 10 degrees of |phi| */
+}
+
+/* rho(n; A -> B) = n^2 rho(1/n; B -> A) (MODEL.md section 4), with every order of
+   scattering: it holds for the whole surface, not only for Eq. 25. Bins of 2 x 10
+   degrees around the forward plane; the angles are the bins' centres, so both sides
+   average the same function over the same |phi| bin, and the theta averaging differs
+   by O(bin^2 / 24) = 5e-5 relative, far below the noise (about 3 % per bin). Four
+   combined standard errors, as for Fresnel. */
+static void reciprocity(void **state)
+{
+    (void)state;
+    const double n = 1.5, s = 1;
+    const double ti[2] = {21 * DEG, 41 * DEG}; /* centres of bins 10 and 20 */
+    const int bin[2] = {10, 20}, fwd = 17;     /* |phi| in [170, 180] */
+    btdf_sim_result *up = run(n, s, ti, 2, 600000, hist_recip);
+    btdf_sim_result *dn = run(1 / n, s, ti, 2, 600000, hist_recip);
+    for (int a = 0; a < 2; a++) {
+        int b = 1 - a;
+        /* rho |cos to| = P / solid angle; rho needs the bin's cosine too */
+        size_t ia = (size_t)bin[b] * 18 + fwd, ib = (size_t)bin[a] * 18 + fwd;
+        double om_b = btdf_sim_bin_solid_angle(45, 18, bin[b], fwd);
+        double om_a = btdf_sim_bin_solid_angle(45, 18, bin[a], fwd);
+        double c_b = cos(ti[b]), c_a = cos(ti[a]);
+        double r1 = up->tally[a].hist_T[ia].mean / om_b / c_b;
+        double e1 = up->tally[a].hist_T[ia].se / om_b / c_b;
+        double r2 = n * n * dn->tally[b].hist_T[ib].mean / om_a / c_a;
+        double e2 = n * n * dn->tally[b].hist_T[ib].se / om_a / c_a;
+        print_message("reciprocity %d: %.4f +- %.4f vs %.4f +- %.4f\n", a, r1, e1, r2, e2);
+        assert_true(e1 > 0 && e2 > 0 && e1 < 0.1 * r1);
+        assert_within_se(r1, r2, sqrt(e1 * e1 + e2 * e2), 4.0, "reciprocity");
+    }
+    btdf_sim_result_free(up);
+    btdf_sim_result_free(dn);
+}
+
+static void fine_grid(btdf_sim_opts *o)
+{
+    o->cells_per_tau = 32;
+}
+
+static void big_tile(btdf_sim_opts *o)
+{
+    o->tile_tau = 32;
+}
+
+/* Halving the spacing or doubling the tile moves R and T by less than 2 standard
+   errors of the difference (the runs use different surfaces, so they are independent):
+   the grid's own error, the 0.1 % lower RMS slope of the triangles at 16 cells per tau
+   (the default; 1 - dx^2 / (4 tau^2)), is below the noise of 2e5 rays. s = 1 has 10 % of multiple scattering, the order
+   most sensitive to the surface's shape. */
+static void grid_independence(void **state)
+{
+    (void)state;
+    double ti = 30 * DEG;
+    btdf_sim_result *a = run(1.5, 1, &ti, 1, 200000, NULL);
+    btdf_sim_result *b = run(1.5, 1, &ti, 1, 200000, fine_grid);
+    btdf_sim_result *c = run(1.5, 1, &ti, 1, 200000, big_tile);
+    const btdf_sim_tally *ta = &a->tally[0], *tb = &b->tally[0], *tc = &c->tally[0];
+    print_message("grid: T %.5f +- %.5f, fine %.5f +- %.5f, big tile %.5f +- %.5f\n",
+                  ta->T.mean, ta->T.se, tb->T.mean, tb->T.se, tc->T.mean, tc->T.se);
+    assert_within_se(ta->T.mean, tb->T.mean, hypot(ta->T.se, tb->T.se), 2.0, "T, spacing");
+    assert_within_se(ta->R.mean, tb->R.mean, hypot(ta->R.se, tb->R.se), 2.0, "R, spacing");
+    assert_within_se(ta->T.mean, tc->T.mean, hypot(ta->T.se, tc->T.se), 2.0, "T, tile");
+    assert_within_se(ta->R.mean, tc->R.mean, hypot(ta->R.se, tc->R.se), 2.0, "R, tile");
+    assert_within_se(ta->T_order[1].mean, tb->T_order[1].mean,
+                     hypot(ta->T_order[1].se, tb->T_order[1].se), 2.0, "T order 2, spacing");
+    btdf_sim_result_free(a);
+    btdf_sim_result_free(b);
+    btdf_sim_result_free(c);
+}
+
+/* The realised surfaces: sigma, RMS slope 2/s and correlation length s within 3 %.
+   Over 32 realisations of a 16 tau tile, the RMS height about the tile's mean is
+   expected 0.6 % low (the mean takes pi tau^2 / L^2 of the variance) with a spread of
+   about 1 %; 3 % is three times both. */
+static void surface_statistics(void **state)
+{
+    (void)state;
+    double ti = 0;
+    btdf_sim_result *r = run(1.5, 2, &ti, 1, 20000, NULL);
+    const btdf_sim_surface *sf = &r->surface;
+    print_message("surface: h %.4f slope %.4f tau %.4f over %d\n", sf->rms_height,
+                  sf->rms_slope, sf->corr_length, sf->realisations);
+    assert_int_equal(sf->n, 256);
+    assert_true(sf->realisations >= 32);
+    assert_close(sf->rms_height, 1.0, 0.03, 0);
+    assert_close(sf->rms_slope, 1.0, 0.03, 0);
+    assert_close(sf->corr_length, 2.0, 0.03, 0);
+    btdf_sim_result_free(r);
+}
+
+static void one_thread(btdf_sim_opts *o)
+{
+    o->threads = 1;
+    o->theta_bins = 18;
+    o->phi_bins = 4;
+}
+static void three_threads_plain(btdf_sim_opts *o)
+{
+    o->threads = 3;
+    o->accel = 0;
+    o->theta_bins = 18;
+    o->phi_bins = 4;
+}
+
+/* Same bytes with one thread and hierarchy as with three and the plain DDA: the batch
+   order fixes the sums, and both walks find the same first hit exactly. */
+static void deterministic(void **state)
+{
+    (void)state;
+    const double ti[2] = {10 * DEG, 70 * DEG};
+    btdf_sim_result *a = run(1.5, 0.7, ti, 2, 30000, one_thread);
+    btdf_sim_result *b = run(1.5, 0.7, ti, 2, 30000, three_threads_plain);
+    for (size_t k = 0; k < 2; k++) {
+        const btdf_sim_tally *x = &a->tally[k], *y = &b->tally[k];
+        assert_memory_equal(&x->R, &y->R, sizeof x->R);
+        assert_memory_equal(&x->T_order, &y->T_order, sizeof x->T_order);
+        assert_memory_equal(&x->mean_hits, &y->mean_hits, sizeof x->mean_hits);
+        assert_memory_equal(x->hist_T, y->hist_T, 72 * sizeof *x->hist_T);
+        assert_memory_equal(x->hist_R1, y->hist_R1, 72 * sizeof *x->hist_R1);
+    }
+    assert_memory_equal(&a->surface, &b->surface, sizeof a->surface);
+    btdf_sim_result_free(a);
+    btdf_sim_result_free(b);
+}
+
+static btdf_status check(void (*set)(btdf_sim_opts *), char *msg, size_t len)
+{
+    static const double ti = 0.5;
+    btdf_sim_opts o;
+    btdf_sim_opts_default(&o);
+    o.theta_i = &ti;
+    o.n_theta = 1;
+    set(&o);
+    return btdf_sim_opts_check(&o, msg, len);
+}
+static void bad_s(btdf_sim_opts *o) { o->smoothness = 0; }
+static void bad_n(btdf_sim_opts *o) { o->ior[0] = 1; }
+static void bad_nan(btdf_sim_opts *o) { o->ior[0] = NAN; }
+static void bad_rays(btdf_sim_opts *o) { o->rays = BTDF_SIM_RAYS_MAX + 1; }
+static void bad_grid(btdf_sim_opts *o) { o->tile_tau = 12; }
+static void bad_mem(btdf_sim_opts *o) { o->max_memory = 1000; }
+
+static void bad_input(void **state)
+{
+    (void)state;
+    char msg[256];
+    assert_status(BTDF_EINVAL, check(bad_s, msg, sizeof msg));
+    assert_non_null(strstr(msg, "smoothness 0"));
+    assert_status(BTDF_EINVAL, check(bad_n, msg, sizeof msg));
+    assert_non_null(strstr(msg, "n = 1"));
+    assert_status(BTDF_EINVAL, check(bad_nan, msg, sizeof msg));
+    assert_non_null(strstr(msg, "nan"));
+    assert_status(BTDF_EINVAL, check(bad_rays, msg, sizeof msg));
+    assert_non_null(strstr(msg, "rays 100000000001"));
+    assert_status(BTDF_EINVAL, check(bad_grid, msg, sizeof msg));
+    assert_non_null(strstr(msg, "192 points"));
+    assert_status(BTDF_EBUDGET, check(bad_mem, msg, sizeof msg));
+    assert_non_null(strstr(msg, "memory limit"));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(bad_input),
+        cmocka_unit_test(flat_is_fresnel),
+        cmocka_unit_test(energy_is_conserved),
+        cmocka_unit_test(surface_statistics),
+        cmocka_unit_test(deterministic),
+        cmocka_unit_test(large_s_is_eq25),
+        cmocka_unit_test(reciprocity),
+        cmocka_unit_test(grid_independence),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,352 @@
+/* SPDX-License-Identifier: MIT */
+/* cmd_simulate.c: btdftab simulate: options into btdf_sim_opts, the run with a
+   progress bar, the summary on standard error and the JSON report (written whole or
+   not at all, by btdf_write_buffer). */
+#include "cmd_simulate.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <btdf/btdf.h>
+#include <btdf/btdf_io.h>
+#include <btdf/btdf_sim.h>
+
+#include "numparse.h"
+#include "options.h"
+#include "run.h"
+
+#define MAX_ANGLES 1000
+#define DEG (3.14159265358979323846 / 180.0)
+
+static const char *prog_name = "btdftab";
+static double deg_given[MAX_ANGLES]; /* the angles as given, for the report */
+
+static int fail(int code, const char *fmt, ...)
+{
+    va_list ap;
+    fprintf(stderr, "%s: simulate: ", prog_name);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    return code;
+}
+
+/* A, A,B,..., or A:B:STEP (degrees) into ti (radians). 0 after a usage error. */
+static int parse_angles(const char *v, double *ti, size_t *n)
+{
+    double a[MAX_ANGLES];
+    int k = 0;
+    if (strchr(v, ':')) {
+        char buf[128];
+        double lo, hi, st;
+        snprintf(buf, sizeof buf, "%s", v);
+        char *c1 = strchr(buf, ':'), *c2 = c1 ? strchr(c1 + 1, ':') : NULL;
+        if (!c2)
+            return fail(2, "--theta-i: '%s': expected A:B:STEP in degrees, e.g. 0:80:10", v), 0;
+        *c1 = *c2 = 0;
+        if (num_double(buf, &lo) || num_double(c1 + 1, &hi) || num_double(c2 + 1, &st) ||
+            !(st > 0) || !(hi >= lo) || (hi - lo) / st >= MAX_ANGLES)
+            return fail(2, "--theta-i: '%s': need A <= B and STEP > 0, at most %d angles", v,
+                        MAX_ANGLES), 0;
+        for (double t = lo; t <= hi + 1e-9 * st; t = lo + st * (double)k)
+            a[k++] = t;
+    } else {
+        const char *why = num_double_list(v, a, 1, MAX_ANGLES, &k);
+        if (why)
+            return fail(2, "--theta-i: '%s': %s", v, why), 0;
+    }
+    for (int i = 0; i < k; i++) {
+        if (!(a[i] >= 0.0 && a[i] < 90.0))
+            return fail(2, "--theta-i: %g: must lie in [0, 90) degrees", a[i]), 0;
+        ti[i] = a[i] * DEG;
+        deg_given[i] = a[i];
+    }
+    *n = (size_t)k;
+    return 1;
+}
+
+static int parse_u64(const char *flag, const char *v, size_t lo, size_t hi, size_t *out)
+{
+    const char *why = num_size(v, lo, hi, out);
+    if (why)
+        fail(2, "%s: '%s': %s", flag, v, why);
+    return !why;
+}
+
+static void progress(void *ctx, uint64_t done, uint64_t total, double t_se)
+{
+    char stage[64];
+    if (isfinite(t_se))
+        snprintf(stage, sizeof stage, "rays, T error %.2g", t_se);
+    else
+        snprintf(stage, sizeof stage, "rays");
+    run_progress_cb(ctx, stage, (size_t)done, (size_t)(total - done));
+}
+
+static void jnum(FILE *f, double x)
+{
+    char b[40];
+    btdf_format_double(isfinite(x) ? x : 0.0, b, sizeof b); /* never NaN in a file */
+    fputs(b, f);
+}
+
+/* "key": value for one case, or [values] for several. */
+static void jfield(FILE *f, const char *key, const btdf_sim_result *r, size_t off, int se)
+{
+    fprintf(f, "  \"%s\": %s", key, r->count > 1 ? "[" : "");
+    for (size_t k = 0; k < r->count; k++) {
+        const btdf_sim_est *e = (const btdf_sim_est *)((const char *)&r->tally[k] + off);
+        if (k)
+            fputs(", ", f);
+        jnum(f, se ? e->se : e->mean);
+    }
+    fprintf(f, "%s,\n", r->count > 1 ? "]" : "");
+}
+
+static void jorders(FILE *f, const btdf_sim_tally *t, int T, int se)
+{
+    const btdf_sim_est *e = T ? t->T_order : t->R_order;
+    fputc('[', f);
+    for (int o = 0; o < BTDF_SIM_ORDERS; o++) {
+        if (o)
+            fputs(", ", f);
+        jnum(f, se ? e[o].se : e[o].mean);
+    }
+    fputc(']', f);
+}
+
+static int write_report(const char *path, const char *prov, const btdf_sim_opts *o,
+                        const btdf_sim_result *r, const double *eqT, const double *eqR)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    if (!f)
+        return fail(1, "%s: out of memory for the report", path);
+    run_json_open(f, prov);
+    fprintf(f, "  \"smoothness\": ");
+    jnum(f, o->smoothness);
+    fprintf(f, ",\n  \"cases\": [");
+    for (size_t k = 0; k < r->count; k++) {
+        fprintf(f, "%s{\"theta_i\": ", k ? ", " : "");
+        jnum(f, deg_given[k % o->n_theta]);
+        fprintf(f, ", \"channel\": %d, \"ior\": ", r->tally[k].channel);
+        jnum(f, r->tally[k].ior);
+        fputc('}', f);
+    }
+    fprintf(f, "],\n");
+    jfield(f, "R", r, offsetof(btdf_sim_tally, R), 0);
+    jfield(f, "T", r, offsetof(btdf_sim_tally, T), 0);
+    jfield(f, "R_se", r, offsetof(btdf_sim_tally, R), 1);
+    jfield(f, "T_se", r, offsetof(btdf_sim_tally, T), 1);
+    jfield(f, "mean_hits", r, offsetof(btdf_sim_tally, mean_hits), 0);
+    fprintf(f, "  \"orders\": {");
+    const char *keys[4] = {"T", "T_se", "R", "R_se"};
+    for (int q = 0; q < 4; q++) {
+        fprintf(f, "%s\"%s\": %s", q ? ", " : "", keys[q], r->count > 1 ? "[" : "");
+        for (size_t k = 0; k < r->count; k++) {
+            if (k)
+                fputs(", ", f);
+            jorders(f, &r->tally[k], q < 2, q & 1);
+        }
+        fprintf(f, "%s", r->count > 1 ? "]" : "");
+    }
+    fprintf(f, "},\n  \"eq25\": {\"T\": %s", r->count > 1 ? "[" : "");
+    for (size_t k = 0; k < r->count; k++) {
+        if (k)
+            fputs(", ", f);
+        jnum(f, eqT[k]);
+    }
+    fprintf(f, "%s, \"R\": %s", r->count > 1 ? "]" : "", r->count > 1 ? "[" : "");
+    for (size_t k = 0; k < r->count; k++) {
+        if (k)
+            fputs(", ", f);
+        jnum(f, eqR[k]);
+    }
+    fprintf(f, "%s},\n", r->count > 1 ? "]" : "");
+    const btdf_sim_surface *s = &r->surface;
+    fprintf(f, "  \"surface\": {\"points_per_side\": %d, \"spacing\": ", s->n);
+    jnum(f, s->dx);
+    fprintf(f, ", \"tile\": ");
+    jnum(f, s->tile);
+    fprintf(f, ", \"realisations_measured\": %d, \"rms_height\": ", s->realisations);
+    jnum(f, s->rms_height);
+    fprintf(f, ", \"rms_slope\": ");
+    jnum(f, s->rms_slope);
+    fprintf(f, ", \"rms_slope_target\": ");
+    jnum(f, 2.0 / o->smoothness);
+    fprintf(f, ", \"corr_length\": ");
+    jnum(f, s->corr_length);
+    fprintf(f, ", \"tile_bytes\": %zu},\n", s->tile_bytes);
+    fprintf(f, "  \"rays\": %llu,\n  \"batches\": %llu,\n  \"lost\": %llu,\n  \"seed\": %llu,\n",
+            (unsigned long long)o->rays, (unsigned long long)r->tally[0].batches,
+            (unsigned long long)r->tally[0].lost, (unsigned long long)o->seed);
+    fprintf(f, "  \"seconds\": ");
+    jnum(f, r->seconds);
+    fprintf(f, "\n}\n");
+    if (fclose(f) != 0) {
+        free(buf);
+        return fail(1, "%s: out of memory for the report", path);
+    }
+    char msg[512];
+    btdf_status st = btdf_write_buffer(path, ".json", buf, len, msg, sizeof msg);
+    free(buf);
+    if (st != BTDF_OK)
+        return fail(1, "%s: %s", path, msg);
+    return 0;
+}
+
+/* Options into o; -1 to go on, or an exit status. */
+static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, double *ti,
+                 const char **report, int *quiet)
+{
+    opt_hit hits[64];
+    const char *pos[64];
+    int npos = 0;
+    if (argc > 64)
+        return fail(2, "at most 64 arguments");
+    int nh = opt_parse(prog_name, cmd, argc, argv, hits, 64, pos, &npos);
+    if (nh < 0)
+        return 2;
+    for (int k = 0; k < nh; k++)
+        if (hits[k].id == OPT_HELP) {
+            opt_help(stdout, cmd);
+            return fflush(stdout) == 0 ? 0 : 1;
+        }
+    if (npos > 0)
+        return fail(2, "unexpected argument '%s' (angles go in --theta-i)", pos[0]);
+    size_t v;
+    for (int k = 0; k < nh; k++) {
+        const char *s = hits[k].value;
+        switch (hits[k].id) {
+        case OPT_IOR: {
+            int n = 0;
+            const char *why = num_double_list(s, o->ior, 1, 3, &n);
+            if (why || n == 2)
+                return fail(2, "--ior: '%s': %s", s, why ? why : "give 1 value or 3 (R,G,B)");
+            o->channels = n;
+            break;
+        }
+        case OPT_SMOOTHNESS:
+            if (num_double(s, &o->smoothness))
+                return fail(2, "--smoothness: '%s': not a number", s);
+            break;
+        case OPT_THETA_I:
+            if (!parse_angles(s, ti, &o->n_theta))
+                return 2;
+            break;
+        case OPT_RAYS:
+            if (!parse_u64("--rays", s, 2, (size_t)BTDF_SIM_RAYS_MAX, &v))
+                return 2;
+            o->rays = v;
+            break;
+        case OPT_SEED:
+            if (!parse_u64("--seed", s, 0, SIZE_MAX, &v))
+                return 2;
+            o->seed = v;
+            break;
+        case OPT_CELLS:
+            if (!parse_u64("--cells-per-tau", s, BTDF_SIM_CELLS_PER_TAU_MIN,
+                           BTDF_SIM_CELLS_PER_TAU_MAX, &v))
+                return 2;
+            o->cells_per_tau = (int)v;
+            break;
+        case OPT_TILE:
+            if (!parse_u64("--tile", s, BTDF_SIM_TILE_TAU_MIN, BTDF_SIM_TILE_TAU_MAX, &v))
+                return 2;
+            o->tile_tau = (int)v;
+            break;
+        case OPT_THREADS:
+            if (!parse_u64("--threads", s, 0, 256, &v))
+                return 2;
+            o->threads = (int)v;
+            break;
+        case OPT_MAX_MEMORY:
+            if (!parse_u64("--max-memory", s, 1, (size_t)1 << 20, &v))
+                return 2;
+            o->max_memory = v << 20;
+            break;
+        case OPT_REPORT: *report = s; break;
+        case OPT_QUIET: *quiet = 1; break;
+        default: break;
+        }
+    }
+    return -1;
+}
+
+int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
+{
+    prog_name = prog;
+    const cmd_def *cmd = cmd_find("simulate");
+    static double ti[MAX_ANGLES];
+    btdf_sim_opts o;
+    btdf_sim_opts_default(&o);
+    o.max_memory = (size_t)1024 << 20;
+    ti[0] = 30.0 * DEG;
+    deg_given[0] = 30.0;
+    o.theta_i = ti;
+    o.n_theta = 1;
+    const char *report = NULL;
+    int quiet = 0;
+    int code = parse(cmd, argc, argv, &o, ti, &report, &quiet);
+    if (code >= 0)
+        return code;
+    char msg[512];
+    btdf_status st = btdf_sim_opts_check(&o, msg, sizeof msg);
+    if (st != BTDF_OK)
+        return fail(st == BTDF_EBUDGET ? 3 : 2, "%s", msg);
+    if (report && btdf_output_check(report, msg, sizeof msg) != BTDF_OK)
+        return fail(1, "%s: %s", report, msg);
+    run_progress pr;
+    run_progress_start(&pr, !quiet && isatty(2), "simulate");
+    o.progress = progress;
+    o.progress_ctx = &pr;
+    btdf_sim_result *r = NULL;
+    st = btdf_sim_run(&o, &r, msg, sizeof msg);
+    run_progress_end(&pr);
+    if (st != BTDF_OK)
+        return fail(st == BTDF_EBUDGET ? 3 : st == BTDF_EINVAL ? 2 : 1, "%s", msg);
+    double *eqT = calloc(r->count, sizeof *eqT), *eqR = calloc(r->count, sizeof *eqR);
+    if (!eqT || !eqR) {
+        free(eqT);
+        free(eqR);
+        btdf_sim_result_free(r);
+        return fail(1, "out of memory");
+    }
+    for (size_t k = 0; k < r->count; k++) {
+        btdf_params p;
+        btdf_params_default(&p);
+        p.ior[0] = r->tally[k].ior;
+        p.smoothness = o.smoothness;
+        if (btdf_transmittance(&p, r->tally[k].theta_i, &eqT[k]) != BTDF_OK)
+            eqT[k] = 0.0;
+        if (btdf_reflectance(&p, r->tally[k].theta_i, &eqR[k]) != BTDF_OK)
+            eqR[k] = 0.0;
+    }
+    if (!quiet) {
+        for (size_t k = 0; k < r->count; k++) {
+            const btdf_sim_tally *t = &r->tally[k];
+            fprintf(stderr,
+                    "ti %g n %g s %g: T %.5f +- %.5f (orders %.5f %.5f %.5f), R %.5f +- %.5f; "
+                    "Eq. 25 T %.5f R %.5f; %.3f hits per ray\n",
+                    t->theta_i / DEG, t->ior, o.smoothness, t->T.mean, t->T.se,
+                    t->T_order[0].mean, t->T_order[1].mean, t->T_order[2].mean, t->R.mean,
+                    t->R.se, eqT[k], eqR[k], t->mean_hits.mean);
+        }
+        fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (2/s = %.4f), "
+                        "correlation length %.4f; %llu rays in %.2f s\n",
+                r->surface.n, r->surface.n, r->surface.rms_height, r->surface.rms_slope,
+                2.0 / o.smoothness, r->surface.corr_length,
+                (unsigned long long)r->rays_traced, r->seconds);
+    }
+    code = report ? write_report(report, prov, &o, r, eqT, eqR) : 0;
+    free(eqT);
+    free(eqR);
+    btdf_sim_result_free(r);
+    return code;
+}
