@@ -49,6 +49,7 @@ typedef enum {
     OPT_QUIET,
     OPT_LOG_DECADES,
     OPT_ZOOM,
+    OPT_MODEL,
     OPT_END
 } opt_id;
 
