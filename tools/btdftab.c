@@ -873,6 +873,12 @@ static int cmd_tabulate(cli *c, const char *prov)
     if (c->npos)
         return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
                     c->pos[0]);
+    /* the table builders and their error estimates evaluate Eq. 25's separable
+       shadowing; until they carry the model, a smith table is refused, not written
+       as Eq. 25 */
+    if (c->p.model != BTDF_MODEL_XU_SUN)
+        return fail(EXIT_USAGE, "tabulate --model %s: tables of this model are not available "
+                    "in this build (eval, albedo and polar take it)", btdf_model_name(c->p.model));
     btdf_format_info fi = {0};
     const char *out = c->out;
     if (out && strcmp(out, "-")) {
