@@ -428,8 +428,20 @@ BT_CLONES static void batch_block(const btdf_params *p, size_t count, const doub
     const int nc = p->channels;
     for (size_t i = 0; i < count; i++)
         c[i] = bt_fold_rad(phi[i]);
-    if (p->model == BTDF_MODEL_SMITH) {
+    if (p->model == BTDF_MODEL_SMITH && nc == 1) {
         /* the loops below with the Smith prefactor (bt_io_pref_smith) */
+        const double n = p->ior[0], d = n - 1.0;
+        for (size_t i = 0; i < count; i++) {
+            bt_io io;
+            bt_az az;
+            bt_io_geom_rad(&io, ti[i], to[i]);
+            bt_io_pref_smith(&io, s);
+            bt_az_rad(&az, c[i]);
+            out[i] = bt_rho(n, d, s, &io, az.h2, az.sphi);
+        }
+        return;
+    }
+    if (p->model == BTDF_MODEL_SMITH) {
         for (size_t i = 0; i < count; i++) {
             bt_io io;
             bt_az az;
