@@ -200,8 +200,8 @@ typedef struct curve {
 /* rho |cos to| of channel ch in the plane of incidence; side +1 forward (phi = pi). */
 static double polar_value(const curve *cv, double to, int side)
 {
-    double v = btdf_rho(cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0, cv->ti, to,
-                        side > 0 ? M_PI : 0.0);
+    double v = btdf_rho_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0,
+                              cv->ti, to, side > 0 ? M_PI : 0.0);
     return v * fabs(cos(to));
 }
 
@@ -209,8 +209,8 @@ static double polar_value(const curve *cv, double to, int side)
    (phi = pi). */
 static double polar_value_r(const curve *cv, double tr, int side)
 {
-    double v = btdf_rho_r(cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0, cv->ti, tr,
-                          side > 0 ? M_PI : 0.0);
+    double v = btdf_rho_r_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness,
+                                cv->p->k0, cv->ti, tr, side > 0 ? M_PI : 0.0);
     return v * fabs(cos(tr));
 }
 
@@ -355,8 +355,16 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     double m = 0.8 * fs, lineS = plot_text_height(c, fsS);
 
     /* Title. */
+    int smith = o->materials[0].model == BTDF_MODEL_SMITH; /* polar shares one model */
     const char *title =
         o->title ? o->title
+        : smith ? (!trans ? PLOT_RHO "r |cos " PLOT_THETA "r| in the plane of incidence: the "
+                            "same facets with the height-correlated Smith term"
+                   : refl ? PLOT_RHO " |cos " PLOT_THETA "o| below, " PLOT_RHO "r |cos "
+                            PLOT_THETA "r| above: the facets of Eq. 25 with the "
+                            "height-correlated Smith term"
+                          : PLOT_RHO " |cos " PLOT_THETA "o| in the plane of incidence: the "
+                            "facets of Eq. 25 with the height-correlated Smith term")
         : !trans ? PLOT_RHO "r |cos " PLOT_THETA "r| in the plane of incidence: the reflection "
                    "of the facets of Xu & Sun 2008, Eq. 25"
         : refl   ? PLOT_RHO " |cos " PLOT_THETA "o| below the surface (Xu & Sun 2008, Eq. 25), "
@@ -401,7 +409,9 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     for (size_t k = 1; k < o->nmaterials; k++)
         same_k0 &= o->materials[k].k0 == o->materials[0].k0;
     char k0s[40] = "";
-    if (same_k0)
+    if (smith)
+        snprintf(k0s, sizeof k0s, "; model smith");
+    else if (same_k0)
         snprintf(k0s, sizeof k0s, "; k0 = %.3g", o->materials[0].k0);
     snprintf(foot, sizeof foot,
              "radius: " PLOT_RHO " |cos " PLOT_THETA "o| (1/sr), linear%s; dashed: Snell direction "

@@ -554,6 +554,24 @@ expect 2 "--rays: '1e20'" "simulate absurd rays" -- "$B" simulate --rays 1e20 --
 expect 2 "theta-i: 90: must lie in" "simulate grazing angle" -- "$B" simulate --theta-i 90 --report "$W/t.json"
 expect 3 "above the memory limit of 1 MB" "simulate tile over --max-memory" -- "$B" simulate --max-memory 1 --report "$W/t.json"
 expect 1 "cannot write in the folder" "simulate unwritable report" -- "$B" simulate --rays 100 --report "$W/nodir/t.json"
+# --model: xu-sun is the default (same bytes with and without it), smith is another
+# value, full is reserved and refused, anything else is named; tables refuse smith
+a=$("$B" eval 30 150 180) && b=$("$B" eval --model xu-sun 30 150 180) && [ "$a" = "$b" ] && \
+    ok "--model xu-sun is the default" || no "--model xu-sun: $a vs $b"
+a=$("$B" eval --model smith 30 150 180) && b=$(printf '30 150 180\n' | "$B" eval --model smith) && \
+    [ "$a" = "$b" ] && [ "$a" != "$("$B" eval 30 150 180)" ] && \
+    ok "--model smith: arguments and rows agree, and differ from Eq. 25" || no "--model smith: $a vs $b"
+# Smith shadows a rough surface less than Eq. 25's V: more is transmitted at s = 1
+t1=$("$B" albedo -s 1 60 | awk -F, 'NR == 2 {print $2}')
+t2=$("$B" albedo --model smith -s 1 60 | awk -F, 'NR == 2 {print $2}')
+awk -v a="$t1" -v b="$t2" 'BEGIN { exit !(b > a) }' && ok "albedo --model smith: T above xu-sun's at s = 1" || \
+    no "albedo --model smith: $t2 vs $t1"
+"$B" polar --model smith -o "$W/p.png" && [ -s "$W/p.png" ] && ok "polar --model smith" || no "polar --model smith"
+rm -f "$W/p.png"
+expect 2 "--model full: not available in this build" "--model full is refused" -- "$B" eval --model full 30 150 180
+expect 2 "--model: 'walter': must be xu-sun or smith" "an unknown --model is named" -- "$B" albedo --model walter
+expect 2 "tabulate --model smith: tables of this model are not available" "tabulate refuses smith" \
+    -- "$B" tabulate --model smith -o "$W/t.csv"
 
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

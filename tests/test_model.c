@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "btdf_test.h"
+#include "model/kernel.h" /* bt_lambda and the Smith exponents, checked against libm */
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -671,6 +672,265 @@ static void grid(void **state)
     assert_status(BTDF_OK, btdf_eval_grid(&p, 0, NULL, 0, NULL, 0, NULL, 1, NULL));
 }
 
+/* ------------------------------------------------------------------------- */
+/* The Smith model (BTDF_MODEL_SMITH, docs/model.md section 10)              */
+/* ------------------------------------------------------------------------- */
+
+/* MODEL.md section 4's reciprocity for smith, to relative 1e-8: swapping the sides
+   swaps Lambda(ti) and Lambda(to), and B is symmetric; rho_r is symmetric in ti, tr. */
+static void smith_reciprocity(void **state)
+{
+    (void)state;
+    const double ns[] = {1.5, 1.0001, 1.33, 2.4, 1 / 1.5, 0.9999};
+    const double ss[] = {0.5, 3, 20, 1000};
+    srand(71);
+    int checked = 0;
+    double worst = 0.0;
+    for (int a = 0; a < 6; a++)
+        for (int b = 0; b < 4; b++)
+            for (int k = 0; k < 400; k++) {
+                double ti = 89.0 * rand() / RAND_MAX, to = 91.0 + 89.0 * rand() / RAND_MAX;
+                double ph = 360.0 * rand() / RAND_MAX;
+                double f = btdf_rho_smith_deg(ns[a], ss[b], ti, to, ph);
+                double g = ns[a] * ns[a] * btdf_rho_smith_deg(1 / ns[a], ss[b], 180 - to, 180 - ti, ph);
+                if (f > 1e-250 || g > 1e-250) {
+                    assert_close(f, g, 1e-8, 0.0);
+                    worst = fmax(worst, fabs(f - g) / fmax(f, g));
+                    checked++;
+                }
+                double tr = 89.0 * rand() / RAND_MAX;
+                double r1 = btdf_rho_r_smith_deg(ns[a], ss[b], ti, tr, ph);
+                double r2 = btdf_rho_r_smith_deg(ns[a], ss[b], tr, ti, ph);
+                assert_close(r1, r2, 1e-8, 0.0);
+            }
+    print_message("smith reciprocity: %d values, worst relative difference %.3g\n", checked,
+                  worst);
+    assert_true(checked > 500); /* the draw must reach the lobes, or this tests nothing */
+}
+
+/* The pieces against libm: Lambda against its erfc form where that has no
+   cancellation (a <= 4, Lambda >= 1e-9: libm's erfc is within a few ulps, the
+   difference loses at most a factor 2a^2 + 1 = 33), the log-Beta against lgamma
+   (absolute, each lgamma within a few ulps of values below 300), the reflection
+   exponent against log1p; B(1 + x, 1) = 1/(1 + x), B(1, 1) = 1 exactly, and the
+   height-correlated transmission term below the separable product 1/((1+x)(1+y)). */
+static void smith_pieces(void **state)
+{
+    (void)state;
+    double worst_l = 0.0, worst_b = 0.0;
+    for (int k = 1; k <= 400; k++) {
+        double a = 4.0 * k / 400; /* sin t = 1, cos t = a, s = 2: a = s cos t/(2 sin t) */
+        double ref = 0.5 * (exp(-a * a) / (a * sqrt(M_PI)) - erfc(a));
+        double l = bt_lambda(1.0, a, 2.0);
+        worst_l = fmax(worst_l, fabs(l - ref) / ref);
+        assert_close(l, ref, 1e-12, 0.0); /* 33 x 8 ulps, rounded up */
+    }
+    assert_true(bt_lambda(0.0, 1.0, 3.0) == 0.0);     /* t = 0: no shadowing at all */
+    assert_true(bt_lambda(1e-3, 1.0, 1e6) == 0.0);    /* huge a: exp(-a^2) underflows */
+    double g = bt_lambda(1.0, 1e-12, 2.0);             /* grazing: 1/(2 a sqrt(pi)) - 1/2 */
+    assert_close(g, 1.0 / (2e-12 * sqrt(M_PI)) - 0.5, 1e-12, 0.0);
+    assert_true(isfinite(bt_lambda(1.0, 0.0, 3.0)));  /* t = 90: finite */
+    for (int i = 0; i < 30; i++)
+        for (int j = 0; j < 30; j++) {
+            double x = pow(10.0, -6.0 + 0.28 * i), y = pow(10.0, -6.0 + 0.28 * j);
+            double ref = lgamma(2.0 + x + y) - lgamma(1.0 + x) - lgamma(1.0 + y);
+            double sh = bt_smith_t_exponent(x, y);
+            worst_b = fmax(worst_b, fabs(sh - ref));
+            /* lgamma's values reach 1.3e3 here: 3 x 4 ulps of that */
+            assert_close(sh, ref, 0.0, 1e-12 * fmax(1.0, fabs(lgamma(2.0 + x + y))));
+            assert_close(bt_smith_r_exponent(x, y), log1p(x + y), 1e-15, 0.0);
+            assert_true(sh >= log1p(x) + log1p(y) - 1e-15); /* B <= G1(i) G1(o) */
+        }
+    /* absolute 1e-14 (relative in G2 = e^-sh): the shifted Stirling form sums terms
+       near 10 for small arguments, a few ulps of which are 4e-15 */
+    for (double x = 1e-12; x < 1e12; x *= 7.3)
+        assert_close(bt_smith_t_exponent(x, 0.0), log1p(x), 1e-14, 1e-14);
+    assert_true(bt_smith_t_exponent(0.0, 0.0) == 0.0);
+    print_message("Lambda vs erfc: %.3g relative; -ln B vs lgamma: %.3g absolute\n", worst_l,
+                  worst_b);
+}
+
+/* Limits: with Lambda = 0 on both sides smith is Walter's BTDF with G = 1, which is
+   Eq. 25 with k0 = 0 (V = 1), bit for bit; where Lambda is below 1e-16 (s = 20,
+   angles within 60 degrees of the normal: a >= 5.7) the two agree to 1e-14; as s
+   grows T tends to the flat Ft (MODEL.md 4's bound for xu-sun at s = 100) and
+   R + T to 1. */
+static void smith_limits(void **state)
+{
+    (void)state;
+    assert_true(btdf_rho_smith_deg(1.5, 3, 0, 180, 0) == btdf_rho_deg(1.5, 3, 0.0, 0, 180, 0));
+    assert_true(btdf_rho_smith_deg(1.5, 3, 0, 180, 0) > 0.0);
+    srand(73);
+    for (int k = 0; k < 2000; k++) {
+        double ti = 60.0 * rand() / RAND_MAX, to = 120.0 + 60.0 * rand() / RAND_MAX;
+        double ph = 360.0 * rand() / RAND_MAX;
+        assert_close(btdf_rho_smith_deg(1.5, 20, ti, to, ph), btdf_rho_deg(1.5, 20, 0.0, ti, to, ph),
+                     1e-14, 0.0);
+        assert_close(btdf_rho_r_smith_deg(1.5, 20, ti, to - 120.0, ph),
+                     btdf_rho_r_deg(1.5, 20, 0.0, ti, to - 120.0, ph), 1e-14, 0.0);
+    }
+    btdf_params p;
+    btdf_params_default(&p);
+    p.model = BTDF_MODEL_SMITH;
+    const double ns[] = {1.33, 1.5, 2.4};
+    double worst = 0.0, worst_rt = 0.0;
+    for (int a = 0; a < 3; a++)
+        for (int ti = 0; ti <= 60; ti += 5) {
+            p.ior[0] = ns[a];
+            p.smoothness = 100;
+            double T, R;
+            assert_status(BTDF_OK, btdf_transmittance(&p, rad(ti), &T));
+            assert_status(BTDF_OK, btdf_reflectance(&p, rad(ti), &R));
+            worst = fmax(worst, fabs(T - btdf_fresnel_t(ns[a], rad(ti))));
+            worst_rt = fmax(worst_rt, fabs(R + T - 1.0));
+            assert_true(fabs(T - btdf_fresnel_t(ns[a], rad(ti))) < 1e-3);
+            assert_true(fabs(R + T - 1.0) < 2e-3);
+        }
+    print_message("smith, s = 100, ti <= 60: max |T - Ft| %.3g, max |R + T - 1| %.3g\n", worst,
+                  worst_rt);
+}
+
+/* Energy: T + R <= 1 + 1e-6 (the quadratures' accuracy, btdf.h) over a sweep of n on
+   both sides of 1, s and ti; and Smith's shadowing, weaker than V's for these rough
+   surfaces, transmits at least as much as Eq. 25 for s <= 3 (to the same 1e-6). */
+static void smith_energy(void **state)
+{
+    (void)state;
+    const double ns[] = {1.0001, 1.33, 1.5, 2.4, 0.9999, 1 / 1.33, 1 / 1.5, 1 / 2.4};
+    const double ss[] = {0.3, 1, 3, 10, 100, 1000};
+    double most = 0.0;
+    btdf_params p, q;
+    btdf_params_default(&p);
+    p.model = BTDF_MODEL_SMITH;
+    for (int a = 0; a < 8; a++)
+        for (int b = 0; b < 6; b++)
+            for (int ti = 0; ti <= 89; ti += 7) {
+                p.ior[0] = ns[a];
+                p.smoothness = ss[b];
+                q = p;
+                q.model = BTDF_MODEL_XU_SUN;
+                double R, T, Tx;
+                assert_status(BTDF_OK, btdf_reflectance(&p, rad(ti), &R));
+                assert_status(BTDF_OK, btdf_transmittance(&p, rad(ti), &T));
+                assert_status(BTDF_OK, btdf_transmittance(&q, rad(ti), &Tx));
+                assert_true(R >= 0.0 && T >= 0.0);
+                most = fmax(most, R + T);
+                if (R + T > 1.0 + 1e-6)
+                    print_error("n %g s %g ti %d: R %.9f T %.9f\n", ns[a], ss[b], ti, R, T);
+                assert_true(R + T <= 1.0 + 1e-6);
+                if (ss[b] <= 3) {
+                    if (T < Tx - 1e-6)
+                        print_error("n %g s %g ti %d: T smith %.9f < xu-sun %.9f\n", ns[a],
+                                    ss[b], ti, T, Tx);
+                    assert_true(T >= Tx - 1e-6);
+                }
+            }
+    print_message("smith: max R + T over the sweep %.9f\n", most);
+}
+
+/* MODEL.md section 3's stiff cases for smith: finite and >= 0 everywhere (n near 1,
+   grazing, past the critical angle, huge and tiny s), 0 at exactly 90 degrees, and
+   every entry point the same bits (batch, grid, eval, the scalar forms). */
+static void smith_stiff(void **state)
+{
+    (void)state;
+    const double ns[] = {1.5, 1.0001, 0.9999, 1 / 1.5, 1e-3, 1e3};
+    const double ss[] = {0.001, 0.05, 3, 10000, 1e6};
+    const double tis[] = {0, 1e-9, 15, 30, 45, 60, 75, 89.9999, 90};
+    const double tos[] = {90, 90 + 1e-9, 95, 120, 150, 170, 180 - 1e-9, 180};
+    for (int a = 0; a < 6; a++)
+        for (int b = 0; b < 5; b++)
+            for (int i = 0; i < 9; i++)
+                for (int j = 0; j < 8; j++)
+                    for (int ph = 0; ph <= 180; ph += 45) {
+                        double v = btdf_rho_smith_deg(ns[a], ss[b], tis[i], tos[j], ph);
+                        double r = btdf_rho_r_smith_deg(ns[a], ss[b], tis[i], tos[j] - 90, ph);
+                        assert_true(isfinite(v) && v >= 0.0);
+                        assert_true(isfinite(r) && r >= 0.0);
+                        if (tis[i] == 90 || tos[j] == 90)
+                            assert_true(v == 0.0);
+                    }
+    btdf_params p;
+    btdf_params_default(&p);
+    p.model = BTDF_MODEL_SMITH;
+    for (int ch = 1; ch <= 3; ch += 2) {
+        p.channels = ch;
+        p.ior[0] = 1.0001;
+        p.ior[1] = 1.5;
+        p.ior[2] = 1 / 1.5;
+        enum { N = 600, NP = 7 };
+        static double ti[N], to[N], ph[N], out[N * 3], g[N * NP * 3];
+        srand(79);
+        for (int k = 0; k < N; k++) {
+            ti[k] = rad(89.99 * rand() / RAND_MAX);
+            to[k] = rad(90.01 + 89.99 * rand() / RAND_MAX);
+            ph[k] = rad(360.0 * rand() / RAND_MAX);
+        }
+        assert_status(BTDF_OK, btdf_eval_batch(&p, N, ti, to, ph, out, NULL));
+        for (int k = 0; k < N; k++) {
+            double e[3];
+            assert_status(BTDF_OK, btdf_eval(&p, ti[k], to[k], ph[k], e));
+            for (int c = 0; c < ch; c++) {
+                assert_true(e[c] == out[k * ch + c]);
+                assert_true(e[c] == btdf_rho_smith(p.ior[c], p.smoothness, ti[k], to[k], ph[k]));
+            }
+        }
+        assert_status(BTDF_OK, btdf_eval_grid(&p, 20, ti, 30, to, NP, ph, 2, g));
+        for (int i = 0; i < 20; i++)
+            for (int j = 0; j < 30; j++)
+                for (int k = 0; k < NP; k++) {
+                    double e[3];
+                    btdf_eval(&p, ti[i], to[j], ph[k], e);
+                    for (int c = 0; c < ch; c++)
+                        assert_true(e[c] == g[(((size_t)i * 30 + j) * NP + k) * ch + c]);
+                }
+        double e[3], r[3];
+        assert_status(BTDF_OK, btdf_eval_r(&p, 0.3, 0.4, 2.0, r));
+        assert_true(r[0] == btdf_rho_r_smith(p.ior[0], p.smoothness, 0.3, 0.4, 2.0));
+        /* by direction vectors: the same value to rounding */
+        double wi[3] = {sin(0.3), 0.0, cos(0.3)};
+        double wo[3] = {sin(2.6) * cos(3.0), sin(2.6) * sin(3.0), cos(2.6)};
+        assert_status(BTDF_OK, btdf_eval_dir(&p, wi, wo, e));
+        for (int c = 0; c < ch; c++)
+            assert_close(e[c], btdf_rho_smith(p.ior[c], p.smoothness, 0.3, 2.6, 3.0), 1e-9, 0.0);
+    }
+}
+
+/* The model's names and checks: zero-initialised parameters are xu-sun, full is
+   refused with a message saying so, anything else names the value. */
+static void smith_names(void **state)
+{
+    (void)state;
+    btdf_params p;
+    memset(&p, 0, sizeof p);
+    assert_true(p.model == BTDF_MODEL_XU_SUN);
+    btdf_params_default(&p);
+    assert_true(p.model == BTDF_MODEL_XU_SUN);
+    const char *names[] = {"xu-sun", "smith", "full"};
+    for (int k = 0; k < 3; k++) {
+        btdf_model m;
+        assert_true(btdf_model_parse(names[k], &m));
+        assert_string_equal(btdf_model_name(m), names[k]);
+    }
+    btdf_model m = BTDF_MODEL_SMITH;
+    assert_false(btdf_model_parse("Smith", &m));
+    assert_false(btdf_model_parse("", &m));
+    assert_true(m == BTDF_MODEL_SMITH); /* untouched */
+    char msg[256] = "";
+    p.model = BTDF_MODEL_FULL;
+    assert_status(BTDF_ENOTSUP, btdf_params_check(&p, msg, sizeof msg));
+    assert_non_null(strstr(msg, "full: not available"));
+    double out[3], T;
+    assert_status(BTDF_EINVAL, btdf_eval(&p, 0.1, 3.0, 0.0, out));
+    assert_status(BTDF_EINVAL, btdf_transmittance(&p, 0.1, &T));
+    p.model = (btdf_model)7;
+    assert_status(BTDF_EINVAL, btdf_params_check(&p, msg, sizeof msg));
+    assert_non_null(strstr(msg, "model 7"));
+    assert_true(btdf_rho_model(BTDF_MODEL_FULL, 1.5, 3, 0.7, 0.1, 3.0, 0.0) == 0.0);
+    p.model = BTDF_MODEL_SMITH;
+    assert_status(BTDF_OK, btdf_params_check(&p, NULL, 0));
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -684,6 +944,9 @@ int main(void)
         cmocka_unit_test(albedo_r),       cmocka_unit_test(albedo_r_radial),
         cmocka_unit_test(energy),         cmocka_unit_test(stiff_cases_r),
         cmocka_unit_test(continuity_r),   cmocka_unit_test(grid),
+        cmocka_unit_test(smith_reciprocity), cmocka_unit_test(smith_pieces),
+        cmocka_unit_test(smith_limits),   cmocka_unit_test(smith_energy),
+        cmocka_unit_test(smith_stiff),    cmocka_unit_test(smith_names),
     };
     return cmocka_run_group_tests_name("model", tests, NULL, NULL);
 }

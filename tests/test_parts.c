@@ -76,7 +76,7 @@ static void reflection_tolerance_met(void **state)
         assert_true(r.e_t_max <= r.e_l1_max + 1e-12);
         /* the estimate's R is the library's reflectance */
         double R;
-        assert_status(BTDF_OK, btdf_reflectance(&(btdf_params){1, {c[0], 0, 0}, c[1], 0.7},
+        assert_status(BTDF_OK, btdf_reflectance(&(btdf_params){1, {c[0], 0, 0}, c[1], 0.7, BTDF_MODEL_XU_SUN},
                                                 r.per_ti[0].ti, &R));
         assert_close(r.per_ti[0].T, R, 1e-12, 0.0);
         btdf_report_clear(&r);

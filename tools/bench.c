@@ -266,10 +266,43 @@ static void api_batch(api_grid *g)
     btdf_eval_batch(&g->p, g->NI * g->NO * g->NP, g->ati, g->ato, g->aphi, g->out, NULL);
 }
 
+/* The same entry points in the Smith model (BTDF_MODEL_SMITH), side by side. */
+static void api_rho_smith(api_grid *g)
+{
+    double acc = 0.0;
+    for (size_t i = 0; i < g->NI; i++)
+        for (size_t j = 0; j < g->NO; j++)
+            for (size_t k = 0; k < g->NP; k++)
+                acc += btdf_rho_smith(g->p.ior[0], g->p.smoothness, g->ti[i], g->to[j],
+                                      g->phi[k]);
+    api_sink = acc;
+}
+
+static void api_eval_smith(api_grid *g)
+{
+    g->p.model = BTDF_MODEL_SMITH;
+    api_eval(g);
+    g->p.model = BTDF_MODEL_XU_SUN;
+}
+
+static void api_batch_smith(api_grid *g)
+{
+    g->p.model = BTDF_MODEL_SMITH;
+    api_batch(g);
+    g->p.model = BTDF_MODEL_XU_SUN;
+}
+
 static int api_threads;
 static void api_grid_fn(api_grid *g)
 {
     btdf_eval_grid(&g->p, g->NI, g->ti, g->NO, g->to, g->NP, g->phi, api_threads, g->out);
+}
+
+static void api_grid_smith(api_grid *g)
+{
+    g->p.model = BTDF_MODEL_SMITH;
+    api_grid_fn(g);
+    g->p.model = BTDF_MODEL_XU_SUN;
 }
 
 static eval_job api_kernel_job;
@@ -455,6 +488,9 @@ static void api_bench(int reps)
         {"btdf_eval_batch", api_batch, 1},  {"btdf_eval_grid", api_grid_fn, 1},
         {"btdf_eval_grid", api_grid_fn, 2}, {"kernel (rho_kernel, tables)", api_kernel, 1},
         {"kernel (rho_kernel, tables)", api_kernel, 2},
+        {"btdf_rho_smith", api_rho_smith, 1}, {"btdf_eval (smith)", api_eval_smith, 1},
+        {"btdf_eval_batch (smith)", api_batch_smith, 1},
+        {"btdf_eval_grid (smith)", api_grid_smith, 1},
     };
     for (size_t r = 0; r < sizeof rows / sizeof rows[0]; r++) {
         api_threads = rows[r].threads;

@@ -216,6 +216,16 @@ static int apply(cli *c, const opt_hit *h)
     case OPT_IOR: return parse_ior(v, &c->p);
     case OPT_SMOOTHNESS: return parse_double("--smoothness", v, &c->p.smoothness);
     case OPT_K0: return parse_double("--k0", v, &c->p.k0);
+    case OPT_MODEL:
+        if (!btdf_model_parse(v, &c->p.model)) {
+            fail(EXIT_USAGE, "--model: '%s': must be xu-sun or smith", v);
+            return 0;
+        }
+        if (c->p.model == BTDF_MODEL_FULL) {
+            fail(EXIT_USAGE, "--model full: not available in this build (xu-sun or smith)");
+            return 0;
+        }
+        return 1;
     case OPT_TABLE: c->table = v; return 1;
     case OPT_PART:
         if (btdf_part_parse(v, &c->part)) {
@@ -648,13 +658,15 @@ static int cmd_eval(const cli *c)
             btdf_table_eval(tpart, ti, to, phi, out);
         } else if (c->reflection) {
             for (int ch = 0; ch < p.channels; ch++)
-                out[ch] = btdf_rho_r_deg(p.ior[ch], p.smoothness, p.k0, v[0], v[1], v[2]);
+                out[ch] = btdf_rho_r_model_deg(p.model, p.ior[ch], p.smoothness, p.k0, v[0],
+                                               v[1], v[2]);
         } else if (in.scatfun) {
             /* light entering through the top (index n), as pbrt-v3 would read it */
             btdf_scatfun_eval(in.scatfun, ti, to, phi, out);
         } else {
             for (int ch = 0; ch < p.channels; ch++)
-                out[ch] = btdf_rho_deg(p.ior[ch], p.smoothness, p.k0, v[0], v[1], v[2]);
+                out[ch] = btdf_rho_model_deg(p.model, p.ior[ch], p.smoothness, p.k0, v[0],
+                                             v[1], v[2]);
         }
         print_values(out, p.channels);
         if (ferror(stdout))
@@ -947,6 +959,12 @@ static int cmd_tabulate(cli *c, const char *prov)
     if (c->npos)
         return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
                     c->pos[0]);
+    /* the table builders and their error estimates evaluate Eq. 25's separable
+       shadowing; until they carry the model, a smith table is refused, not written
+       as Eq. 25 */
+    if (c->p.model != BTDF_MODEL_XU_SUN)
+        return fail(EXIT_USAGE, "tabulate --model %s: tables of this model are not available "
+                    "in this build (eval, albedo and polar take it)", btdf_model_name(c->p.model));
     /* The light the model loses at the table's first incidence angle (normal incidence
        by default): a warning, not an error, since the table is Eq. 25 all the same. */
     if (!c->quiet && btdf_params_check(&c->p, NULL, 0) == BTDF_OK) {
@@ -1232,6 +1250,7 @@ static int cmd_polar(const cli *c)
         mats[nm].ior[0] = c->mat_n[nm];
         mats[nm].smoothness = c->mat_s[nm];
         mats[nm].k0 = c->p.k0;
+        mats[nm].model = c->p.model;
         if (!check_params(&mats[nm]))
             return EXIT_USAGE;
     }

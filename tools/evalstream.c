@@ -107,8 +107,10 @@ static void run_chunk(job *j, size_t i)
         }
         for (int ch = 0; ch < p->channels; ch++) {
             double r = j->reflection
-                           ? btdf_rho_r_deg(p->ior[ch], p->smoothness, p->k0, v[0], v[1], v[2])
-                           : btdf_rho_deg(p->ior[ch], p->smoothness, p->k0, v[0], v[1], v[2]);
+                           ? btdf_rho_r_model_deg(p->model, p->ior[ch], p->smoothness, p->k0,
+                                                  v[0], v[1], v[2])
+                           : btdf_rho_model_deg(p->model, p->ior[ch], p->smoothness, p->k0,
+                                                v[0], v[1], v[2]);
             if (ch)
                 c->out[c->len++] = ' ';
             c->len += (size_t)fastnum_g17(r, c->out + c->len);

@@ -19,6 +19,10 @@ const opt_def opt_table[] = {
     {OPT_SMOOTHNESS, "smoothness", 's', "S", 0, MAT,
      "s = correlation length / RMS height (default 3)"},
     {OPT_K0, "k0", 0, "K", 0, MAT, "shadowing constant (default 0.7)"},
+    {OPT_MODEL, "model", 0, "M", 0, MAT,
+     "the facets' shadowing-masking: xu-sun (default: Eq. 25, V(ti) V(to) with k0) or\n"
+     "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused);\n"
+     "full is reserved and not available in this build"},
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
      "evaluate a written table (.csv, .exr, .bsdf) instead of Eq. 25; the file gives\n"
      "the material, so --ior, --smoothness and --k0 do not apply"},

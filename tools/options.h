@@ -55,6 +55,7 @@ typedef enum {
     OPT_SEED,
     OPT_CELLS,
     OPT_TILE,
+    OPT_MODEL,
     OPT_END
 } opt_id;
 

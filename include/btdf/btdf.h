@@ -99,19 +99,44 @@ BTDF_API const char *btdf_strerror(btdf_status status);
 #define BTDF_S_MAX 1e6
 #define BTDF_K0_MAX 100.0
 
+/*
+ * Which shadowing-masking the facets get (docs/model.md section 10). The facets, their
+ * Beckmann density D (RMS slope 2/s), the Fresnel terms and the Jacobian are the same
+ * in every model; only the term G that multiplies them differs.
+ *  BTDF_MODEL_XU_SUN: Eq. 25 as the paper writes it, G = V(ti) V(to) with the constant
+ *    k0 (the default; a zero-initialised btdf_params means this model).
+ *  BTDF_MODEL_SMITH: the height-correlated Smith term of the same Gaussian surface
+ *    (Walter et al. 2007; Heitz 2014), with Lambda of the Beckmann slopes of RMS 2/s:
+ *    transmission G = B(1 + Lambda(ti), 1 + Lambda(to)) (Beta function), reflection
+ *    G = 1/(1 + Lambda(ti) + Lambda(tr)). k0 plays no part. One scattering event.
+ *  BTDF_MODEL_FULL: reserved (single plus multiple scattering); refused by this build.
+ */
+typedef enum {
+    BTDF_MODEL_XU_SUN = 0,
+    BTDF_MODEL_SMITH = 1,
+    BTDF_MODEL_FULL = 2
+} btdf_model;
+
+/* "xu-sun", "smith", "full"; parse returns 0 for an unknown name (it accepts "full":
+   btdf_params_check is what refuses it). */
+BTDF_API const char *btdf_model_name(btdf_model model);
+BTDF_API int btdf_model_parse(const char *name, btdf_model *model);
+
 typedef struct btdf_params {
     int channels;                  /* 1, or 3 for R, G, B */
     double ior[BTDF_MAX_CHANNELS]; /* n per channel (dispersion); ior[0] when channels = 1 */
     double smoothness;             /* s = tau / sigma, shared by all channels */
     double k0;                     /* shadowing constant of Eq. 25, 0.7 in the paper */
+    btdf_model model;              /* shadowing-masking; 0 = BTDF_MODEL_XU_SUN */
 } btdf_params;
 
-/* Defaults: one channel, n = 1.5, s = 3, k0 = 0.7. */
+/* Defaults: one channel, n = 1.5, s = 3, k0 = 0.7, model xu-sun. */
 BTDF_API void btdf_params_default(btdf_params *p);
 
 /* BTDF_OK, or BTDF_EINVAL for NaN/inf, channels not 1 or 3, n <= 0 or outside
    [BTDF_IOR_MIN, BTDF_IOR_MAX], |n - 1| < BTDF_IOR_ONE_EPS, s outside
-   [BTDF_S_MIN, BTDF_S_MAX], k0 outside [0, BTDF_K0_MAX]. */
+   [BTDF_S_MIN, BTDF_S_MAX], k0 outside [0, BTDF_K0_MAX], a model other than xu-sun
+   or smith; BTDF_ENOTSUP for BTDF_MODEL_FULL (not available in this build). */
 BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t msglen);
 
 /* ------------------------------------------------------------------------- */
@@ -126,6 +151,11 @@ BTDF_API double btdf_rho(double n, double s, double k0, double ti, double to, do
    (the form the btdftab tool uses). */
 BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti, double to,
                              double phi);
+
+/* The same facets with the height-correlated Smith term of BTDF_MODEL_SMITH in place
+   of V(ti) V(to) (k0 plays no part); same rules as btdf_rho. */
+BTDF_API double btdf_rho_smith(double n, double s, double ti, double to, double phi);
+BTDF_API double btdf_rho_smith_deg(double n, double s, double ti, double to, double phi);
 
 /* Flat-interface Fresnel transmittance Ft(ti) for index n (0 past the critical angle). */
 BTDF_API double btdf_fresnel_t(double n, double ti);
@@ -180,6 +210,20 @@ BTDF_API btdf_status btdf_transmittance(const btdf_params *p, double ti, double 
 BTDF_API double btdf_rho_r(double n, double s, double k0, double ti, double tr, double phi);
 BTDF_API double btdf_rho_r_deg(double n, double s, double k0, double ti, double tr,
                                double phi);
+/* rho_r with the height-correlated Smith term 1/(1 + Lambda(ti) + Lambda(tr)). */
+BTDF_API double btdf_rho_r_smith(double n, double s, double ti, double tr, double phi);
+BTDF_API double btdf_rho_r_smith_deg(double n, double s, double ti, double tr, double phi);
+
+/* btdf_rho, btdf_rho_deg, btdf_rho_r and btdf_rho_r_deg in the model m (a model this
+   build does not evaluate gives 0): for callers that carry a btdf_params' model. */
+BTDF_API double btdf_rho_model(btdf_model m, double n, double s, double k0, double ti,
+                               double to, double phi);
+BTDF_API double btdf_rho_model_deg(btdf_model m, double n, double s, double k0, double ti,
+                                   double to, double phi);
+BTDF_API double btdf_rho_r_model(btdf_model m, double n, double s, double k0, double ti,
+                                 double tr, double phi);
+BTDF_API double btdf_rho_r_model_deg(btdf_model m, double n, double s, double k0, double ti,
+                                     double tr, double phi);
 
 /* Flat-interface Fresnel reflectance Fr(ti) = 1 - Ft(ti) (1 past the critical angle),
    formed without that cancellation, so it keeps its digits when n is near 1. */

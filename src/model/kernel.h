@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* model_impl.h: the Eq. 25 kernel shared by the evaluator, the tables and the estimates. */
+/* kernel.h: the Eq. 25 kernel shared by the evaluator, the tables and the estimates. */
 #ifndef BTDF_MODEL_IMPL_H
 #define BTDF_MODEL_IMPL_H
 
@@ -226,6 +226,130 @@ BT_INLINE double bt_exp_mul(double x, double f)
     return f * p * bt_pow2i(k1) * bt_pow2i(k - k1);
 }
 
+/* ------------------------------------------------------------------------- */
+/* Smith's shadowing-masking of the same Beckmann surface (docs/model.md 10)   */
+/* ------------------------------------------------------------------------- */
+
+/* Natural logarithm of a positive normal double, branch-free: x = 2^e m with m in
+   [sqrt(1/2), sqrt(2)), log m = 2 atanh(f), f = (m - 1)/(m + 1), |f| <= 0.1716, by its
+   Taylor series to f^23 (truncation below 1e-18 relative). The exponent is read as
+   a double from the bits (no integer conversion, so the loops stay vectors). */
+BT_INLINE double bt_log(double x)
+{
+    uint64_t u = bt_bits(x);
+    /* the biased exponent as a double: 2^52 + field, minus 2^52 (exact) */
+    double e = bt_from_bits((u >> 52) | 0x4330000000000000u) - 0x1p52 - 1023.0;
+    double m = bt_from_bits((u & 0x000fffffffffffffu) | 0x3ff0000000000000u); /* [1, 2) */
+    int big = m > 1.4142135623730951;
+    m = big ? 0.5 * m : m; /* exact */
+    e = big ? e + 1.0 : e;
+    double f = (m - 1.0) / (m + 1.0); /* m - 1 exact (Sterbenz); m + 1 >= 1.7 */
+    double f2 = f * f, f4 = f2 * f2, f8 = f4 * f4;
+    double p = ((1.0 + f2 * (1.0 / 3)) + (0.2 + f2 * (1.0 / 7)) * f4) +
+               (((1.0 / 9) + f2 * (1.0 / 11)) + ((1.0 / 13) + f2 * (1.0 / 15)) * f4) * f8 +
+               (((1.0 / 17) + f2 * (1.0 / 19)) + ((1.0 / 21) + f2 * (1.0 / 23)) * f4) *
+                   (f8 * f8);
+    /* ln 2 in two parts: e * hi is exact for |e| < 2^21 */
+    return e * 0x1.62e42fee00000p-1 + (2.0 * f * p + e * 0x1.a39ef35793c76p-33);
+}
+
+/* log(1 + z) for z >= 0 without losing z's digits when z is small: the rounding of
+   w = 1 + z is put back to first order, (z - (w - 1)) / w (w >= 1: no 1/0). */
+BT_INLINE double bt_log1p(double z)
+{
+    double w = 1.0 + z;
+    return bt_log(w) + (z - (w - 1.0)) / w;
+}
+
+/* Smith's Lambda of the Beckmann distribution with alpha = 2/s (MODEL.md 2: D has
+   alpha^2 = 4/s^2) for the direction of polar angle t, from sin t >= 0, cos t >= 0:
+     Lambda = (erf(a) - 1)/2 + exp(-a^2)/(2 a sqrt(pi)) = exp(-a^2) P(a) / (2 a sqrt(pi)),
+     a = 1/(alpha |tan t|) = s cos t / (2 sin t),  P(a) = 1 - a sqrt(pi) erfcx(a),
+   written with erfcx so that the two terms' cancellation never happens in double.
+   P(a) (1 + sqrt(pi) a + 2 a^2) is a degree-19 polynomial in z = (u - 0.7)/0.3,
+   u = 1/(1 + a/4), on a in [0, 6] (Chebyshev interpolation of the 40-digit function,
+   relative error 5.6e-17; 4e-16 evaluated in double); beyond 6 the asymptotic series
+   P = (1/(2a^2))(1 - 3/(2a^2) + 15/(4a^4) - 105/(8a^6)) (relative 4e-5 at a = 6, where
+   Lambda < 2e-19, so below one ulp of the 1 + Lambda it enters). */
+BT_INLINE double bt_lambda(double sn, double cs, double s)
+{
+    /* t = 0 (sin t = 0): a = inf and Lambda = 0; the floor keeps a finite (at most
+       5e305 for s <= 1e6), and exp(-a^2) underflows to exactly 0 */
+    double a = 0.5 * s * cs / (sn > 1e-300 ? sn : 1e-300);
+    /* t = 90 deg (cos t = 0): Lambda ~ 1/(2 a sqrt(pi)) grows without bound; the floor
+       keeps it finite (below 3e149), and the caller's 1/cos t factor is 0 there */
+    a = a > 1e-150 ? a : 1e-150;
+    a = a < 1e100 ? a : 1e100; /* a^2 stays finite; exp(-a^2) is 0 long before */
+    double ap = a < 6.0 ? a : 6.0;
+    double u = 1.0 / (1.0 + 0.25 * ap);
+    double z = (u - 0.7) * (1.0 / 0.3);
+    double z2 = z * z, z4 = z2 * z2, z8 = z4 * z4, z16 = z8 * z8;
+    double q = (((1.1867676924093455 + z * -0.023618146227367517) +
+                 (-0.17886306605641428 + z * -0.10234086534320358) * z2) +
+                ((0.0044565090145065149 + z * 0.047190216554424874) +
+                 (0.039330353917093844 + z * 0.019367418592606416) * z2) * z4) +
+               (((0.0063572500040774442 + z * 0.0013011407413532545) +
+                 (9.1554866108988373e-05 + z * -3.1673794627486539e-05) * z2) +
+                ((-8.91187115683128e-06 + z * 1.3020483812005169e-07) +
+                 (3.8981032682771344e-07 + z * 2.3894428621003025e-08) * z2) * z4) * z8 +
+               ((-1.5779711270640086e-08 + z * -1.5679996926558987e-09) +
+                (5.7079271508319384e-10 + z * 6.0577447299708143e-11) * z2) * z16;
+    double pp = q / (1.0 + 1.7724538509055160 * ap + 2.0 * ap * ap); /* divisor >= 1 */
+    double ia2 = 1.0 / (a * a); /* a >= 1e-150: a^2 >= 1e-300, no 1/0 */
+    double pt = 0.5 * ia2 * (1.0 - ia2 * (1.5 - ia2 * (3.75 - 13.125 * ia2)));
+    double P = a < 6.0 ? pp : pt;
+    /* P / (2 sqrt(pi) a) <= 2.9e149 < 2^600, as bt_exp_mul requires */
+    return bt_exp_mul(-(a * a), P * (0.28209479177387814 / a));
+}
+
+/* Stirling's correction lnGamma(w) - ((w - 1/2) ln w - w + ln(2 pi)/2) for w >= 10,
+   by its series to w^-15 (the first term left out is below 2e-18 at w = 10). */
+BT_INLINE double bt_stirling_tail(double r) /* r = 1/w */
+{
+    double r2 = r * r, r4 = r2 * r2, r8 = r4 * r4;
+    double p = ((1.0 / 12 + r2 * (-1.0 / 360)) + (1.0 / 1260 + r2 * (-1.0 / 1680)) * r4) +
+               ((1.0 / 1188 + r2 * (-691.0 / 360360)) + (1.0 / 156 + r2 * (-3617.0 / 122400)) *
+                                                            r4) * r8;
+    return r * p;
+}
+
+/* -ln B(1 + x, 1 + y) for x, y >= 0: the exponent of the height-correlated Smith term of
+   transmission, G2 = B(1 + Lambda_i, 1 + Lambda_o) = Gamma(1+x) Gamma(1+y) / Gamma(2+x+y)
+   (Heitz 2014, eq. 99). Branch-free and stable for large arguments: with x the larger,
+   lnGamma(2 + x + y) - lnGamma(1 + x) is formed as one difference of Stirling series,
+     lnG(w + d) - lnG(w) = (w - 1/2) log1p(d/w) + d ln(w + d) - d + tail(w + d) - tail(w),
+   w = 1 + x, d = 1 + y, so the two ~x ln x terms never cancel in double (x reaches
+   1e16 at grazing angles). Arguments below 10 are first shifted up by 9
+   (lnGamma(z) = lnGamma(z + 9) - ln(z (z+1) ... (z+8))); the three products of the shift
+   stay below 1e13 and go into one logarithm. Exactly 0 at x = y = 0 (B(1, 1) = 1). */
+BT_INLINE double bt_smith_t_exponent(double li, double lo)
+{
+    double x = li > lo ? li : lo, y = li > lo ? lo : li;
+    int mx = x < 9.0, my = y < 9.0;
+    double px = 1.0, pxy = 1.0, py = 1.0;
+    for (int k = 0; k < 9; k++) {
+        px *= mx ? 1.0 + x + k : 1.0;
+        pxy *= mx ? 2.0 + x + y + k : 1.0;
+        py *= my ? 1.0 + y + k : 1.0;
+    }
+    double w = 1.0 + x + (mx ? 9.0 : 0.0), d = 1.0 + y;
+    double wy = 1.0 + y + (my ? 9.0 : 0.0);
+    double rw = 1.0 / w, rwd = 1.0 / (w + d), rwy = 1.0 / wy; /* all >= 10: no 1/0 */
+    double dxy = (w - 0.5) * bt_log1p(d * rw) + d * bt_log(w + d) - d +
+                 (bt_stirling_tail(rwd) - bt_stirling_tail(rw));
+    double gy = (wy - 0.5) * bt_log(wy) - wy + 0.91893853320467274 + bt_stirling_tail(rwy);
+    double sh = dxy - gy + bt_log(px * py / pxy); /* pxy >= 1 */
+    sh = sh > 0.0 ? sh : 0.0; /* -ln B >= 0 for x, y >= 0: a rounding below it is 0 */
+    return x > 0.0 ? sh : 0.0; /* no shadowing at all: B(1, 1) = 1 exactly */
+}
+
+/* ln(1 + Lambda_i + Lambda_r): the exponent of the height-correlated Smith term of
+   reflection, G2 = 1/(1 + Lambda_i + Lambda_r) (Walter et al. 2007, Heitz 2014). */
+BT_INLINE double bt_smith_r_exponent(double li, double lr)
+{
+    return bt_log1p(li + lr);
+}
+
 /* sin and cos of y in [-pi/4, pi/4]; swapped when swap is set (the caller reduced
    its angle x to y = pi/2 - x). */
 BT_INLINE void bt_sincos_red(double y, int swap, double *s, double *c)
@@ -319,6 +443,16 @@ BT_INLINE void bt_io_pref(bt_io *io, double s, double k0)
     io->pref = s * s / (4.0 * M_PI) * bt_inv_cos(io->cti) * bt_inv_cos(io->cto);
     io->sh = bt_shadow_exponent(io->sti, io->cti, s, k0) +
              bt_shadow_exponent(io->sto, io->cto, s, k0);
+}
+
+/* The same prefactor with the Smith term of the same surface (BTDF_MODEL_SMITH):
+   V(ti) V(to) = e^-sh becomes G2 = B(1 + Lambda(ti), 1 + Lambda(to)) = e^-sh, Lambda of
+   the lower direction from |tan to| (sto, cto >= 0), so that swapping the two sides
+   swaps the two Lambdas and the symmetric B keeps the reciprocity of MODEL.md 4. */
+BT_INLINE void bt_io_pref_smith(bt_io *io, double s)
+{
+    io->pref = s * s / (4.0 * M_PI) * bt_inv_cos(io->cti) * bt_inv_cos(io->cto);
+    io->sh = bt_smith_t_exponent(bt_lambda(io->sti, io->cti, s), bt_lambda(io->sto, io->cto, s));
 }
 
 /* sin and cos of four reduced arguments at once (the lanes of one vector where the
@@ -492,6 +626,18 @@ BT_INLINE double bt_rho_one(double n, double d, double s, double k0, bt_io *io, 
     return r;
 }
 
+/* bt_rho_one with the Smith term (bt_io_pref_smith): the same operations otherwise. */
+BT_INLINE double bt_rho_one_smith(double n, double d, double s, bt_io *io, double h2,
+                                  double sphi)
+{
+    BT_RHO_GEOMETRY;
+    if (!ok)
+        return 0.0;
+    bt_io_pref_smith(io, s);
+    BT_RHO_VALUE(io->pref);
+    return r;
+}
+
 /* The reflection of the same facets (MODEL.md section 8): the (ti, tr) part, with
    u = e_i + e_r, tr in [0, pi/2]. */
 typedef struct bt_ir {
@@ -512,17 +658,35 @@ BT_INLINE void bt_ir_set(bt_ir *ir, double sti, double cti, double str, double c
     ir->sh = bt_shadow_exponent(sti, cti, s, k0) + bt_shadow_exponent(str, ctr, s, k0);
 }
 
-BT_INLINE void bt_ir_rad(bt_ir *ir, double ti, double tr, double s, double k0)
+/* The Smith term of reflection in place of V(ti) V(tr) (BTDF_MODEL_SMITH):
+   e^-sh = 1/(1 + Lambda(ti) + Lambda(tr)); sti, cti, str, ctr >= 0. */
+BT_INLINE void bt_ir_smith(bt_ir *ir, double sti, double cti, double str, double ctr,
+                           double s)
+{
+    ir->sh = bt_smith_r_exponent(bt_lambda(sti, cti, s), bt_lambda(str, ctr, s));
+}
+
+/* smith: 1 for the Smith term (k0 is then unused). */
+BT_INLINE void bt_ir_rad_m(bt_ir *ir, double ti, double tr, double s, double k0, int smith)
 {
     double sti, cti, str, ctr, sp, cp, sm, cm;
     bt_sincos_rad(ti, &sti, &cti);
     bt_sincos_rad(tr, &str, &ctr);
     bt_sincos_rad(0.5 * (ti + tr), &sp, &cp);
     bt_sincos_red(0.5 * (ti - tr), 0, &sm, &cm);
-    bt_ir_set(ir, sti, cti > 0.0 ? cti : 0.0, str, ctr > 0.0 ? ctr : 0.0, cp, sm, cm, s, k0);
+    cti = cti > 0.0 ? cti : 0.0;
+    ctr = ctr > 0.0 ? ctr : 0.0;
+    bt_ir_set(ir, sti, cti, str, ctr, cp, sm, cm, s, k0);
+    if (smith)
+        bt_ir_smith(ir, sti, cti, str, ctr, s);
 }
 
-BT_INLINE void bt_ir_deg(bt_ir *ir, double ti, double tr, double s, double k0)
+BT_INLINE void bt_ir_rad(bt_ir *ir, double ti, double tr, double s, double k0)
+{
+    bt_ir_rad_m(ir, ti, tr, s, k0, 0);
+}
+
+BT_INLINE void bt_ir_deg_m(bt_ir *ir, double ti, double tr, double s, double k0, int smith)
 {
     double sti, cti, str, ctr, sp, cp, sm, cm;
     bt_sincos_deg(ti, &sti, &cti);
@@ -530,6 +694,13 @@ BT_INLINE void bt_ir_deg(bt_ir *ir, double ti, double tr, double s, double k0)
     bt_sincos_deg(0.5 * (ti + tr), &sp, &cp);
     bt_sincos_red(0.5 * (ti - tr) * BT_DEG, 0, &sm, &cm);
     bt_ir_set(ir, sti, cti, str, ctr, cp, sm, cm, s, k0);
+    if (smith)
+        bt_ir_smith(ir, sti, cti, str, ctr, s);
+}
+
+BT_INLINE void bt_ir_deg(bt_ir *ir, double ti, double tr, double s, double k0)
+{
+    bt_ir_deg_m(ir, ti, tr, s, k0, 0);
 }
 
 /* Fresnel reflectance of a facet at incidence cosine ca > 0 for n = 1 + d, without

@@ -34,6 +34,30 @@ BTDF_API void btdf_params_default(btdf_params *p)
     p->k0 = 0.7;
 }
 
+BTDF_API const char *btdf_model_name(btdf_model model)
+{
+    switch (model) {
+    case BTDF_MODEL_XU_SUN: return "xu-sun";
+    case BTDF_MODEL_SMITH: return "smith";
+    case BTDF_MODEL_FULL: return "full";
+    }
+    return "unknown";
+}
+
+BTDF_API int btdf_model_parse(const char *name, btdf_model *model)
+{
+    static const btdf_model all[] = {BTDF_MODEL_XU_SUN, BTDF_MODEL_SMITH, BTDF_MODEL_FULL};
+    if (!name)
+        return 0;
+    for (size_t k = 0; k < sizeof all / sizeof all[0]; k++)
+        if (!strcmp(name, btdf_model_name(all[k]))) {
+            if (model)
+                *model = all[k];
+            return 1;
+        }
+    return 0;
+}
+
 BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t msglen)
 {
     if (!p)
@@ -64,6 +88,12 @@ BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t m
         return core_say(BTDF_EINVAL, msg, msglen, "smoothness %g: must lie in [0.001, 1e6]", s);
     if (!isfinite(p->k0) || p->k0 < 0.0 || p->k0 > BTDF_K0_MAX)
         return core_say(BTDF_EINVAL, msg, msglen, "k0 %g: must lie in [0, 100]", p->k0);
+    if (p->model == BTDF_MODEL_FULL)
+        return core_say(BTDF_ENOTSUP, msg, msglen,
+                        "model full: not available in this build (xu-sun or smith)");
+    if (p->model != BTDF_MODEL_XU_SUN && p->model != BTDF_MODEL_SMITH)
+        return core_say(BTDF_EINVAL, msg, msglen, "model %d: must be xu-sun (0) or smith (1)",
+                        (int)p->model);
     return BTDF_OK;
 }
 
@@ -113,6 +143,72 @@ BT_CLONES BTDF_API double btdf_rho(double n, double s, double k0, double ti, dou
     return rho_point(n, s, k0, &io, &az);
 }
 
+/* One Smith evaluation (BTDF_MODEL_SMITH): the same geometry, the Smith prefactor. */
+BT_INLINE double rho_point_smith(double n, double s, bt_io *io, const bt_az *az)
+{
+    return bt_rho_one_smith(n, n - 1.0, s, io, az->h2, az->sphi);
+}
+
+/* One evaluation in the model of p (validated by the caller). */
+BT_INLINE double rho_point_m(const btdf_params *p, double n, bt_io *io, const bt_az *az)
+{
+    return p->model == BTDF_MODEL_SMITH ? rho_point_smith(n, p->smoothness, io, az)
+                                        : rho_point(n, p->smoothness, p->k0, io, az);
+}
+
+BT_CLONES BTDF_API double btdf_rho_smith(double n, double s, double ti, double to,
+                                         double phi)
+{
+    if (!params_ok(n, s, 0.0) || !(ti >= 0.0 && ti <= M_PI / 2 + 1e-15 &&
+                                   to >= M_PI / 2 - 1e-15 && to <= M_PI + 1e-15 &&
+                                   isfinite(phi)))
+        return 0.0;
+    bt_io io;
+    bt_az az;
+    bt_io_geom_rad(&io, ti, to);
+    bt_az_rad(&az, bt_fold_rad(phi));
+    return rho_point_smith(n, s, &io, &az);
+}
+
+BT_CLONES BTDF_API double btdf_rho_smith_deg(double n, double s, double ti, double to,
+                                             double phi)
+{
+    if (!params_ok(n, s, 0.0) ||
+        !(ti >= 0.0 && ti <= 90.0 && to >= 90.0 && to <= 180.0 && isfinite(phi)))
+        return 0.0;
+    bt_io io;
+    bt_az az;
+    bt_io_geom_deg(&io, ti, to);
+    bt_az_deg(&az, bt_fold_deg(phi));
+    return rho_point_smith(n, s, &io, &az);
+}
+
+BT_CLONES BTDF_API double btdf_rho_r_smith(double n, double s, double ti, double tr,
+                                           double phi)
+{
+    if (!params_ok(n, s, 0.0) || !(ti >= 0.0 && ti <= M_PI / 2 + 1e-15 && tr >= 0.0 &&
+                                   tr <= M_PI / 2 + 1e-15 && isfinite(phi)))
+        return 0.0;
+    bt_ir ir;
+    bt_az az;
+    bt_ir_rad_m(&ir, ti, tr, s, 0.0, 1);
+    bt_az_rad(&az, bt_fold_rad(phi));
+    return bt_rho_r(n, n - 1.0, s, &ir, az.h2, az.sphi);
+}
+
+BT_CLONES BTDF_API double btdf_rho_r_smith_deg(double n, double s, double ti, double tr,
+                                               double phi)
+{
+    if (!params_ok(n, s, 0.0) ||
+        !(ti >= 0.0 && ti <= 90.0 && tr >= 0.0 && tr <= 90.0 && isfinite(phi)))
+        return 0.0;
+    bt_ir ir;
+    bt_az az;
+    bt_ir_deg_m(&ir, ti, tr, s, 0.0, 1);
+    bt_az_deg(&az, bt_fold_deg(phi));
+    return bt_rho_r(n, n - 1.0, s, &ir, az.h2, az.sphi);
+}
+
 BT_CLONES BTDF_API double btdf_rho_deg(double n, double s, double k0, double ti,
                                        double to, double phi)
 {
@@ -150,6 +246,38 @@ BT_CLONES BTDF_API double btdf_rho_r_deg(double n, double s, double k0, double t
     bt_ir_deg(&ir, ti, tr, s, k0);
     bt_az_deg(&az, bt_fold_deg(phi));
     return bt_rho_r(n, n - 1.0, s, &ir, az.h2, az.sphi);
+}
+
+BTDF_API double btdf_rho_model(btdf_model m, double n, double s, double k0, double ti,
+                               double to, double phi)
+{
+    return m == BTDF_MODEL_XU_SUN  ? btdf_rho(n, s, k0, ti, to, phi)
+           : m == BTDF_MODEL_SMITH ? btdf_rho_smith(n, s, ti, to, phi)
+                                   : 0.0;
+}
+
+BTDF_API double btdf_rho_model_deg(btdf_model m, double n, double s, double k0, double ti,
+                                   double to, double phi)
+{
+    return m == BTDF_MODEL_XU_SUN  ? btdf_rho_deg(n, s, k0, ti, to, phi)
+           : m == BTDF_MODEL_SMITH ? btdf_rho_smith_deg(n, s, ti, to, phi)
+                                   : 0.0;
+}
+
+BTDF_API double btdf_rho_r_model(btdf_model m, double n, double s, double k0, double ti,
+                                 double tr, double phi)
+{
+    return m == BTDF_MODEL_XU_SUN  ? btdf_rho_r(n, s, k0, ti, tr, phi)
+           : m == BTDF_MODEL_SMITH ? btdf_rho_r_smith(n, s, ti, tr, phi)
+                                   : 0.0;
+}
+
+BTDF_API double btdf_rho_r_model_deg(btdf_model m, double n, double s, double k0, double ti,
+                                     double tr, double phi)
+{
+    return m == BTDF_MODEL_XU_SUN  ? btdf_rho_r_deg(n, s, k0, ti, tr, phi)
+           : m == BTDF_MODEL_SMITH ? btdf_rho_r_smith_deg(n, s, ti, tr, phi)
+                                   : 0.0;
 }
 
 BTDF_API double btdf_fresnel_r(double n, double ti)
@@ -194,7 +322,8 @@ static int angles_ok(double ti, double to, double phi)
 /* btdf_params_check's verdict without its messages: the per-call check of btdf_eval. */
 static int params_valid(const btdf_params *p)
 {
-    if (!p || !(p->channels == 1 || p->channels == 3))
+    if (!p || !(p->channels == 1 || p->channels == 3) ||
+        !(p->model == BTDF_MODEL_XU_SUN || p->model == BTDF_MODEL_SMITH))
         return 0;
     for (int c = 0; c < p->channels; c++)
         if (!params_ok(p->ior[c], p->smoothness, p->k0))
@@ -214,7 +343,7 @@ BT_CLONES BTDF_API btdf_status btdf_eval(const btdf_params *p, double ti, double
     bt_io_geom_rad(&io, ti, to);
     bt_az_rad(&az, bt_fold_rad(phi));
     for (int c = 0; c < p->channels; c++)
-        out[c] = rho_point(p->ior[c], p->smoothness, p->k0, &io, &az);
+        out[c] = rho_point_m(p, p->ior[c], &io, &az);
     return BTDF_OK;
 }
 
@@ -227,7 +356,7 @@ BTDF_API btdf_status btdf_eval_r(const btdf_params *p, double ti, double tr, dou
         return BTDF_EDOMAIN;
     bt_ir ir;
     bt_az az;
-    bt_ir_rad(&ir, ti, tr, p->smoothness, p->k0);
+    bt_ir_rad_m(&ir, ti, tr, p->smoothness, p->k0, p->model == BTDF_MODEL_SMITH);
     bt_az_rad(&az, bt_fold_rad(phi));
     for (int c = 0; c < p->channels; c++)
         out[c] = bt_rho_r(p->ior[c], p->ior[c] - 1.0, p->smoothness, &ir, az.h2, az.sphi);
@@ -259,6 +388,16 @@ BTDF_API btdf_status btdf_eval_dir(const btdf_params *p, const double wi[3],
     rho_out b;
     rho_in_init(&a, ri, wi[2], s, k0);
     rho_out_init(&b, ro, wo[2], s, k0);
+    if (p->model == BTDF_MODEL_SMITH) {
+        /* G2 does not factor into an incoming and an outgoing part: all of it goes to
+           the incoming prefactor (rho is their product); 1/cos as rho_in_init's guards */
+        double ci = wi[2], co = -wo[2];
+        double g2 = bt_exp_mul(-bt_smith_t_exponent(bt_lambda(ri, ci > 0.0 ? ci : 0.0, s),
+                                                    bt_lambda(ro, co > 0.0 ? co : 0.0, s)),
+                               1.0);
+        a.pref = ci > 0.0 ? s * s / (4.0 * M_PI) * g2 / ci : 0.0;
+        b.pref = co > 0.0 ? 1.0 / co : 0.0;
+    }
     for (int c = 0; c < p->channels; c++) {
         double n = p->ior[c], d = n - 1.0;
         double vx = (wi[0] + wo[0]) + d * wo[0], vy = (wi[1] + wo[1]) + d * wo[1];
@@ -284,6 +423,32 @@ BT_CLONES static void batch_block(const btdf_params *p, size_t count, const doub
     const int nc = p->channels;
     for (size_t i = 0; i < count; i++)
         c[i] = bt_fold_rad(phi[i]);
+    if (p->model == BTDF_MODEL_SMITH && nc == 1) {
+        /* the loops below with the Smith prefactor (bt_io_pref_smith) */
+        const double n = p->ior[0], d = n - 1.0;
+        for (size_t i = 0; i < count; i++) {
+            bt_io io;
+            bt_az az;
+            bt_io_geom_rad(&io, ti[i], to[i]);
+            bt_io_pref_smith(&io, s);
+            bt_az_rad(&az, c[i]);
+            out[i] = bt_rho(n, d, s, &io, az.h2, az.sphi);
+        }
+        return;
+    }
+    if (p->model == BTDF_MODEL_SMITH) {
+        for (size_t i = 0; i < count; i++) {
+            bt_io io;
+            bt_az az;
+            bt_io_geom_rad(&io, ti[i], to[i]);
+            bt_io_pref_smith(&io, s);
+            bt_az_rad(&az, c[i]);
+            for (int k = 0; k < nc; k++)
+                out[i * (size_t)nc + (size_t)k] =
+                    bt_rho(p->ior[k], p->ior[k] - 1.0, s, &io, az.h2, az.sphi);
+        }
+        return;
+    }
     if (nc == 1) {
         const double n = p->ior[0], d = n - 1.0;
         for (size_t i = 0; i < count; i++) {
@@ -357,7 +522,12 @@ static void grid_row(void *arg, size_t r)
     const btdf_params *p = g->p;
     size_t i = r / g->nto, j = r % g->nto;
     bt_io io;
-    bt_io_rad(&io, g->ti[i], g->to[j], p->smoothness, p->k0);
+    if (p->model == BTDF_MODEL_SMITH) {
+        bt_io_geom_rad(&io, g->ti[i], g->to[j]);
+        bt_io_pref_smith(&io, p->smoothness);
+    } else {
+        bt_io_rad(&io, g->ti[i], g->to[j], p->smoothness, p->k0);
+    }
     grid_line(p, &io, g->nphi, g->h2, g->sphi, g->out + r * g->nphi * (size_t)p->channels);
 }
 
@@ -412,9 +582,10 @@ static const double GL_W[8] = {0.05061426814518813, 0.11119051722668724,
                                0.11119051722668724, 0.05061426814518813};
 
 /* Integrand of T over the facet azimuth at tilt tn: ca Ft V(to) / cos tn (0 when
-   the facet cannot refract e_i into the lower hemisphere). */
+   the facet cannot refract e_i into the lower hemisphere); with smith set, ca Ft G2 /
+   cos tn, G2 = B(1 + li, 1 + Lambda(to)), li = Lambda(ti). */
 static double facet_term(double n, double s, double k0, double sti, double cti,
-                         double stn, double ctn, double cpsi)
+                         double stn, double ctn, double cpsi, int smith, double li)
 {
     facet_ray r;
     if (!facet_refract(n, sti, cti, stn, ctn, cpsi, 0.0, &r))
@@ -425,12 +596,19 @@ static double facet_term(double n, double s, double k0, double sti, double cti,
     double tan_to = st2 > 0.0 ? sqrt(st2) / -r.oz : 0.0; /* -oz > 0 after facet_refract */
     double d1 = r.ca + n * r.cb, d2 = n * r.ca + r.cb;
     double ft = 2.0 * n * r.ca * r.cb * (1.0 / (d1 * d1) + 1.0 / (d2 * d2));
+    if (smith) {
+        double sto = st2 > 0.0 ? sqrt(st2) : 0.0; /* |cos to| = -oz > 0 */
+        double g2 = bt_exp_mul(-bt_smith_t_exponent(li, bt_lambda(sto, -r.oz, s)), 1.0);
+        return r.ca * ft * g2 / ctn;
+    }
     return r.ca * ft * shadow_v(tan_to, s, k0) / ctn;
 }
 
 /* Composite Gauss-Legendre of f over [a, b] in `panels` panels, f(x) = facet sum. */
 typedef struct tq_ctx {
     double n, s, k0, sti, cti;
+    int smith;  /* BTDF_MODEL_SMITH */
+    double li;  /* Lambda(ti) when smith */
 } tq_ctx;
 
 /* Inner integral over psi in [0, pi] at tilt tn, split where the integrand has a
@@ -465,7 +643,8 @@ static double psi_integral(const tq_ctx *q, double stn, double ctn, int panels)
             double om = 1.0 - x;
             double psi = hi * (1.0 - om * om);
             double w = GL_W[j] / panels * 2.0 * hi * om;
-            sum += w * facet_term(q->n, q->s, q->k0, q->sti, q->cti, stn, ctn, cos(psi));
+            sum += w * facet_term(q->n, q->s, q->k0, q->sti, q->cti, stn, ctn, cos(psi),
+                                  q->smith, q->li);
         }
     }
     return sum;
@@ -481,13 +660,13 @@ static int cmp_double(const void *a, const void *b)
 
 /* T(ti) for one index: (V(ti)/cos ti) (2/pi) int_0^U u e^{-u^2} int_0^pi g dpsi du,
    with u = (s/2) tan tn the facet slope in units of its RMS value / sqrt 2. */
-static double transmittance_one(double n, double s, double k0, double ti, int u_panels,
-                                int psi_panels)
+static double transmittance_one(double n, double s, double k0, int smith, double ti,
+                                int u_panels, int psi_panels)
 {
     double sti = sin(ti), cti = cos(ti);
     if (!(cti > 0.0))
         return 0.0; /* grazing incidence transmits nothing */
-    tq_ctx q = {n, s, k0, sti, cti};
+    tq_ctx q = {n, s, k0, sti, cti, smith, smith ? bt_lambda(sti, cti, s) : 0.0};
     /* Tilts where the set of valid facet azimuths changes shape: tn = 90 - ti (all
        facets face e_i below it), and for n < 1 tn = theta_c -+ ti (critical angle). */
     const double U = 6.5; /* e^{-U^2} = 4e-19: the neglected tail */
@@ -528,7 +707,7 @@ static double transmittance_one(double n, double s, double k0, double ti, int u_
             }
         }
     }
-    double vi = shadow_v(sti / cti, s, k0);
+    double vi = smith ? 1.0 : shadow_v(sti / cti, s, k0); /* smith: G2 is inside */
     return vi / cti * (2.0 / M_PI) * sum;
 }
 
@@ -539,7 +718,8 @@ BTDF_API btdf_status btdf_transmittance(const btdf_params *p, double ti, double 
     if (!(ti >= 0.0 && ti <= M_PI / 2))
         return BTDF_EDOMAIN;
     for (int c = 0; c < p->channels; c++)
-        out[c] = transmittance_one(p->ior[c], p->smoothness, p->k0, ti, 24, 4);
+        out[c] = transmittance_one(p->ior[c], p->smoothness, p->k0,
+                                   p->model == BTDF_MODEL_SMITH, ti, 24, 4);
     /* 24 x 4 panels: within 3.3e-7 of 128 x 32 (1.5e-5 of max(T, 0.01)) over n in
        {1.5, 1.33, 2.4, 1.1, 1.0001} and their inverses, s in {0.5, 1, 3, 10, 20, 100,
        1000}, ti in 1.3-degree steps, and within 2.4e-7 of 24 x 12 in 0.5-degree
@@ -559,7 +739,8 @@ double btdf_transmittance_coarse(const btdf_params *p, double ti)
        angle), so a slice's share can be that much off there. */
     double m = 1.0;
     for (int c = 0; c < p->channels; c++)
-        m = fmin(m, transmittance_one(p->ior[c], p->smoothness, p->k0, ti, 4, 3));
+        m = fmin(m, transmittance_one(p->ior[c], p->smoothness, p->k0,
+                                      p->model == BTDF_MODEL_SMITH, ti, 4, 3));
     return m;
 }
 
@@ -572,18 +753,25 @@ double btdf_transmittance_coarse(const btdf_params *p, double ti)
      R = (V(ti)/cos ti) (2/pi) int u e^{-u^2} int_0^pi ca Fr(ca) V(tr) / cos tn dpsi du,
    u = (s/2) tan tn, over the facets that face e_i and send e_r into the upper medium
    (e_r,z = 2 ca cos tn - cos ti > 0, which implies ca > 0). */
-static double refl_term(double n, double s, double k0, double cti, double ctn, double ca)
+static double refl_term(double n, double s, double k0, double cti, double ctn, double ca,
+                        int smith, double li)
 {
     double rz = 2.0 * ca * ctn - cti; /* > 0 inside the interval the caller integrates */
     double st2 = 1.0 - rz * rz;
+    if (smith) { /* G2 = 1/(1 + li + Lambda(tr)), li = Lambda(ti) */
+        double str = st2 > 0.0 ? sqrt(st2) : 0.0;
+        double g2 = bt_exp_mul(-bt_smith_r_exponent(li, bt_lambda(str, rz > 0.0 ? rz : 0.0, s)),
+                               1.0);
+        return ca * bt_fresnel_r(n, n - 1.0, ca) * g2 / ctn;
+    }
     double tan_tr = rz > 0.0 && st2 > 0.0 ? sqrt(st2) / rz : 0.0;
     return ca * bt_fresnel_r(n, n - 1.0, ca) * shadow_v(tan_tr, s, k0) / ctn;
 }
 
 /* Gauss-Legendre over [lo, hi] in psi, graded at both ends (x^2 (3 - 2x)): the ends
    are the edge e_r,z = 0 and the critical angle, where the integrand has a kink. */
-static double refl_psi_piece(double n, double s, double k0, double cti, double A, double B,
-                             double ctn, double lo, double hi, int panels)
+static double refl_psi_piece(double n, double s, double k0, int smith, double li, double cti,
+                             double A, double B, double ctn, double lo, double hi, int panels)
 {
     double sum = 0.0;
     for (int k = 0; k < panels; k++)
@@ -591,7 +779,7 @@ static double refl_psi_piece(double n, double s, double k0, double cti, double A
             double x = (k + GL_X[j]) / panels;
             double psi = lo + (hi - lo) * x * x * (3.0 - 2.0 * x);
             double w = GL_W[j] / panels * (hi - lo) * 6.0 * x * (1.0 - x);
-            sum += w * refl_term(n, s, k0, cti, ctn, A * cos(psi) + B);
+            sum += w * refl_term(n, s, k0, cti, ctn, A * cos(psi) + B, smith, li);
         }
     return sum;
 }
@@ -606,12 +794,13 @@ static double psi_at(double A, double B, double c)
     return x >= 1.0 ? 0.0 : x <= -1.0 ? M_PI : acos(x);
 }
 
-static double reflectance_one(double n, double s, double k0, double ti, int u_panels,
-                              int psi_panels)
+static double reflectance_one(double n, double s, double k0, int smith, double ti,
+                              int u_panels, int psi_panels)
 {
     double sti = sin(ti), cti = cos(ti);
     if (!(cti > 0.0))
         return 0.0; /* grazing incidence: V(ti)/cos ti -> 0 (MODEL.md 3.5) */
+    double li = smith ? bt_lambda(sti, cti, s) : 0.0;
     const double U = 6.5; /* e^{-U^2} = 4e-19: the neglected tail */
     /* Tilts where the valid azimuths change shape: (90 - ti)/2 (every facet sends e_r
        up below it), (90 + ti)/2 (none does above it), and for n < 1 the tilts where
@@ -656,25 +845,29 @@ static double reflectance_one(double n, double s, double k0, double ti, int u_pa
                 double in = 0.0;
                 double pc = ccrit > 0.0 ? psi_at(A, B, ccrit) : 0.0;
                 if (pc > 0.0 && pc < hi) { /* Fr = 1 beyond the critical angle */
-                    in = refl_psi_piece(n, s, k0, cti, A, B, ctn, 0.0, pc, psi_panels) +
-                         refl_psi_piece(n, s, k0, cti, A, B, ctn, pc, hi, psi_panels);
+                    in = refl_psi_piece(n, s, k0, smith, li, cti, A, B, ctn, 0.0, pc,
+                                        psi_panels) +
+                         refl_psi_piece(n, s, k0, smith, li, cti, A, B, ctn, pc, hi,
+                                        psi_panels);
                 } else {
-                    in = refl_psi_piece(n, s, k0, cti, A, B, ctn, 0.0, hi, psi_panels);
+                    in = refl_psi_piece(n, s, k0, smith, li, cti, A, B, ctn, 0.0, hi,
+                                        psi_panels);
                 }
                 sum += w * u * exp(-u * u) * in;
             }
     }
-    double vi = shadow_v(sti / cti, s, k0);
+    double vi = smith ? 1.0 : shadow_v(sti / cti, s, k0); /* smith: G2 is inside */
     return vi / cti * (2.0 / M_PI) * sum;
 }
 
 void bt_albedo_panels(const btdf_params *p, int refl, double ti, int u_panels,
                       int psi_panels, double *out)
 {
+    int sm = p->model == BTDF_MODEL_SMITH;
     for (int c = 0; c < p->channels; c++)
-        out[c] = refl ? reflectance_one(p->ior[c], p->smoothness, p->k0, ti, u_panels,
+        out[c] = refl ? reflectance_one(p->ior[c], p->smoothness, p->k0, sm, ti, u_panels,
                                         psi_panels)
-                      : transmittance_one(p->ior[c], p->smoothness, p->k0, ti, u_panels,
+                      : transmittance_one(p->ior[c], p->smoothness, p->k0, sm, ti, u_panels,
                                           psi_panels);
 }
 
@@ -683,7 +876,8 @@ double btdf_reflectance_coarse(const btdf_params *p, double ti)
     /* 4 x 3 panels, as btdf_transmittance_coarse: for the max(R, 0.01) floor */
     double m = 1.0;
     for (int c = 0; c < p->channels; c++)
-        m = fmin(m, reflectance_one(p->ior[c], p->smoothness, p->k0, ti, 4, 3));
+        m = fmin(m, reflectance_one(p->ior[c], p->smoothness, p->k0,
+                                    p->model == BTDF_MODEL_SMITH, ti, 4, 3));
     return m;
 }
 
@@ -694,7 +888,8 @@ BTDF_API btdf_status btdf_reflectance(const btdf_params *p, double ti, double *o
     if (!(ti >= 0.0 && ti <= M_PI / 2))
         return BTDF_EDOMAIN;
     for (int c = 0; c < p->channels; c++)
-        out[c] = reflectance_one(p->ior[c], p->smoothness, p->k0, ti, 16, 6);
+        out[c] = reflectance_one(p->ior[c], p->smoothness, p->k0,
+                                 p->model == BTDF_MODEL_SMITH, ti, 16, 6);
     /* 16 x 6 panels: within 4.9e-8 of 128 x 32 (3.9e-7 of max(R, 0.01)) over the grid
        of btdf_transmittance's note, at half the cost of 16 x 12 (1.0e-9). */
     return BTDF_OK;

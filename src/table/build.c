@@ -243,7 +243,7 @@ typedef struct slice_out {
 /* Eq. 25 written in facet space for the builder, with the Beckmann factor hoisted per
    row: rho = [s^2/(4 pi) V(ti)/cos ti] e^{-s^2 t^2/4} (1 + t^2)^2 ca Ft chi V(to)/|cos to|,
    t = tan tn, chi = n^2 cb / (ca - n cb)^2. The error estimate evaluates the same
-   directions through the kernel of model_impl.h, so the two check each other.
+   directions through the kernel of model/kernel.h, so the two check each other.
    Returns rho and sets *w to the measure weight |cos to|/chi * sin tn. */
 static double facet_rho(double n, double s, double k0, const rho_in *a, double stn,
                         double ctn, double cpsi, double spsi, double beck, double *w)
