@@ -100,7 +100,7 @@ BTDF_API const char *btdf_strerror(btdf_status status);
 #define BTDF_K0_MAX 100.0
 
 /*
- * Which shadowing-masking the facets get (docs/model.md section 10). The facets, their
+ * Which shadowing-masking the facets get (docs/model.md section 11). The facets, their
  * Beckmann density D (RMS slope 2/s), the Fresnel terms and the Jacobian are the same
  * in every model; only the term G that multiplies them differs.
  *  BTDF_MODEL_XU_SUN: Eq. 25 as the paper writes it, G = V(ti) V(to) with the constant

@@ -41,7 +41,8 @@ class _Params(ctypes.Structure):
     _fields_ = [("channels", ctypes.c_int),
                 ("ior", ctypes.c_double * MAX_CHANNELS),
                 ("smoothness", ctypes.c_double),
-                ("k0", ctypes.c_double)]
+                ("k0", ctypes.c_double),
+                ("model", ctypes.c_int)]  # btdf_model: 0 = xu-sun, what ctypes zero-fills
 
 
 class _Slice(ctypes.Structure):
