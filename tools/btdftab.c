@@ -30,13 +30,6 @@ enum { EXIT_USAGE = 2, EXIT_BUDGET = 3 };
 
 static const char *prog = "btdftab";
 
-/* Peak resident memory of this process so far, in bytes (Linux reports KiB). */
-static size_t peak_rss(void)
-{
-    struct rusage ru;
-    return getrusage(RUSAGE_SELF, &ru) == 0 ? (size_t)ru.ru_maxrss * 1024u : 0;
-}
-
 static int fail(int code, const char *fmt, ...)
 {
     va_list ap;
@@ -765,112 +758,6 @@ static int cmd_albedo(const cli *c)
 /* tabulate                                                                  */
 /* ------------------------------------------------------------------------- */
 
-/* The numbers of one part's report, as "key": value lines at the given indent. */
-static void json_part(FILE *f, const char *ind, btdf_table_kind kind, const btdf_report *r)
-{
-    int refl = kind == BTDF_TABLE_FACET_REFLECTION;
-    fprintf(f, "%s\"part\": \"%s\",\n%s\"kind\": \"%s\",\n", ind,
-            refl ? "reflection" : "transmission", ind, btdf_table_kind_name(kind));
-    fprintf(f, "%s\"met\": %s,\n%s\"slices\": %zu,\n%s\"samples\": %zu,\n", ind,
-            r->met ? "true" : "false", ind, r->slices, ind, r->samples);
-    fprintf(f, "%s\"test_angles\": %zu,\n%s\"test_points\": %zu,\n", ind, r->test_angles, ind,
-            r->test_points);
-    fprintf(f, "%s\"seconds_estimate\": %.6f,\n", ind, r->seconds_estimate);
-    fprintf(f, "%s\"e_l1\": {\"max\": %.6g, \"mean\": %.6g},\n", ind, r->e_l1_max, r->e_l1_mean);
-    fprintf(f, "%s\"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n", ind,
-            r->e_max_max, r->e_max_mean, r->e_max_angles);
-    fprintf(f, "%s\"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n", ind, r->e_t_max, r->e_t_mean);
-    fprintf(f, "%s\"per_theta_i\": [\n", ind);
-    for (size_t k = 0; k < r->test_angles; k++) {
-        const btdf_ti_error *e = &r->per_ti[k];
-        fprintf(f,
-                "%s  {\"theta_i_deg\": %.6f, \"%s\": %.9g, \"%s_table\": %.9g, \"e_l1\": %.6g, "
-                "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
-                ind, e->ti * 180 / M_PI, refl ? "R" : "T", e->T, refl ? "R" : "T", e->T_table,
-                e->e_l1, e->e_t, e->e_max, k + 1 < r->test_angles ? "," : "");
-    }
-    fprintf(f, "%s]", ind);
-}
-
-/* The request's lines of a table's JSON report: material, range, tolerance, met. */
-static void json_request(FILE *f, const btdf_table_opts *o, const btdf_report *r, int met)
-{
-    fprintf(f, "  \"ior\": [");
-    for (int c = 0; c < o->params.channels; c++)
-        fprintf(f, "%s%s", c ? ", " : "", num(o->params.ior[c]));
-    fprintf(f, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n", num(o->params.smoothness),
-            num(o->params.k0));
-    fprintf(f, "  \"theta_i_deg\": [%s, %s],\n", num(o->ti_min * 180 / M_PI),
-            num(o->ti_max * 180 / M_PI));
-    fprintf(f, "  \"tolerance\": %s,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
-            num(r->tolerance), r->metric == BTDF_METRIC_MAX ? "max" : "l1",
-            met ? "true" : "false");
-}
-
-/* r2: the reflection's report of a table holding both parts, or NULL. */
-static void json_report(FILE *f, const btdf_table_opts *o, btdf_table_kind kind,
-                        const btdf_report *r, const char *provenance, const btdf_report *r2)
-{
-    if (kind == BTDF_TABLE_FACET_REFLECTION || r2) {
-        /* reflection or both: one object per part, under "parts" */
-        run_json_open(f, provenance);
-        json_request(f, o, r, r->met && (!r2 || r2->met));
-        fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"peak_bytes\": %zu,\n",
-                r->seconds_build, r->peak_bytes);
-        fprintf(f, "  \"parts\": [\n    {\n");
-        json_part(f, "      ", kind, r);
-        if (r2) {
-            fprintf(f, "\n    },\n    {\n");
-            json_part(f, "      ", BTDF_TABLE_FACET_REFLECTION, r2);
-        }
-        fprintf(f, "\n    }\n  ]\n}\n");
-        return;
-    }
-    run_json_open(f, provenance);
-    fprintf(f, "  \"kind\": \"%s\",\n", btdf_table_kind_name(kind));
-    json_request(f, o, r, r->met);
-    fprintf(f, "  \"slices\": %zu,\n  \"samples\": %zu,\n", r->slices, r->samples);
-    fprintf(f, "  \"seconds_tabulation\": %.6f,\n  \"seconds_estimate\": %.6f,\n"
-               "  \"estimate_within_tabulation\": %s,\n",
-            r->seconds_build, r->seconds_estimate, r->estimate_in_build ? "true" : "false");
-    fprintf(f, "  \"test_angles\": %zu,\n  \"test_points\": %zu,\n", r->test_angles,
-            r->test_points);
-    fprintf(f, "  \"peak_bytes\": %zu,\n", r->peak_bytes);
-    fprintf(f, "  \"e_l1\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_l1_max, r->e_l1_mean);
-    fprintf(f, "  \"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n", r->e_max_max,
-            r->e_max_mean, r->e_max_angles);
-    fprintf(f, "  \"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n", r->e_t_max, r->e_t_mean);
-    fprintf(f, "  \"per_theta_i\": [\n");
-    for (size_t k = 0; k < r->test_angles; k++) {
-        const btdf_ti_error *e = &r->per_ti[k];
-        fprintf(f,
-                "    {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_table\": %.9g, \"e_l1\": %.6g, "
-                "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
-                e->ti * 180 / M_PI, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
-                k + 1 < r->test_angles ? "," : "");
-    }
-    fprintf(f, "  ]\n}\n");
-}
-
-/* The JSON report, written like every output: atomically. */
-static int write_report(const char *path, const btdf_table_opts *o, btdf_table_kind kind,
-                        const btdf_report *r, const char *prov, const btdf_report *r2)
-{
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
-    if (!f)
-        return fail(1, "%s: out of memory", path);
-    json_report(f, o, kind, r, prov, r2);
-    int bad = fclose(f) != 0;
-    char msg[512] = "";
-    btdf_status st = bad ? BTDF_ENOMEM : btdf_write_buffer(path, ".json", buf, len, msg, sizeof msg);
-    free(buf);
-    if (st != BTDF_OK)
-        return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
-    return 0;
-}
-
 /* Two outputs of one run must be two files, whatever the format: -o (unless standard
    output), --report and every --preview. 0, or the exit code after the message. */
 static int distinct_outputs(const char *out, const cli *c)
@@ -1061,171 +948,32 @@ static int cmd_tabulate(cli *c, const char *prov)
     o.phi_max = c->ph1 * M_PI / 180.0;
     o.max_bytes = c->mib << 20;
     o.part = c->part;
-    char msg[512] = "";
-    btdf_table *t = NULL;
     /* A progress bar on a terminal (run.h): the build, the estimate, the writes. */
     run_progress pr;
     run_progress_start(&pr, !c->quiet && isatty(2),
                        out ? (strcmp(out, "-") ? out : "standard output") : c->previews[0].path);
     o.progress = run_progress_cb;
     o.progress_user = &pr;
-    double t0 = run_now();
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    double t1 = run_now();
-    run_progress_stage(&pr, "estimating the error");
-    if (st != BTDF_OK && st != BTDF_EBUDGET)
-        run_progress_end(&pr);
-    if (st != BTDF_OK && st != BTDF_EBUDGET)
-        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s", msg[0] ? msg : btdf_strerror(st));
-    if (!t) {
-        run_progress_end(&pr);
-        return fail(st == BTDF_EBUDGET ? EXIT_BUDGET : 1, "%s", msg[0] ? msg : btdf_strerror(st));
+    /* The table first, then its pictures. */
+    run_table_out outs[MAX_PREVIEWS + 1];
+    btdf_preview_opts pos[MAX_PREVIEWS];
+    int nouts = 0;
+    if (out)
+        outs[nouts++] = (run_table_out){out, NULL, 0};
+    for (int k = 0; k < c->npreview; k++) {
+        btdf_preview_opts *po = &pos[k];
+        btdf_preview_opts_default(po);
+        po->kind = c->previews[k].kind;
+        po->analytic = c->previews[k].analytic;
+        po->log_decades = po->kind == BTDF_PREVIEW_RENDER ? c->log_decades : 0.0;
+        po->zoom = po->kind == BTDF_PREVIEW_RENDER ? c->zoom : 0.0;
+        po->width = c->pic_w;
+        po->height = c->pic_h;
+        outs[nouts++] = (run_table_out){c->previews[k].path, po, 0};
     }
-    /* One report per part: the table's own, and the reflection of a table holding both. */
-    int estimated = o.estimate != BTDF_ESTIMATE_NONE;
-    int nparts = btdf_table_parts(t) == BTDF_PART_BOTH ? 2 : 1;
-    const btdf_table *pt[2] = {t, btdf_table_part(t, BTDF_PART_REFLECTION)};
-    btdf_report rs[2];
-    memset(rs, 0, sizeof rs);
-    btdf_report r; /* the first part's, filled below */
-    char lines[2][640];
-    lines[0][0] = lines[1][0] = '\0';
-    int met_all = 1;
-    double e_worst = 0.0;
-    for (int k = 0; k < nparts; k++) {
-        btdf_report *rk = &rs[k];
-        if (estimated) {
-            /* For an adaptive table this is the builder's own check (the same request
-               returns it): the report and the builder's verdict cannot differ. */
-            int fast = o.estimate == BTDF_ESTIMATE_FAST;
-            btdf_status es = btdf_table_estimate(pt[k], o.ti_min, o.ti_max, fast ? 16 : 0,
-                                                 fast ? 2048 : 0, REPORT_SEED, o.threads, rk);
-            if (es != BTDF_OK) {
-                run_progress_end(&pr);
-                btdf_report_clear(&rs[0]);
-                btdf_table_free(t);
-                return fail(1, "error estimate: %s", btdf_strerror(es));
-            }
-        } else {
-            rk->slices = btdf_table_slice_count(pt[k]);
-            rk->samples = btdf_table_node_count(pt[k]);
-        }
-        rk->seconds_build = t1 - t0;
-        rk->peak_bytes = peak_rss();
-        rk->tolerance = o.kind == BTDF_TABLE_GRID ? 0.0 : o.tolerance;
-        rk->metric = o.metric;
-        double e = o.metric == BTDF_METRIC_MAX ? rk->e_max_max : rk->e_l1_max;
-        rk->met = o.kind == BTDF_TABLE_GRID || !estimated ? 1 : e <= o.tolerance;
-        met_all &= rk->met;
-        e_worst = fmax(e_worst, e);
-        /* "table" as before for the transmission alone; the part's name otherwise */
-        int refl = btdf_table_get_kind(pt[k]) == BTDF_TABLE_FACET_REFLECTION;
-        const char *what = c->part == BTDF_PART_TRANSMISSION ? "table"
-                           : refl                            ? "reflection table"
-                                                             : "transmission table";
-        char *line = lines[k];
-        if (estimated) {
-            char emax[96];
-            if (rk->e_max_angles)
-                snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", rk->e_max_max,
-                         rk->e_max_mean);
-            else
-                snprintf(emax, sizeof emax, "e_max n/a (%s < 0.01 at every test angle)",
-                         refl ? "R" : "T");
-            snprintf(line, sizeof lines[k],
-                     "%s: %s: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
-                     "(%s, %zu angles, %zu points%s); e_L1 max %.3g mean %.3g; %s; "
-                     "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
-                     prog, what, rk->slices, rk->samples, rk->seconds_build,
-                     rk->seconds_estimate, o.estimate == BTDF_ESTIMATE_FAST ? "fast" : "full",
-                     rk->test_angles, rk->test_points,
-                     rk->estimate_in_build ? "; the builder's last check, inside the tabulation"
-                                           : "",
-                     rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max, rk->e_t_mean,
-                     (double)rk->peak_bytes / 1048576.0,
-                     o.kind == BTDF_TABLE_GRID ? ""
-                                               : (rk->met ? "; tolerance met" : "; TOLERANCE NOT MET"));
-        } else {
-            snprintf(line, sizeof lines[k],
-                     "%s: %s: %zu slices, %zu samples; tabulation %.3f s; error not estimated "
-                     "(--estimate none); peak memory %.1f MiB",
-                     prog, what, rk->slices, rk->samples, rk->seconds_build,
-                     (double)rk->peak_bytes / 1048576.0);
-        }
-    }
-    r = rs[0];
-    int code = 0;
-    if (!estimated && msg[0])
-        fprintf(stderr, "%s: %s\n", prog, msg); /* the budget stopped the unchecked pass */
-    if (o.kind != BTDF_TABLE_GRID && !met_all) {
-        for (int k = 0; k < nparts; k++) {
-            if (!c->quiet)
-                fprintf(stderr, "%s; total %.3f s\n", lines[k], run_now() - t0);
-            lines[k][0] = '\0'; /* printed */
-        }
-        fprintf(stderr, "%s: %s: the table reached %s error %.3g, above the tolerance %g%s%s\n",
-                prog, out ? out : "table", o.metric == BTDF_METRIC_MAX ? "max" : "L1", e_worst,
-                o.tolerance, msg[0] ? ": " : "", msg);
-        if (!c->best_effort) {
-            fprintf(stderr, "%s: nothing written; %s, loosen --tolerance, or pass "
-                            "--best-effort\n", prog,
-                    strstr(msg, "memory") ? "raise --max-memory"
-                    : strstr(msg, "budget") ? "raise --max-samples (and --max-memory)"
-                                             : "try again with --estimate full");
-            code = EXIT_BUDGET;
-        }
-    }
-    char prov2[1200];
-    if (!estimated) {
-        snprintf(prov2, sizeof prov2, "%s; error not estimated", prov ? prov : "btdftab");
-        prov = prov2;
-    }
-    btdf_write_opts w = {estimated ? &r : NULL, prov,
-                         estimated && nparts == 2 ? &rs[1] : NULL};
-    /* The table, its pictures and its report appear together or not at all. */
-    btdf_outputs_begin();
-    if (code == 0 && out) {
-        btdf_output what = {t, NULL, NULL, &w, NULL, NULL};
-        if (strcmp(out, "-"))
-            run_progress_stage(&pr, "writing");
-        st = btdf_write(&what, out, msg, sizeof msg);
-        run_progress_end(&pr);
-        if (st != BTDF_OK)
-            code = fail(1, "%s: %s", out, msg[0] ? msg : btdf_strerror(st));
-    }
-    for (int k = 0; k < c->npreview && code == 0; k++) {
-        btdf_preview_opts po;
-        btdf_preview_opts_default(&po);
-        po.kind = c->previews[k].kind;
-        po.analytic = c->previews[k].analytic;
-        po.log_decades = po.kind == BTDF_PREVIEW_RENDER ? c->log_decades : 0.0;
-        po.zoom = po.kind == BTDF_PREVIEW_RENDER ? c->zoom : 0.0;
-        po.table = t;
-        po.width = c->pic_w;
-        po.height = c->pic_h;
-        btdf_output what = {NULL, NULL, &po, &w, NULL, NULL};
-        st = btdf_write(&what, c->previews[k].path, msg, sizeof msg);
-        if (st != BTDF_OK)
-            code = fail(1, "%s: %s", c->previews[k].path, msg[0] ? msg : btdf_strerror(st));
-    }
-    if (code == 0 && c->report)
-        code = write_report(c->report, &o, btdf_table_get_kind(t), &r, prov,
-                            nparts == 2 ? &rs[1] : NULL);
-    if (code == 0) {
-        st = btdf_outputs_commit(msg, sizeof msg);
-        if (st != BTDF_OK)
-            code = fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
-    } else {
-        btdf_outputs_abort();
-    }
-    /* The one-line report, last: the total covers tabulation, estimate and writing. */
-    for (int k = 0; k < nparts; k++)
-        if (!c->quiet && lines[k][0])
-            fprintf(stderr, "%s; total %.3f s\n", lines[k], run_now() - t0);
-    btdf_report_clear(&rs[0]);
-    btdf_report_clear(&rs[1]);
-    btdf_table_free(t);
-    return code;
+    run_table_req rq = {prog, out, o, c->part != BTDF_PART_TRANSMISSION, outs, nouts,
+                        c->report, prov, c->quiet, c->best_effort, &pr};
+    return run_table(&rq);
 }
 
 /* ------------------------------------------------------------------------- */

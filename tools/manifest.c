@@ -483,7 +483,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         for (int c = 0; c < p.channels; c++)
             p.ior[c] = 1.0 / p.ior[c];
     const char *side = leave ? "leave" : "enter";
-    char stamp[4096], msg[512] = "";
+    char stamp[4096];
     int stale = 0;
     for (int k = 0; k < nouts; k++) {
         stamp_text(stamp, sizeof stamp, m, &p, side);
@@ -527,78 +527,29 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     o.threads = mo->threads;
     o.progress = run_progress_cb;
     o.progress_user = &pr;
-    btdf_table *t = NULL;
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    run_progress_stage(&pr, "estimating the error");
-    if (st != BTDF_OK && !(st == BTDF_EBUDGET && mo->best_effort)) {
-        run_progress_end(&pr);
-        btdf_table_free(t);
-        fprintf(stderr, "%s: %s (%s): %s\n", mo->prog, m->name, side,
-                msg[0] ? msg : btdf_strerror(st));
-        return st == BTDF_EBUDGET ? 3 : 1;
-    }
-    /* one report per part the table holds (the reflection of a table holding both
-       second) */
-    btdf_report rs[2];
-    memset(rs, 0, sizeof rs);
-    const btdf_table *pt[2] = {t, btdf_table_part(t, BTDF_PART_REFLECTION)};
-    int nparts = btdf_table_parts(t) == BTDF_PART_BOTH ? 2 : 1, met = 1;
-    for (int q = 0; q < nparts; q++) {
-        btdf_report *rq = &rs[q];
-        btdf_table_estimate(pt[q], o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, rq);
-        rq->tolerance = o.tolerance;
-        rq->metric = o.metric;
-        rq->met = (o.metric == BTDF_METRIC_MAX ? rq->e_max_max : rq->e_l1_max) <= o.tolerance;
-        met &= rq->met;
-    }
-    run_progress_end(&pr);
-    btdf_report r = rs[0];
-    for (int q = 0; q < nparts && !mo->quiet; q++) {
-        const char *pn = m->part == BTDF_PART_TRANSMISSION ? ""
-                         : btdf_table_get_kind(pt[q]) == BTDF_TABLE_FACET_REFLECTION
-                             ? " reflection"
-                             : " transmission";
-        fprintf(stderr, "%s: %s (%s)%s: %zu slices, %zu samples; e_L1 max %.3g, e_max max "
-                        "%.3g, e_T max %.3g%s\n",
-                mo->prog, m->name, side, pn, rs[q].slices, rs[q].samples, rs[q].e_l1_max,
-                rs[q].e_max_max, rs[q].e_t_max, rs[q].met ? "" : "; TOLERANCE NOT MET");
-    }
-    int code = 0;
-    if (!met && !mo->best_effort) {
-        fprintf(stderr, "%s: %s (%s): nothing written (tolerance %g not met)\n", mo->prog,
-                m->name, side, o.tolerance);
-        code = 3;
-    }
-    char prov[256];
+    /* The stale outputs, written together by the run tabulate takes: a table file, or
+       a .png montage of the table (the registry picks by extension). */
+    btdf_preview_opts po;
+    btdf_preview_opts_default(&po);
+    po.kind = BTDF_PREVIEW_MONTAGE;
+    run_table_out todo[MAX_OUTPUTS];
+    int ntodo = 0;
+    for (int k = 0; k < nouts; k++)
+        if (mo->force || !up_to_date(outs[k], stamp))
+            todo[ntodo++] = (run_table_out){outs[k], &po, 1};
+    char prov[256], who[256];
     snprintf(prov, sizeof prov, "btdftab build, material [%s], side %s", m->name, side);
-    if (code == 0)
-        run_progress_stage(&pr, "writing");
-    for (int k = 0; k < nouts && code == 0; k++) {
-        stamp_text(stamp, sizeof stamp, m, &p, side);
-        (*done)++;
-        if (!mo->force && up_to_date(outs[k], stamp))
-            continue;
-        /* A table file, or a .png montage of the table: the registry picks by extension. */
-        btdf_preview_opts po;
-        btdf_preview_opts_default(&po);
-        po.kind = BTDF_PREVIEW_MONTAGE;
-        po.table = t;
-        btdf_write_opts w = {&r, prov, nparts == 2 ? &rs[1] : NULL};
-        btdf_output what = {t, NULL, &po, &w, NULL, NULL};
-        st = btdf_write(&what, outs[k], msg, sizeof msg);
-        if (st != BTDF_OK) {
-            fprintf(stderr, "%s: %s: %s\n", mo->prog, outs[k], msg[0] ? msg : btdf_strerror(st));
-            code = 1;
-        } else if (!write_stamp_for(outs[k], stamp)) {
-            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, outs[k],
+    snprintf(who, sizeof who, "%s: %s (%s)", mo->prog, m->name, side);
+    run_table_req rq = {who, NULL, o, m->part != BTDF_PART_TRANSMISSION, todo, ntodo, NULL,
+                        prov, mo->quiet, mo->best_effort, &pr};
+    int code = run_table(&rq);
+    *done += nouts;
+    for (int k = 0; k < ntodo && code == 0; k++)
+        if (!write_stamp_for(todo[k].path, stamp)) {
+            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, todo[k].path,
                     strerror(errno));
             code = 1;
         }
-    }
-    run_progress_end(&pr);
-    btdf_report_clear(&rs[0]);
-    btdf_report_clear(&rs[1]);
-    btdf_table_free(t);
     return code;
 }
 

@@ -7,11 +7,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <time.h>
 
 #include <btdf/btdf_io.h>
 #include <btdf/btdf_scatfun.h>
 
+#include "report_json.h"
 #include "run.h"
 
 void run_json_open(FILE *f, const char *prov)
@@ -162,9 +164,13 @@ void run_progress_end(run_progress *pr)
     pr->stage[0] = 0;
 }
 
+/* "prog: path: what" on standard error ("prog: what" for an empty path); returns code. */
 static int fail(const char *prog, int code, const char *path, const char *what)
 {
-    fprintf(stderr, "%s: %s: %s\n", prog, path, what);
+    if (path[0])
+        fprintf(stderr, "%s: %s: %s\n", prog, path, what);
+    else
+        fprintf(stderr, "%s: %s\n", prog, what);
     return code;
 }
 
@@ -603,5 +609,177 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
         btdf_report_clear(&coarse[k]);
     }
     btdf_rad_free(x);
+    return code;
+}
+
+/* ------------------------------------------------------------------------- */
+/* tables                                                                    */
+/* ------------------------------------------------------------------------- */
+
+size_t run_peak_rss(void)
+{
+    struct rusage ru; /* Linux reports KiB */
+    return getrusage(RUSAGE_SELF, &ru) == 0 ? (size_t)ru.ru_maxrss * 1024u : 0;
+}
+
+/* One part's line for standard error (without the total time, added when printed). */
+static void table_line(char *line, size_t len, const run_table_req *rq, const btdf_table *pt,
+                       const btdf_report *rk, int estimated)
+{
+    const btdf_table_opts *o = &rq->o;
+    /* "table" as before for the transmission alone; the part's name otherwise */
+    int refl = btdf_table_get_kind(pt) == BTDF_TABLE_FACET_REFLECTION;
+    const char *what = !rq->name_parts ? "table"
+                       : refl          ? "reflection table"
+                                       : "transmission table";
+    if (!estimated) {
+        snprintf(line, len,
+                 "%s: %s: %zu slices, %zu samples; tabulation %.3f s; error not estimated "
+                 "(--estimate none); peak memory %.1f MiB",
+                 rq->prog, what, rk->slices, rk->samples, rk->seconds_build,
+                 (double)rk->peak_bytes / 1048576.0);
+        return;
+    }
+    char emax[96];
+    if (rk->e_max_angles)
+        snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", rk->e_max_max, rk->e_max_mean);
+    else
+        snprintf(emax, sizeof emax, "e_max n/a (%s < 0.01 at every test angle)",
+                 refl ? "R" : "T");
+    snprintf(line, len,
+             "%s: %s: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
+             "(%s, %zu angles, %zu points%s); e_L1 max %.3g mean %.3g; %s; "
+             "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
+             rq->prog, what, rk->slices, rk->samples, rk->seconds_build, rk->seconds_estimate,
+             o->estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", rk->test_angles,
+             rk->test_points,
+             rk->estimate_in_build ? "; the builder's last check, inside the tabulation" : "",
+             rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max, rk->e_t_mean,
+             (double)rk->peak_bytes / 1048576.0,
+             o->kind == BTDF_TABLE_GRID ? ""
+                                        : (rk->met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+}
+
+int run_table(const run_table_req *rq)
+{
+    const btdf_table_opts *o = &rq->o;
+    const char *prog = rq->prog;
+    run_progress *pr = rq->pr;
+    char msg[512] = "";
+    btdf_table *t = NULL;
+    btdf_report rs[2]; /* one per part: the table's own, and the reflection of both */
+    memset(rs, 0, sizeof rs);
+    char lines[2][640];
+    lines[0][0] = lines[1][0] = '\0';
+    int code = 0, nparts = 0, estimated = o->estimate != BTDF_ESTIMATE_NONE, met_all = 1;
+    double t0 = run_now(), e_worst = 0.0;
+    const char *prov = rq->prov;
+    char prov2[1200];
+    btdf_status st = btdf_table_build(o, &t, msg, sizeof msg);
+    double t1 = run_now();
+    run_progress_stage(pr, "estimating the error");
+    if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        run_progress_end(pr);
+        code = fail(prog, st == BTDF_EINVAL ? 2 : 1, "", msg[0] ? msg : btdf_strerror(st));
+        goto done;
+    }
+    if (!t) { /* the budget cannot hold the coarsest table: nothing was built */
+        run_progress_end(pr);
+        code = fail(prog, st == BTDF_EBUDGET ? 3 : 1, "", msg[0] ? msg : btdf_strerror(st));
+        goto done;
+    }
+    nparts = btdf_table_parts(t) == BTDF_PART_BOTH ? 2 : 1;
+    const btdf_table *pt[2] = {t, btdf_table_part(t, BTDF_PART_REFLECTION)};
+    for (int k = 0; k < nparts; k++) {
+        btdf_report *rk = &rs[k];
+        if (estimated) {
+            /* For an adaptive table this is the builder's own check (the same request
+               returns it): the report and the builder's verdict cannot differ. */
+            int fast = o->estimate == BTDF_ESTIMATE_FAST;
+            btdf_status es = btdf_table_estimate(pt[k], o->ti_min, o->ti_max, fast ? 16 : 0,
+                                                 fast ? 2048 : 0, REPORT_SEED, o->threads, rk);
+            if (es != BTDF_OK) {
+                run_progress_end(pr);
+                fprintf(stderr, "%s: error estimate: %s\n", prog, btdf_strerror(es));
+                code = 1;
+                goto done;
+            }
+        } else {
+            rk->slices = btdf_table_slice_count(pt[k]);
+            rk->samples = btdf_table_node_count(pt[k]);
+        }
+        rk->seconds_build = t1 - t0;
+        rk->peak_bytes = run_peak_rss();
+        rk->tolerance = o->kind == BTDF_TABLE_GRID ? 0.0 : o->tolerance;
+        rk->metric = o->metric;
+        double e = o->metric == BTDF_METRIC_MAX ? rk->e_max_max : rk->e_l1_max;
+        rk->met = o->kind == BTDF_TABLE_GRID || !estimated ? 1 : e <= o->tolerance;
+        met_all &= rk->met;
+        e_worst = fmax(e_worst, e);
+        table_line(lines[k], sizeof lines[k], rq, pt[k], rk, estimated);
+    }
+    if (!estimated && msg[0])
+        fprintf(stderr, "%s: %s\n", prog, msg); /* the budget stopped the unchecked pass */
+    if (o->kind != BTDF_TABLE_GRID && !met_all) {
+        for (int k = 0; k < nparts; k++) {
+            if (!rq->quiet)
+                fprintf(stderr, "%s; total %.3f s\n", lines[k], run_now() - t0);
+            lines[k][0] = '\0'; /* printed */
+        }
+        fprintf(stderr, "%s: %s: the table reached %s error %.3g, above the tolerance %g%s%s\n",
+                prog, rq->name ? rq->name : "table", o->metric == BTDF_METRIC_MAX ? "max" : "L1",
+                e_worst, o->tolerance, msg[0] ? ": " : "", msg);
+        if (!rq->best_effort) {
+            fprintf(stderr, "%s: nothing written; %s, loosen --tolerance, or pass "
+                            "--best-effort\n", prog,
+                    strstr(msg, "memory") ? "raise --max-memory"
+                    : strstr(msg, "budget") ? "raise --max-samples (and --max-memory)"
+                                             : "try again with --estimate full");
+            code = 3;
+        }
+    }
+    if (!estimated) {
+        snprintf(prov2, sizeof prov2, "%s; error not estimated", prov ? prov : "btdftab");
+        prov = prov2;
+    }
+    btdf_write_opts w = {estimated ? &rs[0] : NULL, prov, estimated && nparts == 2 ? &rs[1] : NULL};
+    /* The tables, their pictures and the report appear together or not at all. */
+    btdf_outputs_begin();
+    for (int k = 0; k < rq->nouts && code == 0; k++) {
+        const run_table_out *out = &rq->outs[k];
+        btdf_preview_opts po;
+        if (out->preview) {
+            po = *out->preview;
+            po.table = t;
+        }
+        int table = !out->preview || out->with_table;
+        btdf_output what = {table ? t : NULL, NULL, out->preview ? &po : NULL, &w, NULL, NULL};
+        if (table && strcmp(out->path, "-"))
+            run_progress_stage(pr, "writing");
+        st = btdf_write(&what, out->path, msg, sizeof msg);
+        if (table)
+            run_progress_end(pr);
+        if (st != BTDF_OK)
+            code = fail(prog, 1, out->path, msg[0] ? msg : btdf_strerror(st));
+    }
+    if (code == 0 && rq->report)
+        code = report_json_table(prog, rq->report, o, btdf_table_get_kind(t), &rs[0], prov,
+                                 nparts == 2 ? &rs[1] : NULL);
+    if (code == 0) {
+        st = btdf_outputs_commit(msg, sizeof msg);
+        if (st != BTDF_OK)
+            code = fail(prog, 1, "", msg[0] ? msg : btdf_strerror(st));
+    } else {
+        btdf_outputs_abort();
+    }
+    /* The one-line report, last: the total covers tabulation, estimate and writing. */
+    for (int k = 0; k < nparts; k++)
+        if (!rq->quiet && lines[k][0])
+            fprintf(stderr, "%s; total %.3f s\n", lines[k], run_now() - t0);
+done:
+    run_progress_end(pr);
+    btdf_report_clear(&rs[0]);
+    btdf_report_clear(&rs[1]);
+    btdf_table_free(t);
     return code;
 }
