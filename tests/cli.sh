@@ -138,6 +138,18 @@ printf '[g]\nior = 1.5\nsmoothness = 3\ntheta_i = 0:40\ntolerance = 1e-2\npart =
     grep -q 'g (enter): reflection table: ' "$W/m/err" && grep -q 'part both' "$W/m/.g.csv.btdftab-stamp" && \
     "$B" build "$W/m/p.ini" 2>&1 | grep -q "up to date" && \
     ok "manifest: part = both writes both parts, stamps the part" || { no "manifest part"; cat "$W/m/err"; }
+# A manifest's .bsdf and tabulate's for the same keys: the same bytes up to the
+# metadata, which differs in its "command" (the provenance) only, and so in its length
+# (the header's u32 at byte 32).
+printf '[g]\nior = 1.5\nsmoothness = 3\ntolerance = 5e-2\npart = both\nbsdf = %s/m/g.bsdf\n' "$W" > "$W/m/b.ini"
+meta_at() { grep -abo '{"program": "btdftab' "$1" | tail -n 1 | cut -d: -f1; }
+"$B" build -q "$W/m/b.ini" && "$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 --part both -o "$W/m/t.bsdf" && \
+    "$B" inspect "$W/m/g.bsdf" | grep -q '^reflection *top bottom' && off=$(meta_at "$W/m/g.bsdf") && \
+    [ -n "$off" ] && [ "$off" = "$(meta_at "$W/m/t.bsdf")" ] && cmp -s -n 32 "$W/m/g.bsdf" "$W/m/t.bsdf" && \
+    cmp -s -i 36 -n $((off - 36)) "$W/m/g.bsdf" "$W/m/t.bsdf" && \
+    [ "$(tail -c +"$off" "$W/m/g.bsdf" | sed 's/, "command": ".*"}$//')" = \
+      "$(tail -c +"$off" "$W/m/t.bsdf" | sed 's/, "command": ".*"}$//')" ] && \
+    ok "manifest .bsdf with part = both: tabulate's file (four blocks)" || no "manifest .bsdf differs from tabulate's"
 rm -rf "$W/m"
 
 # manifests are checked whole before any work; damaged outputs are rebuilt

@@ -801,15 +801,9 @@ static int tabulate_series(const cli *c, const char *prov)
     run_progress_start(&pr, !c->quiet && isatty(2), c->out);
     /* --max-samples caps the stored coefficients, --max-memory the builder's series;
        each only when given (the format has its own budgets otherwise) */
-    /* --side picks the light's sides, --part the parts: light from above has T_ENTER
-       and R_TOP, light from below T_LEAVE and R_BOTTOM (btdf_scatfun_block) */
-    int sides = c->sides ? c->sides : BTDF_SIDE_BOTH, part = GIVEN(c, OPT_PART) ? (int)c->part : 3;
-    int blocks = ((part & 1) ? sides : 0) | ((part & 2) ? sides << 2 : 0);
-    /* Default tolerance: 1e-3 for transmission blocks alone (about 20 s, 12 MB for
-       s = 3), 1e-2 once the file holds reflection: four blocks at 1e-3 outgrow the
-       format's node budget (s = 3: 964 nodes, 368 million coefficients after 619 s,
-       not met; at 1e-2: 296 nodes, 21.5 MB in 34 s; docs/scatfun.md) */
-    double tol = GIVEN(c, OPT_TOLERANCE) ? c->o.tolerance : (part & 2) ? 1e-2 : c->o.tolerance;
+    /* --side picks the light's sides, --part the parts (run.h) */
+    int part = GIVEN(c, OPT_PART) ? (int)c->part : 0, blocks = run_series_blocks(c->sides, part);
+    double tol = run_series_tolerance(part, GIVEN(c, OPT_TOLERANCE), c->o.tolerance);
     return run_series_ex(prog, c->out, &c->p, tol, blocks, c->threads, c->quiet,
                          c->best_effort, prov, c->report,
                          GIVEN(c, OPT_MAX_SAMPLES) ? c->o.max_samples : 0,

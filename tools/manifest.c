@@ -31,8 +31,9 @@
  *   theta_i = 0:90             ; optional incidence range, degrees
  *   tolerance = 1e-3           ; optional
  *   metric = l1                ; optional, l1 or max
- *   part = both                ; optional: the lobes the enter/leave tables hold,
- *                              ; transmission (default), reflection or both
+ *   part = both                ; optional: the lobes the outputs hold, transmission,
+ *                              ; reflection or both; as tabulate's --part: tables
+ *                              ; default to transmission, a .bsdf to both
  *   enter = a.csv a.exr m.png  ; tables for light entering (index n): .csv .exr .png
  *   leave = b.exr              ; tables for light leaving (index 1/n)
  *   bsdf = glass.bsdf          ; a renderer file (SCATFUN v1)
@@ -553,16 +554,22 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     return code;
 }
 
-/* Writes the stale .bsdf outputs of one material. */
+/* Writes the stale .bsdf outputs of one material: blocks as run_series_blocks
+   gives them, and their tolerance. */
 static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_params *p,
-                         double tol, int sides, char **outs, int nouts, int *done, int total,
-                         int *job)
+                         double tol, int sides, int blocks, char **outs, int nouts, int *done,
+                         int total, int *job)
 {
-    /* The stamp: everything the file depends on (theta_i does not apply). */
+    /* The stamp: everything the file depends on (theta_i does not apply); the parts
+       only when the file holds reflection, so that older stamps of transmission-only
+       files hold. */
     material m;
     memset(&m, 0, sizeof m);
     m.tol = tol;
     m.sides = sides;
+    m.part = (blocks & ~BTDF_SIDE_BOTH) ? ((blocks & BTDF_SIDE_BOTH) ? BTDF_PART_BOTH
+                                                                     : BTDF_PART_REFLECTION)
+                                        : BTDF_PART_TRANSMISSION;
     char stamp[4096], prov[256];
     stamp_text(stamp, sizeof stamp, &m, p, "bsdf");
     snprintf(prov, sizeof prov, "btdftab build, material [%s]", name);
@@ -588,7 +595,7 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
         snprintf(label, sizeof label, "[%d/%d] %s", *done, total, outs[k]);
         run_progress pr;
         run_progress_start(&pr, mo->progress, label);
-        int code = run_series(mo->prog, outs[k], p, tol, sides, mo->threads, mo->quiet,
+        int code = run_series(mo->prog, outs[k], p, tol, blocks, mo->threads, mo->quiet,
                               mo->best_effort, prov, &pr);
         if (code != 0)
             return code;
@@ -599,6 +606,24 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
         }
     }
     return 0;
+}
+
+/* A .bsdf's blocks and tolerance from the keys as tabulate takes them from its options
+   (run.h): part and tolerance apply when given; without part, the file holds both
+   parts, as tabulate -o F.bsdf without --part. */
+static int bsdf_part(const material *m)
+{
+    return m->key_line[K_PART] ? (int)m->part : 0;
+}
+
+static int bsdf_blocks(const material *m)
+{
+    return run_series_blocks(m->sides, bsdf_part(m));
+}
+
+static double bsdf_tol(const material *m)
+{
+    return run_series_tolerance(bsdf_part(m), m->key_line[K_TOL] != 0, m->tol);
 }
 
 /* The line of key k of m, or of its header when the key was not given. */
@@ -636,8 +661,8 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
                                                      : m->line;
             }
         }
-        if (m->nbsdf &&
-            btdf_scatfun_check(&m->p, m->tol, (btdf_side)m->sides, msg, sizeof msg) != BTDF_OK) {
+        if (m->nbsdf && btdf_scatfun_check(&m->p, bsdf_tol(m), (btdf_side)bsdf_blocks(m), msg,
+                                           sizeof msg) != BTDF_OK) {
             snprintf(why, whylen, "material [%s]: %.400s (for its .bsdf output)", m->name, msg);
             return !strncmp(msg, "tolerance", 9) ? line_of(m, K_TOL)
                    : !strncmp(msg, "side", 4)    ? line_of(m, K_SIDES)
@@ -768,8 +793,8 @@ int manifest_run(const manifest_opts *mo)
                 done += m->nleave;
         }
         if (code == 0 && m->nbsdf)
-            code = manifest_bsdf(mo, m->name, &m->p, m->tol, m->sides, m->bsdf, m->nbsdf, &done,
-                                 total, &job);
+            code = manifest_bsdf(mo, m->name, &m->p, bsdf_tol(m), m->sides, bsdf_blocks(m),
+                                 m->bsdf, m->nbsdf, &done, total, &job);
     }
     free_manifest(mf);
     free(mf);

@@ -238,6 +238,27 @@ static int write_series_report(const char *prog, const char *report, const btdf_
     return 0;
 }
 
+int run_series_blocks(int sides, int part)
+{
+    if (!sides)
+        sides = BTDF_SIDE_BOTH;
+    if (!part)
+        part = BTDF_PART_BOTH;
+    return ((part & BTDF_PART_TRANSMISSION) ? sides : 0) |
+           ((part & BTDF_PART_REFLECTION) ? sides << 2 : 0);
+}
+
+double run_series_tolerance(int part, int given, double tol)
+{
+    /* Default tolerance: 1e-3 for transmission blocks alone (about 20 s, 12 MB for
+       s = 3), 1e-2 once the file holds reflection: four blocks at 1e-3 outgrow the
+       format's node budget (s = 3: 964 nodes, 368 million coefficients after 619 s,
+       not met; at 1e-2: 296 nodes, 21.5 MB in 34 s; docs/scatfun.md) */
+    if (given)
+        return tol;
+    return (!part || (part & BTDF_PART_REFLECTION)) ? 1e-2 : tol;
+}
+
 int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
                int threads, int quiet, int best_effort, const char *prov, run_progress *pr)
 {

@@ -45,6 +45,14 @@ void run_progress_cb(void *user, const char *stage, size_t done, size_t todo);
 void run_progress_stage(run_progress *pr, const char *stage);
 void run_progress_end(run_progress *pr);
 
+/* A .bsdf request as the command line and the manifest state it: the light's sides
+   (btdf_side, 0: both) and the parts (btdf_part, 0: not given, both) give its blocks
+   (btdf_scatfun_block: light from above has T_ENTER and R_TOP, from below T_LEAVE and
+   R_BOTTOM). The tolerance: tol when given, else tol (the tables' default) for
+   transmission blocks alone and 1e-2 once the file holds reflection. */
+int run_series_blocks(int sides, int part);
+double run_series_tolerance(int part, int given, double tol);
+
 /* Builds a .bsdf from Eq. 25, reports its error per side on standard error (unless
    quiet) and writes it at path unless the tolerance was missed without best_effort.
    Returns an exit status: 0, 1 failed run, 2 bad parameters, 3 tolerance not met. */
