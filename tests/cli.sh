@@ -107,6 +107,17 @@ INI
     ok "build writes the listed outputs" || no "build"
 "$B" build "$W/m/scene.ini" 2>&1 | grep -q "up to date" && ok "build skips up-to-date outputs" || no "build skip"
 "$B" build --force "$W/m/scene.ini" 2>&1 | grep -q "slices" && ok "build --force redoes them" || no "build --force"
+# A manifest's table goes through tabulate's own run (tools/run.c run_table): for the
+# same keys, the same report line after the material's name (times and memory aside)
+# and the same file (its provenance line aside).
+"$B" build --force "$W/m/scene.ini" 2>"$W/m/err.b"
+"$B" tabulate --ior 1.5 -s 3 --theta-i 0:40 --tolerance 1e-2 -o "$W/m/f3.csv" 2>"$W/m/err.t"
+untimed() { sed -e 's/^btdftab: frosted (enter): /btdftab: /' -e 's/[0-9.]* s\([ ,;)]\|$\)/_ s\1/g' \
+    -e 's/peak memory [0-9.]* MiB/peak memory _/' "$1"; }
+[ -s "$W/m/err.t" ] && [ "$(untimed "$W/m/err.b")" = "$(untimed "$W/m/err.t")" ] && \
+    [ "$(grep -v '^# provenance' "$W/m/f.csv")" = "$(grep -v '^# provenance' "$W/m/f3.csv")" ] && \
+    ok "build and tabulate: one table run, the same verdict line and file" || \
+    { no "build and tabulate differ"; cat "$W/m/err.b" "$W/m/err.t"; }
 rm -rf "$W/m"; mkdir -p "$W/m"
 printf '[a]\nior = 1.5\nsmoothness = 3\ncolour = red\nenter = %s/t.csv\n' "$W" > "$W/m/bad.ini"
 expect 2 "bad.ini:4: unknown key 'colour'" "manifest: unknown key, file:line" -- "$B" build "$W/m/bad.ini"
@@ -124,9 +135,21 @@ printf '[a]\nior = 1.5\nsmoothness = 3\npart = mirror\nenter = %s/t.csv\n' "$W" 
 expect 2 "bad.ini:4: part 'mirror': must be transmission, reflection or both" "manifest: bad part" -- "$B" build "$W/m/bad.ini"
 printf '[g]\nior = 1.5\nsmoothness = 3\ntheta_i = 0:40\ntolerance = 1e-2\npart = both\nenter = %s/m/g.csv\n' "$W" > "$W/m/p.ini"
 "$B" build "$W/m/p.ini" 2>"$W/m/err" && grep -q '^# parts: transmission, reflection' "$W/m/g.csv" && \
-    grep -q 'g (enter) reflection: ' "$W/m/err" && grep -q 'part both' "$W/m/.g.csv.btdftab-stamp" && \
+    grep -q 'g (enter): reflection table: ' "$W/m/err" && grep -q 'part both' "$W/m/.g.csv.btdftab-stamp" && \
     "$B" build "$W/m/p.ini" 2>&1 | grep -q "up to date" && \
     ok "manifest: part = both writes both parts, stamps the part" || { no "manifest part"; cat "$W/m/err"; }
+# A manifest's .bsdf and tabulate's for the same keys: the same bytes up to the
+# metadata, which differs in its "command" (the provenance) only, and so in its length
+# (the header's u32 at byte 32).
+printf '[g]\nior = 1.5\nsmoothness = 3\ntolerance = 5e-2\npart = both\nbsdf = %s/m/g.bsdf\n' "$W" > "$W/m/b.ini"
+meta_at() { grep -abo '{"program": "btdftab' "$1" | tail -n 1 | cut -d: -f1; }
+"$B" build -q "$W/m/b.ini" && "$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 --part both -o "$W/m/t.bsdf" && \
+    "$B" inspect "$W/m/g.bsdf" | grep -q '^reflection *top bottom' && off=$(meta_at "$W/m/g.bsdf") && \
+    [ -n "$off" ] && [ "$off" = "$(meta_at "$W/m/t.bsdf")" ] && cmp -s -n 32 "$W/m/g.bsdf" "$W/m/t.bsdf" && \
+    cmp -s -i 36 -n $((off - 36)) "$W/m/g.bsdf" "$W/m/t.bsdf" && \
+    [ "$(tail -c +"$off" "$W/m/g.bsdf" | sed 's/, "command": ".*"}$//')" = \
+      "$(tail -c +"$off" "$W/m/t.bsdf" | sed 's/, "command": ".*"}$//')" ] && \
+    ok "manifest .bsdf with part = both: tabulate's file (four blocks)" || no "manifest .bsdf differs from tabulate's"
 rm -rf "$W/m"
 
 # manifests are checked whole before any work; damaged outputs are rebuilt

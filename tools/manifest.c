@@ -31,8 +31,9 @@
  *   theta_i = 0:90             ; optional incidence range, degrees
  *   tolerance = 1e-3           ; optional
  *   metric = l1                ; optional, l1 or max
- *   part = both                ; optional: the lobes the enter/leave tables hold,
- *                              ; transmission (default), reflection or both
+ *   part = both                ; optional: the lobes the outputs hold, transmission,
+ *                              ; reflection or both; as tabulate's --part: tables
+ *                              ; default to transmission, a .bsdf to both
  *   enter = a.csv a.exr m.png  ; tables for light entering (index n): .csv .exr .png
  *   leave = b.exr              ; tables for light leaving (index 1/n)
  *   bsdf = glass.bsdf          ; a renderer file (SCATFUN v1)
@@ -483,7 +484,7 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
         for (int c = 0; c < p.channels; c++)
             p.ior[c] = 1.0 / p.ior[c];
     const char *side = leave ? "leave" : "enter";
-    char stamp[4096], msg[512] = "";
+    char stamp[4096];
     int stale = 0;
     for (int k = 0; k < nouts; k++) {
         stamp_text(stamp, sizeof stamp, m, &p, side);
@@ -527,91 +528,48 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     o.threads = mo->threads;
     o.progress = run_progress_cb;
     o.progress_user = &pr;
-    btdf_table *t = NULL;
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    run_progress_stage(&pr, "estimating the error");
-    if (st != BTDF_OK && !(st == BTDF_EBUDGET && mo->best_effort)) {
-        run_progress_end(&pr);
-        btdf_table_free(t);
-        fprintf(stderr, "%s: %s (%s): %s\n", mo->prog, m->name, side,
-                msg[0] ? msg : btdf_strerror(st));
-        return st == BTDF_EBUDGET ? 3 : 1;
-    }
-    /* one report per part the table holds (the reflection of a table holding both
-       second) */
-    btdf_report rs[2];
-    memset(rs, 0, sizeof rs);
-    const btdf_table *pt[2] = {t, btdf_table_part(t, BTDF_PART_REFLECTION)};
-    int nparts = btdf_table_parts(t) == BTDF_PART_BOTH ? 2 : 1, met = 1;
-    for (int q = 0; q < nparts; q++) {
-        btdf_report *rq = &rs[q];
-        btdf_table_estimate(pt[q], o.ti_min, o.ti_max, 0, 0, REPORT_SEED, o.threads, rq);
-        rq->tolerance = o.tolerance;
-        rq->metric = o.metric;
-        rq->met = (o.metric == BTDF_METRIC_MAX ? rq->e_max_max : rq->e_l1_max) <= o.tolerance;
-        met &= rq->met;
-    }
-    run_progress_end(&pr);
-    btdf_report r = rs[0];
-    for (int q = 0; q < nparts && !mo->quiet; q++) {
-        const char *pn = m->part == BTDF_PART_TRANSMISSION ? ""
-                         : btdf_table_get_kind(pt[q]) == BTDF_TABLE_FACET_REFLECTION
-                             ? " reflection"
-                             : " transmission";
-        fprintf(stderr, "%s: %s (%s)%s: %zu slices, %zu samples; e_L1 max %.3g, e_max max "
-                        "%.3g, e_T max %.3g%s\n",
-                mo->prog, m->name, side, pn, rs[q].slices, rs[q].samples, rs[q].e_l1_max,
-                rs[q].e_max_max, rs[q].e_t_max, rs[q].met ? "" : "; TOLERANCE NOT MET");
-    }
-    int code = 0;
-    if (!met && !mo->best_effort) {
-        fprintf(stderr, "%s: %s (%s): nothing written (tolerance %g not met)\n", mo->prog,
-                m->name, side, o.tolerance);
-        code = 3;
-    }
-    char prov[256];
+    /* The stale outputs, written together by the run tabulate takes: a table file, or
+       a .png montage of the table (the registry picks by extension). */
+    btdf_preview_opts po;
+    btdf_preview_opts_default(&po);
+    po.kind = BTDF_PREVIEW_MONTAGE;
+    run_table_out todo[MAX_OUTPUTS];
+    int ntodo = 0;
+    for (int k = 0; k < nouts; k++)
+        if (mo->force || !up_to_date(outs[k], stamp))
+            todo[ntodo++] = (run_table_out){outs[k], &po, 1};
+    char prov[256], who[256];
     snprintf(prov, sizeof prov, "btdftab build, material [%s], side %s", m->name, side);
-    if (code == 0)
-        run_progress_stage(&pr, "writing");
-    for (int k = 0; k < nouts && code == 0; k++) {
-        stamp_text(stamp, sizeof stamp, m, &p, side);
-        (*done)++;
-        if (!mo->force && up_to_date(outs[k], stamp))
-            continue;
-        /* A table file, or a .png montage of the table: the registry picks by extension. */
-        btdf_preview_opts po;
-        btdf_preview_opts_default(&po);
-        po.kind = BTDF_PREVIEW_MONTAGE;
-        po.table = t;
-        btdf_write_opts w = {&r, prov, nparts == 2 ? &rs[1] : NULL};
-        btdf_output what = {t, NULL, &po, &w, NULL, NULL};
-        st = btdf_write(&what, outs[k], msg, sizeof msg);
-        if (st != BTDF_OK) {
-            fprintf(stderr, "%s: %s: %s\n", mo->prog, outs[k], msg[0] ? msg : btdf_strerror(st));
-            code = 1;
-        } else if (!write_stamp_for(outs[k], stamp)) {
-            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, outs[k],
+    snprintf(who, sizeof who, "%s: %s (%s)", mo->prog, m->name, side);
+    run_table_req rq = {who, NULL, o, m->part != BTDF_PART_TRANSMISSION, todo, ntodo, NULL,
+                        prov, mo->quiet, mo->best_effort, &pr};
+    int code = run_table(&rq);
+    *done += nouts;
+    for (int k = 0; k < ntodo && code == 0; k++)
+        if (!write_stamp_for(todo[k].path, stamp)) {
+            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, todo[k].path,
                     strerror(errno));
             code = 1;
         }
-    }
-    run_progress_end(&pr);
-    btdf_report_clear(&rs[0]);
-    btdf_report_clear(&rs[1]);
-    btdf_table_free(t);
     return code;
 }
 
-/* Writes the stale .bsdf outputs of one material. */
+/* Writes the stale .bsdf outputs of one material: blocks as run_series_blocks
+   gives them, and their tolerance. */
 static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_params *p,
-                         double tol, int sides, char **outs, int nouts, int *done, int total,
-                         int *job)
+                         double tol, int sides, int blocks, char **outs, int nouts, int *done,
+                         int total, int *job)
 {
-    /* The stamp: everything the file depends on (theta_i does not apply). */
+    /* The stamp: everything the file depends on (theta_i does not apply); the parts
+       only when the file holds reflection, so that older stamps of transmission-only
+       files hold. */
     material m;
     memset(&m, 0, sizeof m);
     m.tol = tol;
     m.sides = sides;
+    m.part = (blocks & ~BTDF_SIDE_BOTH) ? ((blocks & BTDF_SIDE_BOTH) ? BTDF_PART_BOTH
+                                                                     : BTDF_PART_REFLECTION)
+                                        : BTDF_PART_TRANSMISSION;
     char stamp[4096], prov[256];
     stamp_text(stamp, sizeof stamp, &m, p, "bsdf");
     snprintf(prov, sizeof prov, "btdftab build, material [%s]", name);
@@ -637,7 +595,7 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
         snprintf(label, sizeof label, "[%d/%d] %s", *done, total, outs[k]);
         run_progress pr;
         run_progress_start(&pr, mo->progress, label);
-        int code = run_series(mo->prog, outs[k], p, tol, sides, mo->threads, mo->quiet,
+        int code = run_series(mo->prog, outs[k], p, tol, blocks, mo->threads, mo->quiet,
                               mo->best_effort, prov, &pr);
         if (code != 0)
             return code;
@@ -648,6 +606,24 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
         }
     }
     return 0;
+}
+
+/* A .bsdf's blocks and tolerance from the keys as tabulate takes them from its options
+   (run.h): part and tolerance apply when given; without part, the file holds both
+   parts, as tabulate -o F.bsdf without --part. */
+static int bsdf_part(const material *m)
+{
+    return m->key_line[K_PART] ? (int)m->part : 0;
+}
+
+static int bsdf_blocks(const material *m)
+{
+    return run_series_blocks(m->sides, bsdf_part(m));
+}
+
+static double bsdf_tol(const material *m)
+{
+    return run_series_tolerance(bsdf_part(m), m->key_line[K_TOL] != 0, m->tol);
 }
 
 /* The line of key k of m, or of its header when the key was not given. */
@@ -685,8 +661,8 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
                                                      : m->line;
             }
         }
-        if (m->nbsdf &&
-            btdf_scatfun_check(&m->p, m->tol, (btdf_side)m->sides, msg, sizeof msg) != BTDF_OK) {
+        if (m->nbsdf && btdf_scatfun_check(&m->p, bsdf_tol(m), (btdf_side)bsdf_blocks(m), msg,
+                                           sizeof msg) != BTDF_OK) {
             snprintf(why, whylen, "material [%s]: %.400s (for its .bsdf output)", m->name, msg);
             return !strncmp(msg, "tolerance", 9) ? line_of(m, K_TOL)
                    : !strncmp(msg, "side", 4)    ? line_of(m, K_SIDES)
@@ -817,8 +793,8 @@ int manifest_run(const manifest_opts *mo)
                 done += m->nleave;
         }
         if (code == 0 && m->nbsdf)
-            code = manifest_bsdf(mo, m->name, &m->p, m->tol, m->sides, m->bsdf, m->nbsdf, &done,
-                                 total, &job);
+            code = manifest_bsdf(mo, m->name, &m->p, bsdf_tol(m), m->sides, bsdf_blocks(m),
+                                 m->bsdf, m->nbsdf, &done, total, &job);
     }
     free_manifest(mf);
     free(mf);

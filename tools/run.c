@@ -7,11 +7,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <time.h>
 
 #include <btdf/btdf_io.h>
 #include <btdf/btdf_scatfun.h>
 
+#include "report_json.h"
 #include "run.h"
 
 void run_json_open(FILE *f, const char *prov)
@@ -162,74 +164,35 @@ void run_progress_end(run_progress *pr)
     pr->stage[0] = 0;
 }
 
+/* "prog: path: what" on standard error ("prog: what" for an empty path); returns code. */
 static int fail(const char *prog, int code, const char *path, const char *what)
 {
-    fprintf(stderr, "%s: %s: %s\n", prog, path, what);
+    if (path[0])
+        fprintf(stderr, "%s: %s: %s\n", prog, path, what);
+    else
+        fprintf(stderr, "%s: %s\n", prog, what);
     return code;
 }
 
-/* The .bsdf's blocks as reports and messages name them, by bit (btdf_scatfun_block). */
-static const char *const block_name[4] = {"enter", "leave", "reflection_top",
-                                          "reflection_bottom"};
-
-/* One side's report as JSON (the fields of a table's report, docs/tables.md). */
-static void json_side(FILE *f, const char *name, const btdf_report *r, double tol, int last)
+int run_series_blocks(int sides, int part)
 {
-    fprintf(f, "    \"%s\": {\"met\": %s, \"e_l1\": {\"max\": %.6g, \"mean\": %.6g}, "
-               "\"e_max\": {\"max\": %.6g, \"mean\": %.6g}, \"e_t\": {\"max\": %.6g, "
-               "\"mean\": %.6g}, \"seconds_estimate\": %.6f, \"test_angles\": %zu, "
-               "\"test_points\": %zu,\n      \"per_theta_i\": [\n",
-            name, r->e_l1_max <= tol ? "true" : "false", r->e_l1_max, r->e_l1_mean,
-            r->e_max_max, r->e_max_mean, r->e_t_max, r->e_t_mean, r->seconds_estimate,
-            r->test_angles, r->test_points);
-    for (size_t k = 0; k < r->test_angles; k++) {
-        const btdf_ti_error *e = &r->per_ti[k];
-        fprintf(f,
-                "        {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_table\": %.9g, \"e_l1\": %.6g, "
-                "\"e_t\": %.6g, \"e_max\": %.6g}%s\n",
-                e->ti * 180 / M_PI, e->T, e->T_table, e->e_l1, e->e_t, e->e_max,
-                k + 1 < r->test_angles ? "," : "");
-    }
-    fprintf(f, "      ]}%s\n", last ? "" : ",");
+    if (!sides)
+        sides = BTDF_SIDE_BOTH;
+    if (!part)
+        part = BTDF_PART_BOTH;
+    return ((part & BTDF_PART_TRANSMISSION) ? sides : 0) |
+           ((part & BTDF_PART_REFLECTION) ? sides << 2 : 0);
 }
 
-/* The .bsdf's JSON report, written atomically like every output. */
-static int write_series_report(const char *prog, const char *report, const btdf_params *p,
-                               const btdf_scatfun *f, const btdf_report reps[4], double tol,
-                               double seconds, int met, const char *prov)
+double run_series_tolerance(int part, int given, double tol)
 {
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *m = open_memstream(&buf, &len);
-    if (!m)
-        return fail(prog, 1, report, "out of memory");
-    run_json_open(m, prov);
-    fprintf(m, "  \"kind\": \"scatfun\",\n  \"ior\": [");
-    for (int c = 0; c < p->channels; c++)
-        fprintf(m, "%s%.17g", c ? ", " : "", p->ior[c]);
-    double peak = btdf_scatfun_a0_peak(f);
-    fprintf(m, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n  \"tolerance\": %.17g,\n"
-               "  \"metric\": \"l1\",\n  \"met\": %s,\n  \"nodes\": %zu,\n  \"coefficients\": %zu,\n"
-               "  \"max_order\": %zu,\n  \"seconds_build\": %.6f,\n  \"a0_peak\": %.6g,\n"
-               "  \"pbrt_v3_single_precision_safe\": %s,\n  \"sides\": {\n",
-            p->smoothness, p->k0, tol, met ? "true" : "false", btdf_scatfun_node_count(f),
-            btdf_scatfun_coeff_count(f), btdf_scatfun_max_order(f), seconds, peak,
-            peak <= BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 ? "true" : "false");
-    int last = -1;
-    for (int b = 0; b < 4; b++)
-        if (reps[b].test_angles)
-            last = b;
-    for (int b = 0; b < 4; b++)
-        if (reps[b].test_angles)
-            json_side(m, block_name[b], &reps[b], tol, b == last);
-    fprintf(m, "  }\n}\n");
-    int bad = fclose(m) != 0;
-    char msg[512] = "";
-    btdf_status st = bad ? BTDF_ENOMEM : btdf_write_buffer(report, ".json", buf, len, msg, sizeof msg);
-    free(buf);
-    if (st != BTDF_OK)
-        return fail(prog, 1, report, msg[0] ? msg : btdf_strerror(st));
-    return 0;
+    /* Default tolerance: 1e-3 for transmission blocks alone (about 20 s, 12 MB for
+       s = 3), 1e-2 once the file holds reflection: four blocks at 1e-3 outgrow the
+       format's node budget (s = 3: 964 nodes, 368 million coefficients after 619 s,
+       not met; at 1e-2: 296 nodes, 21.5 MB in 34 s; docs/scatfun.md) */
+    if (given)
+        return tol;
+    return (!part || (part & BTDF_PART_REFLECTION)) ? 1e-2 : tol;
 }
 
 int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
@@ -297,7 +260,7 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         }
         int ok = r.e_l1_max <= tol;
         met = met && ok;
-        const char *name = block_name[bi];
+        const char *name = report_block_name[bi];
         if (!quiet)
             fprintf(stderr,
                     "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients; "
@@ -335,7 +298,7 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         st = btdf_write(&what, path, msg, sizeof msg);
         run_progress_end(pr);
         if (st == BTDF_OK && report &&
-            write_series_report(prog, report, p, f, reps, tol, t1 - t0, met, prov) != 0) {
+            report_json_series(prog, report, p, f, reps, tol, t1 - t0, met, prov) != 0) {
             btdf_outputs_abort();
             code = 1; /* the report's failure is said */
         } else if (st == BTDF_OK) {
@@ -358,147 +321,10 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
     return code;
 }
 
-/* The JSON report of a .xml: per block the error report and probes, the directions
-   at which Radiance's own lookup must return the value the file holds. */
-#define RAD_PROBES 1000
 /* The report's own estimate of the file's integral is a sum too: each report is also
    run at a quarter of the points (same seed, so the same stratified angles), and the
-   JSON gives that estimate beside it ("T_file_coarse", null at angles the coarse run
-   did not reach), from which a reader judges the estimate's own error. */
+   JSON gives that estimate beside it ("T_file_coarse", report_json.h). */
 #define RAD_COARSE 4
-static const char *const rad_ch_name[3] = {"R", "G", "B"};
-
-/* One report's summary and per-angle rows (4 spaces of indent for the fields). */
-static void rad_json_report(FILE *f, const btdf_report *r, const btdf_report *coarse,
-                            const char *ind)
-{
-    const double d2r = 3.14159265358979323846 / 180.0;
-    fprintf(f, "%s\"seconds_estimate\": %.6f, \"test_angles\": %zu, \"test_points\": %zu,\n",
-            ind, r->seconds_estimate, r->test_angles, r->test_points);
-    fprintf(f, "%s\"e_l1\": {\"max\": %.6g, \"max_to_%g_deg\": %.6g, \"mean\": %.6g},\n", ind,
-            r->e_l1_max, BTDF_RAD_TI_CHECKED_DEG, btdf_rad_e_l1_checked(r), r->e_l1_mean);
-    fprintf(f, "%s\"e_max\": {\"max\": %.6g, \"mean\": %.6g, \"angles\": %zu},\n", ind,
-            r->e_max_max, r->e_max_mean, r->e_max_angles);
-    fprintf(f, "%s\"e_t\": {\"max\": %.6g, \"mean\": %.6g},\n%s\"per_theta_i\": [\n", ind,
-            r->e_t_max, r->e_t_mean, ind);
-    for (size_t a = 0; a < r->test_angles; a++) {
-        const btdf_ti_error *e = &r->per_ti[a];
-        char tc[40] = "null";
-        for (size_t b = 0; coarse && b < coarse->test_angles; b++)
-            if (coarse->per_ti[b].ti == e->ti)
-                snprintf(tc, sizeof tc, "%.9g", coarse->per_ti[b].T_table);
-        fprintf(f,
-                "%s {\"theta_i_deg\": %.6f, \"T\": %.9g, \"T_file\": %.9g, \"T_file_coarse\": %s, "
-                "\"e_l1\": %.6g, \"e_t\": %.6g, \"e_max\": %.6g}%s\n",
-                ind, e->ti / d2r, e->T, e->T_table, tc, e->e_l1, e->e_t, e->e_max,
-                a + 1 < r->test_angles ? "," : "");
-    }
-    fprintf(f, "%s]", ind);
-}
-
-/* rep[k * 3 + c], coarse likewise: block k, channel c. */
-static void rad_json(FILE *f, const btdf_rad *x, const btdf_params *p, const btdf_report *rep,
-                     const btdf_report *coarse, const char *prov)
-{
-    run_json_open(f, prov);
-    int nch = btdf_rad_channels(x);
-    fprintf(f, "  \"format\": \"radiance-xml\",\n  \"basis\": \"%s\",\n",
-            btdf_rad_basis_name(btdf_rad_get_basis(x)));
-    fprintf(f, "  \"ior\": [");
-    for (int c = 0; c < nch; c++)
-        fprintf(f, "%s%.17g", c ? ", " : "", p->ior[c]);
-    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", p->smoothness, p->k0);
-    if (nch == 3) {
-        double m[3][3];
-        btdf_rad_rgb_to_xyz(m);
-        fprintf(f, "  \"rgb_to_xyz\": [[%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g], "
-                   "[%.17g, %.17g, %.17g]],\n",
-                m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2]);
-    }
-    fprintf(f, "  \"seconds_build\": %.6f,\n  \"blocks\": [\n", btdf_rad_seconds_build(x));
-    const double d2r = 3.14159265358979323846 / 180.0;
-    int nb = btdf_rad_block_count(x);
-    for (int k = 0; k < nb; k++) {
-        btdf_rad_block_info b;
-        btdf_rad_block(x, k, &b);
-        int refl = strncmp(b.label, "Reflection", 10) == 0;
-        fprintf(f, "   {\"label\": \"%s\", \"side\": \"%s\", \"reflection\": %s, \"n\": %.17g,\n",
-                b.label, b.light == BTDF_SIDE_ENTER ? "enter" : "leave", refl ? "true" : "false",
-                b.n_light);
-        const btdf_report *r0 = &rep[k * 3];
-        fprintf(f, "    \"values\": %zu, \"depth\": %d, \"tolerance\": %.9g, \"met\": %s,\n",
-                b.values, b.depth, r0->tolerance, r0->met ? "true" : "false");
-        if (nch == 1) {
-            rad_json_report(f, r0, &coarse[k * 3], "    ");
-            fprintf(f, ",\n");
-        } else {
-            /* per channel: R, G, B recovered from the file's X, Y, Z, each against
-               Eq. 25 at its own index */
-            fprintf(f, "    \"channels\": [\n");
-            for (int c = 0; c < 3; c++) {
-                double nl = b.light == BTDF_SIDE_ENTER ? p->ior[c] : 1.0 / p->ior[c];
-                fprintf(f, "     {\"channel\": \"%s\", \"n\": %.17g,\n", rad_ch_name[c], nl);
-                rad_json_report(f, &rep[k * 3 + c], &coarse[k * 3 + c], "      ");
-                fprintf(f, "}%s\n", c < 2 ? "," : "");
-            }
-            fprintf(f, "    ],\n");
-        }
-        /* Probes [theta_p, phi_p, theta_q, phi_q, value, rho]: degrees (theta from +Z,
-           phi from +X) in Radiance's frame; p on the block's side (the view), q the
-           light (on the other side, or for a reflection block the same); value is what
-           Radiance's lookup gives, rho Eq. 25 (or rho_r) for light from q to p. Half
-           spread over the hemisphere, half near the straight-through (or specular)
-           direction. A three-channel file: value is the file's CIE Y and rho the Y of
-           the three channels' Eq. 25, then the file's X and Z follow. */
-        fprintf(f, "    \"probes\": [\n");
-        uint64_t z = 0x9e3779b97f4a7c15ull * (uint64_t)(k + 1);
-        /* p's side: the view's; for reflection the light's side too */
-        double sg = (b.light == BTDF_SIDE_LEAVE) != refl ? -1.0 : 1.0;
-        double m[3][3];
-        btdf_rad_rgb_to_xyz(m);
-        for (int i = 0; i < RAD_PROBES; i++) {
-            double u[4];
-            for (int d = 0; d < 4; d++) {
-                z = z * 6364136223846793005ull + 1442695040888963407ull;
-                u[d] = (double)(z >> 11) * (1.0 / 9007199254740992.0);
-            }
-            double tp = floor(89.0 * u[0] * 1e4 + 0.5) / 1e4;
-            double pp = floor(360.0 * u[1] * 1e4 + 0.5) / 1e4, tq, pq;
-            if (i % 2) {
-                tq = floor(89.0 * sqrt(u[2]) * 1e4 + 0.5) / 1e4;
-                pq = floor(360.0 * u[3] * 1e4 + 0.5) / 1e4;
-            } else {
-                tq = floor(fmin(89.0, tp * (0.7 + 0.6 * u[2])) * 1e4 + 0.5) / 1e4;
-                pq = floor((pp + 180.0 + 40.0 * (u[3] - 0.5)) * 1e4 + 0.5) / 1e4;
-            }
-            double th_p = sg > 0 ? tp : 180.0 - tp;
-            double th_q = (sg > 0) != refl ? 180.0 - tq : tq;
-            double pv[3] = {sin(th_p * d2r) * cos(pp * d2r), sin(th_p * d2r) * sin(pp * d2r),
-                            cos(th_p * d2r)};
-            double qv[3] = {sin(th_q * d2r) * cos(pq * d2r), sin(th_q * d2r) * sin(pq * d2r),
-                            cos(th_q * d2r)};
-            double xyz[3];
-            btdf_rad_lookup_xyz(x, k, pv, qv, xyz);
-            /* Eq. 25 for the light at q in its own frame (rho depends on cos phi only) */
-            double truth = 0.0;
-            for (int c = 0; c < nch; c++) {
-                double nl = b.light == BTDF_SIDE_ENTER ? p->ior[c] : 1.0 / p->ior[c];
-                double t = refl ? btdf_rho_r(nl, p->smoothness, p->k0, tq * d2r, tp * d2r,
-                                             (pp - pq) * d2r)
-                                : btdf_rho(nl, p->smoothness, p->k0, tq * d2r,
-                                           (180.0 - tp) * d2r, (pp - pq) * d2r);
-                truth += nch == 1 ? t : m[1][c] * t;
-            }
-            fprintf(f, "     [%.4f, %.4f, %.4f, %.4f, %.9g, %.9g", th_p, pp, th_q, pq, xyz[1],
-                    truth);
-            if (nch == 3)
-                fprintf(f, ", %.9g, %.9g", xyz[0], xyz[2]);
-            fprintf(f, "]%s\n", i + 1 < RAD_PROBES ? "," : "");
-        }
-        fprintf(f, "    ]}%s\n", k + 1 < nb ? "," : "");
-    }
-    fprintf(f, "  ]\n}\n");
-}
 
 int run_radiance(const char *prog, const char *path, const char *report, const btdf_params *p,
                  btdf_rad_basis basis, double tol, int threads, int quiet, int best_effort,
@@ -545,7 +371,7 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
                 run_progress_end(pr); /* the report lines replace the bar */
             char chn[48] = "";
             if (nch == 3)
-                snprintf(chn, sizeof chn, ", channel %s (n = %.6g)", rad_ch_name[c],
+                snprintf(chn, sizeof chn, ", channel %s (n = %.6g)", report_rad_channel[c],
                          p->ior[c]);
             if (!quiet)
                 fprintf(stderr,
@@ -577,7 +403,7 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
         if (!f) {
             code = fail(prog, 1, report, "out of memory");
         } else {
-            rad_json(f, x, p, rep, coarse, prov);
+            report_json_radiance(f, x, p, rep, coarse, prov);
             if (fclose(f) != 0)
                 code = fail(prog, 1, report, "out of memory");
         }
@@ -603,5 +429,177 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
         btdf_report_clear(&coarse[k]);
     }
     btdf_rad_free(x);
+    return code;
+}
+
+/* ------------------------------------------------------------------------- */
+/* tables                                                                    */
+/* ------------------------------------------------------------------------- */
+
+size_t run_peak_rss(void)
+{
+    struct rusage ru; /* Linux reports KiB */
+    return getrusage(RUSAGE_SELF, &ru) == 0 ? (size_t)ru.ru_maxrss * 1024u : 0;
+}
+
+/* One part's line for standard error (without the total time, added when printed). */
+static void table_line(char *line, size_t len, const run_table_req *rq, const btdf_table *pt,
+                       const btdf_report *rk, int estimated)
+{
+    const btdf_table_opts *o = &rq->o;
+    /* "table" as before for the transmission alone; the part's name otherwise */
+    int refl = btdf_table_get_kind(pt) == BTDF_TABLE_FACET_REFLECTION;
+    const char *what = !rq->name_parts ? "table"
+                       : refl          ? "reflection table"
+                                       : "transmission table";
+    if (!estimated) {
+        snprintf(line, len,
+                 "%s: %s: %zu slices, %zu samples; tabulation %.3f s; error not estimated "
+                 "(--estimate none); peak memory %.1f MiB",
+                 rq->prog, what, rk->slices, rk->samples, rk->seconds_build,
+                 (double)rk->peak_bytes / 1048576.0);
+        return;
+    }
+    char emax[96];
+    if (rk->e_max_angles)
+        snprintf(emax, sizeof emax, "e_max max %.3g mean %.3g", rk->e_max_max, rk->e_max_mean);
+    else
+        snprintf(emax, sizeof emax, "e_max n/a (%s < 0.01 at every test angle)",
+                 refl ? "R" : "T");
+    snprintf(line, len,
+             "%s: %s: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
+             "(%s, %zu angles, %zu points%s); e_L1 max %.3g mean %.3g; %s; "
+             "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
+             rq->prog, what, rk->slices, rk->samples, rk->seconds_build, rk->seconds_estimate,
+             o->estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", rk->test_angles,
+             rk->test_points,
+             rk->estimate_in_build ? "; the builder's last check, inside the tabulation" : "",
+             rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max, rk->e_t_mean,
+             (double)rk->peak_bytes / 1048576.0,
+             o->kind == BTDF_TABLE_GRID ? ""
+                                        : (rk->met ? "; tolerance met" : "; TOLERANCE NOT MET"));
+}
+
+int run_table(const run_table_req *rq)
+{
+    const btdf_table_opts *o = &rq->o;
+    const char *prog = rq->prog;
+    run_progress *pr = rq->pr;
+    char msg[512] = "";
+    btdf_table *t = NULL;
+    btdf_report rs[2]; /* one per part: the table's own, and the reflection of both */
+    memset(rs, 0, sizeof rs);
+    char lines[2][640];
+    lines[0][0] = lines[1][0] = '\0';
+    int code = 0, nparts = 0, estimated = o->estimate != BTDF_ESTIMATE_NONE, met_all = 1;
+    double t0 = run_now(), e_worst = 0.0;
+    const char *prov = rq->prov;
+    char prov2[1200];
+    btdf_status st = btdf_table_build(o, &t, msg, sizeof msg);
+    double t1 = run_now();
+    run_progress_stage(pr, "estimating the error");
+    if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        run_progress_end(pr);
+        code = fail(prog, st == BTDF_EINVAL ? 2 : 1, "", msg[0] ? msg : btdf_strerror(st));
+        goto done;
+    }
+    if (!t) { /* the budget cannot hold the coarsest table: nothing was built */
+        run_progress_end(pr);
+        code = fail(prog, st == BTDF_EBUDGET ? 3 : 1, "", msg[0] ? msg : btdf_strerror(st));
+        goto done;
+    }
+    nparts = btdf_table_parts(t) == BTDF_PART_BOTH ? 2 : 1;
+    const btdf_table *pt[2] = {t, btdf_table_part(t, BTDF_PART_REFLECTION)};
+    for (int k = 0; k < nparts; k++) {
+        btdf_report *rk = &rs[k];
+        if (estimated) {
+            /* For an adaptive table this is the builder's own check (the same request
+               returns it): the report and the builder's verdict cannot differ. */
+            int fast = o->estimate == BTDF_ESTIMATE_FAST;
+            btdf_status es = btdf_table_estimate(pt[k], o->ti_min, o->ti_max, fast ? 16 : 0,
+                                                 fast ? 2048 : 0, REPORT_SEED, o->threads, rk);
+            if (es != BTDF_OK) {
+                run_progress_end(pr);
+                fprintf(stderr, "%s: error estimate: %s\n", prog, btdf_strerror(es));
+                code = 1;
+                goto done;
+            }
+        } else {
+            rk->slices = btdf_table_slice_count(pt[k]);
+            rk->samples = btdf_table_node_count(pt[k]);
+        }
+        rk->seconds_build = t1 - t0;
+        rk->peak_bytes = run_peak_rss();
+        rk->tolerance = o->kind == BTDF_TABLE_GRID ? 0.0 : o->tolerance;
+        rk->metric = o->metric;
+        double e = o->metric == BTDF_METRIC_MAX ? rk->e_max_max : rk->e_l1_max;
+        rk->met = o->kind == BTDF_TABLE_GRID || !estimated ? 1 : e <= o->tolerance;
+        met_all &= rk->met;
+        e_worst = fmax(e_worst, e);
+        table_line(lines[k], sizeof lines[k], rq, pt[k], rk, estimated);
+    }
+    if (!estimated && msg[0])
+        fprintf(stderr, "%s: %s\n", prog, msg); /* the budget stopped the unchecked pass */
+    if (o->kind != BTDF_TABLE_GRID && !met_all) {
+        for (int k = 0; k < nparts; k++) {
+            if (!rq->quiet)
+                fprintf(stderr, "%s; total %.3f s\n", lines[k], run_now() - t0);
+            lines[k][0] = '\0'; /* printed */
+        }
+        fprintf(stderr, "%s: %s: the table reached %s error %.3g, above the tolerance %g%s%s\n",
+                prog, rq->name ? rq->name : "table", o->metric == BTDF_METRIC_MAX ? "max" : "L1",
+                e_worst, o->tolerance, msg[0] ? ": " : "", msg);
+        if (!rq->best_effort) {
+            fprintf(stderr, "%s: nothing written; %s, loosen --tolerance, or pass "
+                            "--best-effort\n", prog,
+                    strstr(msg, "memory") ? "raise --max-memory"
+                    : strstr(msg, "budget") ? "raise --max-samples (and --max-memory)"
+                                             : "try again with --estimate full");
+            code = 3;
+        }
+    }
+    if (!estimated) {
+        snprintf(prov2, sizeof prov2, "%s; error not estimated", prov ? prov : "btdftab");
+        prov = prov2;
+    }
+    btdf_write_opts w = {estimated ? &rs[0] : NULL, prov, estimated && nparts == 2 ? &rs[1] : NULL};
+    /* The tables, their pictures and the report appear together or not at all. */
+    btdf_outputs_begin();
+    for (int k = 0; k < rq->nouts && code == 0; k++) {
+        const run_table_out *out = &rq->outs[k];
+        btdf_preview_opts po;
+        if (out->preview) {
+            po = *out->preview;
+            po.table = t;
+        }
+        int table = !out->preview || out->with_table;
+        btdf_output what = {table ? t : NULL, NULL, out->preview ? &po : NULL, &w, NULL, NULL};
+        if (table && strcmp(out->path, "-"))
+            run_progress_stage(pr, "writing");
+        st = btdf_write(&what, out->path, msg, sizeof msg);
+        if (table)
+            run_progress_end(pr);
+        if (st != BTDF_OK)
+            code = fail(prog, 1, out->path, msg[0] ? msg : btdf_strerror(st));
+    }
+    if (code == 0 && rq->report)
+        code = report_json_table(prog, rq->report, o, btdf_table_get_kind(t), &rs[0], prov,
+                                 nparts == 2 ? &rs[1] : NULL);
+    if (code == 0) {
+        st = btdf_outputs_commit(msg, sizeof msg);
+        if (st != BTDF_OK)
+            code = fail(prog, 1, "", msg[0] ? msg : btdf_strerror(st));
+    } else {
+        btdf_outputs_abort();
+    }
+    /* The one-line report, last: the total covers tabulation, estimate and writing. */
+    for (int k = 0; k < nparts; k++)
+        if (!rq->quiet && lines[k][0])
+            fprintf(stderr, "%s; total %.3f s\n", lines[k], run_now() - t0);
+done:
+    run_progress_end(pr);
+    btdf_report_clear(&rs[0]);
+    btdf_report_clear(&rs[1]);
+    btdf_table_free(t);
     return code;
 }

@@ -45,6 +45,14 @@ void run_progress_cb(void *user, const char *stage, size_t done, size_t todo);
 void run_progress_stage(run_progress *pr, const char *stage);
 void run_progress_end(run_progress *pr);
 
+/* A .bsdf request as the command line and the manifest state it: the light's sides
+   (btdf_side, 0: both) and the parts (btdf_part, 0: not given, both) give its blocks
+   (btdf_scatfun_block: light from above has T_ENTER and R_TOP, from below T_LEAVE and
+   R_BOTTOM). The tolerance: tol when given, else tol (the tables' default) for
+   transmission blocks alone and 1e-2 once the file holds reflection. */
+int run_series_blocks(int sides, int part);
+double run_series_tolerance(int part, int given, double tol);
+
 /* Builds a .bsdf from Eq. 25, reports its error per side on standard error (unless
    quiet) and writes it at path unless the tolerance was missed without best_effort.
    Returns an exit status: 0, 1 failed run, 2 bad parameters, 3 tolerance not met. */
@@ -66,5 +74,37 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
 int run_radiance(const char *prog, const char *path, const char *report, const btdf_params *p,
                  btdf_rad_basis basis, double tol, int threads, int quiet, int best_effort,
                  const char *prov, run_progress *pr);
+
+/* Peak resident memory of this process so far, in bytes. */
+size_t run_peak_rss(void);
+
+/* One output of a table run: the table in a format picked by extension (path "-":
+   CSV on standard output), or a picture of it when preview is not NULL (the run fills
+   in its table). with_table: also hand the table to the writer, as a manifest's .png
+   montage wants. */
+typedef struct run_table_out {
+    const char *path;
+    const btdf_preview_opts *preview;
+    int with_table;
+} run_table_out;
+
+/* A table run: build, estimate each part, the verdict, and the outputs and report
+   written together or not at all. Both `tabulate` and a manifest's tables take it. */
+typedef struct run_table_req {
+    const char *prog;  /* the messages' prefix: "btdftab", or "btdftab: window (enter)" */
+    const char *name;  /* the table's name in the verdict: its file (NULL: "table") */
+    btdf_table_opts o; /* the request, with its progress callback (run_progress_cb) */
+    int name_parts;    /* the report lines name the part (a request beyond transmission) */
+    const run_table_out *outs;
+    int nouts;
+    const char *report; /* the JSON report's path, or NULL */
+    const char *prov;   /* the provenance written into the outputs */
+    int quiet, best_effort;
+    run_progress *pr;
+} run_table_req;
+
+/* Exit status: 0 (also a missed tolerance written with best_effort), 1 failed run, 2 bad
+   parameters, 3 tolerance not met or budget too small, nothing written. */
+int run_table(const run_table_req *rq);
 
 #endif
