@@ -35,10 +35,12 @@ extern "C" {
  * Index: n = (lower index) / (upper index), as in btdf.h; n < 1 is light from the
  *   dense side.
  *
- * Errors: Monte Carlo standard errors are batch means: the rays are cut into batches
- *   (each on one surface realisation, with its own random stream seeded from the seed
- *   and the batch index), and the error of a mean is the spread of the batch means
- *   over sqrt(batches). Batches are summed in batch order, so the same options give
+ * Errors: Monte Carlo standard errors are batch means: the rays are cut into batches,
+ *   one per surface realisation (32 up to 3.2e6 rays, then one per 1e5 rays up to 128;
+ *   every angle and channel of batch b sees realisation b, with rays from its own
+ *   stream seeded from the seed, the angle and b), and the error of a mean is the
+ *   spread of the batch means over sqrt(batches), which holds the spread between
+ *   surfaces. Batches are summed in batch order, so the same options give
  *   the same bytes whatever the thread count.
  *
  * Outgoing distribution: optional histograms over (theta, |phi|) per hemisphere, as
@@ -68,7 +70,7 @@ typedef struct btdf_sim_opts {
     int cells_per_tau;    /* grid spacing dx = tau / this; default 16 */
     int tile_tau;         /* tile side in units of tau; default 16 */
     uint64_t batch_rays;  /* rays per batch; 0: chosen from rays (at least 32 batches) */
-    int accel;            /* 1: min/max hierarchy (default); 0: plain grid DDA */
+    int accel;            /* 0: plain grid DDA (default); 1: min/max hierarchy, same hits */
     int theta_bins;       /* histogram bins in theta per hemisphere; 0: no histogram */
     int phi_bins;         /* bins of |phi| over [0, pi]; used when theta_bins > 0 */
     size_t max_memory;    /* bytes the surfaces and tallies may take; 0: no limit */
@@ -80,7 +82,7 @@ typedef struct btdf_sim_opts {
 } btdf_sim_opts;
 
 /* Defaults: n = 1.5, s = 3, one angle (none set: theta_i must be given), 1e6 rays,
-   seed 1, cells_per_tau 16, tile_tau 16, hierarchy on, no histogram. */
+   seed 1, cells_per_tau 16, tile_tau 16, plain DDA, no histogram. */
 BTDF_API void btdf_sim_opts_default(btdf_sim_opts *o);
 
 /* BTDF_OK, or BTDF_EINVAL naming the value: NaN/inf, channels not 1 or 3, n outside
@@ -115,7 +117,7 @@ typedef struct btdf_sim_tally {
 } btdf_sim_tally;
 
 /* The surfaces' realised statistics (sigma = 1), averaged over the first 32
-   realisations (every batch has its own). */
+   realisations (one per batch). */
 typedef struct btdf_sim_surface {
     int n;                 /* grid points per side */
     double dx;             /* spacing */

@@ -56,22 +56,27 @@ BTDF_API void btdf_sim_opts_default(btdf_sim_opts *o)
     o->seed = 1;
     o->cells_per_tau = 16;
     o->tile_tau = 16;
-    o->accel = 1;
+    o->accel = 0; /* the plain DDA: faster than the hierarchy at ti = 30 (btdf-bench sim) */
     o->phi_bins = 1;
 }
 
-/* Rays per batch: 128 batches (the error of a standard error is then 1/sqrt(254) =
-   6 %), or 32 for fewer than 128,000 rays, and never more than BATCH_MAX rays in one.
-   Each batch makes its own surface, which costs about as much as 5,000 paths at
-   s = 3 (256 x 256 points), so batches below 1,000 rays would mostly make surfaces. */
+/* Rays per batch. A batch is one surface realisation, the unit of the error: every
+   ray of realisation b (of every angle and channel) sees the same surface, so the
+   error of a mean is the spread between realisations over sqrt(batches), which holds
+   the surface-to-surface spread whole. Making a 256 x 256 surface costs about as much
+   as 5,000 paths at s = 3, so a realisation carries at least RAYS_PER_REAL rays once
+   there are 32 of them (surface under 5 % of the time): 32 realisations up to 3.2e6
+   rays (the error of a standard error is then 1/sqrt(62) = 13 %), then more up to 128
+   (6 %), then larger ones, never more than BATCH_MAX rays in one. */
+#define RAYS_PER_REAL 100000
 static uint64_t batch_size(const btdf_sim_opts *o)
 {
     if (o->batch_rays)
         return o->batch_rays;
-    uint64_t b = (o->rays + 127) / 128;
-    if (b < 1000)
-        b = (o->rays + 31) / 32;
-    b = b < 1 ? 1 : b;
+    uint64_t nb = o->rays / RAYS_PER_REAL;
+    nb = nb < 32 ? 32 : nb > 128 ? 128 : nb;
+    nb = nb > o->rays ? o->rays : nb; /* rays >= 2: at least two batches */
+    uint64_t b = (o->rays + nb - 1) / nb;
     return b > BATCH_MAX ? BATCH_MAX : b;
 }
 
