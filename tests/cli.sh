@@ -573,5 +573,24 @@ expect 2 "--model: 'walter': must be xu-sun or smith" "an unknown --model is nam
 expect 2 "tabulate --model smith: tables of this model are not available" "tabulate refuses smith" \
     -- "$B" tabulate --model smith -o "$W/t.csv"
 
+# simulate -o: the outgoing distribution as CSV; the header keys, every row finite, and
+# the sum of rho cos_sr over the transmitted bins is T: the bins partition the
+# hemisphere and hold every transmitted ray, so it agrees to rounding (1e-9 relative,
+# far inside T's standard error, which it must also be within)
+"$B" simulate -q -s 1 --rays 20000 --bins 15,6 -o "$W/d.csv" --report "$W/d.json" && \
+    ( for k in '# kind: simulated' '# ior: 1.5' '# smoothness: 1' '# units: rho in 1/sr' \
+             '# bins: 15' '# rows: 180' '# end: 180 rows'; do grep -q "^$k" "$W/d.csv" || exit 1; done ) && \
+    head -1 "$W/d.csv" | grep -q '^theta_i_deg,theta_o_deg,phi_deg,channel,part,rho,rho_se,rho_1,rho_1_se,ti_rad,to_rad,phi_rad,cos_sr$' && \
+    awk -F, '!/^#/ && NR > 1 { n++; for (i = 6; i <= 13; i++) if ($i !~ /^-?[0-9.]+(e[-+]?[0-9]+)?$/) exit 1 }
+             END { exit n != 180 }' "$W/d.csv" && \
+    T=$(sed -n 's/^  "T": \(.*\),$/\1/p' "$W/d.json") && Tse=$(sed -n 's/^  "T_se": \(.*\),$/\1/p' "$W/d.json") && \
+    awk -F, -v T="$T" -v se="$Tse" '$5 == "transmission" { s += $6 * $13 }
+        END { d = s - T; d = d < 0 ? -d : d; exit !(d <= 1e-9 * T && d <= se) }' "$W/d.csv" && \
+    ok "simulate -o: header keys, finite rows, integral of rho |cos| dw over T's bins is T" || no "simulate -o"
+rm -f "$W/d.csv" "$W/d.json"
+expect 2 "is written as .csv" "simulate -o .exr is refused" -- "$B" simulate --rays 100 -o "$W/t.exr"
+expect 2 "--bins: '0'" "simulate --bins 0" -- "$B" simulate --rays 100 --bins 0 -o "$W/t.csv"
+expect 1 "cannot write in the folder" "simulate unwritable -o" -- "$B" simulate --rays 100 -o "$W/nodir/d.csv"
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

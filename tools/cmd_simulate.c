@@ -201,6 +201,166 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
     return 0;
 }
 
+/* Integral of |cos to| over histogram bin (theta_bin, any phi bin), sr: the bin's
+   solid angle weighted by the cosine, both halves of |phi| counted. */
+static double cos_sr(int nt, int np, int it)
+{
+    double w = 1.5707963267948966 / nt, a = sin(w * it), b = sin(w * (it + 1));
+    return 0.5 * (b * b - a * a) * 2.0 * (3.141592653589793 / np);
+}
+
+static void cnum(FILE *f, double x)
+{
+    char b[40];
+    btdf_format_double(isfinite(x) ? x : 0.0, b, sizeof b); /* never NaN in a file */
+    fputs(b, f);
+}
+
+/* The outgoing distribution as CSV (docs/simulation.md): the header row, the comment
+   block of docs/formats.md's conventions, one row per (case, part, bin), the end line.
+   Built in memory and written whole by btdf_write_buffer (a temporary renamed at the
+   end), so an error leaves no file. */
+static int write_dist(const char *path, const char *prov, const btdf_sim_opts *o,
+                      const btdf_sim_result *r)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    if (!f)
+        return fail(1, "%s: out of memory for the table", path);
+    int nt = r->theta_bins, np = r->phi_bins;
+    unsigned long long rows = (unsigned long long)r->count * 2ull * (unsigned long long)nt *
+                              (unsigned long long)np;
+    fputs("theta_i_deg,theta_o_deg,phi_deg,channel,part,rho,rho_se,rho_1,rho_1_se,ti_rad,"
+          "to_rad,phi_rad,cos_sr\n", f);
+    fprintf(f, "# btdftab %s simulation\n# kind: simulated\n# channels: %d\n# ior:",
+            btdf_version_string(), o->channels);
+    for (int c = 0; c < o->channels; c++) {
+        fputc(c ? ',' : ' ', f);
+        cnum(f, o->ior[c]);
+    }
+    fputs("\n# smoothness: ", f);
+    cnum(f, o->smoothness);
+    fputs("\n# units: rho in 1/sr, no cosine factor, the bin's mean weighted by |cos theta_o| "
+          "(fraction of the incident flux in the bin / cos_sr); rho_se its standard error; "
+          "angles in degrees and radians; cos_sr in sr\n",
+          f);
+    fprintf(f, "# bins: %d in theta_o per hemisphere, %d in |phi| over [0, 180] degrees "
+               "(180 is forward); nodes at the bins' centres\n",
+            nt, np);
+    fprintf(f, "# rays: %llu per angle and channel, seed %llu, %llu batches (one surface "
+               "realisation each)\n",
+            (unsigned long long)o->rays, (unsigned long long)o->seed,
+            (unsigned long long)r->tally[0].batches);
+    if (prov) {
+        fputs("# provenance: ", f);
+        for (const unsigned char *c = (const unsigned char *)prov; *c; c++) {
+            if (*c < 0x20 || *c == 0x7f)
+                fprintf(f, "\\x%02x", *c); /* control bytes as C escapes */
+            else
+                fputc(*c, f);
+        }
+        fputc('\n', f);
+    }
+    fprintf(f, "# rows: %llu\n", rows);
+    double wt = 90.0 / nt, wp = 180.0 / np;
+    for (size_t k = 0; k < r->count; k++) {
+        const btdf_sim_tally *t = &r->tally[k];
+        for (int part = 0; part < 2; part++) {
+            const btdf_sim_est *all = part ? t->hist_R : t->hist_T;
+            const btdf_sim_est *one = part ? t->hist_R1 : t->hist_T1;
+            for (int it = 0; it < nt; it++) {
+                double cs = cos_sr(nt, np, it);
+                double inv = cs > 0.0 ? 1.0 / cs : 0.0; /* cs > 0 for every bin; kept safe */
+                double tc = (it + 0.5) * wt, to = part ? tc : 180.0 - tc;
+                for (int ip = 0; ip < np; ip++) {
+                    size_t i = (size_t)it * (size_t)np + (size_t)ip;
+                    double pc = (ip + 0.5) * wp;
+                    fprintf(f, "%.10g,%.10g,%.10g,%d,%s,", deg_given[k % o->n_theta], to, pc,
+                            t->channel, part ? "reflection" : "transmission");
+                    cnum(f, all[i].mean * inv);
+                    fputc(',', f);
+                    cnum(f, all[i].se * inv);
+                    fputc(',', f);
+                    cnum(f, one[i].mean * inv);
+                    fputc(',', f);
+                    cnum(f, one[i].se * inv);
+                    fputc(',', f);
+                    cnum(f, t->theta_i);
+                    fputc(',', f);
+                    cnum(f, to * DEG);
+                    fputc(',', f);
+                    cnum(f, pc * DEG);
+                    fputc(',', f);
+                    cnum(f, cs);
+                    fputc('\n', f);
+                }
+            }
+        }
+    }
+    fprintf(f, "# end: %llu rows\n", rows);
+    if (fclose(f) != 0) {
+        free(buf);
+        return fail(1, "%s: out of memory for the table", path);
+    }
+    char msg[512];
+    btdf_status st = btdf_write_buffer(path, ".csv", buf, len, msg, sizeof msg);
+    free(buf);
+    if (st != BTDF_OK)
+        return fail(1, "%s: %s", path, msg);
+    return 0;
+}
+
+/* simulate's own options, taken out of argv before the common parser: -o/--output
+   FILE.csv and --bins T[,P]. Returns -1 to go on, or an exit status. */
+static int take_own(int *argc, char **argv, const char **out, int *nt, int *np)
+{
+    int w = 0;
+    for (int k = 0; k < *argc; k++) {
+        const char *a = argv[k];
+        const char *v = NULL;
+        int is_out = !strcmp(a, "-o") || !strcmp(a, "--output");
+        int is_bins = !strcmp(a, "--bins");
+        if (!strncmp(a, "--output=", 9)) {
+            is_out = 1;
+            v = a + 9;
+        } else if (!strncmp(a, "--bins=", 7)) {
+            is_bins = 1;
+            v = a + 7;
+        }
+        if (k > 0 && (is_out || is_bins)) {
+            if (!v) {
+                if (k + 1 >= *argc)
+                    return fail(2, "%s: needs a value", a);
+                v = argv[++k];
+            }
+            if (is_out) {
+                size_t n = strlen(v);
+                if (n < 5 || strcmp(v + n - 4, ".csv"))
+                    return fail(2, "-o '%s': the distribution is written as .csv (EXR is not "
+                                   "done yet)", v);
+                *out = v;
+            } else {
+                double b[2];
+                int n = 0;
+                const char *why = num_double_list(v, b, 1, 2, &n);
+                if (why)
+                    return fail(2, "--bins: '%s': %s", v, why);
+                for (int i = 0; i < n; i++)
+                    if (!(b[i] >= 1 && b[i] <= 3600 && b[i] == floor(b[i])))
+                        return fail(2, "--bins: '%s': each count must be a whole number in "
+                                       "[1, 3600]", v);
+                *nt = (int)b[0];
+                *np = n > 1 ? (int)b[1] : 18;
+            }
+            continue;
+        }
+        argv[w++] = argv[k];
+    }
+    *argc = w;
+    return -1;
+}
+
 /* Options into o; -1 to go on, or an exit status. */
 static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, double *ti,
                  const char **report, int *quiet)
@@ -291,17 +451,32 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     deg_given[0] = 30.0;
     o.theta_i = ti;
     o.n_theta = 1;
-    const char *report = NULL;
-    int quiet = 0;
-    int code = parse(cmd, argc, argv, &o, ti, &report, &quiet);
+    const char *report = NULL, *dist = NULL;
+    int quiet = 0, nt = 45, np = 18; /* 2 degrees in theta_o, 10 in |phi| */
+    int code = take_own(&argc, argv, &dist, &nt, &np);
     if (code >= 0)
         return code;
+    code = parse(cmd, argc, argv, &o, ti, &report, &quiet);
+    if (code >= 0) {
+        if (code == 0 && argc > 1 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")))
+            printf("  -o, --output FILE.csv  the outgoing distribution: rho and its error per "
+                   "bin\n                         (docs/simulation.md)\n"
+                   "  --bins T[,P]           bins in theta_o per hemisphere and in |phi| "
+                   "(default 45,18)\n");
+        return code;
+    }
+    if (dist) {
+        o.theta_bins = nt;
+        o.phi_bins = np;
+    }
     char msg[512];
     btdf_status st = btdf_sim_opts_check(&o, msg, sizeof msg);
     if (st != BTDF_OK)
         return fail(st == BTDF_EBUDGET ? 3 : 2, "%s", msg);
     if (report && btdf_output_check(report, msg, sizeof msg) != BTDF_OK)
         return fail(1, "%s: %s", report, msg);
+    if (dist && btdf_output_check(dist, msg, sizeof msg) != BTDF_OK)
+        return fail(1, "%s: %s", dist, msg);
     run_progress pr;
     run_progress_start(&pr, !quiet && isatty(2), "simulate");
     o.progress = progress;
@@ -345,6 +520,8 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                 (unsigned long long)r->rays_traced, r->seconds);
     }
     code = report ? write_report(report, prov, &o, r, eqT, eqR) : 0;
+    if (code == 0 && dist)
+        code = write_dist(dist, prov, &o, r);
     free(eqT);
     free(eqR);
     btdf_sim_result_free(r);
