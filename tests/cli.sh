@@ -591,6 +591,28 @@ rm -f "$W/d.csv" "$W/d.json"
 expect 2 "is written as .csv" "simulate -o .exr is refused" -- "$B" simulate --rays 100 -o "$W/t.exr"
 expect 2 "--bins: '0'" "simulate --bins 0" -- "$B" simulate --rays 100 --bins 0 -o "$W/t.csv"
 expect 1 "cannot write in the folder" "simulate unwritable -o" -- "$B" simulate --rays 100 -o "$W/nodir/d.csv"
+# simulate --shard K/N and --merge: three shards (one on one thread), merged out of
+# order, give the bytes of one run, report and table, but the time and command lines
+O="-q -s 2 --theta-i 10,50 --rays 40000 --bins 9,3"
+"$B" simulate $O --report "$W/one.json" -o "$W/one.csv" && \
+    "$B" simulate $O --shard 1/3 --report "$W/s1.json" && \
+    "$B" simulate $O --shard 2/3 --threads 1 --report "$W/s2.json" && \
+    "$B" simulate $O --shard 3/3 --report "$W/s3.json" && \
+    "$B" simulate $O --merge "$W/s3.json" "$W/s1.json" "$W/s2.json" --report "$W/m.json" -o "$W/m.csv" && \
+    [ "$(grep -v '"seconds"\|"command"' "$W/one.json")" = "$(grep -v '"seconds"\|"command"' "$W/m.json")" ] && \
+    [ "$(grep -v '^# provenance' "$W/one.csv")" = "$(grep -v '^# provenance' "$W/m.csv")" ] && \
+    ! cmp -s "$W/one.json" "$W/s1.json" && \
+    ok "simulate --shard 1/3, 2/3, 3/3 --merge: the bytes of one run" || no "simulate shards and merge"
+expect 2 "batch 21 of 32 is in no part" "simulate --merge with a shard missing" -- \
+    "$B" simulate $O --merge "$W/s1.json" "$W/s2.json" --report "$W/t.json"
+expect 2 "batch 0 is in two parts" "simulate --merge with a shard twice" -- \
+    "$B" simulate $O --merge "$W/s1.json" "$W/s1.json" "$W/s2.json" "$W/s3.json" --report "$W/t.json"
+expect 2 "not a report of these options" "simulate --merge of other options" -- \
+    "$B" simulate -q -s 3 --rays 40000 --merge "$W/s1.json" --report "$W/t.json"
+expect 2 "at most 32 shards" "simulate --shard past the batches" -- "$B" simulate $O --shard 33/33 --report "$W/t.json"
+expect 2 "expected K/N" "simulate --shard 0/3" -- "$B" simulate $O --shard 0/3 --report "$W/t.json"
+expect 2 "--shard needs --report" "simulate --shard without a report" -- "$B" simulate $O --shard 1/3
+rm -f "$W/one.json" "$W/one.csv" "$W/s1.json" "$W/s2.json" "$W/s3.json" "$W/m.json" "$W/m.csv"
 
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

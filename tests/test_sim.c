@@ -390,6 +390,75 @@ static void error_is_honest(void **state)
     assert_true(sd > 0.55 * se && sd < 1.45 * se);
 }
 
+static uint64_t shard_first, shard_end;
+static void shard_of(btdf_sim_opts *o)
+{
+    o->theta_bins = 9;
+    o->phi_bins = 3;
+    o->batch_first = shard_first;
+    o->batch_end = shard_end;
+}
+
+static int same_est(const btdf_sim_est *a, const btdf_sim_est *b, size_t n)
+{
+    return memcmp(a, b, n * sizeof *a) == 0;
+}
+
+/* Shards by batch range merged are one run, to the bit: the counts of every batch are
+   integers put back in batch order, the histograms' sums are integers. Two angles, a
+   split inside the first 32 realisations (whose statistics are averaged) and three
+   parts given out of order. */
+static void shards_merge_to_one_run(void **state)
+{
+    (void)state;
+    double ti[2] = {10 * DEG, 50 * DEG};
+    shard_first = shard_end = 0;
+    btdf_sim_result *whole = run(1.5, 2, ti, 2, 40000, shard_of);
+    uint64_t nb = whole->batches_total;
+    assert_int_equal(32, nb);
+    const uint64_t cut[4] = {0, 5, 20, nb};
+    btdf_sim_result *part[3];
+    for (int k = 0; k < 3; k++) {
+        shard_first = cut[k];
+        shard_end = cut[k + 1];
+        part[k] = run(1.5, 2, ti, 2, 40000, shard_of);
+        assert_int_equal(cut[k + 1] - cut[k], part[k]->tally[0].batches);
+    }
+    btdf_sim_opts o;
+    btdf_sim_opts_default(&o);
+    o.smoothness = 2;
+    o.theta_i = ti;
+    o.n_theta = 2;
+    o.rays = 40000;
+    o.seed = 7;
+    shard_first = shard_end = 0;
+    shard_of(&o);
+    const btdf_sim_result *order[3] = {part[2], part[0], part[1]};
+    btdf_sim_result *m = NULL;
+    char msg[256];
+    assert_status(BTDF_OK, btdf_sim_merge(&o, order, 3, &m, msg, sizeof msg));
+    for (size_t k = 0; k < whole->count; k++) {
+        const btdf_sim_tally *a = &whole->tally[k], *b = &m->tally[k];
+        assert_true(same_est(&a->R, &b->R, 1) && same_est(&a->T, &b->T, 1));
+        assert_true(same_est(a->T_order, b->T_order, 3) && same_est(a->R_order, b->R_order, 3));
+        assert_true(same_est(&a->mean_hits, &b->mean_hits, 1));
+        assert_true(same_est(a->hist_T, b->hist_T, 27) && same_est(a->hist_R1, b->hist_R1, 27));
+        assert_int_equal(a->batches, b->batches);
+    }
+    assert_memory_equal(&whole->surface, &m->surface, sizeof whole->surface);
+    /* a batch held twice, or missing, is named */
+    const btdf_sim_result *twice[3] = {part[0], part[0], part[1]};
+    assert_status(BTDF_EINVAL, btdf_sim_merge(&o, twice, 3, &m, msg, sizeof msg));
+    assert_non_null(strstr(msg, "batch 0 is in two parts"));
+    const btdf_sim_result *gap[2] = {part[0], part[2]};
+    assert_status(BTDF_EINVAL, btdf_sim_merge(&o, gap, 2, &m, msg, sizeof msg));
+    assert_non_null(strstr(msg, "batch 5 of 32 is in no part"));
+    btdf_sim_result_free(m);
+    for (int k = 0; k < 3; k++)
+        btdf_sim_result_free(part[k]);
+    btdf_sim_result_free(whole);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -402,6 +471,7 @@ int main(void)
         cmocka_unit_test(reciprocity),
         cmocka_unit_test(grid_independence),
         cmocka_unit_test(error_is_honest),
+        cmocka_unit_test(shards_merge_to_one_run),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -74,6 +74,9 @@ typedef struct btdf_sim_opts {
     int theta_bins;       /* histogram bins in theta per hemisphere; 0: no histogram */
     int phi_bins;         /* bins of |phi| over [0, pi]; used when theta_bins > 0 */
     size_t max_memory;    /* bytes the surfaces and tallies may take; 0: no limit */
+    /* Trace only batches [batch_first, batch_end) (a shard; btdf_sim_batch_count
+       gives how many there are); batch_end 0: all of them. */
+    uint64_t batch_first, batch_end;
     /* Called after each finished batch with the rays done so far, the total, and the
        standard error of T of the angle in progress (NaN until it is known). From any
        thread, one call at a time; it must not call back into the simulator. */
@@ -137,7 +140,31 @@ typedef struct btdf_sim_result {
     double seconds;        /* wall time of the tracing */
     uint64_t rays_traced;  /* over every angle and channel */
     uint64_t hits_traced;
+    /* The raw integers of batches [batch_first, batch_end) of batches_total, for
+       btdf_sim_merge: raw_counts[(case * (end - first) + b - first) * BTDF_SIM_RAW_Q +
+       q], q = R orders 1, 2, 3+, T orders 1, 2, 3+, lost, hits; raw_hist (NULL without
+       histograms) [((case * 4 + h) * bins + bin) * 3 + {sum c, sum c^2, sum c n}] over
+       the batches, h = T, T1, R, R1; raw_stats[(b - first) * 3 + {rms height, rms
+       slope, correlation length}] of the realisations b < 32 (zero past them). */
+    uint64_t batches_total, batch_first, batch_end;
+    uint64_t *raw_counts;
+    uint64_t *raw_hist;
+    double *raw_stats;
 } btdf_sim_result;
+
+#define BTDF_SIM_RAW_Q 8
+#define BTDF_SIM_STATS_REALISATIONS 32
+
+/* Batches the options cut each angle and channel into (the realisations). */
+BTDF_API uint64_t btdf_sim_batch_count(const btdf_sim_opts *o);
+
+/* The result of all batches from parts that together hold each batch of o once (runs
+   of o with batch ranges, or results rebuilt from their raw integers): the same
+   numbers, to the bit, as one run of o; seconds is the parts' sum. BTDF_EINVAL naming
+   a batch missing or held twice, or a part of other options. */
+BTDF_API btdf_status btdf_sim_merge(const btdf_sim_opts *o, const btdf_sim_result *const *parts,
+                                    size_t nparts, btdf_sim_result **out, char *msg,
+                                    size_t msglen);
 
 /* Runs the simulation. BTDF_EINVAL/BTDF_EBUDGET as btdf_sim_opts_check, BTDF_ENOMEM. */
 BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out, char *msg,
