@@ -637,8 +637,11 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
         return code;
     code = parse(cmd, argc, argv, &o, ti, &report, &quiet);
     if (code >= 0) {
-        if (code == 0 && argc > 1 && (!strcmp(argv[1], "--help") || !strcmp(argv[1], "-h")))
-            printf("  -o, --output FILE.csv  the outgoing distribution: rho and its error per "
+        int help = 0;
+        for (int k = 1; k < argc; k++)
+            help |= !strcmp(argv[k], "--help") || !strcmp(argv[k], "-h");
+        if (code == 0 && help)
+            printf("\nMore options:\n  -o, --output FILE.csv  the outgoing distribution: rho and its error per "
                    "bin\n                         (docs/simulation.md)\n"
                    "  --bins T[,P]           bins in theta_o per hemisphere and in |phi| "
                    "(default 45,18);\n                         given, the report holds them for a merge\n"
