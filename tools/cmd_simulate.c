@@ -507,10 +507,13 @@ static int read_part(const char *path, const btdf_sim_opts *o, btdf_sim_result *
                        "\"%s\")", path, want);
     }
     uint64_t b[3];
+    const char *raw = strstr(run, "\"raw\": {"); /* the raw section follows the run line */
+    raw = raw ? raw : "";
     size_t jobs = (size_t)o->channels * o->n_theta;
     size_t hlen = o->theta_bins ? jobs * 4 * (size_t)o->theta_bins * (size_t)o->phi_bins * 3 : 0;
     int code = 0;
-    if (read_array(text, "\"batches\":", 3, b, NULL) != 0 || b[0] >= b[1] || b[1] > b[2])
+    if (read_array(raw, "\"batches\":", 3, b, NULL) != 0 || b[0] >= b[1] || b[1] > b[2] ||
+        b[2] != btdf_sim_batch_count(o)) /* also bounds the arrays below */
         code = fail(2, "--merge %s: no batch range (\"raw\": {\"batches\": [first, end, "
                        "total]})", path);
     else {
@@ -529,10 +532,10 @@ static int read_part(const char *path, const btdf_sim_opts *o, btdf_sim_result *
         r->seconds = isfinite(r->seconds) ? r->seconds : 0.0;
         if (!r->raw_counts || !r->raw_stats || (hlen && !r->raw_hist))
             code = fail(1, "--merge %s: out of memory", path);
-        else if (read_array(text, "\"counts\":", jobs * nb * BTDF_SIM_RAW_Q, r->raw_counts,
+        else if (read_array(raw, "\"counts\":", jobs * nb * BTDF_SIM_RAW_Q, r->raw_counts,
                             NULL) != 0 ||
-                 (hlen && read_array(text, "\"hist\":", hlen, r->raw_hist, NULL) != 0) ||
-                 read_array(text, "\"stats\":", nb * 3, NULL, r->raw_stats) != 0)
+                 (hlen && read_array(raw, "\"hist\":", hlen, r->raw_hist, NULL) != 0) ||
+                 read_array(raw, "\"stats\":", nb * 3, NULL, r->raw_stats) != 0)
             code = fail(2, "--merge %s: its raw tallies do not have the lengths of these "
                            "options", path);
     }
