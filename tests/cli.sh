@@ -596,5 +596,46 @@ expect 2 "--model: 'walter': must be xu-sun or smith" "an unknown --model is nam
 expect 2 "tabulate --model smith: tables of this model are not available" "tabulate refuses smith" \
     -- "$B" tabulate --model smith -o "$W/t.csv"
 
+# simulate -o: the outgoing distribution as CSV; the header keys, every row finite, and
+# the sum of rho cos_sr over the transmitted bins is T: the bins partition the
+# hemisphere and hold every transmitted ray, so it agrees to rounding (1e-9 relative,
+# far inside T's standard error, which it must also be within)
+"$B" simulate -q -s 1 --rays 20000 --bins 15,6 -o "$W/d.csv" --report "$W/d.json" && \
+    ( for k in '# kind: simulated' '# ior: 1.5' '# smoothness: 1' '# units: rho in 1/sr' \
+             '# bins: 15' '# rows: 180' '# end: 180 rows'; do grep -q "^$k" "$W/d.csv" || exit 1; done ) && \
+    head -1 "$W/d.csv" | grep -q '^theta_i_deg,theta_o_deg,phi_deg,channel,part,rho,rho_se,rho_1,rho_1_se,ti_rad,to_rad,phi_rad,cos_sr$' && \
+    awk -F, '!/^#/ && NR > 1 { n++; for (i = 6; i <= 13; i++) if ($i !~ /^-?[0-9.]+(e[-+]?[0-9]+)?$/) exit 1 }
+             END { exit n != 180 }' "$W/d.csv" && \
+    T=$(sed -n 's/^  "T": \(.*\),$/\1/p' "$W/d.json") && Tse=$(sed -n 's/^  "T_se": \(.*\),$/\1/p' "$W/d.json") && \
+    awk -F, -v T="$T" -v se="$Tse" '$5 == "transmission" { s += $6 * $13 }
+        END { d = s - T; d = d < 0 ? -d : d; exit !(d <= 1e-9 * T && d <= se) }' "$W/d.csv" && \
+    ok "simulate -o: header keys, finite rows, integral of rho |cos| dw over T's bins is T" || no "simulate -o"
+rm -f "$W/d.csv" "$W/d.json"
+expect 2 "is written as .csv" "simulate -o .exr is refused" -- "$B" simulate --rays 100 -o "$W/t.exr"
+expect 2 "--bins: '0'" "simulate --bins 0" -- "$B" simulate --rays 100 --bins 0 -o "$W/t.csv"
+expect 1 "cannot write in the folder" "simulate unwritable -o" -- "$B" simulate --rays 100 -o "$W/nodir/d.csv"
+# simulate --shard K/N and --merge: three shards (one on one thread), merged out of
+# order, give the bytes of one run, report and table, but the time and command lines
+O="-q -s 2 --theta-i 10,50 --rays 40000 --bins 9,3"
+"$B" simulate $O --report "$W/one.json" -o "$W/one.csv" && \
+    "$B" simulate $O --shard 1/3 --report "$W/s1.json" && \
+    "$B" simulate $O --shard 2/3 --threads 1 --report "$W/s2.json" && \
+    "$B" simulate $O --shard 3/3 --report "$W/s3.json" && \
+    "$B" simulate $O --merge "$W/s3.json" "$W/s1.json" "$W/s2.json" --report "$W/m.json" -o "$W/m.csv" && \
+    [ "$(grep -v '"seconds"\|"command"' "$W/one.json")" = "$(grep -v '"seconds"\|"command"' "$W/m.json")" ] && \
+    [ "$(grep -v '^# provenance' "$W/one.csv")" = "$(grep -v '^# provenance' "$W/m.csv")" ] && \
+    ! cmp -s "$W/one.json" "$W/s1.json" && \
+    ok "simulate --shard 1/3, 2/3, 3/3 --merge: the bytes of one run" || no "simulate shards and merge"
+expect 2 "batch 21 of 32 is in no part" "simulate --merge with a shard missing" -- \
+    "$B" simulate $O --merge "$W/s1.json" "$W/s2.json" --report "$W/t.json"
+expect 2 "batch 0 is in two parts" "simulate --merge with a shard twice" -- \
+    "$B" simulate $O --merge "$W/s1.json" "$W/s1.json" "$W/s2.json" "$W/s3.json" --report "$W/t.json"
+expect 2 "not a report of these options" "simulate --merge of other options" -- \
+    "$B" simulate -q -s 3 --rays 40000 --merge "$W/s1.json" --report "$W/t.json"
+expect 2 "at most 32 shards" "simulate --shard past the batches" -- "$B" simulate $O --shard 33/33 --report "$W/t.json"
+expect 2 "expected K/N" "simulate --shard 0/3" -- "$B" simulate $O --shard 0/3 --report "$W/t.json"
+expect 2 "--shard needs --report" "simulate --shard without a report" -- "$B" simulate $O --shard 1/3
+rm -f "$W/one.json" "$W/one.csv" "$W/s1.json" "$W/s2.json" "$W/s3.json" "$W/m.json" "$W/m.csv"
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

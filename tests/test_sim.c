@@ -175,15 +175,18 @@ static void large_s_is_eq25(void **state)
     assert_true(chi_wrong > dof2 + 5 * sqrt(2.0 * dof2));
     /* The batch-means errors against the binomial ones: each batch has its own
        surface, whose lobe differs a little from the ensemble's, so the variance is
-       binomial plus that spread, never less. 128 batches give an error's error of
-       1/sqrt(2 * 127) = 6.3 %: the ratio must exceed 0.8 (over 3 of those below 1).
-       Above, the spread between 16 tau tiles made it at most 1.4 here; 2 bounds it. */
+       binomial plus that spread, never less. 32 batches (one per realisation) give
+       an error's error of 1/sqrt(2 * 31) = 12.7 %: the ratio must exceed 0.6 (over 3
+       of those below 1). The spread between 16 tau tiles raises it: the ratio squared
+       less 1 grows with the rays per batch (binomial variance goes as n, the surfaces'
+       as n^2); it was at most 1.4 at 3,125 rays per batch, so about 2.2 at 12,500
+       (measured: 0.99 to 2.18 over the 12 bins); 3 bounds it. */
     for (int i = 0; i < r->theta_bins; i++) {
         const btdf_sim_est *e = &r->tally[0].hist_T1[i];
         if (e->mean * (double)r->tally[0].rays < 1000)
             continue;
         double bin_se = sqrt(e->mean * (1 - e->mean) / (double)r->tally[0].rays);
-        assert_true(e->se > 0.8 * bin_se && e->se < 2.0 * bin_se);
+        assert_true(e->se > 0.6 * bin_se && e->se < 3.0 * bin_se);
     }
     btdf_sim_result_free(r);
 }
@@ -286,13 +289,14 @@ static void surface_statistics(void **state)
 static void one_thread(btdf_sim_opts *o)
 {
     o->threads = 1;
+    o->accel = 1; /* the hierarchy; the default is the plain DDA */
     o->theta_bins = 18;
     o->phi_bins = 4;
 }
 static void three_threads_plain(btdf_sim_opts *o)
 {
     o->threads = 3;
-    o->accel = 0;
+    o->accel = 0; /* the default, named */
     o->theta_bins = 18;
     o->phi_bins = 4;
 }
@@ -353,6 +357,108 @@ static void bad_input(void **state)
     assert_non_null(strstr(msg, "memory limit"));
 }
 
+static uint64_t est_seed;
+static void seed_of(btdf_sim_opts *o) { o->seed = est_seed; }
+
+/* The batch-means error is the realisation's: all rays of a batch see one surface, so
+   the spread between batch means holds the spread between surfaces. Checked against
+   the spread of T over 24 independent runs (seeds) at s = 1, where the surfaces
+   differ most: the sample standard deviation of 24 means has a relative error of
+   1/sqrt(46) = 15 %, and the mean of 24 reported errors about 13 %/sqrt(24) = 3 %, so
+   their ratio lies in [0.55, 1.45] (3 of those either side of 1). An error taken over
+   sub-batches of one surface, which leaves the surface spread out, fails the lower
+   bound when that spread matters. */
+static void error_is_honest(void **state)
+{
+    (void)state;
+    const int runs = 24;
+    double ti = 30 * DEG, m = 0, m2 = 0, se = 0;
+    for (int k = 0; k < runs; k++) {
+        est_seed = 1000 + (uint64_t)k;
+        btdf_sim_result *r = run(1.5, 1, &ti, 1, 64000, seed_of);
+        double t = r->tally[0].T.mean;
+        m += t;
+        m2 += t * t;
+        se += r->tally[0].T.se;
+        btdf_sim_result_free(r);
+    }
+    m /= runs;
+    double sd = sqrt((m2 / runs - m * m) * runs / (runs - 1.0));
+    se /= runs;
+    print_message("s = 1: spread of T over %d runs %.3g, mean reported error %.3g\n", runs, sd,
+                  se);
+    assert_true(sd > 0.55 * se && sd < 1.45 * se);
+}
+
+static uint64_t shard_first, shard_end;
+static void shard_of(btdf_sim_opts *o)
+{
+    o->theta_bins = 9;
+    o->phi_bins = 3;
+    o->batch_first = shard_first;
+    o->batch_end = shard_end;
+}
+
+static int same_est(const btdf_sim_est *a, const btdf_sim_est *b, size_t n)
+{
+    return memcmp(a, b, n * sizeof *a) == 0;
+}
+
+/* Shards by batch range merged are one run, to the bit: the counts of every batch are
+   integers put back in batch order, the histograms' sums are integers. Two angles, a
+   split inside the first 32 realisations (whose statistics are averaged) and three
+   parts given out of order. */
+static void shards_merge_to_one_run(void **state)
+{
+    (void)state;
+    double ti[2] = {10 * DEG, 50 * DEG};
+    shard_first = shard_end = 0;
+    btdf_sim_result *whole = run(1.5, 2, ti, 2, 40000, shard_of);
+    uint64_t nb = whole->batches_total;
+    assert_int_equal(32, nb);
+    const uint64_t cut[4] = {0, 5, 20, nb};
+    btdf_sim_result *part[3];
+    for (int k = 0; k < 3; k++) {
+        shard_first = cut[k];
+        shard_end = cut[k + 1];
+        part[k] = run(1.5, 2, ti, 2, 40000, shard_of);
+        assert_int_equal(cut[k + 1] - cut[k], part[k]->tally[0].batches);
+    }
+    btdf_sim_opts o;
+    btdf_sim_opts_default(&o);
+    o.smoothness = 2;
+    o.theta_i = ti;
+    o.n_theta = 2;
+    o.rays = 40000;
+    o.seed = 7;
+    shard_first = shard_end = 0;
+    shard_of(&o);
+    const btdf_sim_result *order[3] = {part[2], part[0], part[1]};
+    btdf_sim_result *m = NULL;
+    char msg[256];
+    assert_status(BTDF_OK, btdf_sim_merge(&o, order, 3, &m, msg, sizeof msg));
+    for (size_t k = 0; k < whole->count; k++) {
+        const btdf_sim_tally *a = &whole->tally[k], *b = &m->tally[k];
+        assert_true(same_est(&a->R, &b->R, 1) && same_est(&a->T, &b->T, 1));
+        assert_true(same_est(a->T_order, b->T_order, 3) && same_est(a->R_order, b->R_order, 3));
+        assert_true(same_est(&a->mean_hits, &b->mean_hits, 1));
+        assert_true(same_est(a->hist_T, b->hist_T, 27) && same_est(a->hist_R1, b->hist_R1, 27));
+        assert_int_equal(a->batches, b->batches);
+    }
+    assert_memory_equal(&whole->surface, &m->surface, sizeof whole->surface);
+    /* a batch held twice, or missing, is named */
+    const btdf_sim_result *twice[3] = {part[0], part[0], part[1]};
+    assert_status(BTDF_EINVAL, btdf_sim_merge(&o, twice, 3, &m, msg, sizeof msg));
+    assert_non_null(strstr(msg, "batch 0 is in two parts"));
+    const btdf_sim_result *gap[2] = {part[0], part[2]};
+    assert_status(BTDF_EINVAL, btdf_sim_merge(&o, gap, 2, &m, msg, sizeof msg));
+    assert_non_null(strstr(msg, "batch 5 of 32 is in no part"));
+    btdf_sim_result_free(m);
+    for (int k = 0; k < 3; k++)
+        btdf_sim_result_free(part[k]);
+    btdf_sim_result_free(whole);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -364,6 +470,8 @@ int main(void)
         cmocka_unit_test(large_s_is_eq25),
         cmocka_unit_test(reciprocity),
         cmocka_unit_test(grid_independence),
+        cmocka_unit_test(error_is_honest),
+        cmocka_unit_test(shards_merge_to_one_run),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

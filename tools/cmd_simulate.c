@@ -120,6 +120,53 @@ static void jorders(FILE *f, const btdf_sim_tally *t, int T, int se)
     fputc(']', f);
 }
 
+/* The options a run's numbers depend on, as one string: shards and a merge must agree
+   on it (threads, memory and the hierarchy change no number). */
+static void fingerprint(const btdf_sim_opts *o, char *out, size_t len)
+{
+    char b[40];
+    size_t at = 0;
+#define PUT(...) at += (size_t)snprintf(out + at, at < len ? len - at : 0, __VA_ARGS__)
+    PUT("n");
+    for (int c = 0; c < o->channels; c++) {
+        btdf_format_double(o->ior[c], b, sizeof b);
+        PUT("%s%s", c ? "," : "=", b);
+    }
+    btdf_format_double(o->smoothness, b, sizeof b);
+    PUT(" s=%s ti", b);
+    for (size_t k = 0; k < o->n_theta; k++) {
+        btdf_format_double(o->theta_i[k], b, sizeof b);
+        PUT("%s%s", k ? "," : "=", b);
+    }
+    PUT(" rays=%llu seed=%llu cells=%d tile=%d bins=%d,%d", (unsigned long long)o->rays,
+        (unsigned long long)o->seed, o->cells_per_tau, o->tile_tau, o->theta_bins,
+        o->theta_bins ? o->phi_bins : 0);
+#undef PUT
+}
+
+static void write_raw(FILE *f, const btdf_sim_opts *o, const btdf_sim_result *r)
+{
+    static char big[1024 + 40 * MAX_ANGLES];
+    fingerprint(o, big, sizeof big);
+    uint64_t nb = r->batch_end - r->batch_first;
+    size_t hlen = r->raw_hist ? r->count * 4 * (size_t)r->theta_bins * (size_t)r->phi_bins * 3 : 0;
+    fprintf(f, "  \"run\": \"%s\",\n  \"raw\": {\"batches\": [%llu, %llu, %llu], \"counts\": [",
+            big, (unsigned long long)r->batch_first, (unsigned long long)r->batch_end,
+            (unsigned long long)r->batches_total);
+    for (size_t i = 0; i < r->count * nb * BTDF_SIM_RAW_Q; i++)
+        fprintf(f, "%s%llu", i ? "," : "", (unsigned long long)r->raw_counts[i]);
+    fputs("], \"hist\": [", f);
+    for (size_t i = 0; i < hlen; i++)
+        fprintf(f, "%s%llu", i ? "," : "", (unsigned long long)r->raw_hist[i]);
+    fputs("], \"stats\": [", f);
+    for (size_t i = 0; i < nb * 3; i++) {
+        if (i)
+            fputc(',', f);
+        jnum(f, r->raw_stats[i]);
+    }
+    fputs("]},\n", f);
+}
+
 static int write_report(const char *path, const char *prov, const btdf_sim_opts *o,
                         const btdf_sim_result *r, const double *eqT, const double *eqR)
 {
@@ -186,6 +233,7 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
     fprintf(f, "  \"rays\": %llu,\n  \"batches\": %llu,\n  \"lost\": %llu,\n  \"seed\": %llu,\n",
             (unsigned long long)o->rays, (unsigned long long)r->tally[0].batches,
             (unsigned long long)r->tally[0].lost, (unsigned long long)o->seed);
+    write_raw(f, o, r);
     fprintf(f, "  \"seconds\": ");
     jnum(f, r->seconds);
     fprintf(f, "\n}\n");
@@ -199,6 +247,300 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
     if (st != BTDF_OK)
         return fail(1, "%s: %s", path, msg);
     return 0;
+}
+
+/* Integral of |cos to| over histogram bin (theta_bin, any phi bin), sr: the bin's
+   solid angle weighted by the cosine, both halves of |phi| counted. */
+static double cos_sr(int nt, int np, int it)
+{
+    double w = 1.5707963267948966 / nt, a = sin(w * it), b = sin(w * (it + 1));
+    return 0.5 * (b * b - a * a) * 2.0 * (3.141592653589793 / np);
+}
+
+static void cnum(FILE *f, double x)
+{
+    char b[40];
+    btdf_format_double(isfinite(x) ? x : 0.0, b, sizeof b); /* never NaN in a file */
+    fputs(b, f);
+}
+
+/* The outgoing distribution as CSV (docs/simulation.md): the header row, the comment
+   block of docs/formats.md's conventions, one row per (case, part, bin), the end line.
+   Built in memory and written whole by btdf_write_buffer (a temporary renamed at the
+   end), so an error leaves no file. */
+static int write_dist(const char *path, const char *prov, const btdf_sim_opts *o,
+                      const btdf_sim_result *r)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    if (!f)
+        return fail(1, "%s: out of memory for the table", path);
+    int nt = r->theta_bins, np = r->phi_bins;
+    unsigned long long rows = (unsigned long long)r->count * 2ull * (unsigned long long)nt *
+                              (unsigned long long)np;
+    fputs("theta_i_deg,theta_o_deg,phi_deg,channel,part,rho,rho_se,rho_1,rho_1_se,ti_rad,"
+          "to_rad,phi_rad,cos_sr\n", f);
+    fprintf(f, "# btdftab %s simulation\n# kind: simulated\n# channels: %d\n# ior:",
+            btdf_version_string(), o->channels);
+    for (int c = 0; c < o->channels; c++) {
+        fputc(c ? ',' : ' ', f);
+        cnum(f, o->ior[c]);
+    }
+    fputs("\n# smoothness: ", f);
+    cnum(f, o->smoothness);
+    fputs("\n# units: rho in 1/sr, no cosine factor, the bin's mean weighted by |cos theta_o| "
+          "(fraction of the incident flux in the bin / cos_sr); rho_se its standard error; "
+          "angles in degrees and radians; cos_sr in sr\n",
+          f);
+    fprintf(f, "# bins: %d in theta_o per hemisphere, %d in |phi| over [0, 180] degrees "
+               "(180 is forward); nodes at the bins' centres\n",
+            nt, np);
+    fprintf(f, "# rays: %llu per angle and channel, seed %llu, %llu batches (one surface "
+               "realisation each)\n",
+            (unsigned long long)o->rays, (unsigned long long)o->seed,
+            (unsigned long long)r->tally[0].batches);
+    if (prov) {
+        fputs("# provenance: ", f);
+        for (const unsigned char *c = (const unsigned char *)prov; *c; c++) {
+            if (*c < 0x20 || *c == 0x7f)
+                fprintf(f, "\\x%02x", *c); /* control bytes as C escapes */
+            else
+                fputc(*c, f);
+        }
+        fputc('\n', f);
+    }
+    fprintf(f, "# rows: %llu\n", rows);
+    double wt = 90.0 / nt, wp = 180.0 / np;
+    for (size_t k = 0; k < r->count; k++) {
+        const btdf_sim_tally *t = &r->tally[k];
+        for (int part = 0; part < 2; part++) {
+            const btdf_sim_est *all = part ? t->hist_R : t->hist_T;
+            const btdf_sim_est *one = part ? t->hist_R1 : t->hist_T1;
+            for (int it = 0; it < nt; it++) {
+                double cs = cos_sr(nt, np, it);
+                double inv = cs > 0.0 ? 1.0 / cs : 0.0; /* cs > 0 for every bin; kept safe */
+                double tc = (it + 0.5) * wt, to = part ? tc : 180.0 - tc;
+                for (int ip = 0; ip < np; ip++) {
+                    size_t i = (size_t)it * (size_t)np + (size_t)ip;
+                    double pc = (ip + 0.5) * wp;
+                    fprintf(f, "%.10g,%.10g,%.10g,%d,%s,", deg_given[k % o->n_theta], to, pc,
+                            t->channel, part ? "reflection" : "transmission");
+                    cnum(f, all[i].mean * inv);
+                    fputc(',', f);
+                    cnum(f, all[i].se * inv);
+                    fputc(',', f);
+                    cnum(f, one[i].mean * inv);
+                    fputc(',', f);
+                    cnum(f, one[i].se * inv);
+                    fputc(',', f);
+                    cnum(f, t->theta_i);
+                    fputc(',', f);
+                    cnum(f, to * DEG);
+                    fputc(',', f);
+                    cnum(f, pc * DEG);
+                    fputc(',', f);
+                    cnum(f, cs);
+                    fputc('\n', f);
+                }
+            }
+        }
+    }
+    fprintf(f, "# end: %llu rows\n", rows);
+    if (fclose(f) != 0) {
+        free(buf);
+        return fail(1, "%s: out of memory for the table", path);
+    }
+    char msg[512];
+    btdf_status st = btdf_write_buffer(path, ".csv", buf, len, msg, sizeof msg);
+    free(buf);
+    if (st != BTDF_OK)
+        return fail(1, "%s: %s", path, msg);
+    return 0;
+}
+
+/* simulate's own options, taken out of argv before the common parser: -o/--output
+   FILE.csv and --bins T[,P]. Returns -1 to go on, or an exit status. */
+static const char *merge_files[256];
+static int merge_n = -1; /* -1: no --merge */
+static unsigned long shard_k, shard_n;
+static int bins_given; /* --bins: histograms even without -o (shards to merge into one) */
+
+static int take_own(int *argc, char **argv, const char **out, int *nt, int *np)
+{
+    int w = 0;
+    for (int k = 0; k < *argc; k++) {
+        const char *a = argv[k];
+        if (k > 0 && !strcmp(a, "--merge")) {
+            merge_n = 0;
+            while (k + 1 < *argc && argv[k + 1][0] != '-') {
+                if (merge_n == 256)
+                    return fail(2, "--merge: at most 256 reports");
+                merge_files[merge_n++] = argv[++k];
+            }
+            if (merge_n == 0)
+                return fail(2, "--merge: give the shards' reports, e.g. --merge a.json b.json");
+            continue;
+        }
+        if (k > 0 && !strcmp(a, "--shard")) {
+            const char *v = k + 1 < *argc ? argv[++k] : "";
+            char *e1 = NULL, *e2 = NULL;
+            int digits = v[0] >= '0' && v[0] <= '9';
+            shard_k = strtoul(v, &e1, 10);
+            if (digits && *e1 == '/' && e1[1] >= '0' && e1[1] <= '9')
+                shard_n = strtoul(e1 + 1, &e2, 10);
+            if (!digits || !e2 || *e2 || shard_n < 1 || shard_k < 1 || shard_k > shard_n ||
+                shard_n > 100000)
+                return fail(2, "--shard '%s': expected K/N with 1 <= K <= N <= 100000, e.g. 3/8",
+                            v);
+            continue;
+        }
+        const char *v = NULL;
+        int is_out = !strcmp(a, "-o") || !strcmp(a, "--output");
+        int is_bins = !strcmp(a, "--bins");
+        if (!strncmp(a, "--output=", 9)) {
+            is_out = 1;
+            v = a + 9;
+        } else if (!strncmp(a, "--bins=", 7)) {
+            is_bins = 1;
+            v = a + 7;
+        }
+        if (k > 0 && (is_out || is_bins)) {
+            if (!v) {
+                if (k + 1 >= *argc)
+                    return fail(2, "%s: needs a value", a);
+                v = argv[++k];
+            }
+            if (is_out) {
+                size_t n = strlen(v);
+                if (n < 5 || strcmp(v + n - 4, ".csv"))
+                    return fail(2, "-o '%s': the distribution is written as .csv (EXR is not "
+                                   "done yet)", v);
+                *out = v;
+            } else {
+                double b[2];
+                int n = 0;
+                const char *why = num_double_list(v, b, 1, 2, &n);
+                if (why)
+                    return fail(2, "--bins: '%s': %s", v, why);
+                for (int i = 0; i < n; i++)
+                    if (!(b[i] >= 1 && b[i] <= 3600 && b[i] == floor(b[i])))
+                        return fail(2, "--bins: '%s': each count must be a whole number in "
+                                       "[1, 3600]", v);
+                bins_given = 1;
+                *nt = (int)b[0];
+                *np = n > 1 ? (int)b[1] : 18;
+            }
+            continue;
+        }
+        argv[w++] = argv[k];
+    }
+    *argc = w;
+    return -1;
+}
+
+/* Reads n numbers of the JSON array that follows key in text (integers into u or
+   doubles into d); 0 when the array holds exactly n of them. */
+static int read_array(const char *text, const char *key, size_t n, uint64_t *u, double *d)
+{
+    const char *p = strstr(text, key);
+    if (!p)
+        return -1;
+    p = strchr(p + strlen(key), '[');
+    if (!p)
+        return -1;
+    p++;
+    for (size_t i = 0; i < n; i++) {
+        while (*p == ' ' || *p == ',')
+            p++;
+        char *end = NULL;
+        if (u)
+            u[i] = strtoull(p, &end, 10);
+        else
+            d[i] = strtod(p, &end);
+        if (end == p)
+            return -1;
+        p = end;
+    }
+    while (*p == ' ')
+        p++;
+    return *p == ']' ? 0 : -1;
+}
+
+/* One shard's report into a part for btdf_sim_merge (only the raw fields and the
+   counts are set). Returns 0, or the exit status after a message. */
+static int read_part(const char *path, const btdf_sim_opts *o, btdf_sim_result *r)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return fail(1, "--merge %s: cannot read it", path);
+    size_t cap = 1 << 16, len = 0;
+    char *text = malloc(cap);
+    for (;;) {
+        if (!text)
+            break;
+        len += fread(text + len, 1, cap - len - 1, f);
+        if (len < cap - 1)
+            break;
+        char *t = realloc(text, cap *= 2);
+        if (!t) {
+            free(text);
+            text = NULL;
+            break;
+        }
+        text = t;
+    }
+    int bad = ferror(f);
+    fclose(f);
+    if (!text || bad) {
+        free(text);
+        return fail(1, "--merge %s: cannot read it", path);
+    }
+    text[len] = 0;
+    static char want[1024 + 40 * MAX_ANGLES];
+    fingerprint(o, want, sizeof want);
+    const char *run = strstr(text, "\"run\": \"");
+    size_t wl = strlen(want);
+    if (!run || strncmp(run + 8, want, wl) != 0 || run[8 + wl] != '"') {
+        free(text);
+        return fail(2, "--merge %s: not a report of these options (its \"run\" must read "
+                       "\"%s\")", path, want);
+    }
+    uint64_t b[3];
+    const char *raw = strstr(run, "\"raw\": {"); /* the raw section follows the run line */
+    raw = raw ? raw : "";
+    size_t jobs = (size_t)o->channels * o->n_theta;
+    size_t hlen = o->theta_bins ? jobs * 4 * (size_t)o->theta_bins * (size_t)o->phi_bins * 3 : 0;
+    int code = 0;
+    if (read_array(raw, "\"batches\":", 3, b, NULL) != 0 || b[0] >= b[1] || b[1] > b[2] ||
+        b[2] != btdf_sim_batch_count(o)) /* also bounds the arrays below */
+        code = fail(2, "--merge %s: no batch range (\"raw\": {\"batches\": [first, end, "
+                       "total]})", path);
+    else {
+        uint64_t nb = b[1] - b[0];
+        r->batch_first = b[0];
+        r->batch_end = b[1];
+        r->batches_total = b[2];
+        r->count = jobs;
+        r->theta_bins = o->theta_bins;
+        r->phi_bins = o->theta_bins ? o->phi_bins : 0;
+        r->raw_counts = calloc(jobs * nb * BTDF_SIM_RAW_Q, sizeof *r->raw_counts);
+        r->raw_stats = calloc(nb * 3, sizeof *r->raw_stats);
+        r->raw_hist = hlen ? calloc(hlen, sizeof *r->raw_hist) : NULL;
+        const char *sec = strstr(text, "\"seconds\": ");
+        r->seconds = sec ? strtod(sec + 11, NULL) : 0.0;
+        r->seconds = isfinite(r->seconds) ? r->seconds : 0.0;
+        if (!r->raw_counts || !r->raw_stats || (hlen && !r->raw_hist))
+            code = fail(1, "--merge %s: out of memory", path);
+        else if (read_array(raw, "\"counts\":", jobs * nb * BTDF_SIM_RAW_Q, r->raw_counts,
+                            NULL) != 0 ||
+                 (hlen && read_array(raw, "\"hist\":", hlen, r->raw_hist, NULL) != 0) ||
+                 read_array(raw, "\"stats\":", nb * 3, NULL, r->raw_stats) != 0)
+            code = fail(2, "--merge %s: its raw tallies do not have the lengths of these "
+                           "options", path);
+    }
+    free(text);
+    return code;
 }
 
 /* Options into o; -1 to go on, or an exit status. */
@@ -291,24 +633,84 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     deg_given[0] = 30.0;
     o.theta_i = ti;
     o.n_theta = 1;
-    const char *report = NULL;
-    int quiet = 0;
-    int code = parse(cmd, argc, argv, &o, ti, &report, &quiet);
+    const char *report = NULL, *dist = NULL;
+    int quiet = 0, nt = 45, np = 18; /* 2 degrees in theta_o, 10 in |phi| */
+    int code = take_own(&argc, argv, &dist, &nt, &np);
     if (code >= 0)
         return code;
+    code = parse(cmd, argc, argv, &o, ti, &report, &quiet);
+    if (code >= 0) {
+        int help = 0;
+        for (int k = 1; k < argc; k++)
+            help |= !strcmp(argv[k], "--help") || !strcmp(argv[k], "-h");
+        if (code == 0 && help)
+            printf("\nMore options:\n  -o, --output FILE.csv  the outgoing distribution: rho and its error per "
+                   "bin\n                         (docs/simulation.md)\n"
+                   "  --bins T[,P]           bins in theta_o per hemisphere and in |phi| "
+                   "(default 45,18);\n                         given, the report holds them for a merge\n"
+                   "  --shard K/N            trace only the K-th of N ranges of batches (needs "
+                   "--report)\n"
+                   "  --merge A.json ...     sum shards' reports (same options) into one run's "
+                   "numbers\n");
+        return code;
+    }
+    if (dist || bins_given) {
+        o.theta_bins = nt;
+        o.phi_bins = np;
+    }
+    if (merge_n >= 0 && shard_n)
+        return fail(2, "--merge and --shard: a merge takes every shard's report");
+    if ((merge_n >= 0 || shard_n) && !report)
+        return fail(2, "%s needs --report F.json (%s)", shard_n ? "--shard" : "--merge",
+                    shard_n ? "the shard's tallies go there" : "the merged report");
     char msg[512];
     btdf_status st = btdf_sim_opts_check(&o, msg, sizeof msg);
     if (st != BTDF_OK)
         return fail(st == BTDF_EBUDGET ? 3 : 2, "%s", msg);
+    if (shard_n) {
+        /* shards are ranges of batches (realisations): shard K of N takes
+           [nb (K-1) / N, nb K / N), so together they hold each batch once */
+        uint64_t nb = btdf_sim_batch_count(&o);
+        if (shard_n > nb)
+            return fail(2, "--shard %lu/%lu: these options make %llu batches, so at most %llu "
+                           "shards", shard_k, shard_n, (unsigned long long)nb,
+                        (unsigned long long)nb);
+        o.batch_first = nb * (shard_k - 1) / shard_n;
+        o.batch_end = nb * shard_k / shard_n;
+    }
     if (report && btdf_output_check(report, msg, sizeof msg) != BTDF_OK)
         return fail(1, "%s: %s", report, msg);
+    if (dist && btdf_output_check(dist, msg, sizeof msg) != BTDF_OK)
+        return fail(1, "%s: %s", dist, msg);
     run_progress pr;
     run_progress_start(&pr, !quiet && isatty(2), "simulate");
     o.progress = progress;
     o.progress_ctx = &pr;
     btdf_sim_result *r = NULL;
-    st = btdf_sim_run(&o, &r, msg, sizeof msg);
-    run_progress_end(&pr);
+    if (merge_n >= 0) {
+        btdf_sim_result *parts = calloc((size_t)merge_n, sizeof *parts);
+        const btdf_sim_result **pp = calloc((size_t)merge_n, sizeof *pp);
+        int rc = parts && pp ? 0 : fail(1, "out of memory");
+        for (int k = 0; k < merge_n && rc == 0; k++) {
+            rc = read_part(merge_files[k], &o, &parts[k]);
+            pp[k] = &parts[k];
+        }
+        if (rc == 0)
+            st = btdf_sim_merge(&o, pp, (size_t)merge_n, &r, msg, sizeof msg);
+        for (int k = 0; parts && k < merge_n; k++) {
+            free(parts[k].raw_counts);
+            free(parts[k].raw_hist);
+            free(parts[k].raw_stats);
+        }
+        free(parts);
+        free(pp);
+        run_progress_end(&pr);
+        if (rc)
+            return rc;
+    } else {
+        st = btdf_sim_run(&o, &r, msg, sizeof msg);
+        run_progress_end(&pr);
+    }
     if (st != BTDF_OK)
         return fail(st == BTDF_EBUDGET ? 3 : st == BTDF_EINVAL ? 2 : 1, "%s", msg);
     double *eqT = calloc(r->count, sizeof *eqT), *eqR = calloc(r->count, sizeof *eqR);
@@ -345,6 +747,8 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                 (unsigned long long)r->rays_traced, r->seconds);
     }
     code = report ? write_report(report, prov, &o, r, eqT, eqR) : 0;
+    if (code == 0 && dist)
+        code = write_dist(dist, prov, &o, r);
     free(eqT);
     free(eqR);
     btdf_sim_result_free(r);

@@ -35,10 +35,12 @@ extern "C" {
  * Index: n = (lower index) / (upper index), as in btdf.h; n < 1 is light from the
  *   dense side.
  *
- * Errors: Monte Carlo standard errors are batch means: the rays are cut into batches
- *   (each on one surface realisation, with its own random stream seeded from the seed
- *   and the batch index), and the error of a mean is the spread of the batch means
- *   over sqrt(batches). Batches are summed in batch order, so the same options give
+ * Errors: Monte Carlo standard errors are batch means: the rays are cut into batches,
+ *   one per surface realisation (32 up to 3.2e6 rays, then one per 1e5 rays up to 128;
+ *   every angle and channel of batch b sees realisation b, with rays from its own
+ *   stream seeded from the seed, the angle and b), and the error of a mean is the
+ *   spread of the batch means over sqrt(batches), which holds the spread between
+ *   surfaces. Batches are summed in batch order, so the same options give
  *   the same bytes whatever the thread count.
  *
  * Outgoing distribution: optional histograms over (theta, |phi|) per hemisphere, as
@@ -68,10 +70,13 @@ typedef struct btdf_sim_opts {
     int cells_per_tau;    /* grid spacing dx = tau / this; default 16 */
     int tile_tau;         /* tile side in units of tau; default 16 */
     uint64_t batch_rays;  /* rays per batch; 0: chosen from rays (at least 32 batches) */
-    int accel;            /* 1: min/max hierarchy (default); 0: plain grid DDA */
+    int accel;            /* 0: plain grid DDA (default); 1: min/max hierarchy, same hits */
     int theta_bins;       /* histogram bins in theta per hemisphere; 0: no histogram */
     int phi_bins;         /* bins of |phi| over [0, pi]; used when theta_bins > 0 */
     size_t max_memory;    /* bytes the surfaces and tallies may take; 0: no limit */
+    /* Trace only batches [batch_first, batch_end) (a shard; btdf_sim_batch_count
+       gives how many there are); batch_end 0: all of them. */
+    uint64_t batch_first, batch_end;
     /* Called after each finished batch with the rays done so far, the total, and the
        standard error of T of the angle in progress (NaN until it is known). From any
        thread, one call at a time; it must not call back into the simulator. */
@@ -80,7 +85,7 @@ typedef struct btdf_sim_opts {
 } btdf_sim_opts;
 
 /* Defaults: n = 1.5, s = 3, one angle (none set: theta_i must be given), 1e6 rays,
-   seed 1, cells_per_tau 16, tile_tau 16, hierarchy on, no histogram. */
+   seed 1, cells_per_tau 16, tile_tau 16, plain DDA, no histogram. */
 BTDF_API void btdf_sim_opts_default(btdf_sim_opts *o);
 
 /* BTDF_OK, or BTDF_EINVAL naming the value: NaN/inf, channels not 1 or 3, n outside
@@ -115,7 +120,7 @@ typedef struct btdf_sim_tally {
 } btdf_sim_tally;
 
 /* The surfaces' realised statistics (sigma = 1), averaged over the first 32
-   realisations (every batch has its own). */
+   realisations (one per batch). */
 typedef struct btdf_sim_surface {
     int n;                 /* grid points per side */
     double dx;             /* spacing */
@@ -135,7 +140,31 @@ typedef struct btdf_sim_result {
     double seconds;        /* wall time of the tracing */
     uint64_t rays_traced;  /* over every angle and channel */
     uint64_t hits_traced;
+    /* The raw integers of batches [batch_first, batch_end) of batches_total, for
+       btdf_sim_merge: raw_counts[(case * (end - first) + b - first) * BTDF_SIM_RAW_Q +
+       q], q = R orders 1, 2, 3+, T orders 1, 2, 3+, lost, hits; raw_hist (NULL without
+       histograms) [((case * 4 + h) * bins + bin) * 3 + {sum c, sum c^2, sum c n}] over
+       the batches, h = T, T1, R, R1; raw_stats[(b - first) * 3 + {rms height, rms
+       slope, correlation length}] of the realisations b < 32 (zero past them). */
+    uint64_t batches_total, batch_first, batch_end;
+    uint64_t *raw_counts;
+    uint64_t *raw_hist;
+    double *raw_stats;
 } btdf_sim_result;
+
+#define BTDF_SIM_RAW_Q 8
+#define BTDF_SIM_STATS_REALISATIONS 32
+
+/* Batches the options cut each angle and channel into (the realisations). */
+BTDF_API uint64_t btdf_sim_batch_count(const btdf_sim_opts *o);
+
+/* The result of all batches from parts that together hold each batch of o once (runs
+   of o with batch ranges, or results rebuilt from their raw integers): the same
+   numbers, to the bit, as one run of o; seconds is the parts' sum. BTDF_EINVAL naming
+   a batch missing or held twice, or a part of other options. */
+BTDF_API btdf_status btdf_sim_merge(const btdf_sim_opts *o, const btdf_sim_result *const *parts,
+                                    size_t nparts, btdf_sim_result **out, char *msg,
+                                    size_t msglen);
 
 /* Runs the simulation. BTDF_EINVAL/BTDF_EBUDGET as btdf_sim_opts_check, BTDF_ENOMEM. */
 BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out, char *msg,

@@ -56,22 +56,27 @@ BTDF_API void btdf_sim_opts_default(btdf_sim_opts *o)
     o->seed = 1;
     o->cells_per_tau = 16;
     o->tile_tau = 16;
-    o->accel = 1;
+    o->accel = 0; /* the plain DDA: faster than the hierarchy at ti = 30 (btdf-bench sim) */
     o->phi_bins = 1;
 }
 
-/* Rays per batch: 128 batches (the error of a standard error is then 1/sqrt(254) =
-   6 %), or 32 for fewer than 128,000 rays, and never more than BATCH_MAX rays in one.
-   Each batch makes its own surface, which costs about as much as 5,000 paths at
-   s = 3 (256 x 256 points), so batches below 1,000 rays would mostly make surfaces. */
+/* Rays per batch. A batch is one surface realisation, the unit of the error: every
+   ray of realisation b (of every angle and channel) sees the same surface, so the
+   error of a mean is the spread between realisations over sqrt(batches), which holds
+   the surface-to-surface spread whole. Making a 256 x 256 surface costs about as much
+   as 5,000 paths at s = 3, so a realisation carries at least RAYS_PER_REAL rays once
+   there are 32 of them (surface under 5 % of the time): 32 realisations up to 3.2e6
+   rays (the error of a standard error is then 1/sqrt(62) = 13 %), then more up to 128
+   (6 %), then larger ones, never more than BATCH_MAX rays in one. */
+#define RAYS_PER_REAL 100000
 static uint64_t batch_size(const btdf_sim_opts *o)
 {
     if (o->batch_rays)
         return o->batch_rays;
-    uint64_t b = (o->rays + 127) / 128;
-    if (b < 1000)
-        b = (o->rays + 31) / 32;
-    b = b < 1 ? 1 : b;
+    uint64_t nb = o->rays / RAYS_PER_REAL;
+    nb = nb < 32 ? 32 : nb > 128 ? 128 : nb;
+    nb = nb > o->rays ? o->rays : nb; /* rays >= 2: at least two batches */
+    uint64_t b = (o->rays + nb - 1) / nb;
     return b > BATCH_MAX ? BATCH_MAX : b;
 }
 
@@ -182,6 +187,7 @@ typedef struct run_ctx {
     const btdf_sim_opts *o;
     const sim_gen *gen;
     uint64_t bs, nb;  /* batch size, batches per job */
+    uint64_t b0, b1;  /* the batches this run traces or reduces: [b0, b1) */
     size_t jobs, bins;
     uint64_t items, next;
     uint64_t *counts;            /* [(job * nb + b) * Q_COUNT + q] */
@@ -282,7 +288,7 @@ static void *worker_main(void *arg)
         pthread_mutex_unlock(&rc->mu);
         if (it >= rc->items)
             break;
-        uint64_t b = it / rc->jobs;
+        uint64_t b = rc->b0 + it / rc->jobs;
         size_t job = (size_t)(it % rc->jobs);
         if (b != have) {
             sim_surface_free(&surf);
@@ -352,7 +358,7 @@ static void reduce_job(const run_ctx *rc, size_t job, btdf_sim_tally *t)
 {
     double s[Q_COUNT] = {0}, s2[Q_COUNT] = {0}, sn_[Q_COUNT] = {0}, sn = 0.0, sn2 = 0.0;
     double sR = 0, sR2 = 0, sRn = 0, sT = 0, sT2 = 0, sTn = 0;
-    for (uint64_t b = 0; b < rc->nb; b++) {
+    for (uint64_t b = rc->b0; b < rc->b1; b++) {
         const uint64_t *q = rc->counts + (job * rc->nb + b) * Q_COUNT;
         double n = (double)(b * rc->bs + rc->bs > rc->o->rays ? rc->o->rays - b * rc->bs
                                                                : rc->bs);
@@ -372,7 +378,7 @@ static void reduce_job(const run_ctx *rc, size_t job, btdf_sim_tally *t)
         sT2 += T * T;
         sTn += T * n;
     }
-    double B = (double)rc->nb;
+    double B = (double)(rc->b1 - rc->b0);
     t->R = ratio_est(sR, sR2, sRn, sn, sn2, B);
     t->T = ratio_est(sT, sT2, sTn, sn, sn2, B);
     for (int i = 0; i < BTDF_SIM_ORDERS; i++) {
@@ -380,9 +386,9 @@ static void reduce_job(const run_ctx *rc, size_t job, btdf_sim_tally *t)
         t->T_order[i] = ratio_est(s[Q_T1 + i], s2[Q_T1 + i], sn_[Q_T1 + i], sn, sn2, B);
     }
     t->mean_hits = ratio_est(s[Q_HITS], s2[Q_HITS], sn_[Q_HITS], sn, sn2, B);
-    t->rays = rc->o->rays;
+    t->rays = (uint64_t)sn;
     t->lost = (uint64_t)s[Q_LOST];
-    t->batches = rc->nb;
+    t->batches = rc->b1 - rc->b0;
 }
 
 BTDF_API void btdf_sim_result_free(btdf_sim_result *r)
@@ -397,6 +403,9 @@ BTDF_API void btdf_sim_result_free(btdf_sim_result *r)
             free(r->tally[k].hist_R1);
         }
     free(r->tally);
+    free(r->raw_counts);
+    free(r->raw_hist);
+    free(r->raw_stats);
     free(r);
 }
 
@@ -408,11 +417,11 @@ static double now_s(void)
 }
 
 /* The histograms of every job from the threads' integer sums. */
-static int reduce_hist(const run_ctx *rc, worker *wk, int nthreads, btdf_sim_result *res)
+static int reduce_hist(const run_ctx *rc, const uint64_t *hraw, btdf_sim_result *res)
 {
     size_t bins = rc->bins, per = 4 * bins * 3;
     double sn = 0.0, sn2 = 0.0;
-    for (uint64_t b = 0; b < rc->nb; b++) {
+    for (uint64_t b = rc->b0; b < rc->b1; b++) {
         double n = (double)(b * rc->bs + rc->bs > rc->o->rays ? rc->o->rays - b * rc->bs
                                                                : rc->bs);
         sn += n;
@@ -426,19 +435,86 @@ static int reduce_hist(const run_ctx *rc, worker *wk, int nthreads, btdf_sim_res
             if (!*h[k])
                 return -1;
             for (size_t i = 0; i < bins; i++) {
-                uint64_t c = 0, c2 = 0, cn = 0;
-                for (int w = 0; w < nthreads; w++) {
-                    const uint64_t *hs = wk[w].hsum + job * per + ((size_t)k * bins + i) * 3;
-                    c += hs[0];
-                    c2 += hs[1];
-                    cn += hs[2];
-                }
-                (*h[k])[i] = ratio_est((double)c, (double)c2, (double)cn, sn, sn2,
-                                       (double)rc->nb);
+                const uint64_t *hs = hraw + job * per + ((size_t)k * bins + i) * 3;
+                (*h[k])[i] = ratio_est((double)hs[0], (double)hs[1], (double)hs[2], sn, sn2,
+                                       (double)(rc->b1 - rc->b0));
             }
         }
     }
     return 0;
+}
+
+/* The result from the counts of batches [b0, b1), the histograms' integer sums hraw
+   and the measured realisations: the tallies, the histograms, the surface, and a copy
+   of the raw integers (so shards can be merged). */
+static btdf_status finish(const run_ctx *rc, const uint64_t *hraw, btdf_sim_result *res)
+{
+    const btdf_sim_opts *o = rc->o;
+    int n = grid_n(o);
+    double tau = o->smoothness;
+    for (size_t job = 0; job < rc->jobs; job++) {
+        btdf_sim_tally *t = &res->tally[job];
+        t->theta_i = o->theta_i[job % o->n_theta];
+        t->channel = (int)(job / o->n_theta);
+        t->ior = o->ior[t->channel];
+        reduce_job(rc, job, t);
+        res->rays_traced += t->rays;
+        res->hits_traced += (uint64_t)llround(t->mean_hits.mean * (double)t->rays);
+    }
+    if (rc->bins && reduce_hist(rc, hraw, res) != 0)
+        return BTDF_ENOMEM;
+    res->theta_bins = rc->bins ? o->theta_bins : 0;
+    res->phi_bins = rc->bins ? o->phi_bins : 0;
+    btdf_sim_surface *sf = &res->surface;
+    sf->n = n;
+    sf->dx = tau / o->cells_per_tau;
+    sf->tile = sf->dx * n;
+    sf->tile_bytes = sim_surface_bytes(n);
+    double a = 0, b = 0, c = 0;
+    int made = 0;
+    for (uint64_t i = rc->b0; i < rc->b1; i++)
+        if (rc->stats_done[i]) {
+            a += rc->stats[i].rms_height * rc->stats[i].rms_height;
+            b += rc->stats[i].rms_slope * rc->stats[i].rms_slope;
+            c += rc->stats[i].corr_length;
+            made++;
+        }
+    sf->realisations = made;
+    /* made is 0 only for a shard past the first 32 realisations */
+    sf->rms_height = made ? sqrt(a / made) : 0.0;
+    sf->rms_slope = made ? sqrt(b / made) : 0.0;
+    sf->corr_length = made ? c / made : 0.0;
+    uint64_t nb = rc->b1 - rc->b0;
+    res->batches_total = rc->nb;
+    res->batch_first = rc->b0;
+    res->batch_end = rc->b1;
+    res->raw_counts = calloc(rc->jobs * nb * Q_COUNT, sizeof *res->raw_counts);
+    res->raw_stats = calloc(nb * 3, sizeof *res->raw_stats);
+    if (!res->raw_counts || !res->raw_stats)
+        return BTDF_ENOMEM;
+    for (size_t job = 0; job < rc->jobs; job++)
+        memcpy(res->raw_counts + job * nb * Q_COUNT, rc->counts + (job * rc->nb + rc->b0) * Q_COUNT,
+               nb * Q_COUNT * sizeof *res->raw_counts);
+    for (uint64_t i = 0; i < nb; i++)
+        if (rc->stats_done[rc->b0 + i]) {
+            res->raw_stats[i * 3] = rc->stats[rc->b0 + i].rms_height;
+            res->raw_stats[i * 3 + 1] = rc->stats[rc->b0 + i].rms_slope;
+            res->raw_stats[i * 3 + 2] = rc->stats[rc->b0 + i].corr_length;
+        }
+    if (rc->bins) {
+        size_t len = rc->jobs * 4 * rc->bins * 3;
+        res->raw_hist = malloc(len * sizeof *res->raw_hist);
+        if (!res->raw_hist)
+            return BTDF_ENOMEM;
+        memcpy(res->raw_hist, hraw, len * sizeof *res->raw_hist);
+    }
+    return BTDF_OK;
+}
+
+BTDF_API uint64_t btdf_sim_batch_count(const btdf_sim_opts *o)
+{
+    uint64_t bs = batch_size(o);
+    return (o->rays + bs - 1) / bs;
 }
 
 BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out, char *msg,
@@ -456,10 +532,23 @@ BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out,
     rc.o = o;
     rc.bs = batch_size(o);
     rc.nb = (o->rays + rc.bs - 1) / rc.bs;
+    rc.b0 = 0;
+    rc.b1 = rc.nb;
+    if (o->batch_end) {
+        if (o->batch_first >= o->batch_end || o->batch_end > rc.nb)
+            return say(BTDF_EINVAL, msg, msglen,
+                       "batches [%llu, %llu): must be a non-empty range within [0, %llu)",
+                       (unsigned long long)o->batch_first, (unsigned long long)o->batch_end,
+                       (unsigned long long)rc.nb);
+        rc.b0 = o->batch_first;
+        rc.b1 = o->batch_end;
+    }
     rc.jobs = (size_t)o->channels * o->n_theta;
     rc.bins = hist_bins(o);
-    rc.items = rc.nb * rc.jobs;
-    rc.total_rays = o->rays * rc.jobs;
+    rc.items = (rc.b1 - rc.b0) * rc.jobs;
+    rc.total_rays = 0;
+    for (uint64_t b = rc.b0; b < rc.b1; b++)
+        rc.total_rays += (b * rc.bs + rc.bs > o->rays ? o->rays - b * rc.bs : rc.bs) * rc.jobs;
     btdf_sim_result *res = calloc(1, sizeof *res);
     worker *wk = calloc((size_t)nthreads, sizeof *wk);
     pthread_t *th = calloc((size_t)nthreads, sizeof *th);
@@ -469,6 +558,7 @@ BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out,
     rc.stats = calloc(rc.nb, sizeof *rc.stats);
     rc.stats_done = calloc(rc.nb, 1);
     int started = 0;
+    uint64_t *hraw = NULL;
     st = BTDF_ENOMEM;
     if (!res || !wk || !th || !gen || !rc.counts || !rc.stats || !rc.stats_done)
         goto done;
@@ -498,39 +588,18 @@ BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out,
     pthread_mutex_destroy(&rc.mu);
     if (rc.failed)
         goto done;
-    for (size_t job = 0; job < rc.jobs; job++) {
-        btdf_sim_tally *t = &res->tally[job];
-        t->theta_i = o->theta_i[job % o->n_theta];
-        t->channel = (int)(job / o->n_theta);
-        t->ior = o->ior[t->channel];
-        reduce_job(&rc, job, t);
-        res->rays_traced += t->rays;
-        res->hits_traced += (uint64_t)llround(t->mean_hits.mean * (double)t->rays);
+    /* the threads' integer histogram sums (threads that never started hold zeros) */
+    if (rc.bins) {
+        size_t len = rc.jobs * 4 * rc.bins * 3;
+        hraw = calloc(len, sizeof *hraw);
+        if (!hraw)
+            goto done;
+        for (int w = 0; w < nthreads; w++)
+            for (size_t i = 0; i < len; i++)
+                hraw[i] += wk[w].hsum[i];
     }
-    /* threads that never started hold zero sums */
-    if (rc.bins && reduce_hist(&rc, wk, nthreads, res) != 0)
+    if (finish(&rc, hraw, res) != BTDF_OK)
         goto done;
-    res->theta_bins = rc.bins ? o->theta_bins : 0;
-    res->phi_bins = rc.bins ? o->phi_bins : 0;
-    btdf_sim_surface *sf = &res->surface;
-    sf->n = n;
-    sf->dx = tau / o->cells_per_tau;
-    sf->tile = sf->dx * n;
-    sf->tile_bytes = sim_surface_bytes(n);
-    double a = 0, b = 0, c = 0;
-    int made = 0;
-    for (uint64_t i = 0; i < rc.nb; i++)
-        if (rc.stats_done[i]) {
-            a += rc.stats[i].rms_height * rc.stats[i].rms_height;
-            b += rc.stats[i].rms_slope * rc.stats[i].rms_slope;
-            c += rc.stats[i].corr_length;
-            made++;
-        }
-    sf->realisations = made;
-    /* made >= 1: batch 0 always runs and measures its surface */
-    sf->rms_height = made ? sqrt(a / made) : 0.0;
-    sf->rms_slope = made ? sqrt(b / made) : 0.0;
-    sf->corr_length = made ? c / made : 0.0;
     *out = res;
     res = NULL;
     st = BTDF_OK;
@@ -547,7 +616,95 @@ done:
     free(rc.counts);
     free(rc.stats);
     free(rc.stats_done);
+    free(hraw);
     sim_gen_free(gen);
+    btdf_sim_result_free(res);
+    return st;
+}
+
+BTDF_API btdf_status btdf_sim_merge(const btdf_sim_opts *o, const btdf_sim_result *const *parts,
+                                    size_t nparts, btdf_sim_result **out, char *msg,
+                                    size_t msglen)
+{
+    btdf_status st = btdf_sim_opts_check(o, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    if (!out || !parts || nparts == 0)
+        return say(BTDF_EINVAL, msg, msglen, "no parts to merge");
+    run_ctx rc;
+    memset(&rc, 0, sizeof rc);
+    rc.o = o;
+    rc.bs = batch_size(o);
+    rc.nb = (o->rays + rc.bs - 1) / rc.bs;
+    rc.b0 = 0;
+    rc.b1 = rc.nb;
+    rc.jobs = (size_t)o->channels * o->n_theta;
+    rc.bins = hist_bins(o);
+    size_t hlen = rc.jobs * 4 * rc.bins * 3;
+    rc.counts = calloc(rc.jobs * rc.nb * Q_COUNT, sizeof *rc.counts);
+    rc.stats = calloc(rc.nb, sizeof *rc.stats);
+    rc.stats_done = calloc(rc.nb, 1);
+    unsigned char *have = calloc(rc.nb, 1);
+    uint64_t *hraw = calloc(hlen ? hlen : 1, sizeof *hraw);
+    btdf_sim_result *res = calloc(1, sizeof *res);
+    st = BTDF_ENOMEM;
+    if (!rc.counts || !rc.stats || !rc.stats_done || !have || !hraw || !res)
+        goto done;
+    res->tally = calloc(rc.jobs, sizeof *res->tally);
+    if (!res->tally)
+        goto done;
+    res->count = rc.jobs;
+    for (size_t p = 0; p < nparts; p++) {
+        const btdf_sim_result *r = parts[p];
+        uint64_t nb = r ? r->batch_end - r->batch_first : 0;
+        if (!r || r->batches_total != rc.nb || r->count != rc.jobs || !r->raw_counts ||
+            r->batch_end > rc.nb || nb == 0 || (rc.bins && !r->raw_hist) ||
+            (!rc.bins && r->raw_hist)) {
+            st = say(BTDF_EINVAL, msg, msglen,
+                     "part %zu: not a run of these options (batches, cases or bins differ)", p + 1);
+            goto done;
+        }
+        for (uint64_t i = 0; i < nb; i++) {
+            uint64_t b = r->batch_first + i;
+            if (have[b]) {
+                st = say(BTDF_EINVAL, msg, msglen, "batch %llu is in two parts",
+                         (unsigned long long)b);
+                goto done;
+            }
+            have[b] = 1;
+            for (size_t job = 0; job < rc.jobs; job++)
+                memcpy(rc.counts + (job * rc.nb + b) * Q_COUNT,
+                       r->raw_counts + (job * nb + i) * Q_COUNT, Q_COUNT * sizeof *rc.counts);
+            if (b < STATS_REALISATIONS) {
+                rc.stats[b].rms_height = r->raw_stats[i * 3];
+                rc.stats[b].rms_slope = r->raw_stats[i * 3 + 1];
+                rc.stats[b].corr_length = r->raw_stats[i * 3 + 2];
+                rc.stats_done[b] = 1;
+            }
+        }
+        for (size_t i = 0; i < hlen; i++)
+            hraw[i] += r->raw_hist[i]; /* integers: exact in any order */
+        res->seconds += r->seconds;
+    }
+    for (uint64_t b = 0; b < rc.nb; b++)
+        if (!have[b]) {
+            st = say(BTDF_EINVAL, msg, msglen, "batch %llu of %llu is in no part",
+                     (unsigned long long)b, (unsigned long long)rc.nb);
+            goto done;
+        }
+    st = finish(&rc, hraw, res);
+    if (st != BTDF_OK)
+        goto done;
+    *out = res;
+    res = NULL;
+done:
+    if (st == BTDF_ENOMEM)
+        say(st, msg, msglen, "out of memory for the tallies");
+    free(rc.counts);
+    free(rc.stats);
+    free(rc.stats_done);
+    free(have);
+    free(hraw);
     btdf_sim_result_free(res);
     return st;
 }
