@@ -776,7 +776,7 @@ static void test_unreachable_pairs(void **state)
 }
 
 /* A narrow lobe (s = 20), where most transmission pairs start on a first azimuth grid
-   of their own (first_grid in src/fourier.c) rather than the material's 8 s: the file
+   of their own (first_grid in src/scatfun/build_sample.c) rather than the material's 8 s: the file
    must meet its tolerance in the report's own measurement (8192 facet points per
    angle, a seed the builder does not use), both sides, both readings. */
 #define TOL20 0.03
