@@ -22,7 +22,6 @@ ALLOWED = {
 FORMATS_OBJECTS = {'table/table.h', 'scatfun/scatfun.h', 'radiance/radiance.h'}
 # Files of src/ not yet in their folder, and the folder whose rule they follow.
 PENDING = {
-    'fourier.c': 'scatfun',
     'radiance.c': 'radiance', 'radiance.h': 'radiance', 'radiance_impl.h': 'radiance',
     'ttree.c': 'radiance', 'klems.c': 'radiance',
     'preview.c': 'preview', 'plot.c': 'preview', 'plot.h': 'preview',
@@ -35,7 +34,7 @@ PUBLIC = {'btdf.h', 'btdf_io.h', 'btdf_preview.h', 'btdf_radiance.h', 'btdf_scat
 # System headers confined to one place (layout: STYLE section 9).
 # FFTW: the .bsdf builder's cosine transforms, and the simulator's spectral filter that
 # makes its Gaussian surfaces (src/sim/surface.c).
-CONFINED = {'fftw3.h': ('src/fourier.c', 'src/scatfun/dct.c', 'src/sim/surface.c'),
+CONFINED = {'fftw3.h': ('src/scatfun/dct.c', 'src/sim/surface.c'),
             'openexr.h': ('formats/exr.c',), 'png.h': ('formats/png.c',)}
 
 INC = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)

@@ -15,6 +15,7 @@
 
 #include "btdf.h"
 #include "btdf_scatfun.h"
+#include "scatfun/dct.h"
 #include "scatfun/scatfun.h"
 #include "table/table.h"
 
@@ -722,7 +723,7 @@ static void test_bad_arguments(void **state)
 }
 
 
-/* The builder skips the pairs scatfun_unreachable declares dark at every azimuth: each
+/* The builder skips the pairs sf_unreachable declares dark at every azimuth: each
    such pair must be 0 at every azimuth through the public Eq. 25 (ti = acos mu_s, to =
    pi - acos mu_f, 361 azimuths in [0, pi], the forward and back planes among them),
    over indices on both sides of 1 (0.99 and 1.01 included), smoothness 1 to 1000 and
@@ -746,7 +747,7 @@ static void test_unreachable_pairs(void **state)
                     int zero = 1;
                     for (int k = 0; k <= nphi && zero; k++)
                         zero = btdf_rho(ns[a], ss[b], 0.7, ti, to, M_PI * k / nphi) == 0.0;
-                    int un = scatfun_unreachable(&ns[a], 1, ss[b], mu_s, mu_f);
+                    int un = sf_unreachable(&ns[a], 1, ss[b], mu_s, mu_f);
                     dark += zero;
                     declared += un;
                     if (un && !zero) {
@@ -766,8 +767,8 @@ static void test_unreachable_pairs(void **state)
             double mu_s = sin(M_PI * i / (2.0 * (nm - 1))), mu_f = sin(M_PI * j / (2.0 * (nm - 1)));
             int cnt = 0;
             for (int k = 0; k < 3; k++)
-                cnt += scatfun_unreachable(&rgb[k], 1, 20.0, mu_s, mu_f);
-            assert_int_equal(scatfun_unreachable(rgb, 3, 20.0, mu_s, mu_f), cnt == 3);
+                cnt += sf_unreachable(&rgb[k], 1, 20.0, mu_s, mu_f);
+            assert_int_equal(sf_unreachable(rgb, 3, 20.0, mu_s, mu_f), cnt == 3);
             mixed += cnt > 0 && cnt < 3;
             alldark += cnt == 3;
         }
@@ -775,7 +776,7 @@ static void test_unreachable_pairs(void **state)
 }
 
 /* A narrow lobe (s = 20), where most transmission pairs start on a first azimuth grid
-   of their own (first_grid in src/fourier.c) rather than the material's 8 s: the file
+   of their own (first_grid in src/scatfun/build_sample.c) rather than the material's 8 s: the file
    must meet its tolerance in the report's own measurement (8192 facet points per
    angle, a seed the builder does not use), both sides, both readings. */
 #define TOL20 0.03
@@ -816,11 +817,11 @@ static void check_joint(const btdf_scatfun *f, const btdf_params *p, btdf_side s
     memset(&j, 0, sizeof j);
     memset(&d, 0, sizeof d);
     memset(&a, 0, sizeof a);
-    assert_int_equal(scatfun_report_reading(f, p, side, BTDF_SCATFUN_DIRECT, 1, 8, 1024, 7, 2,
+    assert_int_equal(sf_report_reading(f, p, side, BTDF_SCATFUN_DIRECT, 1, 8, 1024, 7, 2,
                                             &j), BTDF_OK);
-    assert_int_equal(scatfun_report_reading(f, p, side, BTDF_SCATFUN_DIRECT, 0, 8, 1024, 7, 2,
+    assert_int_equal(sf_report_reading(f, p, side, BTDF_SCATFUN_DIRECT, 0, 8, 1024, 7, 2,
                                             &d), BTDF_OK);
-    assert_int_equal(scatfun_report_reading(f, p, side, BTDF_SCATFUN_ADJOINT, 0, 8, 1024, 7,
+    assert_int_equal(sf_report_reading(f, p, side, BTDF_SCATFUN_ADJOINT, 0, 8, 1024, 7,
                                             2, &a), BTDF_OK);
     size_t common = 0, adj_worse = 0;
     for (size_t k = 0; k < j.test_angles; k++) {
@@ -882,8 +883,8 @@ static void check_screen(const btdf_scatfun *f, const btdf_params *p, btdf_side 
     btdf_report a, b;
     memset(&a, 0, sizeof a);
     memset(&b, 0, sizeof b);
-    assert_int_equal(scatfun_report_mis(f, p, side, 24, 2048, 11, 2, &full, NULL, &a), BTDF_OK);
-    assert_int_equal(scatfun_report_mis(f, p, side, 24, 2048, 11, 2, &scr, NULL, &b), BTDF_OK);
+    assert_int_equal(sf_report_mis(f, p, side, 24, 2048, 11, 2, &full, NULL, &a), BTDF_OK);
+    assert_int_equal(sf_report_mis(f, p, side, 24, 2048, 11, 2, &scr, NULL, &b), BTDF_OK);
     assert_int_equal(a.test_angles, b.test_angles);
     size_t again = 0, kept = 0;
     double worst_kept = 0.0;
@@ -936,7 +937,7 @@ static void test_cosine_transform(void **state)
             x[j] = (double)(st >> 11) / 9007199254740992.0 - 0.5;
             l1 += fabs(x[j]);
         }
-        assert_int_equal(scatfun_dct1(x, N, Y), 0);
+        assert_int_equal(sf_dct1(x, N, Y), 0);
         double worst = 0.0;
         for (size_t k = 0; k <= N; k += (N > 256 ? 7 : 1)) {
             long double sum = (long double)x[0] + ((k & 1) ? -1.0L : 1.0L) * x[N];
@@ -950,7 +951,7 @@ static void test_cosine_transform(void **state)
         free(Y);
     }
     double x3[3] = {1.0, 2.0, 3.0}, y3[3];
-    assert_int_equal(scatfun_dct1(x3, 3, y3), -1); /* not a power of two */
+    assert_int_equal(sf_dct1(x3, 3, y3), -1); /* not a power of two */
 }
 
 int main(void)

@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* object.c: the in-memory SCATFUN file: allocation, the node index, the getters and the
-   blocks present. The builder (src/fourier.c) and the reader (formats/bsdf.c) fill it. */
+   blocks present. The builder (build*.c) and the reader (formats/bsdf.c) fill it. */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
-/* scatfun.h: the in-memory SCATFUN v1 file shared by the builder (src/fourier.c), the
-   object (object.c) and the byte layout (formats/bsdf.c). */
+/* scatfun.h: the in-memory SCATFUN v1 file shared by the builder (build*.c), the
+   object (object.c), the readings (lookup.c, report.c) and the byte layout
+   (formats/bsdf.c). */
 #ifndef BTDF_SF_OBJECT_H
 #define BTDF_SF_OBJECT_H
 
@@ -56,33 +57,48 @@ struct btdf_scatfun {
     albedo_memo *memo; /* T and R of the reports' test angles (NULL: computed each time) */
 };
 
-/* btdf_scatfun_report's work without its checks and summary fields, T and R taken from
+/* lookup.c: btdf_scatfun_eval_side from cosines: ci = cos ti and co = |cos to| in
+   [0, 1], cpd = cos phi_d = -cos phi in [-1, 1]; side and mode checked by the caller. */
+btdf_status sf_eval_side_cos(const btdf_scatfun *f, btdf_side side, btdf_scatfun_mode mode,
+                             double ci, double co, double cpd, double *out);
+
+/* lookup.c: a reading of one block at one light angle (the reports' reading). */
+typedef struct sf_fixed_read sf_fixed_read;
+
+/* The reader of (f, side, mode) at light cosine ci in [0, 1]; NULL when out of memory. */
+sf_fixed_read *sf_fixed_new(const btdf_scatfun *f, btdf_side side, btdf_scatfun_mode mode,
+                            double ci);
+
+/* Frees r (NULL: nothing). */
+void sf_fixed_free(sf_fixed_read *r);
+
+/* sf_eval_side_cos of each of the nr (1 or 2) readings r[] at view cosine co and
+   cpd = cos phi_d, the channels of reading i at out + i channels. */
+void sf_fixed_eval_n(const sf_fixed_read *const *r, int nr, double co, double cpd,
+                     double *out);
+
+/* report.c: btdf_scatfun_report's work without its checks and summary fields, T and R taken from
    memo (NULL: computed); fills r's errors and per-angle rows. opt (NULL: none) as
    btdf_estimate_knots_prep's, but for nread, which the reading sets. */
-btdf_status scatfun_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
+btdf_status sf_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
                                const struct est_opts *opt, albedo_memo *memo,
                                btdf_report *r);
 
 /* One reading (mode, both = 0) or both at once (both = 1, mode DIRECT) of block side of
    f, as the reports make them, with T and R computed (no memo); for tests. */
-btdf_status scatfun_report_reading(const btdf_scatfun *f, const btdf_params *p,
+btdf_status sf_report_reading(const btdf_scatfun *f, const btdf_params *p,
                                    btdf_side side, btdf_scatfun_mode mode, int both,
                                    size_t angles, size_t ppa, uint64_t seed, int threads,
                                    btdf_report *r);
 
-/* 1 when Eq. 25 is 0 at every azimuth for light at cosine mu_s and the view at cosine
+/* The builder: 1 when Eq. 25 is 0 at every azimuth for light at cosine mu_s and the view at cosine
    -mu_f (a transmission pair of the builder, both in [0, 1]) for each of the channels'
    indices ior[] and smoothness s: no facet refracts one into the other, or the slope
    it would need underflows the exponential. 0 when some azimuth may reach, including
    every case within rounding of the edge (the builder then samples). */
-int scatfun_unreachable(const double *ior, int channels, double s, double mu_s,
+int sf_unreachable(const double *ior, int channels, double s, double mu_s,
                         double mu_f);
-
-/* Y[0..N] = the DCT-I of x[0..N], Y_k = x_0 + (-1)^k x_N + 2 sum_{j=1}^{N-1} x_j
-   cos(pi j k / N), as the builder computes it (one real DFT of N points); N a power of
-   two from 2 to 2^20. 0 on success, -1 for another N or out of memory. */
-int scatfun_dct1(const double *x, size_t N, double *Y);
 
 /* A file of n nodes, ncoeffs coefficients and channels channels, with its arrays
    allocated but not filled, and metalen + 1 bytes of metadata when with_meta; NULL when

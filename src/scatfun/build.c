@@ -1,0 +1,557 @@
+/* SPDX-License-Identifier: MIT */
+/* build.c: the entry points of the SCATFUN builder, their argument and lobe checks, and
+   the refinement loop: series and checks, splits, the file's own measurement. */
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "btdf.h"
+#include "btdf_scatfun.h"
+#include "core/core.h"
+#include "model/kernel.h"
+#include "model/facet.h"
+#include "estimate/estimate.h"
+#include "scatfun/scatfun.h"
+#include "scatfun/build.h"
+
+/* Where interval j of the half nodes is checked and split: the midpoint in angle.
+   The last interval [P[K-2], 1] is cut at a fraction endr of its angle instead: rho
+   moves with sin ti, which is sqrt(1 - mu) near mu = 1, so the spline error there
+   only falls like the interval's angle and bisection would need many passes. */
+static double split_point(const double *P, size_t K, size_t j, double endr)
+{
+    double lo = j == 0 ? 0.0 : P[j - 1];
+    /* acos of values in [0, 1] */
+    double alo = acos(fmin(1.0, lo)), ahi = acos(fmin(1.0, P[j]));
+    if (j == K - 1 && K > 1)
+        return cos(ahi + (alo - ahi) * endr);
+    return cos(0.5 * (alo + ahi));
+}
+
+
+/* Error estimate of one side with a fixed sample (for the build's own loop): the
+   file's own evaluation, QUICK_PPA facet points per angle, a seed of the builder's. Test
+   angles whose e_L1 exceeds mark_at get their elevation interval marked in split
+   (half nodes P[0..K-1]; both sides share them); *nmark counts new marks. */
+static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side side, int threads,
+                       uint64_t seed, albedo_memo *memo, const double *P, size_t K,
+                       double mark_at, double accept_at, unsigned char *split,
+                       size_t *nmark)
+{
+    btdf_report r;
+    memset(&r, 0, sizeof r);
+    /* btdf_scatfun_report's work, with T and R remembered from the last measurement;
+       e_L1 is all the build reads, and once the first angles fail the acceptance
+       (stop_above) their marks are what the build needs: the refinement rounds, which
+       look for a larger worst, are left to the next measurement. stop_above is 0 for
+       the last measurement (split NULL), which must be whole. */
+    est_opts opt = {1, 1, split ? accept_at : 0.0, split ? QUICK_SCREEN_PPA : 0,
+                    split ? QUICK_SCREEN_NUNI : 0, SCREEN_SHARE * accept_at};
+    if (sf_report_mis(f, p, side, 24, QUICK_PPA, seed, threads, &opt, memo, &r) !=
+        BTDF_OK) {
+        free(r.per_ti);
+        return HUGE_VAL;
+    }
+    for (size_t k = 0; split && k < r.test_angles; k++) {
+        double mu = cos(r.per_ti[k].ti);
+        size_t j = 0; /* interval j is (P[j-1], P[j]], P[-1] = 0 */
+        while (j + 1 < K && P[j] < mu)
+            j++;
+        if (!(r.per_ti[k].e_l1 > mark_at))
+            continue;
+        if (!split[j]) {
+            split[j] = 1;
+            ++*nmark;
+        }
+    }
+    free(r.per_ti);
+    return r.e_l1_max;
+}
+
+/* Bytes the builder holds in series (pairs and check series, double precision) and
+   pair records, for the memory cap. */
+static size_t state_bytes(const build_ctx *c)
+{
+    size_t KK = c->K * c->K, b = 0;
+    for (int s = 0; s < NBLK; s++) {
+        if (!c->want[s])
+            continue;
+        const pair *arr[3] = {c->pairs[s], c->pcol[s], c->prow[s]};
+        for (int a = 0; a < 3; a++) {
+            if (!arr[a])
+                continue;
+            b += KK * sizeof(pair);
+            for (size_t i = 0; i < KK; i++)
+                b += (size_t)arr[a][i].m * (size_t)c->nst * sizeof(double);
+        }
+    }
+    return b;
+}
+
+BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
+                                        btdf_side side, int threads, btdf_scatfun **out,
+                                        char *msg, size_t msglen)
+{
+    return btdf_scatfun_build_limits(p, tolerance, side, threads, 0, 0, out, msg, msglen);
+}
+
+BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
+                                        btdf_side side, char *msg, size_t msglen)
+{
+    btdf_status st = btdf_params_check(p, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    if (!(tolerance >= 1e-6 && tolerance <= 0.5))
+        return core_say(BTDF_EINVAL, msg, msglen, "tolerance %g: must lie in [1e-6, 0.5]", tolerance);
+    if ((int)side < 1 || (int)side > BTDF_SCATFUN_ALL)
+        return core_say(BTDF_EINVAL, msg, msglen,
+                           "blocks %d: must be a mask of 1 (transmission entering), 2 "
+                           "(transmission leaving), 4 (reflection on top), 8 (reflection "
+                           "below), from 1 to 15", (int)side);
+    return BTDF_OK;
+}
+
+static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side side,
+                              int threads, size_t max_coeffs, size_t max_bytes,
+                              btdf_progress_fn progress, void *user, btdf_scatfun **out,
+                              char *msg, size_t msglen);
+
+BTDF_API btdf_status btdf_scatfun_build_limits(const btdf_params *p, double tolerance,
+                                               btdf_side side, int threads, size_t max_coeffs,
+                                               size_t max_bytes, btdf_scatfun **out,
+                                               char *msg, size_t msglen)
+{
+    return build_impl(p, tolerance, side, threads, max_coeffs, max_bytes, NULL, NULL, out, msg,
+                      msglen);
+}
+
+BTDF_API btdf_status btdf_scatfun_build_progress(const btdf_params *p, double tolerance,
+                                                 btdf_side side, int threads, size_t max_coeffs,
+                                                 size_t max_bytes, btdf_progress_fn progress,
+                                                 void *user, btdf_scatfun **out, char *msg,
+                                                 size_t msglen)
+{
+    return build_impl(p, tolerance, side, threads, max_coeffs, max_bytes, progress, user, out,
+                      msg, msglen);
+}
+
+/* The builder: checks, context and fold factors, then the refinement loop (one pass of
+   series and checks, split marks, fronts spread, the file's own measurement that
+   accepts, splits locally or tightens, splits inserted, the best file kept). It is one
+   function of about 410 lines because the loop's phases share a dozen locals (the
+   nodes P, fresh, ahead, best, best_err, tighten, local, stall, last_err, limit) and
+   one cleanup path; cutting them into functions over a build_loop struct beside
+   build_ctx is a change of its own, to be checked against byte-identical files. */
+static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side side,
+                              int threads, size_t max_coeffs, size_t max_bytes,
+                              btdf_progress_fn progress, void *user, btdf_scatfun **out,
+                              char *msg, size_t msglen)
+{
+    if (!out)
+        return core_say(BTDF_EINVAL, msg, msglen, "output pointer missing");
+    btdf_status st = btdf_scatfun_check(p, tolerance, side, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    if (max_coeffs == 0 || max_coeffs > MAX_COEFFS_BUILD)
+        max_coeffs = MAX_COEFFS_BUILD;
+    /* A lobe narrower than one elevation interval, even with the whole node budget
+       spread evenly over 90 degrees, cannot be followed by nodes shared by every
+       incident angle: stop before any work. The transmitted lobe is about
+       (n' - 1) 2/s rad wide in outgoing angle, n' = max(n, 1/n) (facet slopes of RMS
+       2/s, MODEL.md 2). */
+    {
+        double nw = HUGE_VAL;
+        for (int k = 0; k < p->channels; k++) {
+            double n1 = p->ior[k] >= 1.0 ? p->ior[k] : 1.0 / p->ior[k]; /* ior > 0 (checked) */
+            nw = fmin(nw, (n1 - 1.0) * 2.0 / p->smoothness);           /* s > 0 (checked) */
+        }
+        double least = (M_PI / 2) / (double)BTDF_SCATFUN_MAX_HALF_NODES;
+        if (nw < least)
+            return core_say(BTDF_EBUDGET, msg, msglen,
+                               "the transmitted lobe is about %.3g deg wide (n = %.9g, s = %g), "
+                               "narrower than one elevation interval (%.3g deg) even with all "
+                               "%d half nodes of the format's budget; nothing built: use a "
+                               "facet-space table (.exr/.csv) for this material",
+                               nw * 180.0 / M_PI, p->ior[p->channels == 3 ? 1 : 0],
+                               p->smoothness, least * 180.0 / M_PI,
+                               BTDF_SCATFUN_MAX_HALF_NODES);
+    }
+    double t0 = core_now();
+    build_ctx c;
+    memset(&c, 0, sizeof c);
+    if (pthread_mutex_init(&c.lock, NULL) != 0)
+        return core_say(BTDF_ENOMEM, msg, msglen, "cannot create a mutex");
+    c.p = p;
+    c.nc = p->channels;
+    c.nst = p->channels == 3 ? 3 : 1;
+    for (int k = 0; k < c.nc; k++) {
+        c.ior[BLK_T_ENTER][k] = c.ior[BLK_R_TOP][k] = p->ior[k];
+        /* ior >= BTDF_IOR_MIN > 0 (checked) */
+        c.ior[BLK_T_LEAVE][k] = c.ior[BLK_R_BOTTOM][k] = 1.0 / p->ior[k];
+    }
+    for (int b = 0; b < NBLK; b++) {
+        c.want[b] = ((int)side & blk_mask[b]) != 0;
+        for (int k = 0; k < 3; k++)
+            c.fold[b][k] = 1.0;
+    }
+    if (c.nc == 3) {
+        /* pbrt-v3 scales transmission by e^2 with the header's one eta = n_G: reading
+           T_LEAVE for light from above gives n_G^2 rho_c(1/n_c; o->i), and the truth is
+           n_c^2 rho_c(1/n_c; o->i) (reciprocity), so that block carries (n_c/n_G)^2;
+           T_ENTER read for light from below gives rho_c(n_c; o->i)/n_G^2 against
+           rho_c(n_c; o->i)/n_c^2, so it carries (n_G/n_c)^2. Reflection has no factor. */
+        for (int k = 0; k < 3; k++) {
+            double q = p->ior[k] / p->ior[1]; /* ior > 0 (checked) */
+            c.fold[BLK_T_LEAVE][k] = q * q;
+            c.fold[BLK_T_ENTER][k] = 1.0 / (q * q);
+        }
+    }
+    /* The lobe spans about 2/s rad of facet tilt; a first azimuth grid of about 8 s
+       points puts several samples across it, so no lobe falls between samples. The
+       narrowest pairs need that; a transmission pair starts on the grid its own lobe
+       and edges need (sf_first_grid), at most this. */
+    c.nmin = pow2_at_least(fmax(NMIN_PHI, 8.0 * p->smoothness));
+    if (c.nmin > BTDF_SCATFUN_MAX_PHI / 2)
+        c.nmin = BTDF_SCATFUN_MAX_PHI / 2;
+    c.nmax = BTDF_SCATFUN_MAX_PHI;
+    c.budget = tolerance;
+
+    btdf_scatfun *best = NULL;
+    double best_err = HUGE_VAL;
+    /* T and R of the test angles, kept across the measurements (NULL: computed each time) */
+    albedo_memo *memo = albedo_memo_new();
+    /* initial half nodes: mu = sin of equal angle steps, denser towards grazing */
+    size_t K0 = 8;
+    double *P = malloc(BTDF_SCATFUN_MAX_HALF_NODES * 2 * sizeof *P);
+    /* fresh[j]: interval j was made by the last pass's split; ahead: fronts (below) */
+    unsigned char *fresh = calloc(BTDF_SCATFUN_MAX_HALF_NODES * 2, 1);
+    unsigned char *ahead = calloc(BTDF_SCATFUN_MAX_HALF_NODES, 1);
+    if (!P || !fresh || !ahead) {
+        st = BTDF_ENOMEM;
+        goto done;
+    }
+    for (size_t j = 0; j < K0; j++)
+        P[j] = to_float_node(sin((double)(j + 1) * M_PI / (2.0 * (double)K0)));
+    P[K0 - 1] = POLE_NODE;
+    size_t K = K0;
+    int tighten = 0, local = 0, stall = 0;
+    double last_err = HUGE_VAL; /* the previous measurement, for stall */
+    const char *limit = "node"; /* which budget stopped refinement */
+    st = BTDF_OK;
+    for (int pass = 0;; pass++) {
+        if (sf_set_nodes(&c, P, K)) {
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        c.nint = K;
+        if (sf_ensure_state(&c)) {
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        for (size_t j = 0; j < K; j++)
+            /* checked where a split would put the node, so check series become pairs */
+            c.mid[j] = to_float_node(split_point(P, K, j, 0.5));
+        /* the norms of new nodes and midpoints (each its own job: same values on any
+           number of threads) */
+        core_parallel_for(threads, K * NBLK * 2, sf_job_norms, &c);
+        for (size_t j = 0; j < K; j++)
+            c.hasTn[j] = c.hasTm[j] = 1;
+        if (core_parallel_for_ws(threads, NBLK * K, sf_job_row, &c, sf_build_ws_new, sf_build_ws_free) || c.oom) {
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        size_t total = 0;
+        for (int s = 0; s < NBLK; s++)
+            for (size_t i = 0; c.want[s] && i < K * K; i++)
+                total += c.pairs[s][i].m * (size_t)c.nst;
+        if (total > max_coeffs) {
+            limit = "coefficient";
+            st = BTDF_EBUDGET;
+            break;
+        }
+        if (max_bytes && state_bytes(&c) > max_bytes) {
+            limit = "memory";
+            st = BTDF_EBUDGET;
+            break;
+        }
+        if (core_parallel_for_ws(threads, NBLK * K, sf_job_colcheck, &c, sf_build_ws_new, sf_build_ws_free) ||
+            core_parallel_for_ws(threads, NBLK * K, sf_job_rowcheck, &c, sf_build_ws_new, sf_build_ws_free) ||
+            c.oom) {
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        if (max_bytes && state_bytes(&c) > max_bytes) {
+            limit = "memory";
+            st = BTDF_EBUDGET;
+            break;
+        }
+        /* mark intervals to split */
+        unsigned char *split = calloc(K, 1);
+        if (!split) {
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        size_t nsplit = 0;
+        double endr = 1.0;
+        /* The checks bound both readings of every block (norms_at): DIRECT, the light
+           in the slow index, integrates the error over the fast one; ADJOINT, the light
+           in the fast index, over the slow one. One interval check serves both with the
+           axes swapped: the fast-midpoint gaps (errc) summed along a row are the DIRECT
+           error there, summed down a column of rows the ADJOINT error of the light at
+           that midpoint; the slow-midpoint gaps (gapr) the other way round. A
+           three-channel transmission block is read ADJOINT only (sf_pair_norm). */
+        double *ea = calloc(K, sizeof *ea);
+        if (!ea) {
+            free(split);
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        int rowbad = 0; /* once a row fails, also split the ones close to failing */
+        for (int s = 0; s < NBLK; s++) {
+            if (!c.want[s])
+                continue;
+            int direct = !(c.nst == 3 && !blk_refl[s]);
+            for (size_t j = 0; direct && j < K; j++)
+                rowbad |= c.errr[s][j] > share_row(&c);
+        }
+        for (int s = 0; s < NBLK; s++) {
+            if (!c.want[s])
+                continue;
+            int direct = !(c.nst == 3 && !blk_refl[s]);
+            for (size_t r = 0; direct && r < K; r++) {
+                double sum = 0.0;
+                for (size_t j = 0; j < K; j++) {
+                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
+                    sum += wid * c.errc[s][r * K + j];
+                }
+                if (sum <= share_col(&c))
+                    continue;
+                for (size_t j = 0; j < K; j++) {
+                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
+                    if (wid * c.errc[s][r * K + j] > share_col(&c) / (double)K)
+                        split[j] = 1;
+                }
+            }
+            for (size_t j = 0; direct && j < K; j++)
+                if (c.errr[s][j] > share_row(&c) && j == K - 1)
+                    /* error ~ the last interval's angle: aim at half the share */
+                    endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / c.errr[s][j]));
+            for (size_t j = 0; direct && j < K; j++)
+                if (c.errr[s][j] > (rowbad ? 0.7 : 1.0) * share_row(&c))
+                    split[j] = 1;
+            /* ADJOINT, light at fast node col: the slow-midpoint gaps down the column */
+            for (size_t col = 0; col < K; col++) {
+                double sum = 0.0;
+                for (size_t j = 0; j < K; j++) {
+                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
+                    /* the camera's cosine, the slow midpoint's: the ADJOINT integral's
+                       weight (norms_at) */
+                    ea[j] = wid * c.mid[j] * c.gapr[s][j * K + col] *
+                            sf_adj_ratio(&c, c.Tm[j][s], c.Tn[col][s]);
+                    sum += ea[j];
+                }
+                if (sum <= share_col(&c))
+                    continue;
+                for (size_t j = 0; j < K; j++)
+                    if (ea[j] > share_col(&c) / (double)K)
+                        split[j] = 1;
+            }
+            /* ADJOINT, light at fast midpoint j: the fast-midpoint gaps over the rows */
+            for (size_t j = 0; j < K; j++) {
+                double tot = 0.0;
+                for (size_t r = 0; r < K; r++) {
+                    double lo = r == 0 ? 0.0 : P[r - 1], hi = r + 1 < K ? P[r + 1] : P[r];
+                    tot += 0.5 * (hi - lo) * P[r] * c.errc[s][r * K + j] *
+                           sf_adj_ratio(&c, c.Tn[r][s], c.Tm[j][s]);
+                }
+                if (tot > share_row(&c)) {
+                    split[j] = 1;
+                    if (j == K - 1)
+                        endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / tot));
+                }
+            }
+        }
+        free(ea);
+        /* Fronts. A new node is also a new row and column of pairs, and the checks sum
+           over rows and columns: an interval next to a freshly split one can fail only
+           because the new rows now see it (measured for n = 1.5, s = 3 at 1e-3: the
+           failing interval moved one step outwards per pass, its check at 3.1, 2.6,
+           2.2, 1.7, 1.3 times the share, six passes). When an interval that was not
+           just split fails beside one that was, split the next one outwards too: the
+           front moves two intervals per pass. */
+        for (size_t j = 0; j < K; j++)
+            ahead[j] = 0;
+        for (size_t j = 0; j < K; j++) {
+            if (!split[j] || fresh[j])
+                continue;
+            if (j > 0 && fresh[j - 1] && j + 1 < K && !fresh[j + 1])
+                ahead[j + 1] = 1;
+            if (j + 1 < K && fresh[j + 1] && j > 0 && !fresh[j - 1])
+                ahead[j - 1] = 1;
+        }
+        for (size_t j = 0; j < K; j++)
+            split[j] |= ahead[j];
+        for (size_t j = 0; j < K; j++)
+            nsplit += split[j];
+        if (progress) /* K nodes checked, nsplit intervals to split */
+            progress(user, tighten ? "series (tighter)" : "elevation nodes", K, nsplit);
+        if (nsplit == 0) {
+            /* The node checks pass: measure the file itself. Where it misses, split the
+               elevation intervals of the test angles that miss (the checks run at
+               interval midpoints only; the report hunts for the worst angles), keeping
+               every series; only when that finds nothing to split, halve the shares
+               and recompute everything. */
+            btdf_scatfun *f = NULL;
+            st = sf_assemble(&c, &f, msg, msglen);
+            if (st != BTDF_OK) {
+                free(split);
+                goto done;
+            }
+            double e = 0.0;
+            size_t nmark = 0;
+            for (int s = 0; s < NBLK; s++)
+                if (c.want[s])
+                    e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
+                                         QUICK_SEED + (uint64_t)local, memo, P, K,
+                                         MARK_SHARE * tolerance, ACCEPT_SHARE * tolerance,
+                                         split, &nmark));
+            /* A failing measurement may have skipped its refinement (stop_above): its
+               e is a lower bound, so such a file is not kept as the best; should the
+               budget run out, the last file is measured whole below. */
+            if (e < best_err && e <= ACCEPT_SHARE * tolerance) {
+                btdf_scatfun_free(best);
+                best = f;
+                best_err = e;
+            } else {
+                btdf_scatfun_free(f);
+            }
+            if (e <= ACCEPT_SHARE * tolerance && !c.capped) {
+                free(split);
+                st = BTDF_OK;
+                break;
+            }
+            /* Splits that do not lower the error (two measurements in a row above 0.9 of
+               the one before) point at the series, not at the nodes: tighten. */
+            stall = e > 0.9 * last_err ? stall + 1 : 0;
+            last_err = e;
+            if (nmark > 0 && local < LOCAL_ROUNDS && stall < 2 && !c.capped) {
+                local++;
+                nsplit = nmark; /* on to the insertion below */
+            } else {
+                if (++tighten > 6 || c.capped) {
+                    free(split);
+                    st = BTDF_EBUDGET;
+                    break;
+                }
+                c.budget *= 0.5;
+                memset(fresh, 0, K);
+                stall = 0;
+                last_err = HUGE_VAL;
+                free(split);
+                sf_free_state(&c); /* every series and check depends on the budget */
+                continue;       /* same nodes, tighter series and checks */
+            }
+        }
+        if (K + nsplit > BTDF_SCATFUN_MAX_HALF_NODES) {
+            limit = "node";
+            free(split);
+            st = BTDF_EBUDGET;
+            break;
+        }
+        /* insert split points (rounded to float, strictly inside their interval) */
+        double *Q = P + BTDF_SCATFUN_MAX_HALF_NODES;
+        unsigned char *ins = calloc(K, 1);
+        if (!ins) {
+            free(split);
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        size_t KQ = 0;
+        if (endr > 0.5)
+            endr = 0.5;
+        for (size_t j = 0; j < K; j++) {
+            double lo = j == 0 ? 0.0 : P[j - 1];
+            double m = to_float_node(split_point(P, K, j, endr));
+            if (split[j] && m > lo && m < P[j]) {
+                fresh[KQ] = 1;
+                Q[KQ++] = m;
+                ins[j] = m == c.mid[j] ? 1 : 2;
+                fresh[KQ] = 1;
+            } else {
+                fresh[KQ] = 0;
+            }
+            Q[KQ++] = P[j];
+        }
+        free(split);
+        if (KQ == K) {
+            free(ins);
+            st = BTDF_EBUDGET; /* float spacing reached: nothing left to split */
+            break;
+        }
+        if (sf_carry_over(&c, Q, KQ, ins, threads)) {
+            free(ins);
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        free(ins);
+        memcpy(P, Q, KQ * sizeof *P);
+        K = KQ;
+        (void)pass;
+    }
+    if (st == BTDF_EBUDGET || !best) {
+        /* keep the finest file reached as the answer, measured honestly */
+        btdf_scatfun *f = NULL;
+        if (c.pairs[0] || c.pairs[1]) {
+            btdf_status a = sf_assemble(&c, &f, msg, msglen);
+            if (a == BTDF_OK) {
+                double e = 0.0;
+                for (int s = 0; s < NBLK; s++)
+                    if (c.want[s])
+                        e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
+                                             QUICK_SEED + (uint64_t)local, memo, NULL, 0,
+                                             0.0, 0.0, NULL, NULL));
+                if (e < best_err || !best) {
+                    btdf_scatfun_free(best);
+                    best = f;
+                    best_err = e;
+                } else {
+                    btdf_scatfun_free(f);
+                }
+            }
+        }
+        if (!best) {
+            st = BTDF_ENOMEM;
+            goto done;
+        }
+        if (best_err <= tolerance)
+            st = BTDF_OK;
+    }
+done:
+    sf_free_state(&c);
+    free(c.P);
+    free(c.full);
+    free(P);
+    free(fresh);
+    free(ahead);
+    pthread_mutex_destroy(&c.lock);
+    if (st != BTDF_OK && st != BTDF_EBUDGET) {
+        albedo_memo_free(memo);
+        btdf_scatfun_free(best);
+        return st;
+    }
+    best->tolerance = tolerance;
+    best->seconds_build = core_now() - t0;
+    if (memo) { /* the file's reports test the same knot midpoints: hand over T and R */
+        albedo_memo_free(best->memo);
+        best->memo = memo;
+    }
+    *out = best;
+    if (st == BTDF_EBUDGET)
+        return core_say(BTDF_EBUDGET, msg, msglen,
+                   "%s budget reached (%u nodes, %u coefficients, mMax %u) with estimated "
+                   "e_L1 %.3g > tolerance %g",
+                   limit, best->n, best->ncoeffs, best->mmax, best_err, tolerance);
+    return BTDF_OK;
+}
