@@ -586,8 +586,10 @@ static void fixed_view_out(const btdf_scatfun *f, const fixed_view *v, const dou
    cosines cos(k phi) rk^k are made once for the two. The values are those of one
    reading at a time, bit for bit: the same cosines, the same sums in the same
    order. */
-BT_CLONES void sf_fixed_eval_n(const sf_fixed_read *const *r, int nr, double co, double cpd,
-                                   double *out)
+/* static: GCC exports the resolver of a cloned function whatever -fvisibility says,
+   so the clones stay in this file and sf_fixed_eval_n below is a plain call. */
+static BT_CLONES void fixed_eval_n(const sf_fixed_read *const *r, int nr, double co,
+                                   double cpd, double *out)
 {
     const btdf_scatfun *f = r[0]->f;
     uint32_t ch = f->channels;
@@ -616,5 +618,11 @@ BT_CLONES void sf_fixed_eval_n(const sf_fixed_read *const *r, int nr, double co,
     }
     for (int i = 0; i < nr; i++)
         fixed_view_out(f, &v[i], val[i], out + (size_t)i * ch);
+}
+
+void sf_fixed_eval_n(const sf_fixed_read *const *r, int nr, double co, double cpd,
+                     double *out)
+{
+    fixed_eval_n(r, nr, co, cpd, out);
 }
 
