@@ -1,11 +1,11 @@
 /* SPDX-License-Identifier: MIT */
 /* xml.c: LBNL WINDOW / Radiance BSDF XML (renderer-formats.md section 3), TensorTree3 or
-   Klems, from a btdf_rad built in src/radiance.c. Values are the BTDF in 1/sr, no cosine. */
+   Klems, from a btdf_rad built in src/radiance/radiance.c. Values are the BTDF in 1/sr, no cosine. */
 #include <stdio.h>
 #include <string.h>
 
 #include "formats/formats.h"
-#include "radiance.h"
+#include "radiance/radiance.h"
 
 /* Text a reader takes literally: &, < and > escaped, control characters dropped. */
 static void put_text(FILE *f, const char *s)

@@ -20,14 +20,6 @@ ALLOWED = {
 }
 # formats/ sees only the object headers of table, scatfun and radiance.
 FORMATS_OBJECTS = {'table/table.h', 'scatfun/scatfun.h', 'radiance/radiance.h'}
-# Files of src/ not yet in their folder, and the folder whose rule they follow.
-PENDING = {
-    'radiance.c': 'radiance', 'radiance.h': 'radiance', 'radiance_impl.h': 'radiance',
-    'ttree.c': 'radiance', 'klems.c': 'radiance',
-    'preview.c': 'preview', 'plot.c': 'preview', 'plot.h': 'preview',
-}
-# Headers at the top of src/ (until they move), by the folder they belong to.
-TOP_HEADERS = {'radiance.h': 'radiance', 'radiance_impl.h': 'radiance', 'plot.h': 'preview'}
 # Public headers: include/btdf/ and the generated configuration.
 PUBLIC = {'btdf.h', 'btdf_io.h', 'btdf_preview.h', 'btdf_radiance.h', 'btdf_scatfun.h',
           'btdf_sim.h', 'btdf_config.h'}
@@ -43,7 +35,7 @@ INC = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
 def folder_of(rel):
     parts = rel.split('/')
     if parts[0] == 'src':
-        return parts[1] if len(parts) > 2 else PENDING.get(parts[1], '?' + parts[1])
+        return parts[1] if len(parts) > 2 else '?' + parts[1]  # src/ has no loose files
     return parts[0]
 
 
@@ -56,6 +48,8 @@ def main(root):
                     continue
                 rel = os.path.relpath(os.path.join(d, name), root).replace(os.sep, '/')
                 here = folder_of(rel)
+                if here.startswith('?'):
+                    bad.append(f'{rel}: a file loose in src/: give it its folder')
                 with open(os.path.join(d, name), encoding='utf-8') as fh:
                     text = fh.read()
                 for kind, target in INC.findall(text):
@@ -75,8 +69,6 @@ def main(root):
                         continue  # tools' own headers ("run.h") are its folder
                     if '/' in target:
                         to = target.split('/')[0]
-                    elif target in TOP_HEADERS:
-                        to = TOP_HEADERS[target]
                     else:
                         bad.append(f'{rel}: "{target}": name the folder')
                         continue
@@ -87,7 +79,7 @@ def main(root):
                     elif to not in ALLOWED.get(here, set()):
                         bad.append(f'{rel}: "{target}": {here}/ may not include {to}/')
                     elif here == 'formats' and to in ('table', 'scatfun', 'radiance') \
-                            and target not in FORMATS_OBJECTS and target != 'radiance.h':
+                            and target not in FORMATS_OBJECTS:
                         bad.append(f'{rel}: "{target}": formats/ sees object headers only')
     # Self-check: a tree where nothing was read proves nothing.
     if count < 100:

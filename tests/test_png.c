@@ -18,13 +18,13 @@
 
 #include "btdf.h"
 #include "btdf_preview.h"
-#include "plot.h"
+#include "preview/plot.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
 #endif
 
-/* The first curve's colour and the map's ends (src/preview.c, src/plot.c). */
+/* The first curve's colour and the map's ends (src/preview/preview.c, src/preview/plot.c). */
 static const int curve0[3] = {20, 90, 200};
 static const int below[3] = {30, 30, 30};
 static const int yellow[3] = {252, 232, 36};

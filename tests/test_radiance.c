@@ -4,7 +4,7 @@
 #include <string.h>
 
 #include "btdf_test.h"
-#include "radiance_impl.h"
+#include "radiance/radiance_impl.h"
 
 /* The concentric map and its inverse agree (Radiance's two functions are inverses). */
 static void test_square_disk_round_trip(void **state)

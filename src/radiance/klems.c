@@ -30,7 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "radiance_impl.h"
+#include "radiance/radiance_impl.h"
 
 #define KL_EPS 1e-7   /* absolute, per outgoing patch, in transmittance (reflectance) units */
 #define KL_DEPTH 10   /* quarterings at most: a 90 deg patch down to 0.1 deg */

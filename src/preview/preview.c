@@ -17,7 +17,7 @@
 
 #if BTDF_HAVE_PNG
 
-#include "plot.h"
+#include "preview/plot.h"
 
 #define DEG (180.0 / M_PI)
 

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "radiance_impl.h"
+#include "radiance/radiance_impl.h"
 
 static const char *const basis_names[] = {"tree3", "klems-full", "klems-half", "klems-quarter"};
 

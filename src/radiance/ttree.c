@@ -41,7 +41,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "radiance_impl.h"
+#include "radiance/radiance_impl.h"
 
 #define RAD_FTINY 1e-6 /* Radiance's FTINY in double builds, in u0 */
 #define NS 4           /* samples per cell and dimension */

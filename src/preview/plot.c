@@ -1,6 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* plot.c: the drawing layer of plot.h on a cairo RGB24 image surface. */
-#include "plot.h"
+#include "preview/plot.h"
 
 #include <math.h>
 #include <stdint.h>

@@ -1,10 +1,10 @@
 /* SPDX-License-Identifier: MIT */
-/* radiance_impl.h: what src/radiance.c, src/ttree.c and src/klems.c share. */
+/* radiance_impl.h: what src/radiance/radiance.c, src/radiance/ttree.c and src/radiance/klems.c share. */
 #ifndef BTDF_RADIANCE_IMPL_H
 #define BTDF_RADIANCE_IMPL_H
 
 #include "model/kernel.h"
-#include "radiance.h"
+#include "radiance/radiance.h"
 #include "core/core.h"
 #include "estimate/estimate.h"
 #include "model/facet.h"
