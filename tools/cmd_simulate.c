@@ -167,8 +167,47 @@ static void write_raw(FILE *f, const btdf_sim_opts *o, const btdf_sim_result *r)
     fputs("]},\n", f);
 }
 
+/* The comparisons of each case (btdf_sim_compare): the simulated tally against Eq. 25
+   (all orders and one hit) and the Walter/Smith BTDF (one hit), for T and R. */
+#define NCMP 6
+static const struct {
+    const char *key;
+    btdf_sim_part part;
+    int one_hit;
+    btdf_model model;
+} cmp_def[NCMP] = {
+    {"eq25_T", BTDF_SIM_TRANSMISSION, 0, BTDF_MODEL_XU_SUN},
+    {"eq25_T1", BTDF_SIM_TRANSMISSION, 1, BTDF_MODEL_XU_SUN},
+    {"smith_T1", BTDF_SIM_TRANSMISSION, 1, BTDF_MODEL_SMITH},
+    {"eq25_R", BTDF_SIM_REFLECTION, 0, BTDF_MODEL_XU_SUN},
+    {"eq25_R1", BTDF_SIM_REFLECTION, 1, BTDF_MODEL_XU_SUN},
+    {"smith_R1", BTDF_SIM_REFLECTION, 1, BTDF_MODEL_SMITH},
+};
+
+static void jcmp(FILE *f, const btdf_sim_cmp *c)
+{
+    fputs("{\"model\": ", f);
+    jnum(f, c->model_total);
+    fputs(", \"model_in_bins\": ", f);
+    jnum(f, c->model_in_bins);
+    fputs(", \"e_T\": ", f);
+    jnum(f, c->e_T);
+    fputs(", \"e_T_floor\": ", f);
+    jnum(f, c->e_T_floor);
+    fputs(", \"e_L1\": ", f);
+    jnum(f, c->e_L1);
+    fputs(", \"e_L1_floor\": ", f);
+    jnum(f, c->e_L1_floor);
+    fputs(", \"e_L1_floor_sd\": ", f);
+    jnum(f, c->e_L1_floor_sd);
+    fputs(", \"chi2\": ", f);
+    jnum(f, c->chi2);
+    fprintf(f, ", \"dof\": %d}", c->dof);
+}
+
 static int write_report(const char *path, const char *prov, const btdf_sim_opts *o,
-                        const btdf_sim_result *r, const double *eqT, const double *eqR)
+                        const btdf_sim_result *r, const double *eqT, const double *eqR,
+                        const btdf_sim_cmp *cmp)
 {
     char *buf = NULL;
     size_t len = 0;
@@ -216,6 +255,17 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
         jnum(f, eqR[k]);
     }
     fprintf(f, "%s},\n", r->count > 1 ? "]" : "");
+    fputs("  \"compare\": {", f);
+    for (int q = 0; q < NCMP; q++) {
+        fprintf(f, "%s\"%s\": %s", q ? ", " : "", cmp_def[q].key, r->count > 1 ? "[" : "");
+        for (size_t k = 0; k < r->count; k++) {
+            if (k)
+                fputs(", ", f);
+            jcmp(f, &cmp[k * NCMP + (size_t)q]);
+        }
+        fputs(r->count > 1 ? "]" : "", f);
+    }
+    fputs("},\n", f);
     const btdf_sim_surface *s = &r->surface;
     fprintf(f, "  \"surface\": {\"points_per_side\": %d, \"spacing\": ", s->n);
     jnum(f, s->dx);
@@ -654,10 +704,10 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                    "numbers\n");
         return code;
     }
-    if (dist || bins_given) {
-        o.theta_bins = nt;
-        o.phi_bins = np;
-    }
+    /* the histograms always: the comparison with the models (e_L1, chi2) needs them */
+    (void)bins_given;
+    o.theta_bins = nt;
+    o.phi_bins = np;
     if (merge_n >= 0 && shard_n)
         return fail(2, "--merge and --shard: a merge takes every shard's report");
     if ((merge_n >= 0 || shard_n) && !report)
@@ -714,9 +764,11 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     if (st != BTDF_OK)
         return fail(st == BTDF_EBUDGET ? 3 : st == BTDF_EINVAL ? 2 : 1, "%s", msg);
     double *eqT = calloc(r->count, sizeof *eqT), *eqR = calloc(r->count, sizeof *eqR);
-    if (!eqT || !eqR) {
+    btdf_sim_cmp *cmp = calloc(r->count * NCMP, sizeof *cmp);
+    if (!eqT || !eqR || !cmp) {
         free(eqT);
         free(eqR);
+        free(cmp);
         btdf_sim_result_free(r);
         return fail(1, "out of memory");
     }
@@ -729,6 +781,15 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
             eqT[k] = 0.0;
         if (btdf_reflectance(&p, r->tally[k].theta_i, &eqR[k]) != BTDF_OK)
             eqR[k] = 0.0;
+        for (int q = 0; q < NCMP; q++)
+            if (btdf_sim_compare(r, k, cmp_def[q].part, cmp_def[q].one_hit, cmp_def[q].model,
+                                 p.k0, &cmp[k * NCMP + (size_t)q], msg, sizeof msg) != BTDF_OK) {
+                free(eqT);
+                free(eqR);
+                free(cmp);
+                btdf_sim_result_free(r);
+                return fail(1, "comparison with the models: %s", msg);
+            }
     }
     if (!quiet) {
         for (size_t k = 0; k < r->count; k++) {
@@ -739,6 +800,14 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                     t->theta_i / DEG, t->ior, o.smoothness, t->T.mean, t->T.se,
                     t->T_order[0].mean, t->T_order[1].mean, t->T_order[2].mean, t->R.mean,
                     t->R.se, eqT[k], eqR[k], t->mean_hits.mean);
+            const btdf_sim_cmp *a = &cmp[k * NCMP], *b = a + 1, *c = a + 2;
+            fprintf(stderr,
+                    "  T against Eq. 25: e_T %.3g (noise %.2g), e_L1 %.3g (noise %.2g +- %.2g); "
+                    "one hit (noise %.2g +- %.2g): Eq. 25 e_L1 %.3g chi2/dof %.3g, Smith e_L1 "
+                    "%.3g chi2/dof %.3g\n",
+                    a->e_T, a->e_T_floor, a->e_L1, a->e_L1_floor, a->e_L1_floor_sd,
+                    b->e_L1_floor, b->e_L1_floor_sd, b->e_L1, b->dof ? b->chi2 / b->dof : 0.0,
+                    c->e_L1, c->dof ? c->chi2 / c->dof : 0.0);
         }
         fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (2/s = %.4f), "
                         "correlation length %.4f; %llu rays in %.2f s\n",
@@ -746,11 +815,12 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                 2.0 / o.smoothness, r->surface.corr_length,
                 (unsigned long long)r->rays_traced, r->seconds);
     }
-    code = report ? write_report(report, prov, &o, r, eqT, eqR) : 0;
+    code = report ? write_report(report, prov, &o, r, eqT, eqR, cmp) : 0;
     if (code == 0 && dist)
         code = write_dist(dist, prov, &o, r);
     free(eqT);
     free(eqR);
+    free(cmp);
     btdf_sim_result_free(r);
     return code;
 }

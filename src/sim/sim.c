@@ -463,6 +463,7 @@ static btdf_status finish(const run_ctx *rc, const uint64_t *hraw, btdf_sim_resu
     }
     if (rc->bins && reduce_hist(rc, hraw, res) != 0)
         return BTDF_ENOMEM;
+    res->smoothness = o->smoothness;
     res->theta_bins = rc->bins ? o->theta_bins : 0;
     res->phi_bins = rc->bins ? o->phi_bins : 0;
     btdf_sim_surface *sf = &res->surface;
