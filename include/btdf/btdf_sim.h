@@ -71,6 +71,11 @@ typedef struct btdf_sim_opts {
     int tile_tau;         /* tile side in units of tau; default 16 */
     uint64_t batch_rays;  /* rays per batch; 0: chosen from rays (at least 32 batches) */
     int accel;            /* 0: plain grid DDA (default); 1: min/max hierarchy, same hits */
+    /* 0: the 2D surface (default). 1: the paper's setting (Sec. 4), a 1D profile
+       z = h(x) with C(x) = sigma^2 exp(-x^2 / tau^2) (slopes of RMS sqrt(2)/s) and
+       rays in its plane of incidence: every outgoing direction lies in that plane
+       (|phi| = 0 backward or pi forward), R and T are those of the profile. */
+    int profile;
     int theta_bins;       /* histogram bins in theta per hemisphere; 0: no histogram */
     int phi_bins;         /* bins of |phi| over [0, pi]; used when theta_bins > 0 */
     size_t max_memory;    /* bytes the surfaces and tallies may take; 0: no limit */
@@ -151,6 +156,7 @@ typedef struct btdf_sim_result {
     uint64_t *raw_hist;
     double *raw_stats;
     double smoothness; /* s of the run (for btdf_sim_compare) */
+    int profile;       /* the run's opts.profile */
 } btdf_sim_result;
 
 #define BTDF_SIM_RAW_Q 8
@@ -217,7 +223,8 @@ typedef struct btdf_sim_cmp {
 
 /* The comparison above of case k of r, part `part`, all orders (one_hit 0) or one hit
    (1), against model m (BTDF_MODEL_XU_SUN with k0, or BTDF_MODEL_SMITH) at the run's
-   smoothness and the case's n. BTDF_EINVAL naming a bad case, part or model. */
+   smoothness and the case's n. BTDF_EINVAL naming a bad case, part or model, or a
+   profile run (a 1D profile has no BTDF of a 2D surface to compare with). */
 BTDF_API btdf_status btdf_sim_compare(const btdf_sim_result *r, size_t k, btdf_sim_part part,
                                       int one_hit, btdf_model m, double k0, btdf_sim_cmp *out,
                                       char *msg, size_t msglen);

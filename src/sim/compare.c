@@ -65,6 +65,9 @@ BTDF_API btdf_status btdf_sim_compare(const btdf_sim_result *r, size_t k, btdf_s
     if (part != BTDF_SIM_TRANSMISSION && part != BTDF_SIM_REFLECTION)
         return core_say(BTDF_EINVAL, msg, msglen, "part %d: transmission (0) or reflection (1)",
                         (int)part);
+    if (r->profile)
+        return core_say(BTDF_EINVAL, msg, msglen,
+                        "a 1D profile run: Eq. 25 and Smith describe 2D surfaces");
     if (m != BTDF_MODEL_XU_SUN && m != BTDF_MODEL_SMITH)
         return core_say(BTDF_EINVAL, msg, msglen, "model %d: xu-sun (0) or smith (1)", (int)m);
     const btdf_sim_tally *t = &r->tally[k];
