@@ -631,6 +631,17 @@ if "$B" --version | grep -q 'OpenEXR on'; then
 else
     expect 2 "this build has no OpenEXR" "simulate -o .exr without OpenEXR" -- "$B" simulate --rays 100 -o "$W/t.exr"
 fi
+# simulate --preview: a PNG of each case's lobe in the plane of incidence
+if "$B" --version | grep -q 'PNG on'; then
+    "$B" simulate -q -s 3 --theta-i 30,60 --rays 20000 --preview "$W/sp.png" && \
+        [ "$(head -c 8 "$W/sp.png" | od -An -tx1 | tr -d ' ')" = "89504e470d0a1a0a" ] && \
+        ok "simulate --preview: a PNG" || no "simulate --preview"
+    expect 1 "cannot write in the folder" "simulate unwritable --preview" -- "$B" simulate --rays 100 --preview "$W/nodir/p.png"
+    rm -f "$W/sp.png"
+else
+    expect 2 "this build has no pictures" "simulate --preview without PNG" -- "$B" simulate --rays 100 --preview "$W/p.png"
+fi
+expect 2 "the picture is a .png" "simulate --preview not .png" -- "$B" simulate --rays 100 --preview "$W/p.jpg"
 expect 2 "--bins: '0'" "simulate --bins 0" -- "$B" simulate --rays 100 --bins 0 -o "$W/t.csv"
 expect 1 "cannot write in the folder" "simulate unwritable -o" -- "$B" simulate --rays 100 -o "$W/nodir/d.csv"
 # simulate --shard K/N and --merge: three shards (one on one thread), merged out of

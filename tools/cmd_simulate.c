@@ -13,11 +13,13 @@
 
 #include <btdf/btdf.h>
 #include <btdf/btdf_io.h>
+#include <btdf/btdf_preview.h>
 #include <btdf/btdf_sim.h>
 
 #include "numparse.h"
 #include "options.h"
 #include "run.h"
+#include "simchart.h"
 
 #define MAX_ANGLES 1000
 #define DEG (3.14159265358979323846 / 180.0)
@@ -565,6 +567,40 @@ out:
     return code;
 }
 
+/* --preview: a panel per case, the transmitted lobe in the plane of incidence. */
+static int write_preview(const char *path, const btdf_sim_result *r)
+{
+    simchart_panel pn[BTDF_CHART_MAX_PANELS];
+    btdf_chart_panel cp[BTDF_CHART_MAX_PANELS];
+    char msg[512] = "";
+    size_t n = r->count;
+    int code = 0;
+    for (size_t k = 0; k < n && !code; k++) {
+        if (simchart_lobe(r, k, 0.7, &pn[k], msg, sizeof msg) != 0) {
+            code = fail(1, "--preview: %s", msg);
+            n = k + 1;
+            break;
+        }
+        cp[k] = (btdf_chart_panel){pn[k].title, pn[k].series, pn[k].nseries};
+    }
+    if (!code) {
+        btdf_chart ch = {"\xce\xb8o from the downward normal (" "\xc2\xb0" "; < 0 backward, > 0 forward)",
+                         r->profile ? "\xcf\x81 |cos \xce\xb8o| (1/rad), 1D profile"
+                                    : "\xcf\x81 |cos \xce\xb8o| (1/sr), bin mean",
+                         0, -90.0, 90.0, cp, n, 0};
+        btdf_preview_opts po;
+        btdf_preview_opts_default(&po);
+        po.kind = BTDF_PREVIEW_CHART;
+        po.chart = &ch;
+        po.title = "btdftab simulate: the transmitted lobe in the plane of incidence";
+        if (btdf_preview_write(&po, path, msg, sizeof msg) != BTDF_OK)
+            code = fail(1, "%s: %s", path, msg);
+    }
+    for (size_t k = 0; k < n; k++)
+        simchart_panel_free(&pn[k]);
+    return code;
+}
+
 /* Reads n numbers of the JSON array that follows key in text (integers into u or
    doubles into d); 0 when the array holds exactly n of them. */
 static int read_array(const char *text, const char *key, size_t n, uint64_t *u, double *d)
@@ -670,6 +706,8 @@ static int read_part(const char *path, const btdf_sim_opts *o, btdf_sim_result *
 }
 
 /* Options into o; -1 to go on, or an exit status. */
+static const char *preview_path;
+
 static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, double *ti,
                  const char **report, int *quiet, const char **dist, int *nt, int *np)
 {
@@ -754,6 +792,16 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
             break;
         case OPT_REPORT: *report = s; break;
         case OPT_QUIET: *quiet = 1; break;
+        case OPT_PREVIEW: {
+            size_t n = strlen(s);
+            if (n < 5 || strcmp(s + n - 4, ".png"))
+                return fail(2, "--preview '%s': the picture is a .png", s);
+            if (!btdf_format_available(".png"))
+                return fail(2, "--preview '%s': this build has no pictures (meson -Dpng=enabled)",
+                            s);
+            preview_path = s;
+            break;
+        }
         case OPT_PROFILE:
             if (strcmp(s, "1d") && strcmp(s, "2d"))
                 return fail(2, "--profile '%s': 2d (the surface) or 1d (a profile)", s);
@@ -823,6 +871,11 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
         return fail(1, "%s: %s", report, msg);
     if (dist && btdf_output_check(dist, msg, sizeof msg) != BTDF_OK)
         return fail(1, "%s: %s", dist, msg);
+    if (preview_path && btdf_output_check(preview_path, msg, sizeof msg) != BTDF_OK)
+        return fail(1, "%s: %s", preview_path, msg);
+    if (preview_path && (size_t)o.channels * o.n_theta > BTDF_CHART_MAX_PANELS)
+        return fail(2, "--preview: %zu cases (angles x channels): at most %d panels",
+                    (size_t)o.channels * o.n_theta, BTDF_CHART_MAX_PANELS);
     run_progress pr;
     run_progress_start(&pr, !quiet && isatty(2), "simulate");
     o.progress = progress;
@@ -913,6 +966,8 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
         code = strcmp(dist + n - 4, ".exr") ? write_dist(dist, prov, &o, r)
                                             : write_dist_exr(dist, prov, &o, r);
     }
+    if (code == 0 && preview_path)
+        code = write_preview(preview_path, r);
     free(eqT);
     free(eqR);
     free(cmp);

@@ -134,6 +134,9 @@ const opt_def opt_table[] = {
      "the outgoing distribution: rho and its error per bin, all orders and one hit\n"
      "(CSV: both parts; EXR: the transmission as a grid table with error, one_hit\n"
      "and one_hit_error layers; docs/simulation.md)"},
+    {OPT_PREVIEW, "preview", 0, "F.png", 0, SIM,
+     "a picture: each case's transmitted lobe in the plane of incidence with error\n"
+     "bars, beside Eq. 25 and Smith over the same bins (at most 16 cases)"},
     {OPT_BINS, "bins", 0, "T[,P]", 0, SIM,
      "histogram bins in theta_o per hemisphere and in |phi| (default 45,18)"},
     {OPT_SHARD, "shard", 0, "K/N", 0, SIM,

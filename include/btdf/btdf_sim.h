@@ -229,6 +229,14 @@ BTDF_API btdf_status btdf_sim_compare(const btdf_sim_result *r, size_t k, btdf_s
                                       int one_hit, btdf_model m, double k0, btdf_sim_cmp *out,
                                       char *msg, size_t msglen);
 
+/* The model's flux in every histogram bin of case k (the M_i above), into
+   out[theta_bins * phi_bins]: divided by btdf_sim_bin_solid_angle it is the bin's mean
+   of rho |cos|, the number to set beside the simulated one. Errors as
+   btdf_sim_compare. */
+BTDF_API btdf_status btdf_sim_model_bins(const btdf_sim_result *r, size_t k, btdf_sim_part part,
+                                         btdf_model m, double k0, double *out, char *msg,
+                                         size_t msglen);
+
 #ifdef __cplusplus
 }
 #endif

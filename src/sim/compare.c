@@ -147,3 +147,28 @@ BTDF_API btdf_status btdf_sim_compare(const btdf_sim_result *r, size_t k, btdf_s
     *out = c;
     return BTDF_OK;
 }
+
+BTDF_API btdf_status btdf_sim_model_bins(const btdf_sim_result *r, size_t k, btdf_sim_part part,
+                                         btdf_model m, double k0, double *out, char *msg,
+                                         size_t msglen)
+{
+    if (!r || !out || k >= r->count || r->theta_bins < 1 || r->phi_bins < 1)
+        return core_say(BTDF_EINVAL, msg, msglen, "case %zu: no such case with histograms", k);
+    if (r->profile)
+        return core_say(BTDF_EINVAL, msg, msglen,
+                        "a 1D profile run: Eq. 25 and Smith describe 2D surfaces");
+    if (m != BTDF_MODEL_XU_SUN && m != BTDF_MODEL_SMITH)
+        return core_say(BTDF_EINVAL, msg, msglen, "model %d: xu-sun (0) or smith (1)", (int)m);
+    const btdf_sim_tally *t = &r->tally[k];
+    int tb = r->theta_bins, pb = r->phi_bins;
+    double lw = lobe_width(t->ior, r->smoothness, part) / 10.0; /* as in btdf_sim_compare */
+    int nth = panels((PI / 2) / tb, lw);
+    for (int it = 0; it < tb; it++) {
+        int nph = panels(sin((PI / 2) / tb * (it + 1)) * PI / pb, lw);
+        for (int ip = 0; ip < pb; ip++)
+            out[(size_t)it * (size_t)pb + (size_t)ip] =
+                model_bin(m, t->ior, r->smoothness, k0, part, t->theta_i, tb, pb, it, ip, nth,
+                          nph);
+    }
+    return BTDF_OK;
+}
