@@ -27,7 +27,8 @@ PUBLIC = {'btdf.h', 'btdf_io.h', 'btdf_preview.h', 'btdf_radiance.h', 'btdf_scat
 # FFTW: the .bsdf builder's cosine transforms, and the simulator's spectral filter that
 # makes its Gaussian surfaces (src/sim/surface.c).
 CONFINED = {'fftw3.h': ('src/scatfun/dct.c', 'src/sim/surface.c'),
-            'openexr.h': ('formats/exr.c',), 'png.h': ('formats/png.c',)}
+            'openexr.h': ('formats/exr.c', 'formats/exr_impl.h', 'formats/exr_read.c',
+                          'formats/exr_write.c'), 'png.h': ('formats/png.c',)}
 
 INC = re.compile(r'^\s*#\s*include\s*([<"])([^>"]+)[>"]', re.M)
 

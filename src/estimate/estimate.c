@@ -346,6 +346,157 @@ static double ratio(double a, double b, double fl)
     return a > b ? a / b : b / a;
 }
 
+/* The first angles: test_angles stratified over [ti_min, ti_max] (their count is
+   *nstrat), then the two ends and the midpoints of the knot intervals wider than
+   min_gap (a zero-width range has one angle only). Returns the count. */
+static size_t est_first_angles(double ti_min, double ti_max, size_t test_angles,
+                               uint64_t seed, const double *knots, size_t nknots,
+                               double min_gap, double *ti, size_t *nstrat)
+{
+    double span = ti_max - ti_min;
+    uint64_t rng = seed ^ 0x243f6a8885a308d3ull;
+    size_t n = 0;
+    for (size_t k = 0; k < test_angles; k++) {
+        double x = ti_min + span * ((double)k + core_unif(&rng)) / (double)test_angles;
+        ti[n++] = fmin(x, ti_max);
+    }
+    *nstrat = n;
+    if (span > 0.0) {
+        ti[n++] = ti_min;
+        ti[n++] = ti_max;
+        for (size_t k = 0; k + 1 < nknots; k++) {
+            double a = fmax(knots[k], ti_min), b = fmin(knots[k + 1], ti_max);
+            if (b > a && b - a > min_gap)
+                ti[n++] = 0.5 * (a + b);
+        }
+    }
+    return n;
+}
+
+/* Screening (est_opts): the n first angles were read with the small sets; read again
+   with the full ones those whose small reading reaches screen_at or is 0 (a screen that
+   saw no error knows nothing). Leaves j reading in full. */
+static void est_screen(est_job *j, const est_opts *opt, int threads, size_t full_ppa,
+                       size_t full_nu, size_t full_nuni, const double *ti, size_t n,
+                       btdf_ti_error *res, size_t *points)
+{
+    j->ppa = full_ppa;
+    j->nu = full_nu;
+    j->nmu = j->nphi = full_nuni;
+    double *again = malloc(n * sizeof *again);
+    size_t *where = malloc(n * sizeof *where);
+    btdf_ti_error *res2 = calloc(n, sizeof *res2);
+    size_t *pts2 = calloc(n, sizeof *pts2);
+    size_t na = 0;
+    if (again && where && res2 && pts2) {
+        for (size_t k = 0; k < n; k++) {
+            int small = res[k].e_l1 < opt->screen_at && res[k].e_l1 > 0.0; /* NaN: no */
+            if (!small) {
+                where[na] = k;
+                again[na++] = ti[k];
+            }
+        }
+        run_angles(j, threads, again, na, res2, pts2);
+        for (size_t q = 0; q < na; q++) {
+            res[where[q]] = res2[q];
+            points[where[q]] += pts2[q];
+        }
+    } else {
+        run_angles(j, threads, ti, n, res, points); /* out of memory: all in full */
+    }
+    free(again);
+    free(where);
+    free(res2);
+    free(pts2);
+}
+
+/* The midpoints one refinement round adds to the n angles read so far (into add, at
+   most REFINE_MAX_ADD): intervals where the error or T changes fast, and those beside
+   the worst angle. Returns the count; 0 when out of memory (the estimate so far
+   stands: refinement is an improvement). */
+static size_t est_refine_points(const est_job *j, const btdf_ti_error *res, size_t n,
+                                double min_gap, double *add)
+{
+    btdf_ti_error *srt = malloc(n * sizeof *srt);
+    if (!srt)
+        return 0;
+    memcpy(srt, res, n * sizeof *srt);
+    qsort(srt, n, sizeof *srt, cmp_err_ti);
+    double wl1 = 0.0, wmx = 0.0;
+    size_t worst = 0;
+    for (size_t k = 0; k < n; k++) {
+        if (srt[k].e_l1 > wl1) {
+            wl1 = srt[k].e_l1;
+            worst = k;
+        }
+        wmx = fmax(wmx, srt[k].e_max);
+    }
+    size_t na = 0;
+    for (size_t k = 0; k + 1 < n; k++) {
+        const btdf_ti_error *a = &srt[k], *b = &srt[k + 1];
+        if (!(b->ti - a->ti > min_gap))
+            continue;
+        int l1 = fmax(a->e_l1, b->e_l1) >= wl1 / 3.0 && wl1 > 0.0 &&
+                 ratio(a->e_l1, b->e_l1, 0.01 * wl1) > 1.5;
+        int mx = fmax(a->e_max, b->e_max) >= wmx / 3.0 && wmx > 0.0 &&
+                 ratio(a->e_max, b->e_max, 0.01 * wmx) > 1.5;
+        /* T changing fast: the error's floor max(T, 0.01) and the lobe with it */
+        int tf = ratio(a->T, b->T, 1e-3) > 1.5;
+        int near_worst = (wl1 > 0.0 && (k + 1 == worst || k == worst)) ||
+                         (wmx > 0.0 && (a->e_max == wmx || b->e_max == wmx));
+        if (j->l1_only) /* e_max is not read: its rules add nothing the caller uses */
+            mx = 0, near_worst = wl1 > 0.0 && (k + 1 == worst || k == worst);
+        if (l1 || mx || tf || near_worst)
+            add[na++] = 0.5 * (a->ti + b->ti);
+    }
+    free(srt);
+    if (na > REFINE_MAX_ADD) {
+        /* keep the ones nearest the worst angles: sort by nothing fancier than taking
+           every other one, evenly over ti */
+        qsort(add, na, sizeof *add, cmp_double);
+        double step = (double)na / REFINE_MAX_ADD;
+        for (size_t k = 0; k < REFINE_MAX_ADD; k++)
+            add[k] = add[(size_t)((double)k * step)];
+        na = REFINE_MAX_ADD;
+    }
+    return na;
+}
+
+/* The report of the n angles read (res, sorted here; r takes it): means over the
+   stratified angles only, the first nstrat (the others crowd where errors are large);
+   then every angle, sorted by ti, for the maxima and the list. */
+static void est_summarise(btdf_ti_error *res, const size_t *points, size_t n, size_t nstrat,
+                          btdf_report *r)
+{
+    memset(r, 0, sizeof *r);
+    size_t nmean_max = 0;
+    for (size_t k = 0; k < nstrat; k++) {
+        r->e_l1_mean += res[k].e_l1 / (double)nstrat;
+        r->e_t_mean += res[k].e_t / (double)nstrat;
+        if (res[k].T >= 0.01) {
+            nmean_max++;
+            r->e_max_mean += res[k].e_max;
+        }
+    }
+    if (nmean_max)
+        r->e_max_mean /= (double)nmean_max;
+    qsort(res, n, sizeof *res, cmp_err_ti);
+    r->test_angles = n;
+    r->per_ti = res;
+    for (size_t k = 0; k < n; k++) {
+        const btdf_ti_error *e = &res[k];
+        r->test_points += points[k];
+        r->e_l1_max = fmax(r->e_l1_max, e->e_l1);
+        r->e_t_max = fmax(r->e_t_max, e->e_t);
+        r->e_max_max = fmax(r->e_max_max, e->e_max);
+        if (e->T >= 0.01)
+            r->e_max_angles++;
+    }
+}
+
+/* The estimate: the first angles (stratified, the ends, the knots' midpoints), read
+   with the screen's small sets when asked, then refinement rounds where the error or T
+   changes fast, then the summary. */
 static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
                                  double ti_max, size_t test_angles, size_t points_per_angle,
                                  uint64_t seed, int threads, const double *knots,
@@ -395,27 +546,9 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
         free(points);
         return BTDF_ENOMEM;
     }
-    uint64_t rng = seed ^ 0x243f6a8885a308d3ull;
-    size_t n = 0;
-    for (size_t k = 0; k < test_angles; k++) {
-        double x = ti_min + span * ((double)k + core_unif(&rng)) / (double)test_angles;
-        ti[n++] = fmin(x, ti_max);
-    }
-    size_t nstrat = n;
-    /* ends and knot midpoints; a zero-width range has one angle only */
-    size_t extra0 = n;
-    if (span > 0.0) {
-        ti[n++] = ti_min;
-        ti[n++] = ti_max;
-        for (size_t k = 0; k + 1 < nknots; k++) {
-            double a = fmax(knots[k], ti_min), b = fmin(knots[k + 1], ti_max);
-            if (b > a && b - a > min_gap)
-                ti[n++] = 0.5 * (a + b);
-        }
-    }
-    /* Screening (est_opts): every first angle with the small sets, then with the full
-       ones those whose small reading reaches screen_at or is 0 (a screen that saw no
-       error knows nothing); the refinement rounds below read in full. */
+    size_t nstrat;
+    size_t n = est_first_angles(ti_min, ti_max, test_angles, seed, knots, nknots, min_gap, ti,
+                                &nstrat);
     int screen = opt && opt->l1_only && opt->screen_ppa > 0 && opt->screen_nuni > 0 &&
                  opt->screen_ppa < points_per_angle && opt->screen_nuni < j.nmu;
     size_t full_nu = j.nu, full_nuni = j.nmu;
@@ -425,90 +558,17 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
         j.nmu = j.nphi = opt->screen_nuni;
     }
     run_angles(&j, threads, ti, nstrat, res, points);
-    if (n > extra0)
-        run_angles(&j, threads, ti + extra0, n - extra0, res + extra0, points + extra0);
-    if (screen) {
-        j.ppa = points_per_angle;
-        j.nu = full_nu;
-        j.nmu = j.nphi = full_nuni;
-        double *again = malloc(n * sizeof *again);
-        size_t *where = malloc(n * sizeof *where);
-        btdf_ti_error *res2 = calloc(n, sizeof *res2);
-        size_t *pts2 = calloc(n, sizeof *pts2);
-        size_t na = 0;
-        if (again && where && res2 && pts2) {
-            for (size_t k = 0; k < n; k++) {
-                int small = res[k].e_l1 < opt->screen_at && res[k].e_l1 > 0.0; /* NaN: no */
-                if (!small) {
-                    where[na] = k;
-                    again[na++] = ti[k];
-                }
-            }
-            run_angles(&j, threads, again, na, res2, pts2);
-            for (size_t q = 0; q < na; q++) {
-                res[where[q]] = res2[q];
-                points[where[q]] += pts2[q];
-            }
-        } else {
-            run_angles(&j, threads, ti, n, res, points); /* out of memory: all in full */
-        }
-        free(again);
-        free(where);
-        free(res2);
-        free(pts2);
-    }
+    if (n > nstrat)
+        run_angles(&j, threads, ti + nstrat, n - nstrat, res + nstrat, points + nstrat);
+    if (screen)
+        est_screen(&j, opt, threads, points_per_angle, full_nu, full_nuni, ti, n, res, points);
     int refine = 1;
     if (j.stop_above > 0.0) /* the answer is known: the worst is above stop_above */
         for (size_t k = 0; k < n && refine; k++)
             refine = !(res[k].e_l1 > j.stop_above);
     for (int round = 0; refine && round < REFINE_ROUNDS && span > 0.0; round++) {
-        /* sorted copy of what we have */
-        btdf_ti_error *srt = malloc(n * sizeof *srt);
         double *add = malloc((2 * n + 2) * sizeof *add);
-        if (!srt || !add) {
-            free(srt);
-            free(add);
-            break; /* the estimate so far stands; refinement is an improvement */
-        }
-        memcpy(srt, res, n * sizeof *srt);
-        qsort(srt, n, sizeof *srt, cmp_err_ti);
-        double wl1 = 0.0, wmx = 0.0;
-        size_t worst = 0;
-        for (size_t k = 0; k < n; k++) {
-            if (srt[k].e_l1 > wl1) {
-                wl1 = srt[k].e_l1;
-                worst = k;
-            }
-            wmx = fmax(wmx, srt[k].e_max);
-        }
-        size_t na = 0;
-        for (size_t k = 0; k + 1 < n; k++) {
-            const btdf_ti_error *a = &srt[k], *b = &srt[k + 1];
-            if (!(b->ti - a->ti > min_gap))
-                continue;
-            int l1 = fmax(a->e_l1, b->e_l1) >= wl1 / 3.0 && wl1 > 0.0 &&
-                     ratio(a->e_l1, b->e_l1, 0.01 * wl1) > 1.5;
-            int mx = fmax(a->e_max, b->e_max) >= wmx / 3.0 && wmx > 0.0 &&
-                     ratio(a->e_max, b->e_max, 0.01 * wmx) > 1.5;
-            /* T changing fast: the error's floor max(T, 0.01) and the lobe with it */
-            int tf = ratio(a->T, b->T, 1e-3) > 1.5;
-            int near_worst = (wl1 > 0.0 && (k + 1 == worst || k == worst)) ||
-                             (wmx > 0.0 && (a->e_max == wmx || b->e_max == wmx));
-            if (j.l1_only) /* e_max is not read: its rules add nothing the caller uses */
-                mx = 0, near_worst = wl1 > 0.0 && (k + 1 == worst || k == worst);
-            if (l1 || mx || tf || near_worst)
-                add[na++] = 0.5 * (a->ti + b->ti);
-        }
-        free(srt);
-        if (na > REFINE_MAX_ADD) {
-            /* keep the ones nearest the worst angles: sort by nothing fancier than
-               taking every other one, evenly over ti */
-            qsort(add, na, sizeof *add, cmp_double);
-            double step = (double)na / REFINE_MAX_ADD;
-            for (size_t k = 0; k < REFINE_MAX_ADD; k++)
-                add[k] = add[(size_t)((double)k * step)];
-            na = REFINE_MAX_ADD;
-        }
+        size_t na = add ? est_refine_points(&j, res, n, min_gap, add) : 0;
         if (na == 0 || n + na > cap) {
             free(add);
             break;
@@ -519,32 +579,7 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
         n += na;
     }
     free(ti);
-    memset(r, 0, sizeof *r);
-    /* Means over the stratified angles only, the first nstrat (the others crowd where
-       errors are large); then every angle, sorted by ti, for the maxima and the list. */
-    size_t nmean_max = 0;
-    for (size_t k = 0; k < nstrat; k++) {
-        r->e_l1_mean += res[k].e_l1 / (double)nstrat;
-        r->e_t_mean += res[k].e_t / (double)nstrat;
-        if (res[k].T >= 0.01) {
-            nmean_max++;
-            r->e_max_mean += res[k].e_max;
-        }
-    }
-    if (nmean_max)
-        r->e_max_mean /= (double)nmean_max;
-    qsort(res, n, sizeof *res, cmp_err_ti);
-    r->test_angles = n;
-    r->per_ti = res;
-    for (size_t k = 0; k < n; k++) {
-        const btdf_ti_error *e = &res[k];
-        r->test_points += points[k];
-        r->e_l1_max = fmax(r->e_l1_max, e->e_l1);
-        r->e_t_max = fmax(r->e_t_max, e->e_t);
-        r->e_max_max = fmax(r->e_max_max, e->e_max);
-        if (e->T >= 0.01)
-            r->e_max_angles++;
-    }
+    est_summarise(res, points, n, nstrat, r);
     free(points);
     r->seconds_estimate = core_now() - t0;
     return BTDF_OK;
