@@ -152,6 +152,10 @@ int main(int argc, char **argv)
 {
     if (argc < 3)
         return usage();
+    if (!btdf_format_available(".png")) {
+        fprintf(stderr, "btdf-simfig: this build has no pictures (meson -Dpng=enabled)\n");
+        return 2;
+    }
     unsigned long long rays = 0, seed = 1;
     int threads = 0;
     for (int k = 3; k < argc; k++) {
