@@ -871,6 +871,13 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
         return fail(1, "%s: %s", report, msg);
     if (dist && btdf_output_check(dist, msg, sizeof msg) != BTDF_OK)
         return fail(1, "%s: %s", dist, msg);
+    /* an EXR table's slices need distinct angles: said before the run, not after it */
+    if (dist && !strcmp(dist + strlen(dist) - 4, ".exr"))
+        for (size_t i = 0; i < o.n_theta; i++)
+            for (size_t j = 0; j < i; j++)
+                if (o.theta_i[i] == o.theta_i[j])
+                    return fail(2, "-o %s: angle %g deg given twice (a table's slices need "
+                                   "distinct angles)", dist, deg_given[i]);
     if (preview_path && btdf_output_check(preview_path, msg, sizeof msg) != BTDF_OK)
         return fail(1, "%s: %s", preview_path, msg);
     if (preview_path && (size_t)o.channels * o.n_theta > BTDF_CHART_MAX_PANELS)
