@@ -134,8 +134,20 @@ static btdf_status check_part(reader *r, int part, int channels, exr_attr_box2i_
         return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d is not a scanline image",
                    part);
     const exr_attr_chlist_t *cl = NULL;
-    if (exr_get_channels(r->ctx, part, &cl) != EXR_ERR_SUCCESS || !cl ||
-        cl->num_channels != channels)
+    /* the table's channels, and any number of extra layers (names with a '.', such as
+       a simulation's error.Y), which the reader leaves aside */
+    int plain = 0;
+    if (exr_get_channels(r->ctx, part, &cl) == EXR_ERR_SUCCESS && cl)
+        for (int i = 0; i < cl->num_channels; i++) {
+            const exr_attr_chlist_entry_t *e = &cl->entries[i];
+            plain += strchr(e->name.str, '.') == NULL;
+            if (strchr(e->name.str, '.') && (e->pixel_type != EXR_PIXEL_FLOAT ||
+                                             e->x_sampling != 1 || e->y_sampling != 1))
+                return say(BTDF_EFORMAT, r->msg, r->msglen,
+                           "part %d: layer channel %s is not a full-size 32-bit float", part,
+                           e->name.str);
+        }
+    if (!cl || plain != channels)
         return say(BTDF_EFORMAT, r->msg, r->msglen, "part %d does not have %d channel%s",
                    part, channels, channels == 1 ? "" : "s");
     const char *const *names = bexr_chan_names(channels);
@@ -285,7 +297,13 @@ static btdf_status check_sizes(reader *r, int part, const exr_attr_box2i_t *dw, 
         if (packed > fs)
             break;
     }
-    uint64_t px = (uint64_t)channels * sizeof(float); /* bytes per pixel, all channels */
+    /* bytes per pixel, all channels: the table's and any extra layers' (check_part
+       saw that each is a float, the table's by name, the layers' counted here) */
+    const exr_attr_chlist_t *cl = NULL;
+    int all = channels;
+    if (exr_get_channels(r->ctx, part, &cl) == EXR_ERR_SUCCESS && cl && cl->num_channels > all)
+        all = cl->num_channels;
+    uint64_t px = (uint64_t)all * sizeof(float);
     if (packed > fs || unpacked % px != 0 || unpacked / px != width * height)
         return say(BTDF_EFORMAT, r->msg, r->msglen,
                    "part %d: its chunks hold %llu bytes stored and %llu decoded, not a "

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* exr_write.c: a table as a multi-part OpenEXR file (the layout in exr_impl.h). */
+#include <ctype.h>
 #include <errno.h>
 #include <float.h>
 #include <math.h>
@@ -133,7 +134,8 @@ static exr_result_t set_report(exr_context_t ctx, const btdf_report *r, const ch
 
 /* Table-wide attributes, all on part 0. */
 static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
-                                    const btdf_write_opts *w, size_t nslices)
+                                    const btdf_write_opts *w, size_t nslices,
+                                    const char *value)
 {
     const btdf_params *p = btdf_table_get_params(t);
     const char *const *names = bexr_chan_names(p->channels);
@@ -162,7 +164,8 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
     int refl = kind_is_reflection(btdf_table_get_kind(t));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "value",
-                                 refl ? "rho_r, the reflection of the same facets (BRDF), no "
+                                 value  ? value
+                                 : refl ? "rho_r, the reflection of the same facets (BRDF), no "
                                         "cosine factor"
                                       : "rho, the BTDF of Xu & Sun 2008 Eq. 25, no cosine factor");
     const btdf_table *tr = t->refl;
@@ -272,14 +275,14 @@ static exr_result_t compress_or_store_raw(exr_encode_pipeline_t *enc)
 }
 
 static btdf_status write_part_pixels(exr_context_t ctx, int part, const btdf_slice *sl,
-                                     int channels, const float *planes, const exr_err *err,
-                                     char *msg, size_t msglen)
+                                     int channels, const char *const *names,
+                                     const float *planes, const exr_err *err, char *msg,
+                                     size_t msglen)
 {
     int32_t lpc = 1;
     exr_result_t rc = exr_get_scanlines_per_chunk(ctx, part, &lpc);
     if (rc != EXR_ERR_SUCCESS || lpc < 1)
         return say(BTDF_EIO, msg, msglen, "OpenEXR: %s", bexr_text(err, rc));
-    const char *const *names = bexr_chan_names(channels);
     size_t npix = sl->nrows * sl->ncols;
     int32_t width = (int32_t)sl->ncols, height = (int32_t)sl->nrows;
     exr_encode_pipeline_t enc = EXR_ENCODE_PIPELINE_INITIALIZER;
@@ -393,9 +396,46 @@ btdf_status bexr_write(const btdf_output_ctx *c, FILE *f, const char *path, char
     disp.max.y = (int32_t)maxrows - 1;
     exr_attr_v2f_t centre;
     centre.x = centre.y = 0.0f;
-    if (maxpix > SIZE_MAX / sizeof(float) / (size_t)channels)
+    /* the extra layers: the table's own layout, so each slice's pixels line up */
+    size_t nl = c->layers ? c->nlayers : 0;
+    if (nl > 8)
+        return say(BTDF_EINVAL, msg, msglen, "%zu layers: at most 8", nl);
+    for (size_t l = 0; l < nl; l++) {
+        const btdf_table *lt = c->layers[l].table;
+        const char *ln = c->layers[l].name;
+        size_t len = ln ? strlen(ln) : 0;
+        int ok = lt && len > 0 && len < 24 && btdf_table_get_kind(lt) == btdf_table_get_kind(t) &&
+                 btdf_table_get_params(lt)->channels == channels && !lt->refl == !t->refl &&
+                 btdf_table_slice_count(lt) == btdf_table_slice_count(t);
+        for (size_t i = 0; ok && i < len; i++)
+            ok = isalnum((unsigned char)ln[i]) || ln[i] == '_';
+        for (size_t k = 0; ok && k < nslices; k++) {
+            btdf_slice a, b;
+            const btdf_table *oa, *ob;
+            file_slice(t, k, &a, &oa);
+            file_slice(lt, k, &b, &ob);
+            ok = a.nrows == b.nrows && a.ncols == b.ncols;
+        }
+        if (!ok)
+            return say(BTDF_EINVAL, msg, msglen,
+                       "layer %zu ('%s'): needs a name of letters, digits and '_' (under 24) "
+                       "and the table's kind, channels, slices and nodes",
+                       l + 1, ln ? ln : "");
+    }
+    int nch = channels * (int)(1 + nl);
+    char lnames[8 * 3][32];
+    const char *names_all[3 * 9];
+    for (int ch = 0; ch < channels; ch++)
+        names_all[ch] = bexr_chan_names(channels)[ch];
+    for (size_t l = 0; l < nl; l++)
+        for (int ch = 0; ch < channels; ch++) {
+            char *b = lnames[l * 3 + (size_t)ch];
+            snprintf(b, sizeof lnames[0], "%s.%s", c->layers[l].name, bexr_chan_names(channels)[ch]);
+            names_all[(size_t)channels * (l + 1) + (size_t)ch] = b;
+        }
+    if (maxpix > SIZE_MAX / sizeof(float) / (size_t)nch)
         return say(BTDF_EOVERFLOW, msg, msglen, "a slice is too large to convert");
-    float *planes = malloc(maxpix * (size_t)channels * sizeof(float));
+    float *planes = malloc(maxpix * (size_t)nch * sizeof(float));
     if (!planes)
         return say(BTDF_ENOMEM, msg, msglen, "out of memory for a %zu-node slice", maxpix);
 
@@ -412,7 +452,6 @@ btdf_status bexr_write(const btdf_output_ctx *c, FILE *f, const char *path, char
         return say(BTDF_EIO, msg, msglen, "%s", bexr_text(&err, rc));
     }
     write_slot_set(ctx, &err, NULL); /* from here on, OpenEXR's messages reach err */
-    const char *const *names = bexr_chan_names(channels);
     for (size_t k = 0; k < nslices && rc == EXR_ERR_SUCCESS; k++) {
         btdf_slice sl;
         const btdf_table *own;
@@ -434,14 +473,14 @@ btdf_status bexr_write(const btdf_output_ctx *c, FILE *f, const char *path, char
         if (rc == EXR_ERR_SUCCESS)
             rc = exr_initialize_required_attr(ctx, part, &disp, &data, 1.0f, &centre, 1.0f,
                                               EXR_LINEORDER_INCREASING_Y, EXR_COMPRESSION_ZIP);
-        for (int ch = 0; ch < channels && rc == EXR_ERR_SUCCESS; ch++)
-            rc = exr_add_channel(ctx, part, names[ch], EXR_PIXEL_FLOAT,
+        for (int ch = 0; ch < nch && rc == EXR_ERR_SUCCESS; ch++)
+            rc = exr_add_channel(ctx, part, names_all[ch], EXR_PIXEL_FLOAT,
                                  EXR_PERCEPTUALLY_LINEAR, 1, 1);
         if (rc == EXR_ERR_SUCCESS)
             rc = set_slice_attrs(ctx, part, kind, &sl);
     }
     if (rc == EXR_ERR_SUCCESS)
-        rc = set_table_attrs(ctx, t, c->opts, btdf_table_slice_count(t));
+        rc = set_table_attrs(ctx, t, c->opts, btdf_table_slice_count(t), c->value);
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_write_header(ctx);
     if (rc != EXR_ERR_SUCCESS)
@@ -452,8 +491,17 @@ btdf_status bexr_write(const btdf_output_ctx *c, FILE *f, const char *path, char
         const btdf_table *own;
         file_slice(t, k, &sl, &own);
         st = slice_to_float(&sl, channels, planes, msg, msglen);
+        size_t npix = sl.nrows * sl.ncols;
+        for (size_t l = 0; l < nl && st == BTDF_OK; l++) {
+            btdf_slice ls;
+            const btdf_table *lo;
+            file_slice(c->layers[l].table, k, &ls, &lo);
+            st = slice_to_float(&ls, channels, planes + (l + 1) * (size_t)channels * npix, msg,
+                                msglen);
+        }
         if (st == BTDF_OK)
-            st = write_part_pixels(ctx, (int)k, &sl, channels, planes, &err, msg, msglen);
+            st = write_part_pixels(ctx, (int)k, &sl, nch, names_all, planes, &err, msg,
+                                   msglen);
     }
     free(planes);
     rc = exr_finish(&ctx);

@@ -18,6 +18,9 @@ typedef struct btdf_output_ctx {
     int width, height;
     const char *description;     /* stored in the file, may be NULL */
     const struct btdf_rad *rad;  /* BTDF_NEEDS_RADIANCE */
+    const struct btdf_layer *layers; /* tables: more layers (btdf_output), may be NULL */
+    size_t nlayers;
+    const char *value;           /* tables: what the values are; NULL: Eq. 25's */
 } btdf_output_ctx;
 
 typedef struct btdf_format_ops {

@@ -171,6 +171,32 @@ BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char 
     return btdf_write_atomic(f, &c, path, msg, msglen);
 }
 
+BTDF_API btdf_status btdf_write_table_layers(const btdf_table *t, const btdf_layer *layers,
+                                             size_t nlayers, const char *value,
+                                             const btdf_write_opts *w, const char *path,
+                                             char *msg, size_t msglen)
+{
+    if (!t || !path)
+        return core_say(BTDF_EINVAL, msg, msglen, "no table or no path");
+    const btdf_format_ops *f = btdf_format_for_path(path);
+    if (!f || f->needs != BTDF_NEEDS_TABLE)
+        return core_say(BTDF_EINVAL, msg, msglen, "'%s': a table with layers is written as .exr",
+                        path);
+    if (!f->available)
+        return switched_off(f, msg, msglen);
+    if (nlayers && f != &btdf_format_exr)
+        return core_say(BTDF_EINVAL, msg, msglen, "'%s': only .exr holds more layers", path);
+    btdf_write_opts none = {NULL, NULL, NULL};
+    btdf_output_ctx c;
+    memset(&c, 0, sizeof c);
+    c.opts = w ? w : &none;
+    c.table = t;
+    c.layers = layers;
+    c.nlayers = layers ? nlayers : 0;
+    c.value = value;
+    return btdf_write_atomic(f, &c, path, msg, msglen);
+}
+
 BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
                                       const btdf_write_opts *w, char *msg, size_t msglen)
 {

@@ -616,7 +616,34 @@ expect 2 "tabulate --model smith: tables of this model are not available" "tabul
         END { d = s - T; d = d < 0 ? -d : d; exit !(d <= 1e-9 * T && d <= se) }' "$W/d.csv" && \
     ok "simulate -o: header keys, finite rows, integral of rho |cos| dw over T's bins is T" || no "simulate -o"
 rm -f "$W/d.csv" "$W/d.json"
-expect 2 "is written as .csv" "simulate -o .exr is refused" -- "$B" simulate --rays 100 -o "$W/t.exr"
+# simulate -o F.exr: the transmission as a grid table (a slice per angle, sorted) with
+# error and one-hit layers; read back, a bin centre's rho is the CSV's to float
+# rounding (EXR stores 32-bit floats: 1e-6 relative); an angle twice is refused
+if "$B" --version | grep -q 'OpenEXR on'; then
+    "$B" simulate -q -s 1 --theta-i 50,20 --rays 20000 --bins 15,6 -o "$W/d.exr" && \
+        "$B" simulate -q -s 1 --theta-i 50,20 --rays 20000 --bins 15,6 -o "$W/d.csv" && \
+        "$B" inspect "$W/d.exr" > "$W/i.txt" && grep -q '^kind: grid' "$W/i.txt" && \
+        grep -q '^slice 0: index 20.000000 deg, 15 x 6' "$W/i.txt" && \
+        r=$(awk -F, '$1 == 20 && $2 == 153 && $3 == 165 && $5 == "transmission" { print $6 }' "$W/d.csv") && \
+        x=$(echo "20 153 165" | "$B" eval --table "$W/d.exr") && \
+        awk -v a="$r" -v b="$x" 'BEGIN { d = a - b; d = d < 0 ? -d : d; exit !(a > 0 && d <= 1e-6 * a) }' && \
+        ok "simulate -o .exr: a grid table read back, rho of the CSV ($r, $x)" || { no "simulate -o .exr"; cat "$W/i.txt"; }
+    expect 2 "given twice" "simulate -o .exr with an angle twice" -- "$B" simulate -q --theta-i 20,20 --rays 100 -o "$W/t.exr"
+    rm -f "$W/d.exr" "$W/d.csv" "$W/i.txt"
+else
+    expect 2 "this build has no OpenEXR" "simulate -o .exr without OpenEXR" -- "$B" simulate --rays 100 -o "$W/t.exr"
+fi
+# simulate --preview: a PNG of each case's lobe in the plane of incidence
+if "$B" --version | grep -q 'PNG on'; then
+    "$B" simulate -q -s 3 --theta-i 30,60 --rays 20000 --preview "$W/sp.png" && \
+        [ "$(head -c 8 "$W/sp.png" | od -An -tx1 | tr -d ' ')" = "89504e470d0a1a0a" ] && \
+        ok "simulate --preview: a PNG" || no "simulate --preview"
+    expect 1 "cannot write in the folder" "simulate unwritable --preview" -- "$B" simulate --rays 100 --preview "$W/nodir/p.png"
+    rm -f "$W/sp.png"
+else
+    expect 2 "this build has no pictures" "simulate --preview without PNG" -- "$B" simulate --rays 100 --preview "$W/p.png"
+fi
+expect 2 "the picture is a .png" "simulate --preview not .png" -- "$B" simulate --rays 100 --preview "$W/p.jpg"
 expect 2 "--bins: '0'" "simulate --bins 0" -- "$B" simulate --rays 100 --bins 0 -o "$W/t.csv"
 expect 1 "cannot write in the folder" "simulate unwritable -o" -- "$B" simulate --rays 100 -o "$W/nodir/d.csv"
 # simulate --shard K/N and --merge: three shards (one on one thread), merged out of

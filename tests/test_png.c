@@ -529,6 +529,74 @@ static void check_layout(const btdf_preview_opts *o, const char *what)
     plot_canvas_free(&c);
 }
 
+/* BTDF_PREVIEW_CHART (the simulator's pictures): four panels of lobes with error bars
+   and two model lines, and a log-x chart of five series like the orders picture; the
+   layout rules as for every kind, at the default and the smallest size; the same bytes
+   twice; a NaN, a negative error and a size below the minimum named. */
+static void test_chart(void **state)
+{
+    (void)state;
+    static double x[90], y[90], e[90], m[90], xs[10], ys[5][10], es[10];
+    for (int i = 0; i < 90; i++) {
+        x[i] = -89 + 2 * i;
+        y[i] = 6 * exp(-(x[i] - 25) * (x[i] - 25) / 200.0);
+        e[i] = 0.05 * y[i];
+        m[i] = 0.9 * y[i];
+    }
+    for (int k = 0; k < 10; k++) {
+        xs[k] = 0.5 * pow(1.5, k);
+        es[k] = 0.003;
+        for (int q = 0; q < 5; q++)
+            ys[q][k] = (q + 1) / (5.0 + k);
+    }
+    btdf_chart_series sr[3] = {{"simulation \xc2\xb1 1 s.e.", 90, x, y, e, 1},
+                               {"Eq. 25 (same bins)", 90, x, m, NULL, 0},
+                               {"Smith (same bins)", 90, x, y, NULL, 0}};
+    btdf_chart_panel pn[4] = {{"(a) s = 6", sr, 3}, {"(b) s = 3", sr, 3}, {"(c) s = 1", sr, 3},
+                              {"(d) s = 0.5", sr, 3}};
+    btdf_chart ch = {"\xce\xb8o (\xc2\xb0)", "\xcf\x81 |cos \xce\xb8o| (1/sr)", 0, -90, 90,
+                     pn, 4, 2};
+    btdf_preview_opts o;
+    btdf_preview_opts_default(&o);
+    o.kind = BTDF_PREVIEW_CHART;
+    o.chart = &ch;
+    o.title = "Fig. 9 redrawn: n = 1.4, \xce\xb8i = 30\xc2\xb0";
+    check_layout(&o, "chart of lobes");
+    o.width = 640;
+    o.height = 514; /* 2 x 240 and the title's 34 */
+    check_layout(&o, "chart of lobes, smallest");
+    btdf_chart_series so[5];
+    const char *lab[5] = {"one hit", "two hits", "three or more", "all orders", "Eq. 25"};
+    for (int q = 0; q < 5; q++)
+        so[q] = (btdf_chart_series){lab[q], 10, xs, ys[q], q < 4 ? es : NULL, q < 4};
+    btdf_chart_panel po[2] = {{"n = 1.5", so, 5}, {"n = 1/1.5", so, 5}};
+    btdf_chart cl = {"s (log scale)", "T", 1, 0.4, 40, po, 2, 2};
+    btdf_preview_opts_default(&o);
+    o.kind = BTDF_PREVIEW_CHART;
+    o.chart = &cl;
+    o.title = "Transmission by order";
+    check_layout(&o, "chart of orders");
+    unsigned char *a = NULL, *b = NULL;
+    int w1, h1, w2, h2;
+    char msg[300];
+    assert_int_equal(BTDF_OK, btdf_preview_render(&o, &a, &w1, &h1, msg, sizeof msg));
+    assert_int_equal(BTDF_OK, btdf_preview_render(&o, &b, &w2, &h2, msg, sizeof msg));
+    assert_true(w1 == w2 && h1 == h2 && memcmp(a, b, (size_t)w1 * (size_t)h1 * 3) == 0);
+    btdf_preview_free(a);
+    btdf_preview_free(b);
+    ys[1][2] = NAN;
+    assert_int_equal(BTDF_EINVAL, btdf_preview_render(&o, &a, &w1, &h1, msg, sizeof msg));
+    assert_non_null(strstr(msg, "panel 1, series 2, point 3"));
+    ys[1][2] = 0.1;
+    es[4] = -1;
+    assert_int_equal(BTDF_EINVAL, btdf_preview_render(&o, &a, &w1, &h1, msg, sizeof msg));
+    assert_non_null(strstr(msg, "error -1"));
+    es[4] = 0.003;
+    o.width = 300;
+    assert_int_equal(BTDF_EINVAL, btdf_preview_render(&o, &a, &w1, &h1, msg, sizeof msg));
+    assert_non_null(strstr(msg, "at least 640"));
+}
+
 static void test_layout(void **state)
 {
     (void)state;
@@ -689,6 +757,7 @@ int main(void)
         cmocka_unit_test(test_polar_rgb),     cmocka_unit_test(test_montage),
         cmocka_unit_test(test_render),
         cmocka_unit_test(test_deterministic), cmocka_unit_test(test_layout),
+        cmocka_unit_test(test_chart),
         cmocka_unit_test(test_ticks),         cmocka_unit_test(test_errors),
     };
     return cmocka_run_group_tests_name("png", tests, NULL, NULL);

@@ -173,21 +173,130 @@ static void large_s_is_eq25(void **state)
     assert_true(dof >= 10);
     assert_true(chi < dof + 5 * sqrt(2.0 * dof));
     assert_true(chi_wrong > dof2 + 5 * sqrt(2.0 * dof2));
-    /* The batch-means errors against the binomial ones: each batch has its own
-       surface, whose lobe differs a little from the ensemble's, so the variance is
-       binomial plus that spread, never less. 32 batches (one per realisation) give
-       an error's error of 1/sqrt(2 * 31) = 12.7 %: the ratio must exceed 0.6 (over 3
-       of those below 1). The spread between 16 tau tiles raises it: the ratio squared
-       less 1 grows with the rays per batch (binomial variance goes as n, the surfaces'
-       as n^2); it was at most 1.4 at 3,125 rays per batch, so about 2.2 at 12,500
-       (measured: 0.99 to 2.18 over the 12 bins); 3 bounds it. */
-    for (int i = 0; i < r->theta_bins; i++) {
-        const btdf_sim_est *e = &r->tally[0].hist_T1[i];
-        if (e->mean * (double)r->tally[0].rays < 1000)
+    btdf_sim_result_free(r);
+}
+
+/* The per-bin errors of the batch means, from the variance decomposition. Batch b holds
+   n rays on realisation b; its bin fraction is p_b + e_b, with p_b the surface's own
+   fraction (spread sigma_s^2 between surfaces) and e_b the paths' binomial noise
+   (variance V = p (1 - p) / n). The sample variance of the B batch means, S^2 = B se^2,
+   therefore estimates V + sigma_s^2: the binomial error sqrt(V / B) is a lower bound,
+   and how far above it depends on n. Two runs on the same 32 surfaces (the surface
+   stream depends on the seed and the batch only) with independent rays (the second
+   run's second angle, equal to the first, draws stream RAYS + 1): A, the one checked,
+   with n_A = 12,500 rays per batch (that of large_s_is_eq25), B with n_B = 50,000.
+   B gives sigma_s^2 = S_B^2 - V_B, so A must have S_A^2 = V_A + sigma_s^2, i.e.
+   (se_A / sqrt(V_A / B))^2 = 1 + sigma_s^2 / V_A (this replaces a fixed band for that
+   ratio). The difference S_A^2 - S_B^2 - (V_A - V_B) holds no surface term (same
+   surfaces) and has variance (2 V_A^2 + 2 V_B^2 + 4 sigma_s^2 (V_A + V_B)) / (B - 1)
+   (sample variances of B normal values, and the surface-noise cross terms). Per bin,
+   5 of its standard deviations either side (a chi^2 of 31 degrees of freedom passes 5
+   deviations above its mean once in 20,000); a band this wide is what 32 batches
+   allow (S^2 alone has a 25 % error), so the bins' standardised differences are also
+   pooled (the bins' counts are nearly independent: p < 0.1 each): their sum over
+   sqrt(bins) within 5. Bins with at least 1000 paths (the normal approximation). */
+static void errors_follow_the_decomposition(void **state)
+{
+    (void)state;
+    const double n = 1.5, s = 30, t30 = 30 * DEG, ti2[2] = {t30, t30};
+    btdf_sim_result *a = run(n, s, &t30, 1, 400000, hist_fine);
+    btdf_sim_result *b = run(n, s, ti2, 2, 1600000, hist_fine);
+    assert_int_equal(32, a->tally[0].batches);
+    assert_int_equal(32, b->tally[1].batches);
+    const double B = 32, nA = 12500, nB = 50000;
+    int checked = 0;
+    double zsum = 0;
+    for (int i = 0; i < a->theta_bins; i++) {
+        const btdf_sim_est *ea = &a->tally[0].hist_T1[i], *eb = &b->tally[1].hist_T1[i];
+        double p = ea->mean;
+        if (p * (double)a->tally[0].rays < 1000)
             continue;
-        double bin_se = sqrt(e->mean * (1 - e->mean) / (double)r->tally[0].rays);
-        assert_true(e->se > 0.6 * bin_se && e->se < 3.0 * bin_se);
+        double vA = p * (1 - p) / nA, vB = p * (1 - p) / nB;
+        double sA = B * ea->se * ea->se, sB = B * eb->se * eb->se;
+        double sig = sB - vB > 0 ? sB - vB : 0; /* an estimate; clipped where noise leaves it < 0 */
+        double sd = sqrt((2 * vA * vA + 2 * vB * vB + 4 * sig * (vA + vB)) / (B - 1));
+        double ratio2 = sA / vA, want = 1 + sig / vA, sd1 = sd / vA;
+        print_message("bin %d: (se / binomial)^2 %.3f, decomposition %.3f +- %.3f\n", i, ratio2,
+                      want, sd1);
+        assert_true(fabs(ratio2 - want) <= 5 * sd1);
+        zsum += (ratio2 - want) / sd1;
+        checked++;
     }
+    print_message("%d bins, pooled z %.2f\n", checked, zsum / sqrt(checked));
+    assert_true(checked >= 8);
+    assert_true(fabs(zsum / sqrt(checked)) < 5);
+    btdf_sim_result_free(a);
+    btdf_sim_result_free(b);
+}
+
+static void hist_coarse(btdf_sim_opts *o)
+{
+    o->theta_bins = 45;
+    o->phi_bins = 18;
+}
+
+static void hist_cmp(btdf_sim_opts *o)
+{
+    o->theta_bins = 360; /* 0.25 degree: the s = 30 lobe spreads over some 20 bins */
+    o->phi_bins = 18;    /* 10 degrees */
+}
+
+/* btdf_sim_compare: at s = 30 (RMS slope 0.067, V = 1 and Smith's G = 1 to rounding at
+   30 degrees, 0.0 % of two hits) the one-hit lobe is Eq. 25's and Smith's: chi^2 below
+   its mean plus 5 standard deviations (the mean is dof (B - 1) / (B - 3) = 1.069 dof,
+   the errors being estimated from B = 32 batches), e_T within 5 standard errors, and
+   e_L1 within 5 of its spreads e_L1_floor_sd above its floor (the value with no model
+   error, in the normal approximation; bins with few paths make the true value lower).
+   Both binnings: 0.25 x 10 degrees (the lobe over some 30 bins) and the default 2 x 10
+   (the lobe in four, so e_L1 is as noisy as four terms). At s = 1, Eq. 25's shadowing
+   takes 40 % of T (docs/simulation.md): e_T must exceed 100 floors, e_L1 its floor
+   plus 20 spreads, and the one-hit chi^2 10 times its dof. */
+static void compare_with_models(void **state)
+{
+    (void)state;
+    const double n = 1.5, ti = 30 * DEG;
+    char msg[256];
+    btdf_sim_cmp c;
+    btdf_sim_result *r = run(n, 30, &ti, 1, 400000, hist_cmp);
+    const btdf_model models[2] = {BTDF_MODEL_XU_SUN, BTDF_MODEL_SMITH};
+    for (int m = 0; m < 2; m++) {
+        assert_status(BTDF_OK, btdf_sim_compare(r, 0, BTDF_SIM_TRANSMISSION, 1, models[m], 0.7, &c,
+                                                msg, sizeof msg));
+        double mean = c.dof * 31.0 / 29.0, sd = sqrt(2.0 * c.dof) * 31.0 / 29.0;
+        print_message("s = 30, %s: chi2 %.1f on %d, e_T %.2g (floor %.2g), e_L1 %.3g (floor "
+                      "%.3g +- %.3g), model in bins %.6f of %.6f\n",
+                      m ? "smith" : "eq25", c.chi2, c.dof, c.e_T, c.e_T_floor, c.e_L1,
+                      c.e_L1_floor, c.e_L1_floor_sd, c.model_in_bins, c.model_total);
+        assert_true(c.dof >= 30);
+        assert_true(c.chi2 < mean + 5 * sd);
+        assert_true(c.e_T < 5 * c.e_T_floor / 0.7978845608);
+        assert_true(c.e_L1 < c.e_L1_floor + 5 * c.e_L1_floor_sd);
+        /* the quadrature of the bins: their sum is the model's T to 1e-6 */
+        assert_close(c.model_in_bins, c.model_total, 0, 1e-6);
+    }
+    btdf_sim_result_free(r);
+    r = run(n, 30, &ti, 1, 400000, hist_coarse);
+    assert_status(BTDF_OK, btdf_sim_compare(r, 0, BTDF_SIM_TRANSMISSION, 1, BTDF_MODEL_XU_SUN,
+                                            0.7, &c, msg, sizeof msg));
+    print_message("s = 30, 2 degree bins: e_L1 %.3g (floor %.3g +- %.3g)\n", c.e_L1,
+                  c.e_L1_floor, c.e_L1_floor_sd);
+    assert_true(c.e_L1 < c.e_L1_floor + 5 * c.e_L1_floor_sd);
+    btdf_sim_result_free(r);
+    r = run(n, 1, &ti, 1, 400000, hist_coarse);
+    assert_status(BTDF_OK, btdf_sim_compare(r, 0, BTDF_SIM_TRANSMISSION, 0, BTDF_MODEL_XU_SUN,
+                                            0.7, &c, msg, sizeof msg));
+    print_message("s = 1, all orders: e_T %.3g (floor %.2g), e_L1 %.3g (floor %.3g +- %.3g)\n",
+                  c.e_T, c.e_T_floor, c.e_L1, c.e_L1_floor, c.e_L1_floor_sd);
+    assert_true(c.e_T > 100 * c.e_T_floor);
+    assert_true(c.e_L1 > c.e_L1_floor + 20 * c.e_L1_floor_sd);
+    assert_status(BTDF_OK, btdf_sim_compare(r, 0, BTDF_SIM_TRANSMISSION, 1, BTDF_MODEL_XU_SUN,
+                                            0.7, &c, msg, sizeof msg));
+    print_message("s = 1, one hit: chi2 %.1f on %d\n", c.chi2, c.dof);
+    assert_true(c.chi2 > 10.0 * c.dof);
+    /* bad arguments are named */
+    assert_status(BTDF_EINVAL, btdf_sim_compare(r, 5, BTDF_SIM_TRANSMISSION, 1,
+                                                BTDF_MODEL_XU_SUN, 0.7, &c, msg, sizeof msg));
+    assert_non_null(strstr(msg, "case 5"));
     btdf_sim_result_free(r);
 }
 
@@ -459,6 +568,52 @@ static void shards_merge_to_one_run(void **state)
     btdf_sim_result_free(whole);
 }
 
+static void profile_1d(btdf_sim_opts *o)
+{
+    o->profile = 1;
+    o->theta_bins = 45;
+    o->phi_bins = 18;
+}
+
+/* --profile 1d: a profile z = h(x) and rays in its plane. Every outgoing direction
+   lies in the plane, so only the |phi| bins [0, 10) and [170, 180] degrees receive
+   paths, exactly (the normals have no y part and the ray none to begin with); energy
+   holds as on the surface; the profile's slope along x has RMS sqrt(2)/s, within 3 %
+   over 32 realisations of 256 points (each 16 tau long: about 2 % spread of one, 0.4 %
+   of the mean, and the grid's 0.1 %); comparisons with the 2D models are refused. */
+static void profile_in_plane(void **state)
+{
+    (void)state;
+    const double ti[2] = {30 * DEG, 60 * DEG};
+    btdf_sim_result *r = run(1.4, 1, ti, 2, 40000, profile_1d);
+    for (size_t k = 0; k < r->count; k++) {
+        const btdf_sim_tally *t = &r->tally[k];
+        assert_int_equal(t->lost, 0);
+        assert_close(t->R.mean + t->T.mean, 1.0, 0, 1e-12);
+        double off = 0, in = 0;
+        for (int it = 0; it < 45; it++)
+            for (int ip = 0; ip < 18; ip++) {
+                size_t i = (size_t)it * 18 + (size_t)ip;
+                double m = t->hist_T[i].mean + t->hist_R[i].mean;
+                if (ip == 0 || ip == 17)
+                    in += m;
+                else
+                    off += m;
+            }
+        assert_true(off == 0.0);
+        assert_close(in, 1.0, 0, 1e-12);
+    }
+    print_message("profile: slope %.4f (target %.4f), tau %.4f\n", r->surface.rms_slope,
+                  sqrt(2.0), r->surface.corr_length);
+    assert_close(r->surface.rms_slope, sqrt(2.0), 0.03, 0);
+    char msg[128];
+    btdf_sim_cmp c;
+    assert_status(BTDF_EINVAL, btdf_sim_compare(r, 0, BTDF_SIM_TRANSMISSION, 1,
+                                                BTDF_MODEL_XU_SUN, 0.7, &c, msg, sizeof msg));
+    assert_non_null(strstr(msg, "1D profile"));
+    btdf_sim_result_free(r);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -468,10 +623,13 @@ int main(void)
         cmocka_unit_test(surface_statistics),
         cmocka_unit_test(deterministic),
         cmocka_unit_test(large_s_is_eq25),
+        cmocka_unit_test(errors_follow_the_decomposition),
+        cmocka_unit_test(compare_with_models),
         cmocka_unit_test(reciprocity),
         cmocka_unit_test(grid_independence),
         cmocka_unit_test(error_is_honest),
         cmocka_unit_test(shards_merge_to_one_run),
+        cmocka_unit_test(profile_in_plane),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

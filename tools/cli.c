@@ -330,6 +330,9 @@ int apply(cli *c, const opt_hit *h)
     case OPT_SEED:
     case OPT_CELLS:
     case OPT_TILE:
+    case OPT_BINS:
+    case OPT_MERGE:
+    case OPT_PROFILE:
     case OPT_HELP:
     case OPT_END: break;
     }

@@ -13,11 +13,13 @@
 
 #include <btdf/btdf.h>
 #include <btdf/btdf_io.h>
+#include <btdf/btdf_preview.h>
 #include <btdf/btdf_sim.h>
 
 #include "numparse.h"
 #include "options.h"
 #include "run.h"
+#include "simchart.h"
 
 #define MAX_ANGLES 1000
 #define DEG (3.14159265358979323846 / 180.0)
@@ -138,6 +140,8 @@ static void fingerprint(const btdf_sim_opts *o, char *out, size_t len)
         btdf_format_double(o->theta_i[k], b, sizeof b);
         PUT("%s%s", k ? "," : "=", b);
     }
+    if (o->profile)
+        PUT(" profile=1d");
     PUT(" rays=%llu seed=%llu cells=%d tile=%d bins=%d,%d", (unsigned long long)o->rays,
         (unsigned long long)o->seed, o->cells_per_tau, o->tile_tau, o->theta_bins,
         o->theta_bins ? o->phi_bins : 0);
@@ -167,8 +171,47 @@ static void write_raw(FILE *f, const btdf_sim_opts *o, const btdf_sim_result *r)
     fputs("]},\n", f);
 }
 
+/* The comparisons of each case (btdf_sim_compare): the simulated tally against Eq. 25
+   (all orders and one hit) and the Walter/Smith BTDF (one hit), for T and R. */
+#define NCMP 6
+static const struct {
+    const char *key;
+    btdf_sim_part part;
+    int one_hit;
+    btdf_model model;
+} cmp_def[NCMP] = {
+    {"eq25_T", BTDF_SIM_TRANSMISSION, 0, BTDF_MODEL_XU_SUN},
+    {"eq25_T1", BTDF_SIM_TRANSMISSION, 1, BTDF_MODEL_XU_SUN},
+    {"smith_T1", BTDF_SIM_TRANSMISSION, 1, BTDF_MODEL_SMITH},
+    {"eq25_R", BTDF_SIM_REFLECTION, 0, BTDF_MODEL_XU_SUN},
+    {"eq25_R1", BTDF_SIM_REFLECTION, 1, BTDF_MODEL_XU_SUN},
+    {"smith_R1", BTDF_SIM_REFLECTION, 1, BTDF_MODEL_SMITH},
+};
+
+static void jcmp(FILE *f, const btdf_sim_cmp *c)
+{
+    fputs("{\"model\": ", f);
+    jnum(f, c->model_total);
+    fputs(", \"model_in_bins\": ", f);
+    jnum(f, c->model_in_bins);
+    fputs(", \"e_T\": ", f);
+    jnum(f, c->e_T);
+    fputs(", \"e_T_floor\": ", f);
+    jnum(f, c->e_T_floor);
+    fputs(", \"e_L1\": ", f);
+    jnum(f, c->e_L1);
+    fputs(", \"e_L1_floor\": ", f);
+    jnum(f, c->e_L1_floor);
+    fputs(", \"e_L1_floor_sd\": ", f);
+    jnum(f, c->e_L1_floor_sd);
+    fputs(", \"chi2\": ", f);
+    jnum(f, c->chi2);
+    fprintf(f, ", \"dof\": %d}", c->dof);
+}
+
 static int write_report(const char *path, const char *prov, const btdf_sim_opts *o,
-                        const btdf_sim_result *r, const double *eqT, const double *eqR)
+                        const btdf_sim_result *r, const double *eqT, const double *eqR,
+                        const btdf_sim_cmp *cmp)
 {
     char *buf = NULL;
     size_t len = 0;
@@ -216,6 +259,22 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
         jnum(f, eqR[k]);
     }
     fprintf(f, "%s},\n", r->count > 1 ? "]" : "");
+    if (o->profile) {
+        fputs("  \"profile\": \"1d\",\n  \"compare\": null,\n", f);
+        goto surface;
+    }
+    fputs("  \"compare\": {", f);
+    for (int q = 0; q < NCMP; q++) {
+        fprintf(f, "%s\"%s\": %s", q ? ", " : "", cmp_def[q].key, r->count > 1 ? "[" : "");
+        for (size_t k = 0; k < r->count; k++) {
+            if (k)
+                fputs(", ", f);
+            jcmp(f, &cmp[k * NCMP + (size_t)q]);
+        }
+        fputs(r->count > 1 ? "]" : "", f);
+    }
+    fputs("},\n", f);
+surface:;
     const btdf_sim_surface *s = &r->surface;
     fprintf(f, "  \"surface\": {\"points_per_side\": %d, \"spacing\": ", s->n);
     jnum(f, s->dx);
@@ -226,7 +285,7 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
     fprintf(f, ", \"rms_slope\": ");
     jnum(f, s->rms_slope);
     fprintf(f, ", \"rms_slope_target\": ");
-    jnum(f, 2.0 / o->smoothness);
+    jnum(f, (o->profile ? 1.4142135623730951 : 2.0) / o->smoothness);
     fprintf(f, ", \"corr_length\": ");
     jnum(f, s->corr_length);
     fprintf(f, ", \"tile_bytes\": %zu},\n", s->tile_bytes);
@@ -251,9 +310,13 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
 
 /* Integral of |cos to| over histogram bin (theta_bin, any phi bin), sr: the bin's
    solid angle weighted by the cosine, both halves of |phi| counted. */
+static int profile_1d; /* --profile 1d: bins measure radians of theta_o, not sr */
+
 static double cos_sr(int nt, int np, int it)
 {
     double w = 1.5707963267948966 / nt, a = sin(w * it), b = sin(w * (it + 1));
+    if (profile_1d) /* integral of |cos to| d to over the bin, one side of the normal */
+        return b - a;
     return 0.5 * (b * b - a * a) * 2.0 * (3.141592653589793 / np);
 }
 
@@ -289,10 +352,17 @@ static int write_dist(const char *path, const char *prov, const btdf_sim_opts *o
     }
     fputs("\n# smoothness: ", f);
     cnum(f, o->smoothness);
-    fputs("\n# units: rho in 1/sr, no cosine factor, the bin's mean weighted by |cos theta_o| "
-          "(fraction of the incident flux in the bin / cos_sr); rho_se its standard error; "
-          "angles in degrees and radians; cos_sr in sr\n",
-          f);
+    if (profile_1d)
+        fputs("\n# units: a 1D profile (rays in the plane of incidence): rho in 1/rad, no cosine "
+              "factor, the fraction of the incident flux in the bin / cos_sr, cos_sr the "
+              "integral of |cos theta_o| d theta_o over the bin (rad); phi 0 backward, 180 "
+              "forward; rho_se its standard error; angles in degrees and radians\n",
+              f);
+    else
+        fputs("\n# units: rho in 1/sr, no cosine factor, the bin's mean weighted by |cos "
+              "theta_o| (fraction of the incident flux in the bin / cos_sr); rho_se its "
+              "standard error; angles in degrees and radians; cos_sr in sr\n",
+              f);
     fprintf(f, "# bins: %d in theta_o per hemisphere, %d in |phi| over [0, 180] degrees "
                "(180 is forward); nodes at the bins' centres\n",
             nt, np);
@@ -359,84 +429,176 @@ static int write_dist(const char *path, const char *prov, const btdf_sim_opts *o
     return 0;
 }
 
-/* simulate's own options, taken out of argv before the common parser: -o/--output
-   FILE.csv and --bins T[,P]. Returns -1 to go on, or an exit status. */
+/* --merge's reports (the positional arguments), --shard K/N */
 static const char *merge_files[256];
 static int merge_n = -1; /* -1: no --merge */
 static unsigned long shard_k, shard_n;
-static int bins_given; /* --bins: histograms even without -o (shards to merge into one) */
 
-static int take_own(int *argc, char **argv, const char **out, int *nt, int *np)
+static int parse_shard(const char *v)
 {
-    int w = 0;
-    for (int k = 0; k < *argc; k++) {
-        const char *a = argv[k];
-        if (k > 0 && !strcmp(a, "--merge")) {
-            merge_n = 0;
-            while (k + 1 < *argc && argv[k + 1][0] != '-') {
-                if (merge_n == 256)
-                    return fail(2, "--merge: at most 256 reports");
-                merge_files[merge_n++] = argv[++k];
-            }
-            if (merge_n == 0)
-                return fail(2, "--merge: give the shards' reports, e.g. --merge a.json b.json");
-            continue;
-        }
-        if (k > 0 && !strcmp(a, "--shard")) {
-            const char *v = k + 1 < *argc ? argv[++k] : "";
-            char *e1 = NULL, *e2 = NULL;
-            int digits = v[0] >= '0' && v[0] <= '9';
-            shard_k = strtoul(v, &e1, 10);
-            if (digits && *e1 == '/' && e1[1] >= '0' && e1[1] <= '9')
-                shard_n = strtoul(e1 + 1, &e2, 10);
-            if (!digits || !e2 || *e2 || shard_n < 1 || shard_k < 1 || shard_k > shard_n ||
-                shard_n > 100000)
-                return fail(2, "--shard '%s': expected K/N with 1 <= K <= N <= 100000, e.g. 3/8",
-                            v);
-            continue;
-        }
-        const char *v = NULL;
-        int is_out = !strcmp(a, "-o") || !strcmp(a, "--output");
-        int is_bins = !strcmp(a, "--bins");
-        if (!strncmp(a, "--output=", 9)) {
-            is_out = 1;
-            v = a + 9;
-        } else if (!strncmp(a, "--bins=", 7)) {
-            is_bins = 1;
-            v = a + 7;
-        }
-        if (k > 0 && (is_out || is_bins)) {
-            if (!v) {
-                if (k + 1 >= *argc)
-                    return fail(2, "%s: needs a value", a);
-                v = argv[++k];
-            }
-            if (is_out) {
-                size_t n = strlen(v);
-                if (n < 5 || strcmp(v + n - 4, ".csv"))
-                    return fail(2, "-o '%s': the distribution is written as .csv (EXR is not "
-                                   "done yet)", v);
-                *out = v;
-            } else {
-                double b[2];
-                int n = 0;
-                const char *why = num_double_list(v, b, 1, 2, &n);
-                if (why)
-                    return fail(2, "--bins: '%s': %s", v, why);
-                for (int i = 0; i < n; i++)
-                    if (!(b[i] >= 1 && b[i] <= 3600 && b[i] == floor(b[i])))
-                        return fail(2, "--bins: '%s': each count must be a whole number in "
-                                       "[1, 3600]", v);
-                bins_given = 1;
-                *nt = (int)b[0];
-                *np = n > 1 ? (int)b[1] : 18;
-            }
-            continue;
-        }
-        argv[w++] = argv[k];
-    }
-    *argc = w;
+    char *e1 = NULL, *e2 = NULL;
+    int digits = v[0] >= '0' && v[0] <= '9';
+    shard_k = strtoul(v, &e1, 10);
+    if (digits && *e1 == '/' && e1[1] >= '0' && e1[1] <= '9')
+        shard_n = strtoul(e1 + 1, &e2, 10);
+    if (!digits || !e2 || *e2 || shard_n < 1 || shard_k < 1 || shard_k > shard_n ||
+        shard_n > 100000)
+        return fail(2, "--shard '%s': expected K/N with 1 <= K <= N <= 100000, e.g. 3/8", v);
     return -1;
+}
+
+static int parse_bins(const char *v, int *nt, int *np)
+{
+    double b[2];
+    int n = 0;
+    const char *why = num_double_list(v, b, 1, 2, &n);
+    if (why)
+        return fail(2, "--bins: '%s': %s", v, why);
+    for (int i = 0; i < n; i++)
+        if (!(b[i] >= 1 && b[i] <= 3600 && b[i] == floor(b[i])))
+            return fail(2, "--bins: '%s': each count must be a whole number in [1, 3600]", v);
+    *nt = (int)b[0];
+    *np = n > 1 ? (int)b[1] : 18;
+    return -1;
+}
+
+static int parse_output(const char *v, const char **out)
+{
+    size_t n = strlen(v);
+    if (n < 5 || (strcmp(v + n - 4, ".csv") && strcmp(v + n - 4, ".exr")))
+        return fail(2, "-o '%s': the distribution is written as .csv or .exr", v);
+    if (!strcmp(v + n - 4, ".exr") && !btdf_format_available(".exr"))
+        return fail(2, "-o '%s': this build has no OpenEXR (meson -Dopenexr=enabled)", v);
+    *out = v;
+    return -1;
+}
+
+/* The transmitted distribution as an EXR grid table (rows theta_o increasing over
+   (90, 180], cols the |phi| bins' centres, one slice per incident angle in increasing
+   order, a channel per --ior value) with layers error, one_hit and one_hit_error
+   (btdf_write_table_layers): the values of the CSV's rho, rho_se, rho_1, rho_1_se
+   rows of part transmission, as 32-bit floats. The reflection is in the CSV only: a
+   grid table holds transmission. */
+static int write_dist_exr(const char *path, const char *prov, const btdf_sim_opts *o,
+                          const btdf_sim_result *r)
+{
+    size_t nti = o->n_theta, order[MAX_ANGLES];
+    for (size_t k = 0; k < nti; k++)
+        order[k] = k;
+    for (size_t i = 1; i < nti; i++) /* insertion sort of the angles, few of them */
+        for (size_t j = i; j > 0 && o->theta_i[order[j]] < o->theta_i[order[j - 1]]; j--) {
+            size_t t = order[j];
+            order[j] = order[j - 1];
+            order[j - 1] = t;
+        }
+    for (size_t i = 1; i < nti; i++)
+        if (o->theta_i[order[i]] == o->theta_i[order[i - 1]])
+            return fail(2, "-o %s: angle %g deg given twice (a table's slices need distinct "
+                           "angles)", path, deg_given[order[i]]);
+    int nt = r->theta_bins, np = r->phi_bins, ch = o->channels;
+    size_t nodes = (size_t)nt * (size_t)np;
+    double *rows = malloc((size_t)nt * sizeof *rows), *cols = malloc((size_t)np * sizeof *cols);
+    double *val = malloc(4 * nodes * (size_t)ch * sizeof *val);
+    btdf_table *tab[4] = {NULL, NULL, NULL, NULL};
+    char msg[512] = "";
+    int code = 0;
+    if (!rows || !cols || !val) {
+        code = fail(1, "%s: out of memory for the table", path);
+        goto out;
+    }
+    for (int it = 0; it < nt; it++) /* row i: theta bin nt - 1 - i, so to increases */
+        rows[it] = 3.14159265358979323846 - (nt - 1 - it + 0.5) * (1.5707963267948966 / nt);
+    for (int ip = 0; ip < np; ip++)
+        cols[ip] = (ip + 0.5) * (3.14159265358979323846 / np);
+    btdf_params p;
+    btdf_params_default(&p);
+    p.channels = ch;
+    for (int c = 0; c < ch; c++)
+        p.ior[c] = o->ior[c];
+    p.smoothness = o->smoothness;
+    for (int l = 0; l < 4 && !code; l++)
+        if (btdf_table_new(BTDF_TABLE_GRID, &p, &tab[l], msg, sizeof msg) != BTDF_OK)
+            code = fail(1, "%s: %s", path, msg);
+    for (size_t i = 0; i < nti && !code; i++) {
+        size_t k = order[i];
+        for (int c = 0; c < ch; c++) {
+            const btdf_sim_tally *t = &r->tally[(size_t)c * nti + k];
+            for (int it = 0; it < nt; it++) {
+                int bin = nt - 1 - it;
+                double cs = cos_sr(nt, np, bin);
+                double inv = cs > 0.0 ? 1.0 / cs : 0.0; /* cs > 0 for every bin; kept safe */
+                for (int ip = 0; ip < np; ip++) {
+                    size_t h = (size_t)bin * (size_t)np + (size_t)ip;
+                    size_t at = ((size_t)it * (size_t)np + (size_t)ip) * (size_t)ch + (size_t)c;
+                    val[at] = t->hist_T[h].mean * inv;
+                    val[nodes * (size_t)ch + at] = t->hist_T[h].se * inv;
+                    val[2 * nodes * (size_t)ch + at] = t->hist_T1[h].mean * inv;
+                    val[3 * nodes * (size_t)ch + at] = t->hist_T1[h].se * inv;
+                }
+            }
+        }
+        for (int l = 0; l < 4 && !code; l++)
+            if (btdf_table_add_slice(tab[l], o->theta_i[k], (size_t)nt, rows, (size_t)np, cols,
+                                     val + (size_t)l * nodes * (size_t)ch, msg,
+                                     sizeof msg) != BTDF_OK)
+                code = fail(1, "%s: %s", path, msg);
+    }
+    if (!code) {
+        btdf_layer layers[3] = {{"error", tab[1]}, {"one_hit", tab[2]}, {"one_hit_error", tab[3]}};
+        btdf_write_opts w = {NULL, prov, NULL};
+        btdf_status st = btdf_write_table_layers(
+            tab[0], layers, 3,
+            o->profile ? "rho of a 1D profile simulated by btdftab simulate (all orders), "
+                         "1/rad: the bin's flux over the integral of |cos theta_o| d theta_o; "
+                         "layers: error (its standard error), one_hit and one_hit_error"
+                       : "rho simulated by btdftab simulate (all orders), the bin's mean "
+                         "weighted by |cos theta_o|, no cosine factor; layers: error (its "
+                         "standard error), one_hit and one_hit_error (one surface hit)",
+            &w, path, msg, sizeof msg);
+        if (st != BTDF_OK)
+            code = fail(1, "%s: %s", path, msg);
+    }
+out:
+    for (int l = 0; l < 4; l++)
+        btdf_table_free(tab[l]);
+    free(rows);
+    free(cols);
+    free(val);
+    return code;
+}
+
+/* --preview: a panel per case, the transmitted lobe in the plane of incidence. */
+static int write_preview(const char *path, const btdf_sim_result *r)
+{
+    simchart_panel pn[BTDF_CHART_MAX_PANELS];
+    btdf_chart_panel cp[BTDF_CHART_MAX_PANELS];
+    char msg[512] = "";
+    size_t n = r->count;
+    int code = 0;
+    for (size_t k = 0; k < n && !code; k++) {
+        if (simchart_lobe(r, k, 0.7, &pn[k], msg, sizeof msg) != 0) {
+            code = fail(1, "--preview: %s", msg);
+            n = k + 1;
+            break;
+        }
+        cp[k] = (btdf_chart_panel){pn[k].title, pn[k].series, pn[k].nseries};
+    }
+    if (!code) {
+        btdf_chart ch = {"\xce\xb8o from the downward normal (" "\xc2\xb0" "; < 0 backward, > 0 forward)",
+                         r->profile ? "\xcf\x81 |cos \xce\xb8o| (1/rad), 1D profile"
+                                    : "\xcf\x81 |cos \xce\xb8o| (1/sr), bin mean",
+                         0, -90.0, 90.0, cp, n, 0};
+        btdf_preview_opts po;
+        btdf_preview_opts_default(&po);
+        po.kind = BTDF_PREVIEW_CHART;
+        po.chart = &ch;
+        po.title = "btdftab simulate: the transmitted lobe in the plane of incidence";
+        if (btdf_preview_write(&po, path, msg, sizeof msg) != BTDF_OK)
+            code = fail(1, "%s: %s", path, msg);
+    }
+    for (size_t k = 0; k < n; k++)
+        simchart_panel_free(&pn[k]);
+    return code;
 }
 
 /* Reads n numbers of the JSON array that follows key in text (integers into u or
@@ -544,8 +706,10 @@ static int read_part(const char *path, const btdf_sim_opts *o, btdf_sim_result *
 }
 
 /* Options into o; -1 to go on, or an exit status. */
+static const char *preview_path;
+
 static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, double *ti,
-                 const char **report, int *quiet)
+                 const char **report, int *quiet, const char **dist, int *nt, int *np)
 {
     opt_hit hits[64];
     const char *pos[64];
@@ -560,9 +724,22 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
             opt_help(stdout, cmd);
             return fflush(stdout) == 0 ? 0 : 1;
         }
-    if (npos > 0)
+    int merging = 0;
+    for (int k = 0; k < nh; k++)
+        merging |= hits[k].id == OPT_MERGE;
+    if (npos > 0 && !merging)
         return fail(2, "unexpected argument '%s' (angles go in --theta-i)", pos[0]);
+    if (merging) {
+        if (npos == 0)
+            return fail(2, "--merge: give the shards' reports, e.g. --merge a.json b.json");
+        if (npos > 256)
+            return fail(2, "--merge: at most 256 reports");
+        for (int k = 0; k < npos; k++)
+            merge_files[k] = pos[k];
+        merge_n = npos;
+    }
     size_t v;
+    int code;
     for (int k = 0; k < nh; k++) {
         const char *s = hits[k].value;
         switch (hits[k].id) {
@@ -615,6 +792,33 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
             break;
         case OPT_REPORT: *report = s; break;
         case OPT_QUIET: *quiet = 1; break;
+        case OPT_PREVIEW: {
+            size_t n = strlen(s);
+            if (n < 5 || strcmp(s + n - 4, ".png"))
+                return fail(2, "--preview '%s': the picture is a .png", s);
+            if (!btdf_format_available(".png"))
+                return fail(2, "--preview '%s': this build has no pictures (meson -Dpng=enabled)",
+                            s);
+            preview_path = s;
+            break;
+        }
+        case OPT_PROFILE:
+            if (strcmp(s, "1d") && strcmp(s, "2d"))
+                return fail(2, "--profile '%s': 2d (the surface) or 1d (a profile)", s);
+            o->profile = !strcmp(s, "1d");
+            break;
+        case OPT_OUTPUT:
+            if ((code = parse_output(s, dist)) >= 0)
+                return code;
+            break;
+        case OPT_BINS:
+            if ((code = parse_bins(s, nt, np)) >= 0)
+                return code;
+            break;
+        case OPT_SHARD:
+            if ((code = parse_shard(s)) >= 0)
+                return code;
+            break;
         default: break;
         }
     }
@@ -635,29 +839,14 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     o.n_theta = 1;
     const char *report = NULL, *dist = NULL;
     int quiet = 0, nt = 45, np = 18; /* 2 degrees in theta_o, 10 in |phi| */
-    int code = take_own(&argc, argv, &dist, &nt, &np);
+    int code = parse(cmd, argc, argv, &o, ti, &report, &quiet, &dist, &nt, &np);
     if (code >= 0)
         return code;
-    code = parse(cmd, argc, argv, &o, ti, &report, &quiet);
-    if (code >= 0) {
-        int help = 0;
-        for (int k = 1; k < argc; k++)
-            help |= !strcmp(argv[k], "--help") || !strcmp(argv[k], "-h");
-        if (code == 0 && help)
-            printf("\nMore options:\n  -o, --output FILE.csv  the outgoing distribution: rho and its error per "
-                   "bin\n                         (docs/simulation.md)\n"
-                   "  --bins T[,P]           bins in theta_o per hemisphere and in |phi| "
-                   "(default 45,18);\n                         given, the report holds them for a merge\n"
-                   "  --shard K/N            trace only the K-th of N ranges of batches (needs "
-                   "--report)\n"
-                   "  --merge A.json ...     sum shards' reports (same options) into one run's "
-                   "numbers\n");
-        return code;
-    }
-    if (dist || bins_given) {
-        o.theta_bins = nt;
-        o.phi_bins = np;
-    }
+    /* the histograms always: the comparison with the models (e_L1, chi2) needs them;
+       a profile's directions are in the plane: |phi| 0 (backward) or 180 (forward) */
+    o.theta_bins = nt;
+    o.phi_bins = o.profile ? 2 : np;
+    profile_1d = o.profile;
     if (merge_n >= 0 && shard_n)
         return fail(2, "--merge and --shard: a merge takes every shard's report");
     if ((merge_n >= 0 || shard_n) && !report)
@@ -682,6 +871,18 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
         return fail(1, "%s: %s", report, msg);
     if (dist && btdf_output_check(dist, msg, sizeof msg) != BTDF_OK)
         return fail(1, "%s: %s", dist, msg);
+    /* an EXR table's slices need distinct angles: said before the run, not after it */
+    if (dist && !strcmp(dist + strlen(dist) - 4, ".exr"))
+        for (size_t i = 0; i < o.n_theta; i++)
+            for (size_t j = 0; j < i; j++)
+                if (o.theta_i[i] == o.theta_i[j])
+                    return fail(2, "-o %s: angle %g deg given twice (a table's slices need "
+                                   "distinct angles)", dist, deg_given[i]);
+    if (preview_path && btdf_output_check(preview_path, msg, sizeof msg) != BTDF_OK)
+        return fail(1, "%s: %s", preview_path, msg);
+    if (preview_path && (size_t)o.channels * o.n_theta > BTDF_CHART_MAX_PANELS)
+        return fail(2, "--preview: %zu cases (angles x channels): at most %d panels",
+                    (size_t)o.channels * o.n_theta, BTDF_CHART_MAX_PANELS);
     run_progress pr;
     run_progress_start(&pr, !quiet && isatty(2), "simulate");
     o.progress = progress;
@@ -714,9 +915,11 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     if (st != BTDF_OK)
         return fail(st == BTDF_EBUDGET ? 3 : st == BTDF_EINVAL ? 2 : 1, "%s", msg);
     double *eqT = calloc(r->count, sizeof *eqT), *eqR = calloc(r->count, sizeof *eqR);
-    if (!eqT || !eqR) {
+    btdf_sim_cmp *cmp = calloc(r->count * NCMP, sizeof *cmp);
+    if (!eqT || !eqR || !cmp) {
         free(eqT);
         free(eqR);
+        free(cmp);
         btdf_sim_result_free(r);
         return fail(1, "out of memory");
     }
@@ -729,6 +932,15 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
             eqT[k] = 0.0;
         if (btdf_reflectance(&p, r->tally[k].theta_i, &eqR[k]) != BTDF_OK)
             eqR[k] = 0.0;
+        for (int q = 0; q < NCMP && !o.profile; q++)
+            if (btdf_sim_compare(r, k, cmp_def[q].part, cmp_def[q].one_hit, cmp_def[q].model,
+                                 p.k0, &cmp[k * NCMP + (size_t)q], msg, sizeof msg) != BTDF_OK) {
+                free(eqT);
+                free(eqR);
+                free(cmp);
+                btdf_sim_result_free(r);
+                return fail(1, "comparison with the models: %s", msg);
+            }
     }
     if (!quiet) {
         for (size_t k = 0; k < r->count; k++) {
@@ -739,18 +951,33 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                     t->theta_i / DEG, t->ior, o.smoothness, t->T.mean, t->T.se,
                     t->T_order[0].mean, t->T_order[1].mean, t->T_order[2].mean, t->R.mean,
                     t->R.se, eqT[k], eqR[k], t->mean_hits.mean);
+            const btdf_sim_cmp *a = &cmp[k * NCMP], *b = a + 1, *c = a + 2;
+            if (!o.profile)
+                fprintf(stderr,
+                    "  T against Eq. 25: e_T %.3g (noise %.2g), e_L1 %.3g (noise %.2g +- %.2g); "
+                    "one hit (noise %.2g +- %.2g): Eq. 25 e_L1 %.3g chi2/dof %.3g, Smith e_L1 "
+                    "%.3g chi2/dof %.3g\n",
+                    a->e_T, a->e_T_floor, a->e_L1, a->e_L1_floor, a->e_L1_floor_sd,
+                    b->e_L1_floor, b->e_L1_floor_sd, b->e_L1, b->dof ? b->chi2 / b->dof : 0.0,
+                    c->e_L1, c->dof ? c->chi2 / c->dof : 0.0);
         }
-        fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (2/s = %.4f), "
+        fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (target %.4f), "
                         "correlation length %.4f; %llu rays in %.2f s\n",
                 r->surface.n, r->surface.n, r->surface.rms_height, r->surface.rms_slope,
-                2.0 / o.smoothness, r->surface.corr_length,
+                (o.profile ? 1.4142135623730951 : 2.0) / o.smoothness, r->surface.corr_length,
                 (unsigned long long)r->rays_traced, r->seconds);
     }
-    code = report ? write_report(report, prov, &o, r, eqT, eqR) : 0;
-    if (code == 0 && dist)
-        code = write_dist(dist, prov, &o, r);
+    code = report ? write_report(report, prov, &o, r, eqT, eqR, cmp) : 0;
+    if (code == 0 && dist) {
+        size_t n = strlen(dist);
+        code = strcmp(dist + n - 4, ".exr") ? write_dist(dist, prov, &o, r)
+                                            : write_dist_exr(dist, prov, &o, r);
+    }
+    if (code == 0 && preview_path)
+        code = write_preview(preview_path, r);
     free(eqT);
     free(eqR);
+    free(cmp);
     btdf_sim_result_free(r);
     return code;
 }

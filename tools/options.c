@@ -114,6 +114,10 @@ const opt_def opt_table[] = {
      "s = correlation length / RMS height of the generated surface (default 3)"},
     {OPT_THETA_I, "theta-i", 0, "A|A,B,..|A:B:STEP", 0, SIM,
      "incident angles in degrees, in [0, 90) (default 30)"},
+    {OPT_PROFILE, "profile", 0, "2d|1d", 0, SIM,
+     "2d (default): the surface; 1d: the paper's setting, a profile z = h(x) and\n"
+     "rays in its plane of incidence (distribution per radian of theta_o, no\n"
+     "comparison with Eq. 25's 2D BTDF)"},
     {OPT_RAYS, "rays", 0, "K", 0, SIM, "rays per angle and channel (default 1000000)"},
     {OPT_SEED, "seed", 0, "X", 0, SIM, "seed of the surfaces and rays (default 1)"},
     {OPT_CELLS, "cells-per-tau", 0, "C", 0, SIM,
@@ -126,6 +130,20 @@ const opt_def opt_table[] = {
     {OPT_REPORT, "report", 0, "FILE.json", 0, SIM,
      "write R, T, their orders and errors, Eq. 25 beside them, and the surface's\n"
      "realised statistics as JSON"},
+    {OPT_OUTPUT, "output", 'o', "F.csv|F.exr", 0, SIM,
+     "the outgoing distribution: rho and its error per bin, all orders and one hit\n"
+     "(CSV: both parts; EXR: the transmission as a grid table with error, one_hit\n"
+     "and one_hit_error layers; docs/simulation.md)"},
+    {OPT_PREVIEW, "preview", 0, "F.png", 0, SIM,
+     "a picture: each case's transmitted lobe in the plane of incidence with error\n"
+     "bars, beside Eq. 25 and Smith over the same bins (at most 16 cases)"},
+    {OPT_BINS, "bins", 0, "T[,P]", 0, SIM,
+     "histogram bins in theta_o per hemisphere and in |phi| (default 45,18)"},
+    {OPT_SHARD, "shard", 0, "K/N", 0, SIM,
+     "trace only the K-th of N ranges of batches (needs --report)"},
+    {OPT_MERGE, "merge", 0, NULL, 0, SIM,
+     "the arguments are shards' reports (same options): sum them into one run's\n"
+     "numbers, e.g. --merge a.json b.json --report all.json"},
     {OPT_QUIET, "quiet", 'q', NULL, 0, SIM, "no progress bar and no summary"},
     {OPT_HELP, "help", 'h', NULL, 0, ALL, "this help"},
     {OPT_END, NULL, 0, NULL, 0, 0, NULL},
@@ -155,7 +173,7 @@ const cmd_def cmd_table[] = {
      "are relative to the manifest's folder; missing folders are created."},
     {"inspect", CMD_INSPECT, "FILE", "header and statistics of a file",
      "Prints the header and statistics of a table (.csv, .exr) or a .bsdf."},
-    {"simulate", CMD_SIMULATE, "[options] [--report F.json]",
+    {"simulate", CMD_SIMULATE, "[options] [--report F.json] [--merge SHARD.json ...]",
      "Monte Carlo rays on generated rough surfaces",
      "Traces rays through periodic Gaussian random surfaces of smoothness S (exact\n"
      "intersections, Fresnel at every hit, every order) and prints R and T with their\n"

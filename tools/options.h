@@ -56,6 +56,9 @@ typedef enum {
     OPT_CELLS,
     OPT_TILE,
     OPT_MODEL,
+    OPT_BINS,
+    OPT_MERGE,
+    OPT_PROFILE,
     OPT_END
 } opt_id;
 

@@ -68,6 +68,23 @@ typedef struct btdf_output {
 BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char *msg,
                                 size_t msglen);
 
+/* One more layer of a table file: a table of the same layout (kind, slices, nodes,
+   channels) whose values are written beside the table's, e.g. a standard error per
+   node. */
+typedef struct btdf_layer {
+    const char *name; /* letters, digits and '_', under 24 bytes */
+    const btdf_table *table;
+} btdf_layer;
+
+/* Writes table t to path like btdf_write, with nlayers more layers (at most 8) where
+   the format can hold them: EXR writes layer L as channels L.Y (or L.R, L.G, L.B) in
+   every part, which btdf_read leaves aside; other formats refuse layers (BTDF_EINVAL).
+   value says what the numbers are (EXR's btdftab.value); NULL: Eq. 25's rho. */
+BTDF_API btdf_status btdf_write_table_layers(const btdf_table *t, const btdf_layer *layers,
+                                             size_t nlayers, const char *value,
+                                             const btdf_write_opts *w, const char *path,
+                                             char *msg, size_t msglen);
+
 /* What was read: exactly one member is set; free it with its own *_free. */
 typedef struct btdf_input {
     btdf_table *table;

@@ -39,8 +39,41 @@ extern "C" {
 typedef enum {
     BTDF_PREVIEW_POLAR = 0,
     BTDF_PREVIEW_MONTAGE = 1,
-    BTDF_PREVIEW_RENDER = 2
+    BTDF_PREVIEW_RENDER = 2,
+    BTDF_PREVIEW_CHART = 3
 } btdf_preview_kind;
+
+/*
+ * BTDF_PREVIEW_CHART: panels of curves from plain arrays, one x axis shared by all
+ * (the simulator's pictures, docs/simulation.md: lobes with error bars against a model,
+ * energy per order against s). A series is drawn as markers with bars of +- yerr
+ * (points = 1) or as a line; every panel has its own y scale from 0 to its largest
+ * y + yerr, a legend and a title. At most BTDF_CHART_MAX_PANELS panels of at most
+ * BTDF_CHART_MAX_SERIES series; every number must be finite (yerr >= 0, x > 0 with
+ * logx), or BTDF_EINVAL names the panel, series and point.
+ */
+#define BTDF_CHART_MAX_PANELS 16
+#define BTDF_CHART_MAX_SERIES 8
+typedef struct btdf_chart_series {
+    const char *label;
+    size_t n;             /* points, at most 100000 */
+    const double *x, *y;
+    const double *yerr;   /* NULL: no bars */
+    int points;           /* 1: markers (and bars); 0: a line through the points */
+} btdf_chart_series;
+typedef struct btdf_chart_panel {
+    const char *title;
+    const btdf_chart_series *series;
+    size_t nseries;
+} btdf_chart_panel;
+typedef struct btdf_chart {
+    const char *xlabel, *ylabel;
+    int logx;                  /* 1: log10 x axis */
+    double xmin, xmax;         /* both 0: the data's range */
+    const btdf_chart_panel *panels;
+    size_t npanels;
+    int columns;               /* panels per row; 0: 2 (1 for a single panel) */
+} btdf_chart;
 
 #define BTDF_PREVIEW_MAX_CURVES 8
 #define BTDF_PREVIEW_MAX_TILES 48
@@ -66,10 +99,12 @@ typedef struct btdf_preview_opts {
                                       REFLECTION or BOTH also rho_r |cos tr| of the same
                                       facets (MODEL.md section 8) above it, mirrored like the
                                       paper's figures of both halves, on the same scale */
+    const btdf_chart *chart;       /* CHART: what to draw (title: the picture's title) */
 } btdf_preview_opts;
 
 /* Zeroes o and sets kind = POLAR. Defaults when width/height are 0: POLAR 960 x 720;
-   MONTAGE 1000 wide, height to fit; RENDER 300-pixel panels, size to fit. */
+   MONTAGE 1000 wide, height to fit; RENDER 300-pixel panels, size to fit; CHART 480 x
+   360 per panel (the smallest accepted: 320 x 240 per panel). */
 BTDF_API void btdf_preview_opts_default(btdf_preview_opts *o);
 
 /* Draws the picture into a new buffer of *width x *height RGB pixels, 8 bits per

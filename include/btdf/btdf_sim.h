@@ -71,6 +71,11 @@ typedef struct btdf_sim_opts {
     int tile_tau;         /* tile side in units of tau; default 16 */
     uint64_t batch_rays;  /* rays per batch; 0: chosen from rays (at least 32 batches) */
     int accel;            /* 0: plain grid DDA (default); 1: min/max hierarchy, same hits */
+    /* 0: the 2D surface (default). 1: the paper's setting (Sec. 4), a 1D profile
+       z = h(x) with C(x) = sigma^2 exp(-x^2 / tau^2) (slopes of RMS sqrt(2)/s) and
+       rays in its plane of incidence: every outgoing direction lies in that plane
+       (|phi| = 0 backward or pi forward), R and T are those of the profile. */
+    int profile;
     int theta_bins;       /* histogram bins in theta per hemisphere; 0: no histogram */
     int phi_bins;         /* bins of |phi| over [0, pi]; used when theta_bins > 0 */
     size_t max_memory;    /* bytes the surfaces and tallies may take; 0: no limit */
@@ -150,6 +155,8 @@ typedef struct btdf_sim_result {
     uint64_t *raw_counts;
     uint64_t *raw_hist;
     double *raw_stats;
+    double smoothness; /* s of the run (for btdf_sim_compare) */
+    int profile;       /* the run's opts.profile */
 } btdf_sim_result;
 
 #define BTDF_SIM_RAW_Q 8
@@ -175,6 +182,60 @@ BTDF_API void btdf_sim_result_free(btdf_sim_result *r);
 /* Solid angle of histogram bin (theta_bin, phi_bin), both halves of |phi| counted. */
 BTDF_API double btdf_sim_bin_solid_angle(int theta_bins, int phi_bins, int theta_bin,
                                          int phi_bin);
+
+/*
+ * Comparison with a model (MODEL.md section 6, the simulation taken as the truth).
+ * For case k of r and one part (transmission or reflection) of one tally (all orders,
+ * or one hit only), with P_i the simulated fraction of the incident flux in bin i,
+ * se_i its standard error, M_i the model's flux in the same bin (its rho |cos| over
+ * the bin by quadrature) and X the tally's total (T, T of one hit, R or R of one hit):
+ *   e_T  = |X_model - X| / max(X, 0.01), X_model from btdf_transmittance or
+ *          btdf_reflectance of the model;
+ *   e_L1 = sum_i |P_i - M_i| / max(X, 0.01) (needs histograms; the binned form, a
+ *          lower bound of the integral over directions: detail inside a bin is lost);
+ *   floors: what each would be from the Monte Carlo error alone if the model were the
+ *          truth: E|N(0, se)| = sqrt(2/pi) se, so e_T_floor = sqrt(2/pi) se(X) /
+ *          max(X, 0.01) and e_L1_floor = sum_i f_i / max(X, 0.01), f_i the larger of
+ *          sqrt(2/pi) se_i and the mean absolute deviation of a Poisson count of mean
+ *          M_i rays (over rays; this covers bins with few or no paths), and
+ *          e_L1_floor_sd the spread of e_L1 about it from the same terms (a few bins
+ *          holding a narrow lobe make it wide);
+ *   chi2 = sum_i (P_i - M_i)^2 / se_i^2 over the dof bins where the model expects at
+ *          least 50 paths (se_i replaced by the binomial sqrt(M_i (1 - M_i) / rays)
+ *          where no batch had a path), the test of "within the noise": about dof
+ *          (B - 1) / (B - 3) for B batches when the model is right (se_i is itself
+ *          estimated).
+ * A model within the noise has e_T, e_L1 near their floors and chi2 near dof; a
+ * model that departs has them many floors above.
+ */
+typedef enum { BTDF_SIM_TRANSMISSION = 0, BTDF_SIM_REFLECTION = 1 } btdf_sim_part;
+
+typedef struct btdf_sim_cmp {
+    double total, total_se;   /* X and its standard error */
+    double model_total;       /* the model's X */
+    double model_in_bins;     /* sum of M_i: model_total to the quadrature's error */
+    double e_T, e_T_floor;
+    double e_L1, e_L1_floor;  /* 0 without histograms */
+    double e_L1_floor_sd;     /* the spread of e_L1 about its floor from the noise alone */
+    double chi2;
+    int dof;                  /* 0 without histograms */
+} btdf_sim_cmp;
+
+/* The comparison above of case k of r, part `part`, all orders (one_hit 0) or one hit
+   (1), against model m (BTDF_MODEL_XU_SUN with k0, or BTDF_MODEL_SMITH) at the run's
+   smoothness and the case's n. BTDF_EINVAL naming a bad case, part or model, or a
+   profile run (a 1D profile has no BTDF of a 2D surface to compare with). */
+BTDF_API btdf_status btdf_sim_compare(const btdf_sim_result *r, size_t k, btdf_sim_part part,
+                                      int one_hit, btdf_model m, double k0, btdf_sim_cmp *out,
+                                      char *msg, size_t msglen);
+
+/* The model's flux in every histogram bin of case k (the M_i above), into
+   out[theta_bins * phi_bins]: divided by btdf_sim_bin_solid_angle it is the bin's mean
+   of rho |cos|, the number to set beside the simulated one. Errors as
+   btdf_sim_compare. */
+BTDF_API btdf_status btdf_sim_model_bins(const btdf_sim_result *r, size_t k, btdf_sim_part part,
+                                         btdf_model m, double k0, double *out, char *msg,
+                                         size_t msglen);
 
 #ifdef __cplusplus
 }

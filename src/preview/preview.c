@@ -26,6 +26,7 @@ int btdf_preview_draw(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     case BTDF_PREVIEW_POLAR: return pv_draw_polar(o, c, msg, msglen);
     case BTDF_PREVIEW_MONTAGE: return pv_draw_montage(o, c, msg, msglen);
     case BTDF_PREVIEW_RENDER: return pv_draw_render(o, c, msg, msglen);
+    case BTDF_PREVIEW_CHART: return pv_draw_chart(o, c, msg, msglen);
     default: return say(BTDF_EINVAL, msg, msglen, "unknown picture kind %d", (int)o->kind);
     }
 }

@@ -48,5 +48,6 @@ double pv_colour_bar(plot_canvas *c, double x, double y, double w, double h, pv_
 int pv_draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen);
 int pv_draw_montage(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen);
 int pv_draw_render(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen);
+int pv_draw_chart(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen);
 
 #endif

@@ -161,6 +161,9 @@ BTDF_API btdf_status btdf_sim_opts_check(const btdf_sim_opts *o, char *msg, size
                    o->theta_bins, o->phi_bins, BINS_MAX);
     if (o->accel != 0 && o->accel != 1)
         return say(BTDF_EINVAL, msg, msglen, "accel %d: must be 0 or 1", o->accel);
+    if (o->profile != 0 && o->profile != 1)
+        return say(BTDF_EINVAL, msg, msglen, "profile %d: must be 0 (2D surface) or 1 (1D "
+                   "profile)", o->profile);
     uint64_t bs = batch_size(o), nb = (o->rays + bs - 1) / bs;
     double need = memory_needed(o, nb);
     if (o->max_memory && need > (double)o->max_memory)
@@ -234,7 +237,7 @@ static void run_batch(worker *wk, const sim_surface *surf, size_t job, uint64_t 
         memset(wk->hcount, 0, 4 * rc->bins * sizeof *wk->hcount);
     for (uint64_t r = 0; r < n; r++) {
         sim_path p;
-        sim_path_run(surf, o->ior[ch], o->theta_i[k], o->accel, &rng, &p);
+        sim_path_run(surf, o->ior[ch], o->theta_i[k], o->accel, o->profile, &rng, &p);
         q[Q_HITS] += (uint64_t)p.hits;
         if (p.end == SIM_END_LOST) {
             q[Q_LOST]++;
@@ -294,8 +297,10 @@ static void *worker_main(void *arg)
             sim_surface_free(&surf);
             sim_surface_stats st;
             int measured = b < STATS_REALISATIONS;
-            if (sim_gen_surface(rc->gen, scr, sim_stream(rc->o->seed, PURPOSE_SURFACE, b), &surf,
-                                measured ? &st : NULL) != 0) {
+            int (*gen)(const sim_gen *, sim_scratch *, uint64_t, sim_surface *,
+                       sim_surface_stats *) = rc->o->profile ? sim_gen_profile : sim_gen_surface;
+            if (gen(rc->gen, scr, sim_stream(rc->o->seed, PURPOSE_SURFACE, b), &surf,
+                    measured ? &st : NULL) != 0) {
                 pthread_mutex_lock(&rc->mu);
                 rc->failed = 1;
                 pthread_mutex_unlock(&rc->mu);
@@ -463,6 +468,8 @@ static btdf_status finish(const run_ctx *rc, const uint64_t *hraw, btdf_sim_resu
     }
     if (rc->bins && reduce_hist(rc, hraw, res) != 0)
         return BTDF_ENOMEM;
+    res->smoothness = o->smoothness;
+    res->profile = o->profile;
     res->theta_bins = rc->bins ? o->theta_bins : 0;
     res->phi_bins = rc->bins ? o->phi_bins : 0;
     btdf_sim_surface *sf = &res->surface;

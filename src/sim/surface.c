@@ -180,7 +180,7 @@ static int build_bounds(sim_surface *s)
     return 0;
 }
 
-static void measure(const sim_surface *s, sim_surface_stats *st)
+static void measure(const sim_surface *s, int profile, sim_surface_stats *st)
 {
     int n = s->n;
     size_t nn = (size_t)n * (size_t)n;
@@ -209,7 +209,9 @@ static void measure(const sim_surface *s, sim_surface_stats *st)
             for (int i = 0; i < n; i++) {
                 double d = s->h[(size_t)j * n + i] - mean;
                 acc += d * (s->h[(size_t)j * n + ((i + k) & (n - 1))] - mean);
-                acc += d * (s->h[(size_t)((j + k) & (n - 1)) * n + i] - mean);
+                /* a profile is constant along y: only its x lags say anything */
+                acc += profile ? d * (s->h[(size_t)j * n + ((i + k) & (n - 1))] - mean)
+                               : d * (s->h[(size_t)((j + k) & (n - 1)) * n + i] - mean);
             }
         /* c0 > 0 for any realisation of nonzero noise; the guard keeps 0 out */
         double r = c0 > 0.0 ? acc / (2.0 * (double)nn * c0) : 0.0;
@@ -260,6 +262,37 @@ int sim_gen_surface(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surfa
         return -1;
     }
     if (st)
-        measure(s, st);
+        measure(s, 0, st);
+    return 0;
+}
+
+int sim_gen_profile(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surface *s,
+                    sim_surface_stats *st)
+{
+    if (sim_gen_surface(g, w, stream, s, NULL) != 0)
+        return -1;
+    /* Row 0 of the field: along x its autocorrelation is C(x, 0) = exp(-x^2 / tau^2),
+       a Gaussian profile of the same sigma and tau. Every row becomes it, so the
+       triangles slope along x only and a ray in an x-z plane stays in it. */
+    int n = s->n;
+    s->hmin = INFINITY;
+    s->hmax = -INFINITY;
+    for (int i = 0; i < n; i++) {
+        s->hmin = s->h[i] < s->hmin ? s->h[i] : s->hmin;
+        s->hmax = s->h[i] > s->hmax ? s->h[i] : s->hmax;
+    }
+    for (int j = 1; j < n; j++)
+        memcpy(s->h + (size_t)j * (size_t)n, s->h, (size_t)n * sizeof *s->h);
+    for (int k = 0; k < SIM_MAX_LEVELS; k++) {
+        free(s->lo[k]);
+        free(s->hi[k]);
+        s->lo[k] = s->hi[k] = NULL;
+    }
+    if (build_bounds(s) != 0) {
+        sim_surface_free(s);
+        return -1;
+    }
+    if (st)
+        measure(s, 1, st);
     return 0;
 }

@@ -51,6 +51,12 @@ size_t sim_scratch_bytes(int n);
 int sim_gen_surface(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surface *s,
                     sim_surface_stats *st);
 
+/* The same, made a profile: z = h(x) along x, constant along y (row 0 of the field
+   copied to every row); the statistics are those of the profile (slope along x, of
+   RMS sqrt(2)/s, and the correlation length along x). */
+int sim_gen_profile(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surface *s,
+                    sim_surface_stats *st);
+
 void sim_surface_free(sim_surface *s);
 
 /* Bytes one tile with its hierarchy takes. */

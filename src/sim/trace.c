@@ -160,11 +160,13 @@ int sim_first_hit(const sim_surface *s, const double o[3], const double d[3], in
 /* Horizontal travel (in cells) after which a ray still inside the slab is stopped. */
 #define SIM_MAX_TRAVEL_TILES 64.0
 
-void sim_path_run(const sim_surface *s, double n, double ti, int accel, uint64_t *rng,
-                  sim_path *out)
+void sim_path_run(const sim_surface *s, double n, double ti, int accel, int in_plane,
+                  uint64_t *rng, sim_path *out)
 {
     double pin = 6.283185307179586 * sim_uniform(rng);
-    double cp = cos(pin), sp = sin(pin), st = sin(ti), ct = cos(ti);
+    /* in the plane: azimuth 0 or pi exactly (sin pi is 1e-16, not 0) */
+    double cp = in_plane ? (pin < 3.141592653589793 ? 1.0 : -1.0) : cos(pin);
+    double sp = in_plane ? 0.0 : sin(pin), st = sin(ti), ct = cos(ti);
     double dp[3] = {-st * cp, -st * sp, -ct};
     double o[3] = {sim_uniform(rng) * s->n, sim_uniform(rng) * s->n, s->hmax};
     double N = (double)s->n, cap = SIM_MAX_TRAVEL_TILES * N;

@@ -30,8 +30,9 @@ int sim_first_hit(const sim_surface *s, const double o[3], const double d[3], in
                   double tmax, int accel, double *t, double nrm[3]);
 
 /* One path of light arriving at polar angle ti (azimuth drawn uniformly, to average the
-   grid's axes out) on a uniformly drawn point of the tile, for index ratio n. */
-void sim_path_run(const sim_surface *s, double n, double ti, int accel, uint64_t *rng,
-                  sim_path *out);
+   grid's axes out; with in_plane, +x or -x only, for a profile along x, so the path
+   stays in the x-z plane) on a uniformly drawn point of the tile, for index ratio n. */
+void sim_path_run(const sim_surface *s, double n, double ti, int accel, int in_plane,
+                  uint64_t *rng, sim_path *out);
 
 #endif
