@@ -106,12 +106,6 @@ int cmd_tabulate(cli *c, const char *prov)
     if (c->npos)
         return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
                     c->pos[0]);
-    /* the table builders and their error estimates evaluate Eq. 25's separable
-       shadowing; until they carry the model, a smith table is refused, not written
-       as Eq. 25 */
-    if (c->p.model != BTDF_MODEL_XU_SUN)
-        return fail(EXIT_USAGE, "tabulate --model %s: tables of this model are not available "
-                    "in this build (eval, albedo and polar take it)", btdf_model_name(c->p.model));
     /* The light the model loses at the table's first incidence angle (normal incidence
        by default): a warning, not an error, since the table is Eq. 25 all the same. */
     if (!c->quiet && btdf_params_check(&c->p, NULL, 0) == BTDF_OK) {
@@ -133,6 +127,10 @@ int cmd_tabulate(cli *c, const char *prov)
         int same = distinct_outputs(out, c);
         if (same)
             return same;
+        if (c->p.model != BTDF_MODEL_XU_SUN &&
+            (fi.needs == BTDF_NEEDS_SERIES || fi.needs == BTDF_NEEDS_RADIANCE))
+            return fail(EXIT_USAGE, "%s: --model %s: not available for this format yet "
+                        "(.csv and .exr take it)", out, btdf_model_name(c->p.model));
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)
