@@ -209,6 +209,10 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
         rc = exr_attr_set_double(ctx, 0, ATTR_PREFIX "s", p->smoothness);
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_double(ctx, 0, ATTR_PREFIX "k0", p->k0);
+    /* absent (every file before it, and every xu-sun file, which keeps its bytes):
+       xu-sun */
+    if (rc == EXR_ERR_SUCCESS && p->model != BTDF_MODEL_XU_SUN)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "model", btdf_model_name(p->model));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "units", "1/sr");
     int refl = kind_is_reflection(btdf_table_get_kind(t));
@@ -216,6 +220,9 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "value",
                                  refl ? "rho_r, the reflection of the same facets (BRDF), no "
                                         "cosine factor"
+                                      : p->model == BTDF_MODEL_SMITH
+                                      ? "rho, the BTDF of the facets of Xu & Sun 2008 with the "
+                                        "height-correlated Smith term, no cosine factor"
                                       : "rho, the BTDF of Xu & Sun 2008 Eq. 25, no cosine factor");
     const btdf_table *tr = t->refl;
     if (rc == EXR_ERR_SUCCESS && tr)
@@ -621,6 +628,18 @@ static btdf_status read_params(reader *r, btdf_table_kind *kind, btdf_params *p)
         st = get_double(r, 0, ATTR_PREFIX "s", &p->smoothness);
     if (st == BTDF_OK)
         st = get_double(r, 0, ATTR_PREFIX "k0", &p->k0);
+    const char *ms = NULL;
+    int32_t len = 0;
+    if (st == BTDF_OK &&
+        exr_attr_get_string(r->ctx, 0, ATTR_PREFIX "model", &len, &ms) == EXR_ERR_SUCCESS) {
+        char word[32] = ""; /* EXR strings carry a length and need not end in NUL */
+        if (ms && len > 0 && (size_t)len < sizeof word)
+            memcpy(word, ms, (size_t)len);
+        if (!btdf_model_parse(word, &p->model))
+            st = say(BTDF_EFORMAT, r->msg, r->msglen,
+                     "attribute " ATTR_PREFIX "model \"%s\": must be xu-sun, smith or full",
+                     word);
+    }
     return st;
 }
 

@@ -468,13 +468,13 @@ static void table_line(char *line, size_t len, const run_table_req *rq, const bt
                  refl ? "R" : "T");
     snprintf(line, len,
              "%s: %s: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
-             "(%s, %zu angles, %zu points%s); e_L1 max %.3g mean %.3g; %s; "
+             "(%s, %zu angles, %zu points%s); error against %s: e_L1 max %.3g mean %.3g; %s; "
              "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
              rq->prog, what, rk->slices, rk->samples, rk->seconds_build, rk->seconds_estimate,
              o->estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", rk->test_angles,
              rk->test_points,
              rk->estimate_in_build ? "; the builder's last check, inside the tabulation" : "",
-             rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max, rk->e_t_mean,
+             btdf_model_name(o->params.model), rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max, rk->e_t_mean,
              (double)rk->peak_bytes / 1048576.0,
              o->kind == BTDF_TABLE_GRID ? ""
                                         : (rk->met ? "; tolerance met" : "; TOLERANCE NOT MET"));
