@@ -131,11 +131,10 @@ int cmd_tabulate(cli *c, const char *prov)
            incidence (G2 ~ cos ti) and drops to 0 at ti = 90 deg, a step the series
            builder cannot follow (measured: e_L1 0.999 at the coefficient budget at
            n = 1.5, s = 3); the samplers and metadata carry the model already. */
-        if (c->p.model != BTDF_MODEL_XU_SUN &&
-            (fi.needs == BTDF_NEEDS_SERIES || fi.needs == BTDF_NEEDS_RADIANCE))
+        if (c->p.model != BTDF_MODEL_XU_SUN && fi.needs == BTDF_NEEDS_SERIES)
             return fail(EXIT_USAGE, "%s: --model %s: not available for this format yet "
-                        "(.csv and .exr take it; xu-sun is the model of every format)", out,
-                        btdf_model_name(c->p.model));
+                        "(.csv, .exr and .xml take it; xu-sun is the model of every format)",
+                        out, btdf_model_name(c->p.model));
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)
