@@ -96,6 +96,8 @@ fi
     grep -q 'Model: smith' "$W/s.xml" && ok "a smith .xml says its model" || no "smith .xml"
 expect 2 "--model smith: not available for this format yet" "a smith .bsdf is refused" \
     -- "$B" tabulate --model smith -o "$W/s.bsdf"
+expect 2 "reflection tables of this model are not available" "a smith reflection table is refused" \
+    -- "$B" tabulate --model smith --part both -o "$W/r.csv"
 # manifests: the key, its stamp, and its refusals
 mkdir "$W/m"
 printf '[g]\nior = 1.5\nsmoothness = 3\ntolerance = 1e-2\ntheta_i = 0:60\nmodel = smith\nenter = g.csv\n' \

@@ -163,6 +163,11 @@ int cmd_tabulate(cli *c, const char *prov)
         return fail(EXIT_USAGE, "tabulate: no output: give -o FILE (or -o - for CSV on stdout)");
     if (!check_params(&p))
         return EXIT_USAGE;
+    char why[256];
+    o.params = p;
+    o.part = c->part;
+    if (btdf_table_opts_check(&o, why, sizeof why) == BTDF_ENOTSUP) /* smith's reflection */
+        return fail(EXIT_USAGE, "--part %s: %s", btdf_part_name(c->part), why);
     if (out && strcmp(out, "-") && !fi.available)
         return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
                     fi.name, fi.feature);
