@@ -96,19 +96,23 @@ static const char *default_meta(const btdf_scatfun *f, char *buf, size_t len)
              f->sides & BTDF_SCATFUN_T_LEAVE ? "T_leave " : "",
              f->sides & BTDF_SCATFUN_R_TOP ? "R_top " : "",
              f->sides & BTDF_SCATFUN_R_BOTTOM ? "R_bottom" : "");
+    /* xu-sun keeps the words it always had; another model names itself */
+    const char *model = p->model == BTDF_MODEL_XU_SUN ? "Xu & Sun 2008 Eq. 25"
+                                                      : btdf_model_name(p->model);
     if (p->channels == 3)
         snprintf(buf, len,
-                 "{\"generator\": \"btdftab %s\", \"model\": \"Xu & Sun 2008 Eq. 25\", "
+                 "{\"generator\": \"btdftab %s\", \"model\": \"%s\", "
                  "\"ior\": [%.9g, %.9g, %.9g], \"smoothness\": %.9g, \"k0\": %.9g, "
                  "\"tolerance\": %.3g, \"sides\": \"%s\", \"channels\": \"Y,R,B\"}",
-                 BTDF_VERSION_STRING, p->ior[0], p->ior[1], p->ior[2], p->smoothness, p->k0,
-                 f->tolerance, sides);
+                 BTDF_VERSION_STRING, model, p->ior[0], p->ior[1], p->ior[2], p->smoothness,
+                 p->k0, f->tolerance, sides);
     else
         snprintf(buf, len,
-                 "{\"generator\": \"btdftab %s\", \"model\": \"Xu & Sun 2008 Eq. 25\", "
+                 "{\"generator\": \"btdftab %s\", \"model\": \"%s\", "
                  "\"ior\": %.9g, \"smoothness\": %.9g, \"k0\": %.9g, \"tolerance\": %.3g, "
                  "\"sides\": \"%s\", \"channels\": \"Y\"}",
-                 BTDF_VERSION_STRING, p->ior[0], p->smoothness, p->k0, f->tolerance, sides);
+                 BTDF_VERSION_STRING, model, p->ior[0], p->smoothness, p->k0, f->tolerance,
+                 sides);
     return buf;
 }
 

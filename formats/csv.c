@@ -161,6 +161,10 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
         put_num(f, " ", p->ior[ch], "");
     put_num(f, "\n# smoothness: ", p->smoothness, "\n");
     put_num(f, "# k0: ", p->k0, "\n");
+    /* Read by machines; absent (every file before the key, and every xu-sun file, which
+       keeps its bytes) means xu-sun. */
+    if (p->model != BTDF_MODEL_XU_SUN)
+        fprintf(f, "# model: %s\n", btdf_model_name(p->model));
     if (tr)
         fprintf(f, "# units: rho in 1/sr, no cosine factor (rho_r on the reflection rows, "
                    "theta_o_deg their reflected angle in [0, 90]); angles in degrees and "
@@ -173,6 +177,11 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "# rule: %s\n", rule_text(t));
     if (tr)
         fprintf(f, "# rule reflection: %s\n", rule_text(tr));
+    if (p->model == BTDF_MODEL_SMITH)
+        fprintf(f, "# model-rule: smith: the incident factor is 1/((1 + Lambda(theta_i)) "
+                   "cos(theta_i)) in place of V(theta_i)/cos(theta_i), and facet slices divide "
+                   "each node by (1 + Lambda(theta_i)) G2 beside K, G2 the Smith term of its "
+                   "directions at the slice's theta_i (docs/tables.md)\n");
     /* Read by machines: files without these lines are read with the plain rule. */
     if (t->kind != BTDF_TABLE_GRID)
         fprintf(f, "# slice-rule: %s\n", btdf_table_rule_name(t->rule));
@@ -379,6 +388,13 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 have_s = 1;
             } else if (sscanf(line, "# k0: %lf", &p.k0) == 1) {
                 have_k0 = 1;
+            } else if (sscanf(line, "# model: %63s", word) == 1) {
+                if (!btdf_model_parse(word, &p.model)) {
+                    char why[160];
+                    snprintf(why, sizeof why, "model '%s': must be xu-sun, smith or full",
+                             word);
+                    st = ferr(msg, msglen, path, ln, why);
+                }
             }
             continue;
         }

@@ -123,6 +123,18 @@ static btdf_status read_params(reader *r, btdf_table_kind *kind, btdf_params *p)
         st = get_double(r, 0, ATTR_PREFIX "s", &p->smoothness);
     if (st == BTDF_OK)
         st = get_double(r, 0, ATTR_PREFIX "k0", &p->k0);
+    const char *ms = NULL;
+    int32_t len = 0;
+    if (st == BTDF_OK &&
+        exr_attr_get_string(r->ctx, 0, ATTR_PREFIX "model", &len, &ms) == EXR_ERR_SUCCESS) {
+        char word[32] = ""; /* EXR strings carry a length and need not end in NUL */
+        if (ms && len > 0 && (size_t)len < sizeof word)
+            memcpy(word, ms, (size_t)len);
+        if (!btdf_model_parse(word, &p->model))
+            st = say(BTDF_EFORMAT, r->msg, r->msglen,
+                     "attribute " ATTR_PREFIX "model \"%s\": must be xu-sun, smith or full",
+                     word);
+    }
     return st;
 }
 

@@ -159,6 +159,10 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
         rc = exr_attr_set_double(ctx, 0, ATTR_PREFIX "s", p->smoothness);
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_double(ctx, 0, ATTR_PREFIX "k0", p->k0);
+    /* absent (every file before it, and every xu-sun file, which keeps its bytes):
+       xu-sun */
+    if (rc == EXR_ERR_SUCCESS && p->model != BTDF_MODEL_XU_SUN)
+        rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "model", btdf_model_name(p->model));
     if (rc == EXR_ERR_SUCCESS)
         rc = exr_attr_set_string(ctx, 0, ATTR_PREFIX "units", "1/sr");
     int refl = kind_is_reflection(btdf_table_get_kind(t));
@@ -167,6 +171,9 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
                                  value  ? value
                                  : refl ? "rho_r, the reflection of the same facets (BRDF), no "
                                         "cosine factor"
+                                      : p->model == BTDF_MODEL_SMITH
+                                      ? "rho, the BTDF of the facets of Xu & Sun 2008 with the "
+                                        "height-correlated Smith term, no cosine factor"
                                       : "rho, the BTDF of Xu & Sun 2008 Eq. 25, no cosine factor");
     const btdf_table *tr = t->refl;
     if (rc == EXR_ERR_SUCCESS && tr)

@@ -363,7 +363,7 @@ static btdf_status table_inspect(const btdf_input *in, FILE *out)
     btdf_format_double(p->smoothness, b, sizeof b);
     fprintf(out, "\nsmoothness: %s\n", b);
     btdf_format_double(p->k0, b, sizeof b);
-    fprintf(out, "k0: %s\n", b);
+    fprintf(out, "k0: %s\nmodel: %s\n", b, btdf_model_name(p->model));
     if (kind != BTDF_TABLE_GRID) /* what the slices interpolate (docs/tables.md) */
         fprintf(out, "slice rule: %s\n", btdf_table_rule_name(btdf_table_get_rule(t)));
     const btdf_table *tr = btdf_table_parts(t) == BTDF_PART_BOTH

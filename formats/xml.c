@@ -136,6 +136,11 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "<!-- Written by btdftab %s: Xu & Sun (2008) Eq. 25, the BTDF of a rough "
                "dielectric interface. Values are the BTDF in 1/sr (no cosine factor).\n",
             BTDF_VERSION_STRING);
+    /* a model other than xu-sun says so (xu-sun files keep their bytes) */
+    if (r->p.model == BTDF_MODEL_SMITH)
+        fprintf(f, "     Model: smith: the facets of Eq. 25 with the height-correlated Smith "
+                   "shadowing-masking of the same Gaussian surface in place of V(ti) V(to) "
+                   "(k0 unused).\n");
     if (r->channels == 3)
         fprintf(f, "     Colour: R, G, B in Radiance's RGB (its default primaries, equal-energy "
                    "white) for n = %.9g, %.9g, %.9g, written as CIE %s.\n",
@@ -160,16 +165,19 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "</Name>\n\t\t<Manufacturer>btdftab %s</Manufacturer>\n", BTDF_VERSION_STRING);
     fprintf(f, "\t\t<Thickness unit=\"Millimeter\">0</Thickness>\n"
                "\t\t<DeviceType>Other</DeviceType>\n");
+    const char *what = r->p.model == BTDF_MODEL_SMITH
+                           ? "Xu and Sun 2008 facets with the Smith term (model smith)"
+                           : "Xu and Sun 2008 Eq. 25";
     if (r->channels == 3)
-        fprintf(f, "\t\t<Comments>Xu and Sun 2008 Eq. 25 rough interface: n = %.9g (R), "
+        fprintf(f, "\t\t<Comments>%s rough interface: n = %.9g (R), "
                    "%.9g (G), %.9g (B) in Radiance's RGB, written as CIE %s; s = %.9g, "
                    "k0 = %.9g; basis %s",
-                r->p.ior[0], r->p.ior[1], r->p.ior[2], tree ? "Y, u', v'" : "X, Y, Z",
+                what, r->p.ior[0], r->p.ior[1], r->p.ior[2], tree ? "Y, u', v'" : "X, Y, Z",
                 r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
     else
-        fprintf(f, "\t\t<Comments>Xu and Sun 2008 Eq. 25 rough interface: n = %.9g, s = %.9g, "
+        fprintf(f, "\t\t<Comments>%s rough interface: n = %.9g, s = %.9g, "
                    "k0 = %.9g; basis %s",
-                r->p.ior[0], r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
+                what, r->p.ior[0], r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
     if (tree)
         fprintf(f, ", tolerance %g", r->tolerance);
     if (r->reported)

@@ -580,7 +580,7 @@ expect 2 "theta-i: 90: must lie in" "simulate grazing angle" -- "$B" simulate --
 expect 3 "above the memory limit of 1 MB" "simulate tile over --max-memory" -- "$B" simulate --max-memory 1 --report "$W/t.json"
 expect 1 "cannot write in the folder" "simulate unwritable report" -- "$B" simulate --rays 100 --report "$W/nodir/t.json"
 # --model: xu-sun is the default (same bytes with and without it), smith is another
-# value, full is reserved and refused, anything else is named; tables refuse smith
+# value, full is reserved and refused, anything else is named
 a=$("$B" eval 30 150 180) && b=$("$B" eval --model xu-sun 30 150 180) && [ "$a" = "$b" ] && \
     ok "--model xu-sun is the default" || no "--model xu-sun: $a vs $b"
 a=$("$B" eval --model smith 30 150 180) && b=$(printf '30 150 180\n' | "$B" eval --model smith) && \
@@ -598,8 +598,7 @@ fi
 rm -f "$W/p.png"
 expect 2 "--model full: not available in this build" "--model full is refused" -- "$B" eval --model full 30 150 180
 expect 2 "--model: 'walter': must be xu-sun or smith" "an unknown --model is named" -- "$B" albedo --model walter
-expect 2 "tabulate --model smith: tables of this model are not available" "tabulate refuses smith" \
-    -- "$B" tabulate --model smith -o "$W/t.csv"
+# tables of smith, and the formats that refuse it: tests/models.sh
 
 # simulate -o: the outgoing distribution as CSV; the header keys, every row finite, and
 # the sum of rho cos_sr over the transmitted bins is T: the bins partition the

@@ -28,6 +28,7 @@
  *   ior = 1.5                  ; n, or R,G,B
  *   smoothness = 3
  *   k0 = 0.7                   ; optional
+ *   model = smith              ; optional: xu-sun (the default) or smith, as --model
  *   theta_i = 0:90             ; optional incidence range, degrees
  *   tolerance = 1e-3           ; optional
  *   metric = l1                ; optional, l1 or max
@@ -64,14 +65,15 @@ typedef struct material {
     char *enter[MAX_OUTPUTS], *leave[MAX_OUTPUTS], *bsdf[MAX_OUTPUTS];
     int nenter, nleave, nbsdf;
     int line;          /* of the [name] header */
-    int key_line[11];  /* of each key (KEYS order), 0 if not given */
+    int key_line[12];  /* of each key (KEYS order), 0 if not given */
 } material;
 
 /* The keys of a section, in the order of material.key_line. */
-static const char *const KEYS[11] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
+static const char *const KEYS[12] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
                                      "metric",  "sides",      "enter", "leave",   "bsdf",
-                                     "part"};
-enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF, K_PART };
+                                     "part",    "model"};
+enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF, K_PART,
+       K_MODEL };
 
 typedef struct manifest {
     material m[MAX_MATERIALS];
@@ -137,7 +139,7 @@ static int check_not_empty(manifest *mf)
     if (mf->n == 0)
         return 1;
     material *m = &mf->m[mf->n - 1];
-    for (int k = 0; k < 11; k++)
+    for (int k = 0; k < 12; k++)
         if (m->key_line[k])
             return 1;
     snprintf(mf->why, sizeof mf->why, "material [%s] is empty (no keys)", m->name);
@@ -180,12 +182,12 @@ static int on_entry(void *user, const char *section, const char *key, const char
         return set_why(mf, "'%.100s' before any [material] section%s", key, "");
     material *m = &mf->m[mf->n - 1];
     int ki = -1;
-    for (int k = 0; k < 11; k++)
+    for (int k = 0; k < 12; k++)
         if (!strcmp(key, KEYS[k]))
             ki = k;
     if (ki < 0)
-        return set_why(mf, "unknown key '%.100s' (known: ior, smoothness, k0, theta_i, tolerance, "
-                           "metric, part, sides, enter, leave, bsdf)%s", key, "");
+        return set_why(mf, "unknown key '%.100s' (known: ior, smoothness, k0, model, theta_i, "
+                           "tolerance, metric, part, sides, enter, leave, bsdf)%s", key, "");
     if (m->key_line[ki]) {
         snprintf(mf->why, sizeof mf->why, "'%s' given twice in [%s] (first at line %d)", key,
                  m->name, m->key_line[ki]);
@@ -232,6 +234,12 @@ static int on_entry(void *user, const char *section, const char *key, const char
     } else if (ki == K_K0) {
         if (!num(mf, key, value, &m->p.k0))
             return 0;
+    } else if (ki == K_MODEL) {
+        if (!btdf_model_parse(value, &m->p.model))
+            return set_why(mf, "model '%.100s': must be xu-sun or smith%s", value, "");
+        if (m->p.model == BTDF_MODEL_FULL)
+            return set_why(mf, "model '%.100s': not available in this build (xu-sun or "
+                               "smith)%s", value, "");
     } else if (ki == K_TOL) {
         if (!num(mf, key, value, &m->tol))
             return 0;
@@ -304,6 +312,10 @@ static void stamp_text(char *buf, size_t len, const material *m, const btdf_para
     size_t used = strlen(buf);
     if (m->part == BTDF_PART_REFLECTION || m->part == BTDF_PART_BOTH)
         snprintf(buf + used, len - used, "part %s\n", btdf_part_name(m->part));
+    /* only when not xu-sun, for the same reason */
+    used = strlen(buf);
+    if (p->model != BTDF_MODEL_XU_SUN)
+        snprintf(buf + used, len - used, "model %s\n", btdf_model_name(p->model));
 }
 
 /* .NAME.btdftab-stamp beside the output; for a name too long for that to fit in 255
@@ -746,6 +758,15 @@ int manifest_run(const manifest_opts *mo)
         if (btdf_params_check(&m->p, why, sizeof why) != BTDF_OK) {
             fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path, m->line,
                     m->name, why);
+            free_manifest(mf);
+            free(mf);
+            return 2;
+        }
+        if (m->p.model != BTDF_MODEL_XU_SUN && m->nbsdf > 0) { /* as tabulate refuses it */
+            fprintf(stderr, "%s: %s:%d: material [%s]: %s: model %s: not available for .bsdf "
+                            "yet (enter and leave tables take it)\n",
+                    mo->prog, mo->path, m->key_line[K_BSDF], m->name, m->bsdf[0],
+                    btdf_model_name(m->p.model));
             free_manifest(mf);
             free(mf);
             return 2;

@@ -21,8 +21,9 @@ const opt_def opt_table[] = {
     {OPT_K0, "k0", 0, "K", 0, MAT, "shadowing constant (default 0.7)"},
     {OPT_MODEL, "model", 0, "M", 0, MAT,
      "the facets' shadowing-masking: xu-sun (default: Eq. 25, V(ti) V(to) with k0) or\n"
-     "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused);\n"
-     "full is reserved and not available in this build"},
+     "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused;\n"
+     "tabulate writes it to .csv and .exr, the files record it); full is reserved and\n"
+     "not available in this build"},
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
      "evaluate a written table (.csv, .exr, .bsdf) instead of Eq. 25; the file gives\n"
      "the material, so --ior, --smoothness and --k0 do not apply"},
@@ -629,7 +630,10 @@ void opt_bash(FILE *f)
                 fprintf(f, "|-%c", o->letter);
             first = 0;
         }
-    fprintf(f, ")\n            COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n    esac\n");
+    fprintf(f, ")\n            COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n");
+    /* the models this build evaluates (btdf_params_check) */
+    fprintf(f, "        --model)\n            COMPREPLY=($(compgen -W \"xu-sun smith\" -- \"$cur\")); "
+               "return ;;\n    esac\n");
     fprintf(f, "    local opts\n    case ${COMP_WORDS[1]} in\n");
     for (const cmd_def *c = cmd_table; c->name; c++) {
         fprintf(f, "        %s) opts=\"", c->name);

@@ -84,6 +84,8 @@ static void json_request(FILE *f, const btdf_table_opts *o, const btdf_report *r
         fprintf(f, "%s%s", c ? ", " : "", num(o->params.ior[c]));
     fprintf(f, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n", num(o->params.smoothness),
             num(o->params.k0));
+    /* the model the errors are measured against */
+    fprintf(f, "  \"model\": \"%s\",\n", btdf_model_name(o->params.model));
     fprintf(f, "  \"theta_i_deg\": [%s, %s],\n", num(o->ti_min * 180 / M_PI),
             num(o->ti_max * 180 / M_PI));
     fprintf(f, "  \"tolerance\": %s,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",
@@ -194,11 +196,13 @@ int report_json_series(const char *prog, const char *report, const btdf_params *
     for (int c = 0; c < p->channels; c++)
         fprintf(m, "%s%.17g", c ? ", " : "", p->ior[c]);
     double peak = btdf_scatfun_a0_peak(f);
-    fprintf(m, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n  \"tolerance\": %.17g,\n"
+    fprintf(m, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n  \"model\": \"%s\",\n"
+               "  \"tolerance\": %.17g,\n"
                "  \"metric\": \"l1\",\n  \"met\": %s,\n  \"nodes\": %zu,\n  \"coefficients\": %zu,\n"
                "  \"max_order\": %zu,\n  \"seconds_build\": %.6f,\n  \"a0_peak\": %.6g,\n"
                "  \"pbrt_v3_single_precision_safe\": %s,\n  \"sides\": {\n",
-            p->smoothness, p->k0, tol, met ? "true" : "false", btdf_scatfun_node_count(f),
+            p->smoothness, p->k0, btdf_model_name(p->model), tol, met ? "true" : "false",
+            btdf_scatfun_node_count(f),
             btdf_scatfun_coeff_count(f), btdf_scatfun_max_order(f), seconds, peak,
             peak <= BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 ? "true" : "false");
     int last = -1;
@@ -265,7 +269,8 @@ void report_json_radiance(FILE *f, const btdf_rad *x, const btdf_params *p,
     fprintf(f, "  \"ior\": [");
     for (int c = 0; c < nch; c++)
         fprintf(f, "%s%.17g", c ? ", " : "", p->ior[c]);
-    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n", p->smoothness, p->k0);
+    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n  \"model\": \"%s\",\n",
+            p->smoothness, p->k0, btdf_model_name(p->model));
     if (nch == 3) {
         double m[3][3];
         btdf_rad_rgb_to_xyz(m);
@@ -337,14 +342,14 @@ void report_json_radiance(FILE *f, const btdf_rad *x, const btdf_params *p,
                             cos(th_q * d2r)};
             double xyz[3];
             btdf_rad_lookup_xyz(x, k, pv, qv, xyz);
-            /* Eq. 25 for the light at q in its own frame (rho depends on cos phi only) */
+            /* the model for the light at q in its own frame (rho depends on cos phi only) */
             double truth = 0.0;
             for (int c = 0; c < nch; c++) {
                 double nl = b.light == BTDF_SIDE_ENTER ? p->ior[c] : 1.0 / p->ior[c];
-                double t = refl ? btdf_rho_r(nl, p->smoothness, p->k0, tq * d2r, tp * d2r,
-                                             (pp - pq) * d2r)
-                                : btdf_rho(nl, p->smoothness, p->k0, tq * d2r,
-                                           (180.0 - tp) * d2r, (pp - pq) * d2r);
+                double t = refl ? btdf_rho_r_model(p->model, nl, p->smoothness, p->k0,
+                                                   tq * d2r, tp * d2r, (pp - pq) * d2r)
+                                : btdf_rho_model(p->model, nl, p->smoothness, p->k0, tq * d2r,
+                                                 (180.0 - tp) * d2r, (pp - pq) * d2r);
                 truth += nch == 1 ? t : m[1][c] * t;
             }
             fprintf(f, "     [%.4f, %.4f, %.4f, %.4f, %.9g, %.9g", th_p, pp, th_q, pq, xyz[1],

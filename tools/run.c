@@ -239,6 +239,11 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         k += snprintf(meta + k, sizeof meta - (size_t)k,
                       "], \"smoothness\": %s, \"k0\": %s, \"tolerance\": %s", nb[0], nb[1],
                       nb[2]);
+    /* the model, for every model but xu-sun (whose files keep their bytes: no key is
+       xu-sun) */
+    if (p->model != BTDF_MODEL_XU_SUN && k > 0 && (size_t)k < sizeof meta)
+        k += snprintf(meta + k, sizeof meta - (size_t)k, ", \"model\": \"%s\"",
+                      btdf_model_name(p->model));
     btdf_report reps[4];
     memset(reps, 0, sizeof reps);
     for (int bi = 0; bi < 4; bi++) {
@@ -468,13 +473,14 @@ static void table_line(char *line, size_t len, const run_table_req *rq, const bt
                  refl ? "R" : "T");
     snprintf(line, len,
              "%s: %s: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
-             "(%s, %zu angles, %zu points%s); e_L1 max %.3g mean %.3g; %s; "
+             "(%s, %zu angles, %zu points%s); error against %s: e_L1 max %.3g mean %.3g; %s; "
              "e_T max %.3g mean %.3g; peak memory %.1f MiB%s",
              rq->prog, what, rk->slices, rk->samples, rk->seconds_build, rk->seconds_estimate,
              o->estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", rk->test_angles,
              rk->test_points,
              rk->estimate_in_build ? "; the builder's last check, inside the tabulation" : "",
-             rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max, rk->e_t_mean,
+             btdf_model_name(o->params.model), rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max,
+             rk->e_t_mean,
              (double)rk->peak_bytes / 1048576.0,
              o->kind == BTDF_TABLE_GRID ? ""
                                         : (rk->met ? "; tolerance met" : "; TOLERANCE NOT MET"));

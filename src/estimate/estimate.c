@@ -1,5 +1,5 @@
 /* SPDX-License-Identifier: MIT */
-/* estimate.c: a table's error against Eq. 25 (MODEL.md section 6) at points it was not built on. */
+/* estimate.c: a table's error against its model (MODEL.md section 6) at points it was not built on. */
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -15,7 +15,7 @@
 /* ------------------------------------------------------------------------- */
 
 typedef struct memo_key {
-    int refl, channels;
+    int refl, channels, model;
     double ior[BTDF_MAX_CHANNELS], s, k0, ti;
 } memo_key;
 
@@ -57,8 +57,8 @@ void albedo_memo_free(albedo_memo *m)
 
 static int key_eq(const memo_key *a, const memo_key *b)
 {
-    if (a->refl != b->refl || a->channels != b->channels || a->s != b->s || a->k0 != b->k0 ||
-        a->ti != b->ti)
+    if (a->refl != b->refl || a->channels != b->channels || a->model != b->model ||
+        a->s != b->s || a->k0 != b->k0 || a->ti != b->ti)
         return 0;
     for (int c = 0; c < a->channels; c++)
         if (a->ior[c] != b->ior[c])
@@ -79,6 +79,7 @@ btdf_status albedo_memo_get(albedo_memo *m, const btdf_params *p, int refl, doub
         k.ior[c] = p->ior[c];
     k.s = p->smoothness;
     k.k0 = p->k0;
+    k.model = (int)p->model;
     k.ti = ti;
     uint64_t bits, nb;
     memcpy(&bits, &ti, sizeof bits);
@@ -112,7 +113,7 @@ btdf_status albedo_memo_get(albedo_memo *m, const btdf_params *p, int refl, doub
 }
 
 typedef struct est_job {
-    const btdf_params *p; /* the truth: Eq. 25 with these parameters */
+    const btdf_params *p; /* the truth: the model of these parameters */
     est_eval_fn fn;       /* the evaluation under test */
     const void *obj;
     const double *ti;     /* the test angles */
@@ -195,7 +196,7 @@ static void est_angle(void *arg, size_t k)
     }
     double sti = sin(ti), cti = cos(ti), s = p->smoothness;
     rho_in a;
-    rho_in_init(&a, sti, cti, s, p->k0);
+    rho_in_init_m(&a, sti, cti, s, p->k0, p->model); /* the truth is the table's model */
     /* with a context (prep), fn reads the cosines of q only: the angles are left 0 */
     void *ctx = j->prep ? j->prep(j->obj, ti) : NULL;
     const void *obj = ctx ? ctx : j->obj;
@@ -239,7 +240,7 @@ static void est_angle(void *arg, size_t k)
                 }
                 const double q[8] = {sti, cti, g.sin_to, g.cos_to, g.cos_phi, g.sin_phi, pf, to};
                 j->fn(obj, ti, q, tab);
-                /* g.rho is Eq. 25 through the kernel, independent of the table */
+                /* g.rho is the model through the kernel, independent of the table */
                 for (int e = 0; e < nr; e++)
                     est_add(&acc[e], tab[e * p->channels + c], g.rho,
                             va > 0.0 ? va * vb / (va + vb) : 0.0);
@@ -268,10 +269,10 @@ static void est_angle(void *arg, size_t k)
                 }
                 double rho;
                 if (refl) {
-                    rho = btdf_rho_r(n, s, p->k0, ti, atan2(sto, mu), ph);
+                    rho = btdf_rho_r_model(p->model, n, s, p->k0, ti, atan2(sto, mu), ph);
                 } else {
                     rho_out b;
-                    rho_out_init(&b, sto, mu, s, p->k0);
+                    rho_out_init_m(&b, sto, mu, s, p->k0, &a);
                     rho = rho_kernel(n, s, &a, &b, cph, sph);
                 }
                 const double q[8] = {sti, cti, sto, mu, cph, sph, ph,

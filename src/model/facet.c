@@ -20,7 +20,7 @@ int facet_eval(double n, double s, double k0, const rho_in *a, double stn, doubl
     g->cos_phi = st > 0.0 ? r.ox / st : 1.0;
     g->sin_phi = st > 0.0 ? r.oy / st : 0.0;
     rho_out b;
-    rho_out_init(&b, st, r.oz, s, k0);
+    rho_out_init_m(&b, st, r.oz, s, k0, a); /* a's model */
     g->rho = rho_kernel(n, s, a, &b, g->cos_phi, g->sin_phi);
     double d = r.ca - n * r.cb; /* |v| with v = e_i + n e_o = (ca - n cb) h; != 0 for n != 1 */
     g->weight = -r.oz * d * d / (n * n * r.cb);
@@ -42,7 +42,7 @@ int facet_eval_r(double n, double s, double k0, const rho_in *a, double stn, dou
     g->cos_phi = st > 0.0 ? rx / st : 1.0;
     g->sin_phi = st > 0.0 ? ry / st : 0.0;
     /* rho_r from the model's own evaluator at e_r's angles, not from this geometry */
-    g->rho = btdf_rho_r(n, s, k0, atan2(a->sin_ti, a->cos_ti), atan2(st, rz),
+    g->rho = btdf_rho_r_model(a->model, n, s, k0, atan2(a->sin_ti, a->cos_ti), atan2(st, rz),
                         atan2(g->sin_phi, g->cos_phi));
     g->weight = rz * 4.0 * ca; /* d(omega_r) = 4 (e_i.h) d(omega_h) */
     return 1;

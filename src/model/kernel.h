@@ -33,7 +33,10 @@ static inline double shadow_v(double tan_t, double s, double k0)
 /* Incoming-side quantities that depend on ti only: hoisted out of the inner loop. */
 typedef struct rho_in {
     double sin_ti, cos_ti;
-    double pref; /* s^2/(4 pi) * V(ti) / cos ti, 0 when cos ti = 0 */
+    double pref; /* s^2/(4 pi) * V(ti) / cos ti, 0 when cos ti = 0 (xu-sun); without
+                    V(ti) for smith, whose G2 goes to the outgoing side whole */
+    btdf_model model; /* which shadowing-masking (rho_in_init: xu-sun) */
+    double lam;       /* smith: Lambda(ti) */
 } rho_in;
 
 /* Outgoing-side quantities that depend on to only. */
@@ -46,6 +49,8 @@ static inline void rho_in_init(rho_in *a, double sin_ti, double cos_ti, double s
 {
     a->sin_ti = sin_ti;
     a->cos_ti = cos_ti;
+    a->model = BTDF_MODEL_XU_SUN;
+    a->lam = 0.0;
     /* cos ti = 0 is grazing incidence, where rho -> 0 (MODEL.md 3.5): no 1/0. */
     a->pref = cos_ti > 0.0 ? s * s / (4.0 * M_PI) * shadow_v(sin_ti / cos_ti, s, k0) / cos_ti
                            : 0.0;
@@ -58,6 +63,73 @@ static inline void rho_out_init(rho_out *b, double sin_to, double cos_to, double
     double c = -cos_to;
     /* |cos to| = 0 is a grazing exit, where rho -> 0 (MODEL.md 3.5): no 1/0. */
     b->pref = c > 0.0 ? shadow_v(sin_to / c, s, k0) / c : 0.0;
+}
+
+/* The model's outgoing factors of the facet-space evaluators: every place where the
+   models differ goes through one of the two switches below (and rho_in_init_m), so a
+   model slots in by adding a case to each. The Smith forms are defined further down. */
+static inline double bt_lambda_f(double sn, double cs, double s);
+static inline double bt_smith_t_factor(double li, double lo);
+static inline double bt_smith_r_factor(double li, double lr);
+
+/* rho_in_init in the model m: for smith the incoming prefactor drops V(ti) and keeps
+   Lambda(ti) for the outgoing side (G2 does not factor). */
+static inline void rho_in_init_m(rho_in *a, double sin_ti, double cos_ti, double s, double k0,
+                                 btdf_model m)
+{
+    switch (m) {
+    case BTDF_MODEL_SMITH:
+        a->sin_ti = sin_ti;
+        a->cos_ti = cos_ti;
+        a->pref = cos_ti > 0.0 ? s * s / (4.0 * M_PI) / cos_ti : 0.0; /* grazing: rho = 0 */
+        a->model = m;
+        a->lam = bt_lambda_f(sin_ti, cos_ti > 0.0 ? cos_ti : 0.0, s);
+        return;
+    default: /* xu-sun (callers have refused the rest) */
+        rho_in_init(a, sin_ti, cos_ti, s, k0);
+        return;
+    }
+}
+
+/* The outgoing shadowing of a transmission to the direction (sin to, |cos to| > 0):
+   V(to) for xu-sun, G2 = B(1 + Lambda(ti), 1 + Lambda(to)) for smith. */
+static inline double rho_out_shadow(const rho_in *a, double sin_to, double abs_cos_to,
+                                    double s, double k0)
+{
+    switch (a->model) {
+    case BTDF_MODEL_SMITH:
+        return bt_smith_t_factor(a->lam, bt_lambda_f(sin_to, abs_cos_to, s));
+    default:
+        return shadow_v(sin_to / abs_cos_to, s, k0);
+    }
+}
+
+/* The same for a reflection to (sin tr, cos tr > 0): V(tr), or 1/(1 + Lambda(ti) +
+   Lambda(tr)) for smith. */
+static inline double rho_out_shadow_r(const rho_in *a, double sin_tr, double cos_tr,
+                                      double s, double k0)
+{
+    switch (a->model) {
+    case BTDF_MODEL_SMITH:
+        return bt_smith_r_factor(a->lam, bt_lambda_f(sin_tr, cos_tr, s));
+    default:
+        return shadow_v(sin_tr / cos_tr, s, k0);
+    }
+}
+
+/* rho_out_init with the outgoing factor of a's model. */
+static inline void rho_out_init_m(rho_out *b, double sin_to, double cos_to, double s,
+                                  double k0, const rho_in *a)
+{
+    if (a->model == BTDF_MODEL_XU_SUN) {
+        rho_out_init(b, sin_to, cos_to, s, k0); /* the bits of every xu-sun output */
+        return;
+    }
+    b->sin_to = sin_to;
+    b->cos_to = cos_to;
+    double c = -cos_to;
+    /* |cos to| = 0 is a grazing exit, where rho -> 0 (MODEL.md 3.5): no 1/0. */
+    b->pref = c > 0.0 ? rho_out_shadow(a, sin_to, c, s, k0) / c : 0.0;
 }
 
 /* Eq. 25 (MODEL.md section 2) for one channel, from hoisted incoming and outgoing
@@ -348,6 +420,17 @@ BT_INLINE double bt_smith_t_exponent(double li, double lo)
 BT_INLINE double bt_smith_r_exponent(double li, double lr)
 {
     return bt_log1p(li + lr);
+}
+
+/* The forms the facet-space evaluators above declared: Lambda, and the two G2. */
+static inline double bt_lambda_f(double sn, double cs, double s) { return bt_lambda(sn, cs, s); }
+static inline double bt_smith_t_factor(double li, double lo)
+{
+    return bt_exp_mul(-bt_smith_t_exponent(li, lo), 1.0);
+}
+static inline double bt_smith_r_factor(double li, double lr)
+{
+    return bt_exp_mul(-bt_smith_r_exponent(li, lr), 1.0);
 }
 
 /* sin and cos of y in [-pi/4, pi/4]; swapped when swap is set (the caller reduced

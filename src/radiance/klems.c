@@ -114,6 +114,7 @@ static const double gl_w[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451
 
 typedef struct kl_ctx {
     double n, s, k0;
+    btdf_model model; /* the shadowing-masking (kernel.h) */
     int reflect;  /* 1: rho_r of MODEL.md 8, 0: Eq. 25 */
     rho_in ri;
     double ti;    /* the incident polar angle (reflection) */
@@ -146,13 +147,13 @@ static double gl2(const kl_ctx *c, double w0, double w1, double p0, double p1)
         double sto = sqrt(fmin(1.0, fmax(0.0, w)));
         if (c->reflect) {
             bt_ir ir;
-            bt_ir_rad(&ir, c->ti, asin(sto), c->s, c->k0);
+            bt_ir_rad_m(&ir, c->ti, asin(sto), c->s, c->k0, c->model == BTDF_MODEL_SMITH);
             for (int b = 0; b < 4; b++)
                 sum += gl_w[a] * gl_w[b] *
                        bt_rho_r(c->n, c->n - 1.0, c->s, &ir, az[b].h2, az[b].sphi);
         } else {
             rho_out ro;
-            rho_out_init(&ro, sto, -sqrt(fmax(0.0, 1.0 - sto * sto)), c->s, c->k0);
+            rho_out_init_m(&ro, sto, -sqrt(fmax(0.0, 1.0 - sto * sto)), c->s, c->k0, &c->ri);
             for (int b = 0; b < 4; b++)
                 sum += gl_w[a] * gl_w[b] * rho_kernel(c->n, c->s, &c->ri, &ro, cph[b], sph[b]);
         }
@@ -261,6 +262,7 @@ static void kl_column(void *arg, size_t i)
     c.n = j->n;
     c.s = j->p->smoothness;
     c.k0 = j->p->k0;
+    c.model = j->p->model;
     c.reflect = j->reflect;
     double *col = calloc((size_t)np, sizeof *col);
     kl_cell *cells = c.reflect ? malloc(KL_CELLS * sizeof *cells) : NULL;
@@ -299,7 +301,7 @@ static void kl_column(void *arg, size_t i)
             cti = nc[a];
             sti = sqrt(fmax(0.0, 1.0 - cti * cti));
         }
-        rho_in_init(&c.ri, sti, cti, c.s, c.k0);
+        rho_in_init_m(&c.ri, sti, cti, c.s, c.k0, c.model);
         c.ti = nn == 4 ? asin(fmin(1.0, sti)) : acos(cti);
         for (int b = 0; b < 4 * np_phi; b++) {
             int bp = b / 4, bb = b % 4;

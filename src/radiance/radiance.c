@@ -266,10 +266,12 @@ static void probe_angle(void *arg, size_t i)
             double phi = 2.0 * M_PI * ((double)ph + core_unif(&z)) / (double)pr->nphi;
             double st = sqrt(u1), to = asin(st), f;
             if (b->reflect) {
-                f = btdf_rho_r(pr->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
+                f = btdf_rho_r_model(r->p.model, pr->n_light, r->p.smoothness, r->p.k0, ti,
+                                     to, phi);
             } else {
                 to = M_PI - to;
-                f = btdf_rho(pr->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
+                f = btdf_rho_model(r->p.model, pr->n_light, r->p.smoothness, r->p.k0, ti, to,
+                                   phi);
             }
             double pv[3], qv[3];
             rad_render_dirs(r, pr->k, ti, to, phi, pv, qv);

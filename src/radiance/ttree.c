@@ -133,6 +133,7 @@ typedef struct tt_ctx {
     int same[3];            /* the first channel of channel c's index (computed once) */
     double n[3], scale[3];  /* per channel: the block's index and scale */
     double s, k0;
+    btdf_model model;       /* the shadowing-masking (kernel.h) */
     int reflect;            /* 1: rho_r(n) (reciprocal, no scale); 0: scale rho(n; p -> q) */
     double rfloor[3][NR_GRID]; /* max(T or R of the light, 0.01) at r = k / (NR_GRID - 1) */
     double m[3][3];         /* colour: R, G, B -> X, Y, Z */
@@ -289,6 +290,9 @@ static void tt_eval(const tt_ctx *c, tb_node *nd, float *cv, int level, uint32_t
                     uint32_t i1, uint32_t i2)
 {
     double h = ldexp(1.0, -level), f[NS][NS * NS], rr[NS * NS];
+    /* smith: G2 does not factor into the two directions' parts, so it is formed per
+       pair of samples (rho_out_init_m), from Lambda of each side */
+    int smith = c->model == BTDF_MODEL_SMITH;
     rho_out ro[NS * NS];
     double cph[NS * NS], sph[NS * NS], vr[NS * NS];
     for (int j = 0; j < NS; j++) {
@@ -301,6 +305,8 @@ static void tt_eval(const tt_ctx *c, tb_node *nd, float *cv, int level, uint32_t
             rr[m] = r;
             if (!c->reflect)
                 rho_out_init(&ro[m], r, -sqrt(1.0 - r2), c->s, c->k0);
+            else if (smith) /* Lambda(tr) here; the pair's G2 below */
+                vr[m] = bt_lambda(r, sqrt(1.0 - r2), c->s);
             else /* a midpoint has r < 1: cos > 0 */
                 vr[m] = shadow_v(r / sqrt(1.0 - r2), c->s, c->k0);
             /* phi = psi + pi, psi the azimuth of (x, y); any phi at the centre r = 0 */
@@ -316,9 +322,10 @@ static void tt_eval(const tt_ctx *c, tb_node *nd, float *cv, int level, uint32_t
         sp[i] = st;
         cp[i] = sqrt(1.0 - st * st);
         if (c->reflect)
-            vi[i] = shadow_v(st / cp[i], c->s, c->k0); /* cp > 0 below u0 = 0.5 - FTINY */
+            vi[i] = smith ? bt_lambda(st, cp[i], c->s) /* Lambda(ti): the pair's G2 below */
+                          : shadow_v(st / cp[i], c->s, c->k0); /* cp > 0 below u0 = 0.5 - FTINY */
         else
-            rho_in_init(&ri[i], st, cp[i], c->s, c->k0);
+            rho_in_init_m(&ri[i], st, cp[i], c->s, c->k0, c->model);
     }
     /* The cell's ring radii: the Chebyshev norm of (2a - 1, 2b - 1) over the cell. */
     double alo = 2.0 * i1 * h - 1.0, blo = 2.0 * i2 * h - 1.0;
@@ -345,12 +352,18 @@ static void tt_eval(const tt_ctx *c, tb_node *nd, float *cv, int level, uint32_t
         for (int i = 0; i < NS; i++) {
             if (c->reflect) {
                 for (int m = 0; m < NS * NS; m++)
-                    f[i][m] = rho_r_cell(c, c->n[ch], sp[i], cp[i], vi[i], rr[m], cph[m],
-                                         sph[m], vr[m]);
+                    f[i][m] = smith ? rho_r_cell(c, c->n[ch], sp[i], cp[i], 1.0, rr[m], cph[m],
+                                                 sph[m], bt_smith_r_factor(vi[i], vr[m]))
+                                    : rho_r_cell(c, c->n[ch], sp[i], cp[i], vi[i], rr[m], cph[m],
+                                                 sph[m], vr[m]);
             } else {
-                for (int m = 0; m < NS * NS; m++)
+                for (int m = 0; m < NS * NS; m++) {
+                    rho_out om = ro[m];
+                    if (smith)
+                        rho_out_init_m(&om, ro[m].sin_to, ro[m].cos_to, c->s, c->k0, &ri[i]);
                     f[i][m] = c->scale[ch] *
-                              rho_kernel(c->n[ch], c->s, &ri[i], &ro[m], cph[m], sph[m]);
+                              rho_kernel(c->n[ch], c->s, &ri[i], &om, cph[m], sph[m]);
+                }
             }
             double row = 0.0;
             for (int m = 0; m < NS * NS; m++)
@@ -502,6 +515,7 @@ rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, int threads)
     rad_rgb_to_xyz(c->m);
     c->s = p->smoothness;
     c->k0 = p->k0;
+    c->model = p->model;
     c->reflect = blk->reflect;
     /* Start where a cell is no wider than the lobe (about 2/s rad in facet slope). */
     int lv = 3 + (int)ceil(log2(fmax(1.0, p->smoothness / 2.0)));

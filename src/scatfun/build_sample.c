@@ -56,7 +56,10 @@ BT_CLONES static void sample_grid_t1(const build_ctx *c, const build_ws *w, int 
     bt_io io;
     bt_io_set(&io, ss, mu_s, sf, mu_f, sp, cp, sm);
     double n = c->ior[b][0], d = n - 1.0, s = c->p->smoothness;
-    bt_io_pref(&io, s, c->p->k0);
+    if (c->p->model == BTDF_MODEL_SMITH) /* the model's shadowing-masking (kernel.h) */
+        bt_io_pref_smith(&io, s);
+    else
+        bt_io_pref(&io, s, c->p->k0);
     double f = mu_f; /* one channel: no fold (stored_values) */
     size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
     const double *h2 = w->h2g, *sn = w->sing;
@@ -80,7 +83,8 @@ BT_CLONES static void sample_grid_r1(const build_ctx *c, const build_ws *w, int 
     bt_ir ir;
     memset(&ir, 0, sizeof ir);
     /* ti = acos mu_s, tr = acos mu_f, both in [0, pi/2] */
-    bt_ir_rad(&ir, atan2(ss, mu_s), atan2(sf, mu_f), c->p->smoothness, c->p->k0);
+    bt_ir_rad_m(&ir, atan2(ss, mu_s), atan2(sf, mu_f), c->p->smoothness, c->p->k0,
+                c->p->model == BTDF_MODEL_SMITH);
     double n = c->ior[b][0], d = n - 1.0, s = c->p->smoothness;
     size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
     long cnt = phase <= N ? (long)((N - phase) / step) + 1 : 0, sg = (long)(step * g);
@@ -222,10 +226,10 @@ void sf_sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_s,
     if (blk_refl[b]) {
         /* ti = acos mu_s, tr = acos mu_f, both in [0, pi/2] */
         double ti = atan2(ss, mu_s), tr = atan2(sf, mu_f);
-        bt_ir_rad(&ir, ti, tr, c->p->smoothness, c->p->k0);
+        bt_ir_rad_m(&ir, ti, tr, c->p->smoothness, c->p->k0, c->p->model == BTDF_MODEL_SMITH);
     } else {
-        rho_in_init(&ri, ss, mu_s, c->p->smoothness, c->p->k0);
-        rho_out_init(&ro, sf, -mu_f, c->p->smoothness, c->p->k0);
+        rho_in_init_m(&ri, ss, mu_s, c->p->smoothness, c->p->k0, c->p->model);
+        rho_out_init_m(&ro, sf, -mu_f, c->p->smoothness, c->p->k0, &ri);
     }
     double v[3];
     size_t g = c->nmax / N; /* N divides nmax: both are powers of two */

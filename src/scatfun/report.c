@@ -179,7 +179,7 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
                 double tr = atan2(sqrt(rx * rx + ry * ry), rz), phi = atan2(ry, rx);
                 double va = rz * 4.0 * ca * refl_h_measure(u, s, dw, dpsi);
                 double vb = rz * dmu * dphi * 2.0;
-                double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
+                double rho = btdf_rho_r_model(p->model, n, s, p->k0, ti, tr, phi);
                 /* va, vb > 0 */
                 refl_both(m, fr, nr, c, ti, tr, phi, rho, va * vb / (va + vb), acc);
             }
@@ -205,7 +205,7 @@ static size_t refl_angle(const void *obj, const btdf_params *p, double ti, uint6
                     }
                 }
                 double tr = atan2(sr, mu), phi = ph;
-                double rho = btdf_rho_r(n, s, p->k0, ti, tr, phi);
+                double rho = btdf_rho_r_model(p->model, n, s, p->k0, ti, tr, phi);
                 refl_both(m, fr, nr, c, ti, tr, phi, rho, share, acc);
             }
         }

@@ -57,6 +57,7 @@ static void facet_slice_job(void *arg, size_t k)
     memset(&rule, 0, sizeof rule);
     rule.kind = tg.refl ? BTDF_TABLE_FACET_REFLECTION : BTDF_TABLE_FACET;
     rule.rule = tg.refl ? BTDF_RULE_FRESNEL : BTDF_RULE_CHI;
+    rule.p = *tg.p; /* the model's node factors too */
     if (!j->out[k].nomem && j->out[k].s.vals && !slice_prepare(&rule, &j->out[k].s)) {
         tb_free_slice_out(&j->out[k]);
         j->out[k].nomem = 1;
@@ -90,7 +91,9 @@ static double blend_error(const btdf_table_opts *o, const slice_out *A, const sl
         for (size_t j = 0; j < s->nc; j++) {
             double ca = stn * cos(s->cols[j]) * sti + ctn * cti; /* e_i.h at M's ti */
             for (size_t c = 0; c < nch; c++) {
-                double km = rule_factor(tmp.rule, o->params.ior[c], ca);
+                double km = rule_factor(tmp.rule, o->params.ior[c], ca) *
+                            model_node_factor(&o->params, refl, o->params.ior[c], sti, cti,
+                                              stn, ctn, cos(s->cols[j]));
                 double bl = km * blend_ti(slice_interp_red(&tmp, 0, s->rows[i], s->cols[j], (int)c),
                                           slice_interp_red(&tmp, 1, s->rows[i], s->cols[j], (int)c),
                                           1.0 - wa, g, ga, gb);

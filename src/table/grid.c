@@ -35,10 +35,11 @@ static void grid_slice(void *arg, size_t k)
     rho_in a;
     for (size_t c = 0; c < nch; c++) {
         double n = p->ior[c];
-        rho_in_init(&a, sin(s->ti), cos(s->ti), p->smoothness, p->k0);
+        rho_in_init_m(&a, sin(s->ti), cos(s->ti), p->smoothness, p->k0, p->model);
         for (size_t i = 0; i < nr; i++) {
             rho_out b;
-            rho_out_init(&b, sin(s->rows[i]), fmin(cos(s->rows[i]), 0.0), p->smoothness, p->k0);
+            rho_out_init_m(&b, sin(s->rows[i]), fmin(cos(s->rows[i]), 0.0), p->smoothness,
+                           p->k0, &a);
             /* The inner loop has no per-sample trigonometry and no calls: it vectorises. */
             for (size_t j = 0; j < nc; j++)
                 row[j] = rho_kernel(n, p->smoothness, &a, &b, cph[j], sph[j]);

@@ -14,7 +14,8 @@
    row: rho = [s^2/(4 pi) V(ti)/cos ti] e^{-s^2 t^2/4} (1 + t^2)^2 ca Ft chi V(to)/|cos to|,
    t = tan tn, chi = n^2 cb / (ca - n cb)^2. The error estimate evaluates the same
    directions through the kernel of model/kernel.h, so the two check each other.
-   Returns rho and sets *w to the measure weight |cos to|/chi * sin tn. */
+   Returns rho and sets *w to the measure weight |cos to|/chi * sin tn. In the smith
+   model a->pref lacks V(ti) and V(to) becomes G2 (rho_out_shadow: the same product). */
 static double facet_rho(double n, double s, double k0, const rho_in *a, double stn,
                         double ctn, double cpsi, double spsi, double beck, double *w)
 {
@@ -28,7 +29,7 @@ static double facet_rho(double n, double s, double k0, const rho_in *a, double s
     double ft = 2.0 * n * ca * cb * (1.0 / (d1 * d1) + 1.0 / (d2 * d2));
     double chi = n * n * cb / (d * d);
     double st = sqrt(ox * ox + oy * oy);
-    double vo = shadow_v(st / -oz, s, k0); /* -oz > 0 checked above */
+    double vo = rho_out_shadow(a, st, -oz, s, k0); /* -oz > 0 checked above */
     *w = -oz / chi * stn;
     double r = a->pref * beck * ca * ft * chi * vo / -oz;
     return r >= DBL_MIN ? r : 0.0; /* MODEL.md 3.6 */
@@ -46,7 +47,7 @@ static double facet_rho_r(double n, double s, double k0, const rho_in *a, double
     double ca, rx, ry, rz;
     if (!facet_mirror(a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz))
         return 0.0; /* no reflected direction in the upper medium */
-    double vo = shadow_v(sqrt(rx * rx + ry * ry) / rz, s, k0); /* rz > 0 just checked */
+    double vo = rho_out_shadow_r(a, sqrt(rx * rx + ry * ry), rz, s, k0); /* rz > 0 checked */
     *w = rz * 4.0 * ca * stn;
     double r = a->pref * beck * bt_fresnel_r(n, n - 1.0, ca) * vo / (4.0 * rz);
     return r >= DBL_MIN ? r : 0.0; /* MODEL.md 3.6 */
@@ -242,6 +243,10 @@ static int slice_pass_errors(const slice_target *tg, const rho_in *a, const slic
     for (size_t j = 0; j + 1 < nc; j++)
         cpm[j] = cos(ps->cm[j]);
     double sti = a->sin_ti, cti = a->cos_ti;
+    /* the model's node factors beside K (table.h; 1 for xu-sun, so its bits stay) */
+#define NODE_F(stn_, ctn_, cpsi_)                                                          \
+    (smodel ? model_node_factor(p, tg->refl, n, sti, cti, (stn_), (ctn_), (cpsi_)) : 1.0)
+    int smodel = p->model != BTDF_MODEL_XU_SUN;
     double vmax = 0.0;
     for (size_t q = 0; q < nr * nc * nch; q++)
         vmax = fmax(vmax, vals[q]);
@@ -253,9 +258,12 @@ static int slice_pass_errors(const slice_target *tg, const rho_in *a, const slic
         for (size_t j = 0; j < nc; j++)
             for (size_t c = 0; c < nch; c++) {
                 double n = p->ior[c];
-                double k0 = rule_factor(rl, n, sr[i] * cp[j] * sti + cr[i] * cti);
-                double k1 = rule_factor(rl, n, sr[i + 1] * cp[j] * sti + cr[i + 1] * cti);
-                double km = rule_factor(rl, n, smr[i] * cp[j] * sti + cmr[i] * cti);
+                double k0 = rule_factor(rl, n, sr[i] * cp[j] * sti + cr[i] * cti) *
+                            NODE_F(sr[i], cr[i], cp[j]);
+                double k1 = rule_factor(rl, n, sr[i + 1] * cp[j] * sti + cr[i + 1] * cti) *
+                            NODE_F(sr[i + 1], cr[i + 1], cp[j]);
+                double km = rule_factor(rl, n, smr[i] * cp[j] * sti + cmr[i] * cti) *
+                            NODE_F(smr[i], cmr[i], cp[j]);
                 double lin = 0.5 * km * (red(vals[(i * nc + j) * nch + c], k0) +
                                          red(vals[((i + 1) * nc + j) * nch + c], k1));
                 double d = fabs(ps->vr[(i * nc + j) * nch + c] - lin);
@@ -276,9 +284,12 @@ static int slice_pass_errors(const slice_target *tg, const rho_in *a, const slic
         for (size_t i = 0; i < nr; i++)
             for (size_t c = 0; c < nch; c++) {
                 double n = p->ior[c];
-                double k0 = rule_factor(rl, n, sr[i] * cp[j] * sti + cr[i] * cti);
-                double k1 = rule_factor(rl, n, sr[i] * cp[j + 1] * sti + cr[i] * cti);
-                double km = rule_factor(rl, n, sr[i] * cpm[j] * sti + cr[i] * cti);
+                double k0 = rule_factor(rl, n, sr[i] * cp[j] * sti + cr[i] * cti) *
+                            NODE_F(sr[i], cr[i], cp[j]);
+                double k1 = rule_factor(rl, n, sr[i] * cp[j + 1] * sti + cr[i] * cti) *
+                            NODE_F(sr[i], cr[i], cp[j + 1]);
+                double km = rule_factor(rl, n, sr[i] * cpm[j] * sti + cr[i] * cti) *
+                            NODE_F(sr[i], cr[i], cpm[j]);
                 double lin = 0.5 * km * (red(vals[(i * nc + j) * nch + c], k0) +
                                          red(vals[(i * nc + j + 1) * nch + c], k1));
                 double d = fabs(ps->vc[(i * (nc - 1) + j) * nch + c] - lin);
@@ -294,6 +305,7 @@ static int slice_pass_errors(const slice_target *tg, const rho_in *a, const slic
         total += e;
         worst = fmax(worst, e);
     }
+#undef NODE_F
     free(sr);
     *total_out = total;
     *worst_out = worst;
@@ -366,7 +378,7 @@ void tb_build_slice(const slice_target *tg, slice_out *o)
     memset(o, 0, sizeof *o);
     o->s.ti = tg->ti;
     rho_in a;
-    rho_in_init(&a, sin(tg->ti), cos(tg->ti), p->smoothness, p->k0);
+    rho_in_init_m(&a, sin(tg->ti), cos(tg->ti), p->smoothness, p->k0, p->model);
     int is_max = tg->metric == BTDF_METRIC_MAX;
     size_t evals = 0; /* points where Eq. 25 was evaluated */
     slice_grid g = {0};

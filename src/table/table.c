@@ -33,13 +33,53 @@ static double slice_index(const btdf_table *t, int c)
     return t->kind == BTDF_TABLE_FACET_RECIPROCAL ? 1.0 / t->p.ior[c] : t->p.ior[c];
 }
 
+double model_dir_factor(const btdf_params *p, int refl, double sti, double cti, double sto,
+                        double cto)
+{
+    switch (p->model) {
+    case BTDF_MODEL_SMITH: {
+        double s = p->smoothness, li = bt_lambda(sti, cti > 0.0 ? cti : 0.0, s);
+        double lo = bt_lambda(sto, cto > 0.0 ? cto : 0.0, s);
+        /* (1 + li) G2 = e^(ln(1 + li) - (-ln G2)): the exponent is <= 0 since
+           G2 <= G1(ti) = 1/(1 + li) */
+        double x = bt_log1p(li) - (refl ? bt_smith_r_exponent(li, lo)
+                                        : bt_smith_t_exponent(li, lo));
+        return bt_exp_mul(x < 0.0 ? x : 0.0, 1.0);
+    }
+    default:
+        return 1.0; /* xu-sun: V(ti) V(to), and V(to) stays in the nodes */
+    }
+}
+
+double model_node_factor(const btdf_params *p, int refl, double n, double sti, double cti,
+                         double stn, double ctn, double cpsi)
+{
+    if (p->model == BTDF_MODEL_XU_SUN)
+        return 1.0;
+    double spsi = sqrt(fmax(0.0, 1.0 - cpsi * cpsi)); /* psi in [0, pi]: sin psi >= 0 */
+    if (refl) {
+        rho_in a;
+        rho_in_init(&a, sti, cti, 1.0, 0.0); /* geometry only */
+        double ca, rx, ry, rz;
+        if (!facet_mirror(&a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz))
+            return 0.0; /* no reflected direction: the node's rho_r is 0 */
+        return model_dir_factor(p, 1, sti, cti, sqrt(rx * rx + ry * ry), rz);
+    }
+    facet_ray r;
+    if (!facet_refract(n, sti, cti, stn, ctn, cpsi, spsi, &r))
+        return 0.0; /* no transmitted direction: the node's rho is 0 */
+    return model_dir_factor(p, 0, sti, cti, sqrt(r.ox * r.ox + r.oy * r.oy), -r.oz);
+}
+
 int slice_prepare(const btdf_table *t, tslice *s)
 {
     free(s->geo);
     s->geo = NULL;
     if (t->rule == BTDF_RULE_PLAIN || t->kind == BTDF_TABLE_GRID)
         return 1;
-    s->geo = malloc((2 * s->nr + s->nc) * sizeof(double));
+    size_t nch = (size_t)t->p.channels, nsm = t->p.model == BTDF_MODEL_XU_SUN ? 0
+                                                   : s->nr * s->nc * nch;
+    s->geo = malloc((2 * s->nr + s->nc + nsm) * sizeof(double));
     if (!s->geo)
         return 0;
     for (size_t i = 0; i < s->nr; i++) {
@@ -48,6 +88,15 @@ int slice_prepare(const btdf_table *t, tslice *s)
     }
     for (size_t j = 0; j < s->nc; j++)
         s->geo[2 * s->nr + j] = cos(s->cols[j]);
+    /* the model's node factors (model_node_factor) after them, node by node */
+    double *sm = s->geo + 2 * s->nr + s->nc, sti = sin(s->ti), cti = cos(s->ti);
+    int refl = kind_is_reflection(t->kind);
+    for (size_t i = 0; nsm && i < s->nr; i++)
+        for (size_t j = 0; j < s->nc; j++)
+            for (size_t c = 0; c < nch; c++)
+                sm[(i * s->nc + j) * nch + c] =
+                    model_node_factor(&t->p, refl, slice_index(t, (int)c), sti, cti,
+                                      s->geo[i], s->geo[s->nr + i], s->geo[2 * s->nr + j]);
     return 1;
 }
 
@@ -94,6 +143,13 @@ double slice_interp_red(const btdf_table *t, size_t k, double x, double y, int c
         double k01 = rule_factor(rl, n, sn[i] * cp[j1] * sti + cn[i] * cti);
         double k10 = rule_factor(rl, n, sn[i1] * cp[j] * sti + cn[i1] * cti);
         double k11 = rule_factor(rl, n, sn[i1] * cp[j1] * sti + cn[i1] * cti);
+        if (t->p.model != BTDF_MODEL_XU_SUN) { /* the nodes' model factors */
+            const double *sm = s->geo + 2 * s->nr + s->nc;
+            k00 *= sm[(i * s->nc + j) * nch + ch];
+            k01 *= sm[(i * s->nc + j1) * nch + ch];
+            k10 *= sm[(i1 * s->nc + j) * nch + ch];
+            k11 *= sm[(i1 * s->nc + j1) * nch + ch];
+        }
         /* K = 0: the node's facet refracts nothing and its rho is 0; so is rho / K */
         f00 = k00 > 0.0 ? f00 / k00 : 0.0;
         f01 = k01 > 0.0 ? f01 / k01 : 0.0;
@@ -111,14 +167,26 @@ double slice_interp(const btdf_table *t, size_t k, double x, double y, int ch)
         return r;
     double ti = s->ti;
     double ca = sin(x) * cos(y) * sin(ti) + cos(x) * cos(ti); /* e_i . h of the slice */
-    return r * rule_factor(t->rule, slice_index(t, ch), ca);
+    double n = slice_index(t, ch);
+    return r * rule_factor(t->rule, n, ca) *
+           model_node_factor(&t->p, kind_is_reflection(t->kind), n, sin(ti), cos(ti), sin(x),
+                             cos(x), cos(y));
 }
 
 double incident_factor(const btdf_params *p, double ti)
 {
     double c = cos(ti);
-    /* grazing incidence: V -> 0 faster than cos ti, and rho is 0 there */
-    return c > 0.0 ? shadow_v(sin(ti) / c, p->smoothness, p->k0) / c : 0.0;
+    if (!(c > 0.0))
+        return 0.0; /* grazing incidence: the factor -> 0 faster than cos ti, rho is 0 */
+    switch (p->model) {
+    case BTDF_MODEL_SMITH:
+        /* G2 does not factor; its incident part is close to Smith's G1(ti) =
+           1/(1 + Lambda(ti)) (exact where Lambda(to) = 0), which carries the same fast
+           fall near grazing as V(ti) does in Eq. 25 */
+        return 1.0 / ((1.0 + bt_lambda(sin(ti), c, p->smoothness)) * c);
+    default:
+        return shadow_v(sin(ti) / c, p->smoothness, p->k0) / c;
+    }
 }
 
 double blend_ti(double v0, double v1, double w, double g, double g0, double g1)
@@ -195,7 +263,7 @@ BTDF_API btdf_status btdf_table_attach_reflection(btdf_table *t, btdf_table *r, 
         why = "the reflection table is attached to another table already (each table owns "
               "its reflection, and frees it)";
     else if (t->p.channels != r->p.channels || t->p.smoothness != r->p.smoothness ||
-             t->p.k0 != r->p.k0 || memcmp(t->p.ior, r->p.ior, sizeof t->p.ior) != 0)
+             t->p.k0 != r->p.k0 || t->p.model != r->p.model || memcmp(t->p.ior, r->p.ior, sizeof t->p.ior) != 0)
         why = "the two parts have different parameters";
     if (why) {
         if (msg && msglen)
@@ -500,6 +568,9 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
         }
         /* CHI: the slices' reduced values rho / K are blended; the query's K restores rho */
         double kq = chi ? rule_factor(t->rule, n, ca) : 1.0;
+        if (chi && t->p.model != BTDF_MODEL_XU_SUN) /* the query's own model factor */
+            kq *= model_dir_factor(&t->p, t->kind == BTDF_TABLE_FACET_REFLECTION, sti, cti,
+                                   sto, t->kind == BTDF_TABLE_FACET_REFLECTION ? cto : -cto);
         if (!(kq > 0.0))
             continue; /* the query's facet refracts nothing: 0, as Eq. 25 */
         double v = slice_interp_red(t, k, x, y, c);

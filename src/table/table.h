@@ -17,7 +17,8 @@ typedef struct tslice {
     double ti;
     size_t nr, nc;
     double *rows, *cols, *vals; /* vals[(r * nc + c) * channels + ch] */
-    double g;                   /* incident factor V(ti)/cos ti, set when the slice is added */
+    double g;                   /* incident factor V(ti)/cos ti (incident_factor: the
+                                   model's), set when the slice is added */
     double *geo; /* BTDF_RULE_CHI facet slices: sin tn (nr), cos tn (nr), cos psi (nc) of the
                     nodes, set when the slice is added; NULL otherwise */
 } tslice;
@@ -69,11 +70,27 @@ double chi_shape(double n, double ca);
    FRESNEL, 1 for PLAIN; 0 where ca <= 0. */
 double rule_factor(btdf_table_rule rule, double n, double ca);
 
+/* The part of the model's shadowing-masking a facet table's rule divides its nodes by
+   beside K (docs/tables.md): 1 for xu-sun, whose V(ti) is the incident factor and whose
+   V(to) is smooth; for smith (1 + Lambda(ti)) G2, the share of G2 that the incident
+   factor G1(ti) = 1/(1 + Lambda(ti)) leaves out. G2 does not factor, and this share has
+   a logarithmic singularity at grazing incidence that no blend in ti follows: divided
+   out exactly at each node, the reduced values are smooth. model_dir_factor takes the
+   two directions (sin, |cos| of each; refl: G2 of reflection), model_node_factor the
+   node's facet (tn, psi) at incidence ti for the slices' own index n; 0 where the facet
+   sends no light (the node's rho is 0 there). */
+double model_dir_factor(const btdf_params *p, int refl, double sti, double cti, double sto,
+                        double cto);
+double model_node_factor(const btdf_params *p, int refl, double n, double sti, double cti,
+                         double stn, double ctn, double cpsi);
+
 /* Sets up s->geo for table t's rule (no-op for the plain rule and grid tables);
-   0 when out of memory. */
+   for a model other than xu-sun it also holds the nodes' model_node_factor per channel
+   (nr * nc * channels after sin tn, cos tn, cos psi); 0 when out of memory. */
 int slice_prepare(const btdf_table *t, tslice *s);
 
-/* Eq. 25's incident factor V(ti)/cos ti (0 at grazing incidence). */
+/* The incident factor of the model of p: Eq. 25's V(ti)/cos ti, 1/((1 + Lambda(ti))
+   cos ti) for smith (0 at grazing incidence). */
 double incident_factor(const btdf_params *p, double ti);
 
 /* The rule's blend of two slice values at weight w in ti, with the incident factors
