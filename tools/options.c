@@ -21,8 +21,9 @@ const opt_def opt_table[] = {
     {OPT_K0, "k0", 0, "K", 0, MAT, "shadowing constant (default 0.7)"},
     {OPT_MODEL, "model", 0, "M", 0, MAT,
      "the facets' shadowing-masking: xu-sun (default: Eq. 25, V(ti) V(to) with k0) or\n"
-     "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused);\n"
-     "full is reserved and not available in this build"},
+     "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused)\n"
+     "or full (smith plus the light scattered two or more times, tallied once per\n"
+     "material by a random walk: R + T = 1; eval, albedo and polar only)"},
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
      "evaluate a written table (.csv, .exr, .bsdf) instead of Eq. 25; the file gives\n"
      "the material, so --ior, --smoothness and --k0 do not apply"},

@@ -191,6 +191,7 @@ static double colour_bar(plot_canvas *c, double x, double y, double w, double h,
 
 typedef struct curve {
     const btdf_params *p;
+    const btdf_full *full; /* model full: the material's tally, else NULL */
     int ch;
     double ti; /* radians */
     double peak, peak_to;
@@ -200,7 +201,8 @@ typedef struct curve {
 /* rho |cos to| of channel ch in the plane of incidence; side +1 forward (phi = pi). */
 static double polar_value(const curve *cv, double to, int side)
 {
-    double v = btdf_rho_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0,
+    double v = cv->full ? btdf_full_rho(cv->full, cv->ti, to, side > 0 ? M_PI : 0.0)
+                        : btdf_rho_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0,
                               cv->ti, to, side > 0 ? M_PI : 0.0);
     return v * fabs(cos(to));
 }
@@ -209,7 +211,8 @@ static double polar_value(const curve *cv, double to, int side)
    (phi = pi). */
 static double polar_value_r(const curve *cv, double tr, int side)
 {
-    double v = btdf_rho_r_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness,
+    double v = cv->full ? btdf_full_rho_r(cv->full, cv->ti, tr, side > 0 ? M_PI : 0.0)
+                        : btdf_rho_r_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness,
                                 cv->p->k0, cv->ti, tr, side > 0 ? M_PI : 0.0);
     return v * fabs(cos(tr));
 }
@@ -241,7 +244,8 @@ static double polar_radius(int H, double fixed, double Rh, double band0, double 
     return R;
 }
 
-static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen)
+static int draw_polar_in(const btdf_preview_opts *o, btdf_model_ctx *const *mx,
+                         plot_canvas *c, char *msg, size_t msglen)
 {
     if (!o->materials || !o->ti_deg || o->nmaterials == 0 || o->nti == 0)
         return say(BTDF_EINVAL, msg, msglen, "a polar plot needs materials and ti values");
@@ -251,7 +255,10 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
                    o->nmaterials, o->nti, BTDF_PREVIEW_MAX_CURVES);
     size_t ncurves = 0;
     for (size_t m = 0; m < o->nmaterials; m++) {
-        btdf_status st = btdf_params_check(&o->materials[m], msg, msglen);
+        btdf_params q = o->materials[m];
+        if (q.model == BTDF_MODEL_FULL)
+            q.model = BTDF_MODEL_SMITH; /* full has smith's parameters (its tally is mx) */
+        btdf_status st = btdf_params_check(&q, msg, msglen);
         if (st != BTDF_OK)
             return st;
         ncurves += (size_t)o->materials[m].channels * o->nti;
@@ -286,6 +293,9 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
             for (size_t k = 0; k < o->nti; k++, i++) {
                 curve *cu = &cs[i];
                 cu->p = &o->materials[m];
+                cu->full = mx[m] && btdf_model_ctx_params(mx[m])->model == BTDF_MODEL_FULL
+                               ? btdf_model_ctx_full(mx[m], ch)
+                               : NULL;
                 cu->ch = ch;
                 cu->ti = o->ti_deg[k] / DEG;
                 cu->peak = 0.0;
@@ -356,8 +366,16 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
 
     /* Title. */
     int smith = o->materials[0].model == BTDF_MODEL_SMITH; /* polar shares one model */
+    int full = o->materials[0].model == BTDF_MODEL_FULL;
     const char *title =
         o->title ? o->title
+        : full ? (!trans ? PLOT_RHO "r |cos " PLOT_THETA "r| in the plane of incidence: the "
+                           "Smith facets with their multiple scattering (model full)"
+                  : refl ? PLOT_RHO " |cos " PLOT_THETA "o| below, " PLOT_RHO "r |cos "
+                           PLOT_THETA "r| above: the Smith facets with their multiple "
+                           "scattering (model full)"
+                         : PLOT_RHO " |cos " PLOT_THETA "o| in the plane of incidence: the "
+                           "Smith facets with their multiple scattering (model full)")
         : smith ? (!trans ? PLOT_RHO "r |cos " PLOT_THETA "r| in the plane of incidence: the "
                             "same facets with the height-correlated Smith term"
                    : refl ? PLOT_RHO " |cos " PLOT_THETA "o| below, " PLOT_RHO "r |cos "
@@ -411,6 +429,8 @@ static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, siz
     char k0s[40] = "";
     if (smith)
         snprintf(k0s, sizeof k0s, "; model smith");
+    else if (full)
+        snprintf(k0s, sizeof k0s, "; model full");
     else if (same_k0)
         snprintf(k0s, sizeof k0s, "; k0 = %.3g", o->materials[0].k0);
     snprintf(foot, sizeof foot,
@@ -1117,6 +1137,23 @@ static int draw_render(const btdf_preview_opts *o, plot_canvas *c, char *msg, si
     free(img);
     free(px);
     return BTDF_OK;
+}
+
+/* draw_polar_in with the model objects of the materials (tallied here for model full,
+   once per material; nothing is made for the others). */
+static int draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen)
+{
+    btdf_model_ctx *mx[BTDF_PREVIEW_MAX_CURVES] = {NULL};
+    size_t nm = o->materials && o->nmaterials <= BTDF_PREVIEW_MAX_CURVES ? o->nmaterials : 0;
+    int rc = BTDF_OK;
+    for (size_t m = 0; m < nm && rc == BTDF_OK; m++)
+        if (o->materials[m].model == BTDF_MODEL_FULL)
+            rc = btdf_model_ctx_new(&o->materials[m], NULL, &mx[m], msg, msglen);
+    if (rc == BTDF_OK)
+        rc = draw_polar_in(o, mx, c, msg, msglen);
+    for (size_t m = 0; m < nm; m++)
+        btdf_model_ctx_free(mx[m]);
+    return rc;
 }
 
 int btdf_preview_draw(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen)
