@@ -18,15 +18,16 @@
    coefficients are interpolated linearly. Denser towards grazing, where the multiple
    scattering grows fastest; the last node stands in for 90 (a ray at exactly 90 degrees
    never meets the mean plane). */
-static const double full_base_deg[] = {0,  10, 20, 30, 40, 50, 55, 60, 65, 70,
-                                       74, 78, 81, 84, 86, 88, 89, 89.9};
+static const double full_base_deg[] = {0,  5,  10, 15, 20, 25, 30, 35, 40, 45, 50,
+                                       55, 60, 65, 70, 74, 78, 81, 84, 86, 87, 88,
+                                       89, 89.5, 89.9};
 #define FULL_BASE ((int)(sizeof full_base_deg / sizeof full_base_deg[0]))
 /* For n < 1 the single scattering bends at the critical angle asin(n): the ladder gets
    these offsets (degrees) about it, so the linear interpolation follows the bend. */
 static const double full_crit_off[] = {-6, -3, -1.5, -0.5, 0.5, 1.5, 3, 6};
 #define FULL_CRIT ((int)(sizeof full_crit_off / sizeof full_crit_off[0]))
 #define FULL_NODES_MAX (FULL_BASE + FULL_CRIT)
-#define FULL_K 6          /* polynomials in mu = |cos t| of degree 0..5 */
+#define FULL_K 8          /* polynomials in mu = |cos t| of degree 0..7 */
 #define FULL_M 5          /* cos(m phi), m = 0..4 */
 #define FULL_NB (FULL_K * FULL_M)
 #define FULL_CHUNK 8192u  /* paths per work item (its own random stream) */
@@ -37,7 +38,10 @@ struct btdf_full {
     uint64_t paths, seed;
     int nodes;
     double node_deg[FULL_NODES_MAX]; /* increasing */
-    double poly[FULL_K][FULL_K]; /* p_k(mu) = sum_j poly[k][j] mu^j, orthonormal for mu dmu */
+    /* q_km(mu) = sum_j poly[m][k][j] mu^j: sin^m t q_km(mu), k < FULL_K, orthonormal for
+       the weight mu dmu on [0, 1] (so the series is smooth at the pole, where a term
+       cos(m phi) must vanish as sin^m t) */
+    double poly[FULL_M][FULL_K][FULL_K];
     /* per node: the coefficients of the multiply scattered rho, [T/R][k][m] */
     double coef[FULL_NODES_MAX][2][FULL_K][FULL_M];
     /* per node: tallied energies, order 1 and 2+, T and R, and their standard errors */
@@ -237,19 +241,25 @@ typedef struct full_job {
     full_item *items; /* [node * chunks + chunk] */
 } full_job;
 
-/* p_k(mu) for k < FULL_K, and cos(m phi) for m < FULL_M from cos phi. */
-static void full_basis(const btdf_full *f, double mu, double cphi, double *pk, double *cm)
+/* b[k * FULL_M + m] = sin^m t q_km(mu) cos(m phi), from mu = |cos t| and cos phi. */
+static void full_basis(const btdf_full *f, double mu, double cphi, double *b)
 {
-    for (int k = 0; k < FULL_K; k++) {
-        double v = 0.0;
-        for (int j = FULL_K - 1; j >= 0; j--)
-            v = v * mu + f->poly[k][j];
-        pk[k] = v;
-    }
+    double cm[FULL_M], sm[FULL_M];
+    double st = sqrt(fmax(0.0, 1.0 - mu * mu)); /* rounding can push mu above 1 */
     cm[0] = 1.0;
     cm[1] = cphi;
     for (int m = 2; m < FULL_M; m++)
         cm[m] = 2.0 * cphi * cm[m - 1] - cm[m - 2]; /* Chebyshev: cos(m phi) */
+    sm[0] = 1.0;
+    for (int m = 1; m < FULL_M; m++)
+        sm[m] = sm[m - 1] * st;
+    for (int m = 0; m < FULL_M; m++)
+        for (int k = 0; k < FULL_K; k++) {
+            double v = 0.0;
+            for (int j = FULL_K - 1; j >= 0; j--)
+                v = v * mu + f->poly[m][k][j];
+            b[k * FULL_M + m] = v * sm[m] * cm[m];
+        }
 }
 
 static void full_run_item(void *arg, size_t idx)
@@ -284,38 +294,51 @@ static void full_run_item(void *arg, size_t idx)
         double mu = fabs(wo[2]);
         double rxy = sqrt(wo[0] * wo[0] + wo[1] * wo[1]);
         double cphi = rxy > 0.0 ? wo[0] / rxy : 1.0; /* straight out: any phi */
-        double pk[FULL_K], cm[FULL_M];
-        full_basis(f, mu, cphi, pk, cm);
-        for (int k = 0; k < FULL_K; k++)
-            for (int m = 0; m < FULL_M; m++)
-                it->c[side][k * FULL_M + m] += pk[k] * cm[m];
+        double b[FULL_NB];
+        full_basis(f, mu, cphi, b);
+        for (int j = 0; j < FULL_NB; j++)
+            it->c[side][j] += b[j];
     }
 }
 
-/* Orthonormal polynomials for the weight mu on [0, 1], by Gram-Schmidt on the monomials
-   with the exact inner products <mu^i, mu^j> = 1/(i + j + 2). */
-static void full_make_poly(double poly[FULL_K][FULL_K])
+/* <mu^i sin^m t, mu^j sin^m t> = int_0^1 mu^(i+j+1) (1 - mu^2)^m dmu, by the binomial
+   expansion of (1 - mu^2)^m (m < 5: exact to rounding). */
+static double full_moment(int e, int m)
 {
-    memset(poly, 0, sizeof(double) * FULL_K * FULL_K);
-    for (int k = 0; k < FULL_K; k++) {
-        double v[FULL_K] = {0};
-        v[k] = 1.0;
-        for (int q = 0; q < k; q++) {
-            double d = 0.0;
+    double sum = 0.0, c = 1.0; /* c = (-1)^r binom(m, r) */
+    for (int r = 0; r <= m; r++) {
+        sum += c / (e + 2 * r + 2);
+        c = -c * (m - r) / (r + 1);
+    }
+    return sum;
+}
+
+/* For each m, the polynomials q_km with sin^m t q_km orthonormal for mu dmu: Gram-
+   Schmidt on the monomials with the exact inner products of full_moment. */
+static void full_make_poly(double poly[FULL_M][FULL_K][FULL_K])
+{
+    for (int m = 0; m < FULL_M; m++)
+        for (int k = 0; k < FULL_K; k++) {
+            double v[FULL_K] = {0};
+            v[k] = 1.0;
+            for (int pass = 0; pass < 2; pass++) /* twice: re-orthogonalised, as the
+                                                    moment matrix is Hilbert-like */
+                for (int q = 0; q < k; q++) {
+                    double d = 0.0;
+                    for (int i = 0; i < FULL_K; i++)
+                        for (int j = 0; j < FULL_K; j++)
+                            d += v[i] * poly[m][q][j] * full_moment(i + j, m);
+                    for (int j = 0; j < FULL_K; j++)
+                        v[j] -= d * poly[m][q][j];
+                }
+            double nn = 0.0;
             for (int i = 0; i < FULL_K; i++)
                 for (int j = 0; j < FULL_K; j++)
-                    d += v[i] * poly[q][j] / (i + j + 2);
+                    nn += v[i] * v[j] * full_moment(i + j, m);
+            double inv = 1.0 / sqrt(nn); /* nn > 0: the functions are independent */
             for (int j = 0; j < FULL_K; j++)
-                v[j] -= d * poly[q][j];
+                poly[m][k][j] = v[j] * inv;
         }
-        double nn = 0.0;
-        for (int i = 0; i < FULL_K; i++)
-            for (int j = 0; j < FULL_K; j++)
-                nn += v[i] * v[j] / (i + j + 2);
-        double inv = 1.0 / sqrt(nn); /* nn > 0: the monomials are independent */
-        for (int j = 0; j < FULL_K; j++)
-            poly[k][j] = v[j] * inv;
-    }
 }
 
 BTDF_API void btdf_full_opts_default(btdf_full_opts *o)
@@ -448,12 +471,12 @@ static double full_ms(const btdf_full *f, int h, double ti_deg, double mu, doubl
 {
     double w;
     int k0 = full_locate(f, ti_deg, &w);
-    double pk[FULL_K], cm[FULL_M];
-    full_basis(f, mu, cphi, pk, cm);
+    double b[FULL_NB];
+    full_basis(f, mu, cphi, b);
     double v = 0.0;
     for (int k = 0; k < FULL_K; k++)
         for (int m = 0; m < FULL_M; m++)
-            v += pk[k] * cm[m] *
+            v += b[k * FULL_M + m] *
                  ((1.0 - w) * f->coef[k0][h][k][m] + w * f->coef[k0 + 1][h][k][m]);
     /* a truncated series may dip below 0 where the lobe is near 0: a BSDF is not
        negative (this adds at most the dip's energy, measured in docs/model.md) */
