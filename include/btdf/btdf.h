@@ -138,7 +138,8 @@ BTDF_API void btdf_params_default(btdf_params *p);
 /* BTDF_OK, or BTDF_EINVAL for NaN/inf, channels not 1 or 3, n <= 0 or outside
    [BTDF_IOR_MIN, BTDF_IOR_MAX], |n - 1| < BTDF_IOR_ONE_EPS, s outside
    [BTDF_S_MIN, BTDF_S_MAX], k0 outside [0, BTDF_K0_MAX], a model other than xu-sun
-   or smith; BTDF_ENOTSUP for BTDF_MODEL_FULL (not available in this build). */
+   or smith; BTDF_ENOTSUP for BTDF_MODEL_FULL (made by btdf_model_ctx_new or
+   btdf_full_new). */
 BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t msglen);
 
 /* ------------------------------------------------------------------------- */

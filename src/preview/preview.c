@@ -202,8 +202,8 @@ typedef struct curve {
 static double polar_value(const curve *cv, double to, int side)
 {
     double v = cv->full ? btdf_full_rho(cv->full, cv->ti, to, side > 0 ? M_PI : 0.0)
-                        : btdf_rho_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0,
-                              cv->ti, to, side > 0 ? M_PI : 0.0);
+                        : btdf_rho_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness,
+                                         cv->p->k0, cv->ti, to, side > 0 ? M_PI : 0.0);
     return v * fabs(cos(to));
 }
 
