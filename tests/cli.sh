@@ -596,8 +596,17 @@ if "$B" --version | grep -q 'PNG on'; then # a picture needs the png feature
         no "polar --model smith"
 fi
 rm -f "$W/p.png"
-expect 2 "--model full: not available in this build" "--model full is refused" -- "$B" eval --model full 30 150 180
-expect 2 "--model: 'walter': must be xu-sun or smith" "an unknown --model is named" -- "$B" albedo --model walter
+# full: smith plus the multiple scattering; R + T = 1 within its tolerance 1e-2
+# (docs/model.md 12), and its T above smith's at s = 1 (the light smith loses)
+v=$("$B" eval -s 1 --model full 30 160 180)
+awk -v v="$v" 'BEGIN { exit !(v > 0 && v < 100) }' && ok "eval --model full" || \
+    no "eval --model full: $v"
+rt=$("$B" albedo -s 1 --model full 60 | awk -F, 'NR == 2 { print $5 }')
+awk -v a="$rt" 'BEGIN { exit !(a > 0.99 && a < 1.01) }' && ok "albedo --model full: R + T = 1" || \
+    no "albedo --model full: R + T = $rt"
+expect 2 "tables and files do not yet" "tabulate refuses full" \
+    -- "$B" tabulate --model full -o "$W/t.csv"
+expect 2 "--model: 'walter': must be xu-sun, smith or full" "an unknown --model is named" -- "$B" albedo --model walter
 # tables of smith, and the formats that refuse it: tests/models.sh
 
 # simulate -o: the outgoing distribution as CSV; the header keys, every row finite, and

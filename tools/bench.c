@@ -849,10 +849,72 @@ static const char usage[] =
     "           per second), or bsdf (.bsdf builds: time, bytes, nodes, series\n"
     "           length and measured error for s = 3, 20, 100, 1000), or sim (the\n"
     "           Monte Carlo surface: rays/s/thread at s = 0.5 to 30, hierarchy and\n"
-    "           plain DDA; not part of all), or simhit (first hits only: the DDA,\n"
-    "           the hierarchy and, if built with it, Embree on the same rays)\n"
+    "           plain DDA; not part of all), simhit (first hits only: the DDA,\n"
+    "           the hierarchy and, if built with it, Embree on the same rays), or\n"
+    "           full (the model full at n = 1.5, s = 1: its tally on 1 and 2 threads,\n"
+    "           and its evaluations; not part of all)\n"
     "  REPS     runs per table, 1 to 9 (default 3); each row reports the median\n"
     "Timings depend on the machine's load: quote medians and the machine line.\n";
+
+/* The model full at (1.5, 1): its tally (the per-material precomputation) on 1 and 2
+   threads at the default paths, then the cost of one evaluation of the transmission
+   and of the reflection over a 90 x 180 x 19 grid, beside btdf_rho_smith on the same
+   grid (full = smith + a 40-term series). */
+static void bench_full(FILE *out, int reps)
+{
+    fprintf(out, "# model full, n = 1.5, s = 1, %llu walks per ladder angle, median of %d\n",
+            (unsigned long long)BTDF_FULL_PATHS_DEFAULT, reps);
+    fprintf(out, "part,threads,wall_seconds,cpu_seconds,per_second\n");
+    btdf_full *keep = NULL;
+    for (int th = 1; th <= 2; th++) {
+        double ws[9], cs[9];
+        for (int r = 0; r < reps; r++) {
+            btdf_full_opts o;
+            btdf_full_opts_default(&o);
+            o.threads = th;
+            btdf_full *f = NULL;
+            double w0 = now(), c0 = cpu_now();
+            if (btdf_full_new(1.5, 1.0, &o, &f, NULL, 0) != BTDF_OK) {
+                fprintf(stderr, "btdf-bench: btdf_full_new failed\n");
+                exit(1);
+            }
+            ws[r] = now() - w0;
+            cs[r] = cpu_now() - c0;
+            if (!keep)
+                keep = f;
+            else
+                btdf_full_free(f);
+        }
+        btdf_full_stats st;
+        btdf_full_info(keep, &st);
+        double w = median(ws, reps), c = median(cs, reps);
+        fprintf(out, "tally (%d angles x %llu walks),%d,%.3f,%.3f,%.3g walks\n", st.nodes,
+                (unsigned long long)st.paths, th, w, c, st.nodes * (double)st.paths / w);
+    }
+    for (int part = 0; part < 3; part++) {
+        double ws[9], cs[9], acc = 0;
+        size_t N = 0;
+        for (int r = 0; r < reps; r++) {
+            double w0 = now(), c0 = cpu_now();
+            N = 0;
+            for (int ti = 0; ti < 90; ti++)
+                for (int to = 0; to < 180; to++)
+                    for (int p = 0; p <= 180; p += 10, N++)
+                        acc += part == 0   ? btdf_full_rho_deg(keep, ti, 90 + 0.5 * to, p)
+                               : part == 1 ? btdf_full_rho_r_deg(keep, ti, 0.5 * to, p)
+                                           : btdf_rho_smith_deg(1.5, 1.0, ti, 90 + 0.5 * to, p);
+            ws[r] = now() - w0;
+            cs[r] = cpu_now() - c0;
+        }
+        api_sink = acc;
+        double w = median(ws, reps), c = median(cs, reps);
+        fprintf(out, "%s,1,%.4f,%.4f,%.3g evaluations\n",
+                part == 0 ? "btdf_full_rho_deg" : part == 1 ? "btdf_full_rho_r_deg"
+                                                           : "btdf_rho_smith_deg (beside)",
+                w, c, (double)N / w);
+    }
+    btdf_full_free(keep);
+}
 
 int main(int argc, char **argv)
 {
@@ -866,7 +928,7 @@ int main(int argc, char **argv)
     if (strcmp(what, "all") && strcmp(what, "sweep") && strcmp(what, "scaling") &&
         strcmp(what, "api") && strcmp(what, "throughput") && strcmp(what, "tolerances") &&
         strcmp(what, "fullrange") && strcmp(what, "nearone") && strcmp(what, "bsdf") &&
-        strcmp(what, "sim") && strcmp(what, "simhit")) {
+        strcmp(what, "sim") && strcmp(what, "simhit") && strcmp(what, "full")) {
         fprintf(stderr, "btdf-bench: unknown section '%s'\n%s", what, usage);
         return 2;
     }
@@ -882,6 +944,10 @@ int main(int argc, char **argv)
     }
     if (!strcmp(what, "simhit")) {
         bench_simhit(stdout, reps);
+        return 0;
+    }
+    if (!strcmp(what, "full")) {
+        bench_full(stdout, reps);
         return 0;
     }
     const char *header = "method,case,n,s,tolerance,ti_max_deg,samples,seconds_tabulation,"

@@ -20,6 +20,31 @@
 #include "options.h"
 #include "run.h"
 
+/* check_params for the commands that evaluate the model full too (eval, albedo, polar):
+   full has the parameters of smith; its tally is made by the command. */
+static int check_params_full(const btdf_params *p)
+{
+    btdf_params q = *p;
+    if (q.model == BTDF_MODEL_FULL)
+        q.model = BTDF_MODEL_SMITH;
+    return check_params(&q);
+}
+
+/* The model object of p (the tally of model full, on the command's threads); 0 and a
+   message on failure. */
+static int make_ctx(const btdf_params *p, int threads, btdf_model_ctx **mx)
+{
+    btdf_full_opts fo;
+    btdf_full_opts_default(&fo);
+    fo.threads = threads;
+    char msg[256];
+    if (btdf_model_ctx_new(p, &fo, mx, msg, sizeof msg) != BTDF_OK) {
+        fail(1, "%s", msg);
+        return 0;
+    }
+    return 1;
+}
+
 int cmd_eval(const cli *c)
 {
     btdf_params p = c->p;
@@ -70,10 +95,13 @@ int cmd_eval(const cli *c)
                                "which eval reads; it was written with --side leave", c->table);
             }
         }
-    } else if (!check_params(&p)) {
+    } else if (!check_params_full(&p)) {
         return EXIT_USAGE;
     }
-    if (npos == 0 && !in.table && !in.scatfun) { /* the model on rows from stdin */
+    btdf_model_ctx *mx = NULL; /* model full: its tally, made once for every row */
+    if (!in.table && !in.scatfun && p.model == BTDF_MODEL_FULL && !make_ctx(&p, c->threads, &mx))
+        return 1;
+    if (npos == 0 && !in.table && !in.scatfun && !mx) { /* the model on rows from stdin */
         char err[256];
         int rc = eval_stream(stdin, stdout, &p, c->reflection, c->threads, err, sizeof err);
         if (rc)
@@ -123,6 +151,10 @@ int cmd_eval(const cli *c)
         double ti = v[0] * M_PI / 180.0, to = v[1] * M_PI / 180.0, phi = v[2] * M_PI / 180.0;
         if (tpart) {
             btdf_table_eval(tpart, ti, to, phi, out);
+        } else if (mx) {
+            for (int ch = 0; ch < p.channels; ch++)
+                out[ch] = c->reflection ? btdf_model_ctx_rho_r_deg(mx, ch, v[0], v[1], v[2])
+                                        : btdf_model_ctx_rho_deg(mx, ch, v[0], v[1], v[2]);
         } else if (c->reflection) {
             for (int ch = 0; ch < p.channels; ch++)
                 out[ch] = btdf_rho_r_model_deg(p.model, p.ior[ch], p.smoothness, p.k0, v[0],
@@ -140,6 +172,7 @@ int cmd_eval(const cli *c)
             break; /* the reader is gone: stdout_done says so */
     }
     free(line);
+    btdf_model_ctx_free(mx);
     btdf_table_free(in.table);
     btdf_scatfun_free(in.scatfun);
     return stdout_done(code);
@@ -181,7 +214,7 @@ int cmd_albedo(const cli *c)
     for (int k = 0; k < c->npos; k++)
         if (!parse_double("theta-i", c->pos[k], &angles[na++]))
             return EXIT_USAGE;
-    if (!check_params(&c->p))
+    if (!check_params_full(&c->p))
         return EXIT_USAGE;
     if (na == 0)
         for (int k = 0; k <= 8; k++)
@@ -190,6 +223,12 @@ int cmd_albedo(const cli *c)
         if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
             return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
     const btdf_params *p = &c->p;
+    for (int k = 0; k < na; k++)
+        if (!(angles[k] >= 0.0 && angles[k] <= 90.0))
+            return fail(EXIT_USAGE, "theta-i %g: must lie in [0, 90] degrees", angles[k]);
+    btdf_model_ctx *mx = NULL;
+    if (!make_ctx(p, c->threads, &mx))
+        return 1;
     printf("theta_i_deg");
     for (int ch = 0; ch < p->channels; ch++) {
         char sfx[3] = {'_', "rgb"[ch], 0};
@@ -201,8 +240,7 @@ int cmd_albedo(const cli *c)
     double low_rt = ALBEDO_WARN;
     for (int k = 0; k < na; k++) {
         double ti = angles[k] * M_PI / 180.0, T[BTDF_MAX_CHANNELS], R[BTDF_MAX_CHANNELS];
-        btdf_transmittance(p, ti, T);
-        btdf_reflectance(p, ti, R);
+        btdf_model_ctx_albedo(mx, ti, T, R);
         /* 7 significant digits by default: T and R are accurate to 1e-7 absolute or
            better (btdf.h), and a small value keeps its digits (8.01e-06, not
            0.000008010); --digits 17 prints the doubles themselves */
@@ -218,6 +256,7 @@ int cmd_albedo(const cli *c)
         }
         printf("\n");
     }
+    btdf_model_ctx_free(mx);
     if (low >= 0 && !c->quiet)
         warn_albedo(p, angles[low], low_rt, "the lowest of these angles");
     return stdout_done(0);
@@ -246,11 +285,11 @@ int cmd_polar(const cli *c)
         mats[nm].smoothness = c->mat_s[nm];
         mats[nm].k0 = c->p.k0;
         mats[nm].model = c->p.model;
-        if (!check_params(&mats[nm]))
+        if (!check_params_full(&mats[nm]))
             return EXIT_USAGE;
     }
     if (nm == 0) {
-        if (!check_params(&c->p))
+        if (!check_params_full(&c->p))
             return EXIT_USAGE;
         mats[nm++] = c->p;
     }

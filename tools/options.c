@@ -22,8 +22,9 @@ const opt_def opt_table[] = {
     {OPT_MODEL, "model", 0, "M", 0, MAT,
      "the facets' shadowing-masking: xu-sun (default: Eq. 25, V(ti) V(to) with k0) or\n"
      "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused;\n"
-     "tabulate writes it to .csv and .exr, the files record it); full is reserved and\n"
-     "not available in this build"},
+     "tabulate writes it to .csv and .exr, the files record it) or full (smith plus the\n"
+     "light scattered two or more times, tallied once per material by a random walk:\n"
+     "R + T = 1; eval, albedo and polar only)"},
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
      "evaluate a written table (.csv, .exr, .bsdf) instead of Eq. 25; the file gives\n"
      "the material, so --ior, --smoothness and --k0 do not apply"},

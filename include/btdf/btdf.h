@@ -109,7 +109,9 @@ BTDF_API const char *btdf_strerror(btdf_status status);
  *    (Walter et al. 2007; Heitz 2014), with Lambda of the Beckmann slopes of RMS 2/s:
  *    transmission G = B(1 + Lambda(ti), 1 + Lambda(to)) (Beta function), reflection
  *    G = 1/(1 + Lambda(ti) + Lambda(tr)). k0 plays no part. One scattering event.
- *  BTDF_MODEL_FULL: reserved (single plus multiple scattering); refused by this build.
+ *  BTDF_MODEL_FULL: smith plus the light scattered two or more times (section 12); made
+ *    once per material by btdf_model_ctx_new or btdf_full_new, not by the functions
+ *    taking a btdf_params (btdf_params_check refuses it with BTDF_ENOTSUP).
  */
 typedef enum {
     BTDF_MODEL_XU_SUN = 0,
@@ -136,7 +138,8 @@ BTDF_API void btdf_params_default(btdf_params *p);
 /* BTDF_OK, or BTDF_EINVAL for NaN/inf, channels not 1 or 3, n <= 0 or outside
    [BTDF_IOR_MIN, BTDF_IOR_MAX], |n - 1| < BTDF_IOR_ONE_EPS, s outside
    [BTDF_S_MIN, BTDF_S_MAX], k0 outside [0, BTDF_K0_MAX], a model other than xu-sun
-   or smith; BTDF_ENOTSUP for BTDF_MODEL_FULL (not available in this build). */
+   or smith; BTDF_ENOTSUP for BTDF_MODEL_FULL (made by btdf_model_ctx_new or
+   btdf_full_new). */
 BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t msglen);
 
 /* ------------------------------------------------------------------------- */
@@ -224,6 +227,87 @@ BTDF_API double btdf_rho_r_model(btdf_model m, double n, double s, double k0, do
                                  double tr, double phi);
 BTDF_API double btdf_rho_r_model_deg(btdf_model m, double n, double s, double k0, double ti,
                                      double tr, double phi);
+
+/* ------------------------------------------------------------------------- */
+/* The model full: smith plus multiple scattering (docs/model.md section 12)  */
+/* ------------------------------------------------------------------------- */
+
+/*
+ * rho_full = rho_smith + rho_ms, where rho_ms is the light the interface scatters two or
+ * more times on the Smith microsurface. rho_ms is tallied once per material (n, s) by the
+ * dielectric random walk of Heitz et al. 2016 at a ladder of incidence angles and kept
+ * as a series sum_km a_km(ti) p_k(|cos to|) cos(m phi) (p_k orthonormal for the weight
+ * |cos to|), a_km linear in ti between the ladder's angles. The tally is deterministic:
+ * fixed random streams per (seed, angle, chunk of paths), summed in a fixed order, so
+ * the object has the same bits whatever the thread count. Make one object per
+ * material and reuse it: evaluations are cheap, the tally is not (btdf-bench).
+ */
+#define BTDF_FULL_PATHS_DEFAULT 200000ull /* per incidence angle of the ladder */
+#define BTDF_FULL_PATHS_MAX 1000000000ull
+
+typedef struct btdf_full_opts {
+    uint64_t paths; /* walks per incidence angle; default BTDF_FULL_PATHS_DEFAULT */
+    uint64_t seed;  /* default 1 */
+    int threads;    /* 0: as many as the machine has; the result does not depend on it */
+} btdf_full_opts;
+
+BTDF_API void btdf_full_opts_default(btdf_full_opts *o);
+
+typedef struct btdf_full btdf_full;
+
+/* The object of one material, index n and smoothness s (the ranges of
+   btdf_params_check); opts NULL for the defaults. BTDF_EINVAL naming a bad value,
+   BTDF_ENOMEM. */
+BTDF_API btdf_status btdf_full_new(double n, double s, const btdf_full_opts *opts,
+                                   btdf_full **out, char *msg, size_t msglen);
+BTDF_API void btdf_full_free(btdf_full *f);
+
+/* rho_full of transmission and of reflection (the angles of btdf_rho and btdf_rho_r);
+   0 out of range, never NaN or inf. */
+BTDF_API double btdf_full_rho(const btdf_full *f, double ti, double to, double phi);
+BTDF_API double btdf_full_rho_deg(const btdf_full *f, double ti, double to, double phi);
+BTDF_API double btdf_full_rho_r(const btdf_full *f, double ti, double tr, double phi);
+BTDF_API double btdf_full_rho_r_deg(const btdf_full *f, double ti, double tr, double phi);
+
+/* T and R of full at ti (radians): the single scattering by quadrature (as
+   btdf_transmittance and btdf_reflectance of smith), the multiple from the tally,
+   with its binomial standard error. */
+typedef struct btdf_full_albedos {
+    double T, R;       /* full */
+    double T1, R1;     /* single scattering (smith) */
+    double Tms, Rms;   /* two or more */
+    double Tms_se, Rms_se;
+} btdf_full_albedos;
+BTDF_API btdf_status btdf_full_albedo(const btdf_full *f, double ti, btdf_full_albedos *a);
+
+/* What the tally took: its ladder, paths, wall time, the largest fraction of paths lost
+   to the event limit, and the largest |(T1 + R1) - walk's order-1 fraction| over the
+   ladder (the walk checked against smith's quadrature). */
+typedef struct btdf_full_stats {
+    int nodes;
+    uint64_t paths;
+    double seconds, lost, order1_gap;
+} btdf_full_stats;
+BTDF_API void btdf_full_info(const btdf_full *f, btdf_full_stats *st);
+
+/* One evaluation entry for every model: an object made once from a btdf_params (any
+   model; for full it holds one btdf_full per channel, made with opts or the defaults),
+   evaluated per channel. xu-sun and smith give exactly btdf_rho_model_deg and
+   btdf_rho_r_model_deg. */
+typedef struct btdf_model_ctx btdf_model_ctx;
+BTDF_API btdf_status btdf_model_ctx_new(const btdf_params *p, const btdf_full_opts *opts,
+                                        btdf_model_ctx **out, char *msg, size_t msglen);
+BTDF_API void btdf_model_ctx_free(btdf_model_ctx *m);
+BTDF_API const btdf_params *btdf_model_ctx_params(const btdf_model_ctx *m);
+/* The tally of channel ch (model full), else NULL. */
+BTDF_API const btdf_full *btdf_model_ctx_full(const btdf_model_ctx *m, int ch);
+BTDF_API double btdf_model_ctx_rho_deg(const btdf_model_ctx *m, int ch, double ti, double to,
+                                       double phi);
+BTDF_API double btdf_model_ctx_rho_r_deg(const btdf_model_ctx *m, int ch, double ti,
+                                         double tr, double phi);
+/* T and R at ti (radians) for every channel into T[channels], R[channels]. */
+BTDF_API btdf_status btdf_model_ctx_albedo(const btdf_model_ctx *m, double ti, double *T,
+                                           double *R);
 
 /* Flat-interface Fresnel reflectance Fr(ti) = 1 - Ft(ti) (1 past the critical angle),
    formed without that cancellation, so it keeps its digits when n is near 1. */

@@ -90,7 +90,8 @@ BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t m
         return core_say(BTDF_EINVAL, msg, msglen, "k0 %g: must lie in [0, 100]", p->k0);
     if (p->model == BTDF_MODEL_FULL)
         return core_say(BTDF_ENOTSUP, msg, msglen,
-                        "model full: not available in this build (xu-sun or smith)");
+                        "model full: made once per material by btdf_model_ctx_new or "
+                        "btdf_full_new (its tally), not by the functions of btdf_params");
     if (p->model != BTDF_MODEL_XU_SUN && p->model != BTDF_MODEL_SMITH)
         return core_say(BTDF_EINVAL, msg, msglen, "model %d: must be xu-sun (0) or smith (1)",
                         (int)p->model);

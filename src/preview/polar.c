@@ -29,6 +29,7 @@ static const char *channel_letter(int channels, int ch)
 
 typedef struct curve {
     const btdf_params *p;
+    const btdf_full *full; /* model full: the material's tally, else NULL */
     int ch;
     double ti; /* radians */
     double peak, peak_to;
@@ -38,8 +39,9 @@ typedef struct curve {
 /* rho |cos to| of channel ch in the plane of incidence; side +1 forward (phi = pi). */
 static double polar_value(const curve *cv, double to, int side)
 {
-    double v = btdf_rho_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness, cv->p->k0,
-                              cv->ti, to, side > 0 ? M_PI : 0.0);
+    double v = cv->full ? btdf_full_rho(cv->full, cv->ti, to, side > 0 ? M_PI : 0.0)
+                        : btdf_rho_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness,
+                                         cv->p->k0, cv->ti, to, side > 0 ? M_PI : 0.0);
     return v * fabs(cos(to));
 }
 
@@ -47,8 +49,10 @@ static double polar_value(const curve *cv, double to, int side)
    (phi = pi). */
 static double polar_value_r(const curve *cv, double tr, int side)
 {
-    double v = btdf_rho_r_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness,
-                                cv->p->k0, cv->ti, tr, side > 0 ? M_PI : 0.0);
+    double v = cv->full ? btdf_full_rho_r(cv->full, cv->ti, tr, side > 0 ? M_PI : 0.0)
+                        : btdf_rho_r_model(cv->p->model, cv->p->ior[cv->ch],
+                                           cv->p->smoothness, cv->p->k0, cv->ti, tr,
+                                           side > 0 ? M_PI : 0.0);
     return v * fabs(cos(tr));
 }
 
@@ -85,11 +89,12 @@ static double polar_radius(int H, double fixed, double Rh, double band0, double 
    of the drawing phases is part of the picture. */
 typedef struct polar_plot {
     const btdf_preview_opts *o;
+    btdf_model_ctx *mx[BTDF_PREVIEW_MAX_CURVES]; /* per material: full's tally, or NULL */
     size_t ncurves;
     curve cs[BTDF_PREVIEW_MAX_CURVES];
     plot_rgb colour[BTDF_PREVIEW_MAX_CURVES];
     int refl, trans; /* which halves are drawn */
-    int smith;       /* polar shares one model */
+    int smith, full; /* polar shares one model */
     int W, H;
     double vmax, vmax_r; /* the largest peaks below and above */
     int own, own_r;      /* each curve on its own scale (below, above) */
@@ -118,7 +123,10 @@ static int polar_check(polar_plot *pp, char *msg, size_t msglen)
                    o->nmaterials, o->nti, BTDF_PREVIEW_MAX_CURVES);
     size_t ncurves = 0;
     for (size_t m = 0; m < o->nmaterials; m++) {
-        btdf_status st = btdf_params_check(&o->materials[m], msg, msglen);
+        btdf_params q = o->materials[m];
+        if (q.model == BTDF_MODEL_FULL)
+            q.model = BTDF_MODEL_SMITH; /* full has smith's parameters (its tally is mx) */
+        btdf_status st = btdf_params_check(&q, msg, msglen);
         if (st != BTDF_OK)
             return st;
         ncurves += (size_t)o->materials[m].channels * o->nti;
@@ -147,6 +155,15 @@ static int polar_check(polar_plot *pp, char *msg, size_t msglen)
                    "a polar plot of %d x %d pixels would not be readable: at least %d x %d",
                    pp->W, pp->H, POLAR_MIN_W, POLAR_MIN_H);
     pp->smith = o->materials[0].model == BTDF_MODEL_SMITH;
+    pp->full = o->materials[0].model == BTDF_MODEL_FULL;
+    /* the model objects of the materials: tallied here for model full, once per
+       material; nothing is made for the others */
+    for (size_t m = 0; m < o->nmaterials; m++)
+        if (o->materials[m].model == BTDF_MODEL_FULL) {
+            btdf_status st = btdf_model_ctx_new(&o->materials[m], NULL, &pp->mx[m], msg, msglen);
+            if (st != BTDF_OK)
+                return st;
+        }
     return BTDF_OK;
 }
 
@@ -163,6 +180,9 @@ static void polar_peaks(polar_plot *pp)
             for (size_t k = 0; k < o->nti; k++, i++) {
                 curve *cu = &cs[i];
                 cu->p = &o->materials[m];
+                cu->full = pp->mx[m] && btdf_model_ctx_params(pp->mx[m])->model == BTDF_MODEL_FULL
+                               ? btdf_model_ctx_full(pp->mx[m], ch)
+                               : NULL;
                 cu->ch = ch;
                 cu->ti = o->ti_deg[k] / PV_DEG;
                 cu->peak = 0.0;
@@ -234,6 +254,13 @@ static void polar_texts(polar_plot *pp, plot_canvas *c)
     double fs = pp->fs, fsS = pp->fsS, m = pp->m;
     const char *title =
         o->title ? o->title
+        : pp->full ? (!trans ? PLOT_RHO "r |cos " PLOT_THETA "r| in the plane of incidence: the "
+                               "Smith facets with their multiple scattering (model full)"
+                      : refl ? PLOT_RHO " |cos " PLOT_THETA "o| below, " PLOT_RHO "r |cos "
+                               PLOT_THETA "r| above: the Smith facets with their multiple "
+                               "scattering (model full)"
+                             : PLOT_RHO " |cos " PLOT_THETA "o| in the plane of incidence: the "
+                               "Smith facets with their multiple scattering (model full)")
         : pp->smith ? (!trans ? PLOT_RHO "r |cos " PLOT_THETA "r| in the plane of incidence: "
                                 "the same facets with the height-correlated Smith term"
                        : refl ? PLOT_RHO " |cos " PLOT_THETA "o| below, " PLOT_RHO "r |cos "
@@ -293,6 +320,8 @@ static void polar_texts(polar_plot *pp, plot_canvas *c)
     char k0s[40] = "";
     if (pp->smith)
         snprintf(k0s, sizeof k0s, "; model smith");
+    else if (pp->full)
+        snprintf(k0s, sizeof k0s, "; model full");
     else if (same_k0)
         snprintf(k0s, sizeof k0s, "; k0 = %.3g", o->materials[0].k0);
     snprintf(foot, footlen,
@@ -608,6 +637,8 @@ int pv_draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t 
 fail:
     plot_canvas_free(c);
 done:
+    for (size_t m = 0; m < BTDF_PREVIEW_MAX_CURVES; m++)
+        btdf_model_ctx_free(pp->mx[m]);
     free(pp);
     return st;
 }
