@@ -206,7 +206,21 @@ expect 1 "not a regular file" "--report onto a pipe" -- "$B" tabulate -q --grid 
 [ -p "$W/t.json" ] && ok "the pipe is still a pipe" || no "the pipe was replaced"
 rm -f "$W/t.json"
 expect 2 "are the same file" "--report and -o naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/./t.csv"
-expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --tolerance 1e-3 --max-samples 1000 --report "$W/t.json"
+expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --tolerance 1e-3 --max-samples 5000 --report "$W/t.json"
+# .bsdf budgets: predicted before the work, real bounds during it, the verdict's number shown
+expect 3 "node budget, nothing built" "smooth glass beyond the format refused at once" -- "$B" tabulate -q -s 500 -o "$W/t.bsdf"
+expect 3 "coefficient budget, nothing built" "--max-samples below the first pass: no file" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --max-samples 1000 --best-effort
+"$B" tabulate -o "$W/t.bsdf" --part transmission --max-samples 20000 --best-effort 2>"$W/err"; rc=$?
+nco=$("$B" inspect "$W/t.bsdf" | awk '/^coefficients/ {print $2}')
+[ "$rc" -eq 3 ] && [ -n "$nco" ] && [ "$nco" -le 20000 ] && ok "--max-samples bounds a .bsdf ($nco coefficients)" || no "--max-samples 20000: status $rc, $nco coefficients"
+ev=$(sed -n 's/.*tolerance 0.001 not met: e_L1 max \([^ ]*\) (.*/\1/p' "$W/err")
+eb=$(sed -n 's/.*tolerance 0.001 not met: e_L1 max [^ ]* (\([a-z_]*\)).*/\1/p' "$W/err")
+e="$ev $eb"
+[ -n "$ev" ] && grep -q "^btdftab: $W/t.bsdf ($eb, as a renderer reads it):.* e_L1 max $ev mean" "$W/err" && ok "the verdict quotes the report's worst e_L1" || { no "verdict number '$e' not in the report lines"; cat "$W/err"; }
+rm -f "$W/t.bsdf"
+"$B" tabulate -q -o "$W/t.bsdf" --part transmission --max-memory 1 --best-effort; rc=$?
+"$B" inspect "$W/t.bsdf" | awk '/^file size/ {exit !($3 < 1048576)}' && [ "$rc" -eq 3 ] && ok "--max-memory bounds a .bsdf build" || no "--max-memory 1: status $rc"
+rm -f "$W/t.bsdf"
 nl="$W/n
 l.csv"
 "$B" tabulate -q --grid 2,3,3 -o "$nl" && "$B" inspect "$nl" > "$W/out" && \
@@ -285,7 +299,7 @@ head -c 100 /dev/zero > "$W/z.bsdf"
 expect 1 "z.bsdf" "foreign .bsdf" -- "$B" inspect "$W/z.bsdf"
 rm -f "$W/z.bsdf"
 # .bsdf: a lobe too narrow for the format's node budget stops before any work, exit 3
-expect 3 "narrower than one elevation interval" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
+expect 3 "node budget, nothing built" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
 # .bsdf: --report is written; a file without the enter side is refused by eval
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --side leave --part transmission --report "$W/l.json" -o "$W/l.bsdf" && \
     grep -q '"kind": "scatfun"' "$W/l.json" && grep -q '"pbrt_v3_single_precision_safe": true' "$W/l.json" && \

@@ -208,6 +208,28 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
 {
     char msg[512] = "";
     btdf_scatfun *f = NULL;
+    /* What the request needs at least (the builder refuses what cannot fit): said
+       before the work when it is large, with the numbers. */
+    btdf_scatfun_need nd;
+    if (!quiet && btdf_scatfun_predict(p, tol, (btdf_side)sides, &nd, NULL, 0) == BTDF_OK &&
+        nd.half_nodes <= BTDF_SCATFUN_MAX_HALF_NODES &&
+        (nd.half_nodes > BTDF_SCATFUN_MAX_HALF_NODES / 2 || nd.build_bytes > ((size_t)1 << 30)))
+        fprintf(stderr,
+                "%s: %s: warning: this request needs at least %zu of the format's %d half "
+                "nodes (a lobe %.3g deg wide, nodes %.3g deg apart), a file of %.3g MB and "
+                "%.3g MB to build, likely minutes; --max-memory and --max-samples bound it\n",
+                prog, path, nd.half_nodes, BTDF_SCATFUN_MAX_HALF_NODES, nd.lobe_deg,
+                nd.spacing_deg, 1e-6 * (double)nd.file_bytes, 1e-6 * (double)nd.build_bytes);
+    /* Reflection below 1e-2: the reflection inside the glass has a cusp where total
+       reflection starts, which the lobe's width does not predict; the measured case
+       (docs/scatfun.md, "What a request needs") is said before the work. */
+    if (!quiet && (sides & (BTDF_SCATFUN_R_TOP | BTDF_SCATFUN_R_BOTTOM)) && tol < 1e-2)
+        fprintf(stderr,
+                "%s: %s: warning: reflection blocks at tolerance %g: n = 1.5, s = 3 with all "
+                "four blocks at 1e-3 measured 966 nodes, 368 million coefficients, 4.4 GB and "
+                "634 s, then not met; --part transmission, or --max-memory and --max-samples "
+                "to bound the build\n",
+                prog, path, tol);
     double t0 = run_now();
     btdf_status st = btdf_scatfun_build_progress(p, tol, (btdf_side)sides, threads, max_coeffs,
                                                  max_bytes, run_progress_cb, pr, &f, msg,
@@ -224,6 +246,13 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         return fail(prog, 1, path, msg[0] ? msg : btdf_strerror(st));
     /* The error a renderer will see: the format's own evaluation, per side. */
     int met = 1;
+    double worst = -1.0; /* the largest e_L1 max the report lines show, and its block */
+    const char *worst_name = "";
+    /* the builder's reason without its own estimate (its test angles are not the
+       report's): the message quotes the report's number */
+    char *own = strstr(msg, "; its own estimate");
+    if (own)
+        *own = 0;
     char meta[1024];
     char nb[3][40];
     int k = snprintf(meta, sizeof meta, "{\"program\": \"btdftab %s\", \"ior\": [",
@@ -261,6 +290,10 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         int ok = r.e_l1_max <= tol;
         met = met && ok;
         const char *name = report_block_name[bi];
+        if (r.e_l1_max > worst) {
+            worst = r.e_l1_max;
+            worst_name = name;
+        }
         if (!quiet)
             fprintf(stderr,
                     "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients; "
@@ -286,9 +319,9 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         snprintf(meta + k, sizeof meta - (size_t)k, ", \"command\": \"%s\"}", prov ? prov : "");
     int code = 0;
     if (!met && !best_effort) {
-        fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
-                        "to write it anyway)\n",
-                prog, path, tol, msg[0] ? ": " : "", msg);
+        fprintf(stderr, "%s: %s: tolerance %g not met: e_L1 max %.3g (%s)%s%s; nothing written "
+                        "(pass --best-effort to write it anyway)\n",
+                prog, path, tol, worst, worst_name, msg[0] ? "; " : "", msg);
         code = 3;
     } else {
         /* the file and its report appear together or not at all */
@@ -310,8 +343,9 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
             code = fail(prog, 1, path, msg[0] ? msg : btdf_strerror(st));
         } else if (code == 0 && !met) {
             /* --best-effort wrote it, but the run did not do what was asked */
-            fprintf(stderr, "%s: %s: tolerance %g not met%s%s; written anyway (--best-effort), "
-                            "exit 3\n", prog, path, tol, msg[0] ? ": " : "", msg);
+            fprintf(stderr, "%s: %s: tolerance %g not met: e_L1 max %.3g (%s)%s%s; written "
+                            "anyway (--best-effort), exit 3\n",
+                    prog, path, tol, worst, worst_name, msg[0] ? "; " : "", msg);
             code = 3;
         }
     }
