@@ -109,20 +109,18 @@ void rad_block_of(int k, double nc, rad_block *b)
 }
 
 /* The index of the light block k serves, in channel c. */
-static double rad_n_light(const btdf_rad *r, int k, int c)
+double rad_n_light(const btdf_rad *r, int k, int c)
 {
     rad_block b;
     rad_block_of(k, r->p.ior[r->channels == 3 && c > 0 ? c : 0], &b);
     return b.n_light;
 }
 
-static double rad_lookup_ch(const btdf_rad *r, int k, int c, int chosen, const double p[3],
-                            const double q[3]);
 
 /* Channel c (-1: Y) of leaf i of tree block b: chosen = 1, in a colour tree, the value
    the builder chose (cv), else as Radiance reads the file back (Y and u', v' to X, Y, Z,
    then to R, G, B through the inverse of rad_rgb_to_xyz). */
-static double tree_value(const btdf_rad *r, const rad_block *b, size_t i, int c, int chosen)
+double rad_tree_value(const btdf_rad *r, const rad_block *b, size_t i, int c, int chosen)
 {
     if (!b->cv || c < 0)
         return b->nodes[i].v;
@@ -213,25 +211,8 @@ BTDF_API btdf_status btdf_rad_build(const btdf_params *p, btdf_rad_basis basis,
 
 /* ------------------------------------------------------------ probe estimate */
 
-/* Stratified probes of one block as a render reads it: m light angles, kv views each
-   (stratified in sin^2 of the view's polar angle and its azimuth: equal projected solid
-   angle), with the tree coordinates of each (view, light) pair and Eq. 25 (or rho_r) for
-   the light. */
-typedef struct rad_probes {
-    size_t m, ns, nphi, kv;
-    double ti_max;
-    double *ti, *T, *fl; /* per angle: light angle, T (or R) of the light, max(T, 0.01) */
-    double *u0, *a, *b, *f;
-    const btdf_rad *r;
-    int k, c;       /* block, channel (0 for one channel) */
-    int chosen;     /* a colour tree's channel as the builder chose it (tree_value) */
-    double n_light; /* the index of the light the block serves, in channel c */
-    const rad_block *tree; /* the tree under test; NULL for a Klems block, whose value
-                              as Radiance reads it is stored in u0 (a, b unused) */
-    btdf_ti_error *res;
-} rad_probes;
 
-static void rad_probes_free(rad_probes *pr)
+void rad_probes_free(rad_probes *pr)
 {
     free(pr->ti);
     free(pr->u0);
@@ -241,7 +222,7 @@ static void rad_probes_free(rad_probes *pr)
 /* The view p and light q of block k (Radiance's frame) for the light at ti in its own
    MODEL.md frame and a view at (to, phi) in it (to in [pi/2, pi] for a transmission
    block, [0, pi/2] for a reflection block). */
-static void render_dirs(const btdf_rad *r, int k, double ti, double to, double phi, double p[3],
+void rad_render_dirs(const btdf_rad *r, int k, double ti, double to, double phi, double p[3],
                         double q[3])
 {
     const rad_block *b = &r->b[k];
@@ -271,8 +252,6 @@ static void render_dirs(const btdf_rad *r, int k, double ti, double to, double p
     }
 }
 
-static void tree_coords(const double p[3], const double q[3], double *u0, double *a, double *b);
-
 static void probe_angle(void *arg, size_t i)
 {
     rad_probes *pr = arg;
@@ -293,9 +272,9 @@ static void probe_angle(void *arg, size_t i)
                 f = btdf_rho(pr->n_light, r->p.smoothness, r->p.k0, ti, to, phi);
             }
             double pv[3], qv[3];
-            render_dirs(r, pr->k, ti, to, phi, pv, qv);
+            rad_render_dirs(r, pr->k, ti, to, phi, pv, qv);
             if (r->basis == RAD_BASIS_TREE3) {
-                tree_coords(pv, qv, &pr->u0[j], &pr->a[j], &pr->b[j]);
+                rad_tree_coords(pv, qv, &pr->u0[j], &pr->a[j], &pr->b[j]);
             } else {
                 pr->u0[j] = rad_lookup_ch(r, pr->k, pr->c, 0, pv, qv);
                 pr->a[j] = pr->b[j] = 0.0;
@@ -305,7 +284,7 @@ static void probe_angle(void *arg, size_t i)
     }
 }
 
-static btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_max, size_t m,
+btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_max, size_t m,
                                    size_t ns, size_t nphi, uint64_t seed, int threads,
                                    rad_probes *pr)
 {
@@ -370,7 +349,7 @@ static void probe_error(void *arg, size_t i)
     rad_probes *pr = arg;
     double l1 = 0.0, dmax = 0.0, fmaxv = 0.0, tf = 0.0;
     for (size_t j = i * pr->kv; j < (i + 1) * pr->kv; j++) {
-        double v = pr->tree ? tree_value(pr->r, pr->tree,
+        double v = pr->tree ? rad_tree_value(pr->r, pr->tree,
                                           rad_tree_leaf(pr->tree->nodes, pr->u0[j], pr->a[j],
                                                         pr->b[j]),
                                           pr->r->channels == 3 ? pr->c : -1, pr->chosen)
@@ -393,7 +372,7 @@ static void probe_error(void *arg, size_t i)
 }
 
 /* The errors of tree block `tree` (NULL: a Klems block) at every probe angle into res[m]. */
-static void rad_probes_eval(rad_probes *pr, const rad_block *tree, int threads,
+void rad_probes_eval(rad_probes *pr, const rad_block *tree, int threads,
                             btdf_ti_error *res)
 {
     pr->tree = tree;
@@ -412,9 +391,6 @@ static double res_max_l1(const btdf_ti_error *res, size_t m)
 /* Passes of a tensor-tree block, for the progress bar (growth steps). */
 #define RAD_TREE_PASSES 8
 
-static btdf_status rad_report_ch(const btdf_rad *r, int k, int c, int chosen,
-                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
-                                 int threads, btdf_report *rep);
 
 /* The channels a colour tree's builder checks: one per distinct index (equal indices
    give equal channels), into ch[]; their count. One channel: channel 0. */
@@ -761,227 +737,5 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
         return st;
     }
     *out = r;
-    return st;
-}
-
-/* Tree coordinates of the incident direction p and the outgoing q (Radiance frame). */
-static void tree_coords(const double p[3], const double q[3], double *u0, double *a, double *b)
-{
-    *u0 = rad_u0_of_sin(sqrt(p[0] * p[0] + p[1] * p[1]));
-    /* Turn q about z by -atan2(-p_y, -p_x): p's direction of travel to +x. */
-    double ang = -atan2(-p[1], -p[0]);
-    double c = cos(ang), s = sin(ang);
-    double x = q[0] * c - q[1] * s, y = q[0] * s + q[1] * c;
-    rad_disk_to_square(x, y, a, b);
-}
-
-static double deg(double r) { return r * (180.0 / M_PI); }
-
-/* The file's X, Y, Z at (p, q) in block k (a one-channel file: Y in all three, the
-   equal-energy white Radiance gives a grey file); 0 when off the block. */
-static void rad_lookup_xyz(const btdf_rad *r, int k, const double p[3], const double q[3],
-                           double xyz[3])
-{
-    xyz[0] = xyz[1] = xyz[2] = 0.0;
-    if (!r || k < 0 || k >= r->nblocks)
-        return;
-    const rad_block *b = &r->b[k];
-    /* Transmission Front and Reflection Front: p on -Z; the Back blocks: p on +Z; q on
-       the other side (transmission) or the same (reflection) */
-    double sg = b->side == BTDF_SIDE_ENTER ? -1.0 : 1.0, sq = b->reflect ? sg : -sg;
-    if (!(sg * p[2] > 0.0 && sq * q[2] > 0.0))
-        return;
-    if (r->basis == RAD_BASIS_TREE3) {
-        double u0, a, bb;
-        tree_coords(p, q, &u0, &a, &bb);
-        size_t i = rad_tree_leaf(b->nodes, u0, a, bb);
-        if (b->cv)
-            rad_colour_xyz(b->nodes[i].v, b->cv[i * RAD_CV + 3], b->cv[i * RAD_CV + 4], xyz);
-        else
-            xyz[0] = xyz[1] = xyz[2] = b->nodes[i].v;
-        return;
-    }
-    /* Klems: incident patch of p's direction of travel (-p), outgoing patch of q, both by
-       the polar angle from their own side's normal: Radiance's bsdf_m.c rule for every
-       block, transmission or reflection, front or back (its incident maps reverse x and
-       y, the outgoing ones keep them; the back maps only flip z). */
-    int i = rad_klems_patch(r->kb, deg(acos(fmin(1.0, fabs(p[2])))), deg(atan2(-p[1], -p[0])));
-    int o = rad_klems_patch(r->kb, deg(acos(fmin(1.0, fabs(q[2])))), deg(atan2(q[1], q[0])));
-    if (i < 0 || o < 0)
-        return;
-    size_t e = (size_t)o * (size_t)r->kb->npatch + (size_t)i;
-    xyz[1] = b->klems[e];
-    xyz[0] = b->klems_x ? b->klems_x[e] : xyz[1];
-    xyz[2] = b->klems_z ? b->klems_z[e] : xyz[1];
-}
-
-/* Channel c (R, G, B: 0, 1, 2) of the file at (p, q), recovered from its X, Y, Z; -1:
-   its Y. A one-channel file: its value for c = 0 or -1. chosen: a colour tree's channel
-   as its builder chose it (tree_value). */
-static double rad_lookup_ch(const btdf_rad *r, int k, int c, int chosen, const double p[3],
-                            const double q[3])
-{
-    double xyz[3];
-    if (chosen && c >= 0 && r && r->channels == 3 && r->basis == RAD_BASIS_TREE3 && k >= 0 &&
-        k < r->nblocks) {
-        const rad_block *b = &r->b[k];
-        double sg = b->side == BTDF_SIDE_ENTER ? -1.0 : 1.0, sq = b->reflect ? sg : -sg;
-        if (!(sg * p[2] > 0.0 && sq * q[2] > 0.0))
-            return 0.0;
-        double u0, a, bb;
-        tree_coords(p, q, &u0, &a, &bb);
-        return tree_value(r, b, rad_tree_leaf(b->nodes, u0, a, bb), c, 1);
-    }
-    rad_lookup_xyz(r, k, p, q, xyz);
-    if (c < 0 || !r || r->channels != 3)
-        return xyz[1];
-    const double(*m)[3] = r->to_rgb;
-    return m[c][0] * xyz[0] + m[c][1] * xyz[1] + m[c][2] * xyz[2];
-}
-
-BTDF_API double btdf_rad_lookup(const btdf_rad *r, int k, const double p[3],
-                                const double q[3])
-{
-    return rad_lookup_ch(r, k, -1, 0, p, q);
-}
-
-BTDF_API void btdf_rad_lookup_xyz(const btdf_rad *r, int k, const double p[3],
-                                  const double q[3], double xyz[3])
-{
-    rad_lookup_xyz(r, k, p, q, xyz);
-}
-
-BTDF_API double btdf_rad_lookup_channel(const btdf_rad *r, int k, int c, const double p[3],
-                                        const double q[3])
-{
-    if (!r || c < 0 || c >= (r->channels == 3 ? 3 : 1))
-        return 0.0;
-    return rad_lookup_ch(r, k, c, 0, p, q);
-}
-
-static double rad_render(const btdf_rad *r, btdf_side light, int c, int chosen, double ti,
-                         double to, double phi)
-{
-    int k = light == BTDF_SIDE_LEAVE ? 0 : 1; /* the block of the view's side */
-    double p[3], q[3];
-    render_dirs(r, k, ti, to, phi, p, q);
-    return rad_lookup_ch(r, k, c, chosen, p, q);
-}
-
-double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti, double to,
-                       double phi)
-{
-    return rad_render(r, light, c, 0, ti, to, phi);
-}
-
-typedef struct rad_est {
-    const btdf_rad *r;
-    btdf_side light;
-    int c, chosen;
-} rad_est;
-
-static void rad_est_fn(const void *obj, double ti, const double *q, double *out)
-{
-    const rad_est *e = obj;
-    /* q = {sin ti, cos ti, sin to, cos to, cos phi, sin phi, |phi|, to} */
-    out[0] = rad_render(e->r, e->light, e->c, e->chosen, ti, q[7], atan2(q[5], q[4]));
-}
-
-/* A reflection block's report: the probe estimate (stratified light angles over 0-90
-   degrees, views stratified in projected solid angle) against rho_r, since the
-   transmission estimator follows Eq. 25's lobe. */
-static btdf_status rad_reflect_report(const btdf_rad *r, int k, int c, int chosen,
-                                      size_t test_angles, size_t points_per_angle,
-                                      uint64_t seed, int threads, btdf_report *rep)
-{
-    double t0 = core_now();
-    size_t m = test_angles ? test_angles : 48, ppa = points_per_angle ? points_per_angle : 8192;
-    size_t ns = (size_t)sqrt((double)ppa / 2.0);
-    ns = ns < 4 ? 4 : ns;
-    rad_probes pr;
-    btdf_status st = rad_probes_make(r, k, c, M_PI / 2, m, ns, 2 * ns, seed, threads, &pr);
-    if (st != BTDF_OK)
-        return st;
-    memset(rep, 0, sizeof *rep);
-    rep->per_ti = malloc(m * sizeof *rep->per_ti);
-    if (!rep->per_ti) {
-        rad_probes_free(&pr);
-        return BTDF_ENOMEM;
-    }
-    int tree = r->basis == RAD_BASIS_TREE3;
-    pr.chosen = chosen;
-    rad_probes_eval(&pr, tree ? &r->b[k] : NULL, threads, rep->per_ti);
-    rep->test_angles = m;
-    rep->test_points = m * pr.kv;
-    for (size_t i = 0; i < m; i++) {
-        const btdf_ti_error *e = &rep->per_ti[i];
-        rep->e_l1_max = fmax(rep->e_l1_max, e->e_l1);
-        rep->e_l1_mean += e->e_l1 / (double)m;
-        rep->e_t_max = fmax(rep->e_t_max, e->e_t);
-        rep->e_t_mean += e->e_t / (double)m;
-        if (e->T >= 0.01) {
-            rep->e_max_max = fmax(rep->e_max_max, e->e_max);
-            rep->e_max_mean += e->e_max;
-            rep->e_max_angles++;
-        }
-    }
-    if (rep->e_max_angles)
-        rep->e_max_mean /= (double)rep->e_max_angles;
-    rad_probes_free(&pr);
-    rep->seconds_estimate = core_now() - t0;
-    rep->seconds_build = r->seconds_build;
-    rep->tolerance = r->tolerance;
-    rep->metric = BTDF_METRIC_L1;
-    /* a Klems matrix has no tolerance: its entries are exact averages */
-    rep->met = !tree || btdf_rad_e_l1_checked(rep) <= r->tolerance;
-    rep->slices = tree ? (size_t)r->b[k].depth : (size_t)r->kb->npatch;
-    rep->samples = tree ? r->b[k].leaves : (size_t)r->kb->npatch * (size_t)r->kb->npatch;
-    return BTDF_OK;
-}
-
-BTDF_API btdf_status btdf_rad_report(const btdf_rad *r, int k, size_t test_angles,
-                                     size_t points_per_angle, uint64_t seed, int threads,
-                                     btdf_report *rep)
-{
-    return btdf_rad_report_channel(r, k, 0, test_angles, points_per_angle, seed, threads, rep);
-}
-
-BTDF_API btdf_status btdf_rad_report_channel(const btdf_rad *r, int k, int c,
-                                             size_t test_angles, size_t points_per_angle,
-                                             uint64_t seed, int threads, btdf_report *rep)
-{
-    return rad_report_ch(r, k, c, 0, test_angles, points_per_angle, seed, threads, rep);
-}
-
-/* btdf_rad_report_channel; chosen: a colour tree's channels as its builder chose them
-   (the builder's own check), not as read back from the file's Y, u', v'. */
-static btdf_status rad_report_ch(const btdf_rad *r, int k, int c, int chosen,
-                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
-                                 int threads, btdf_report *rep)
-{
-    if (!r || !rep || k < 0 || k >= r->nblocks || c < 0 || c >= (r->channels == 3 ? 3 : 1))
-        return BTDF_EINVAL;
-    if (r->b[k].reflect)
-        return rad_reflect_report(r, k, c, chosen, test_angles, points_per_angle, seed,
-                                  threads, rep);
-    btdf_params q = r->p;
-    q.channels = 1;
-    q.ior[0] = rad_n_light(r, k, c);
-    rad_est e = {r, r->b[k].light, r->channels == 3 ? c : -1, chosen};
-    btdf_status st = btdf_estimate_fn(&q, 0.0, M_PI / 2, test_angles, points_per_angle, seed,
-                                      threads, rad_est_fn, &e, rep);
-    if (st == BTDF_OK) {
-        rep->seconds_build = r->seconds_build;
-        rep->tolerance = r->tolerance;
-        rep->metric = BTDF_METRIC_L1;
-        rep->met = r->basis != RAD_BASIS_TREE3 || btdf_rad_e_l1_checked(rep) <= r->tolerance;
-        if (r->basis == RAD_BASIS_TREE3) {
-            rep->slices = (size_t)r->b[k].depth;
-            rep->samples = r->b[k].leaves;
-        } else {
-            rep->slices = (size_t)r->kb->npatch;
-            rep->samples = (size_t)r->kb->npatch * (size_t)r->kb->npatch;
-        }
-    }
     return st;
 }

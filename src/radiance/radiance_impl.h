@@ -64,4 +64,59 @@ btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t 
    and azimuth (degrees); -1 at theta = 90 or beyond. */
 int rad_klems_patch(const rad_klems_basis *kb, double theta_deg, double phi_deg);
 
+/* ---- shared by radiance.c (build, probes), lookup.c and report.c ---- */
+
+/* The index of the light block k serves, in channel c. */
+double rad_n_light(const btdf_rad *r, int k, int c);
+/* Channel c (-1: Y) of leaf i of tree block b: chosen = 1, in a colour tree, the value
+   the builder chose (cv), else as Radiance reads the file back. */
+double rad_tree_value(const btdf_rad *r, const rad_block *b, size_t i, int c, int chosen);
+/* The view p and light q of block k (Radiance's frame) for the light at ti in its own
+   MODEL.md frame and a view at (to, phi) in it. */
+void rad_render_dirs(const btdf_rad *r, int k, double ti, double to, double phi, double p[3],
+                     double q[3]);
+
+/* Stratified probes of one block as a render reads it: m light angles, kv views each
+   (stratified in sin^2 of the view's polar angle and its azimuth: equal projected solid
+   angle), with the tree coordinates of each (view, light) pair and Eq. 25 (or rho_r) for
+   the light. */
+typedef struct rad_probes {
+    size_t m, ns, nphi, kv;
+    double ti_max;
+    double *ti, *T, *fl; /* per angle: light angle, T (or R) of the light, max(T, 0.01) */
+    double *u0, *a, *b, *f;
+    const btdf_rad *r;
+    int k, c;       /* block, channel (0 for one channel) */
+    int chosen;     /* a colour tree's channel as the builder chose it (rad_tree_value) */
+    double n_light; /* the index of the light the block serves, in channel c */
+    const rad_block *tree; /* the tree under test; NULL for a Klems block, whose value
+                              as Radiance reads it is stored in u0 (a, b unused) */
+    btdf_ti_error *res;
+} rad_probes;
+
+void rad_probes_free(rad_probes *pr);
+/* m light angles up to ti_max, ns x nphi views each, for block k, channel c. */
+btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_max, size_t m,
+                            size_t ns, size_t nphi, uint64_t seed, int threads,
+                            rad_probes *pr);
+/* The probes' errors of tree (NULL: a Klems block) into res[m]. */
+void rad_probes_eval(rad_probes *pr, const rad_block *tree, int threads, btdf_ti_error *res);
+
+/* lookup.c: the tree coordinates of the incident direction p and the outgoing q
+   (Radiance frame). */
+void rad_tree_coords(const double p[3], const double q[3], double *u0, double *a, double *b);
+/* Channel c (0-2; -1: Y) of the file at (p, q); chosen: a colour tree's
+   channel as its builder chose it. */
+double rad_lookup_ch(const btdf_rad *r, int k, int c, int chosen, const double p[3],
+                     const double q[3]);
+/* The file's value as a render reads it, the light on side `light` at ti. */
+double rad_render(const btdf_rad *r, btdf_side light, int c, int chosen, double ti, double to,
+                  double phi);
+
+/* report.c: btdf_rad_report_channel; chosen: a colour tree's channels as its builder
+   chose them (the builder's own check). */
+btdf_status rad_report_ch(const btdf_rad *r, int k, int c, int chosen, size_t test_angles,
+                          size_t points_per_angle, uint64_t seed, int threads,
+                          btdf_report *rep);
+
 #endif
