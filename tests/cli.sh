@@ -474,21 +474,37 @@ fi
     grep -q '^file: .*SCATFUN, [0-9]* bytes' "$W/i.txt" && ok "inspect a .bsdf: stored report, sizes" || { no "inspect .bsdf"; cat "$W/i.txt"; }
 rm -f "$W"/i.*
 
+# a tree's verdict says the range it covers
+"$B" tabulate --tolerance 0.5 --threads 1 -o "$W/v.xml" 2>"$W/v.err"
+[ "$(grep -c 'as Radiance reads it.*; tolerance 0.5 met for light up to 80 deg (not held beyond)$' "$W/v.err")" -eq 4 ] && \
+    ok "a tree's verdict names the range it covers" || { no "tree verdict"; cat "$W/v.err"; }
+rm -f "$W/v.xml"
+# bars_forward FILE: within each stage the bar's fill never falls (frames split at CR)
+bars_forward() {
+    tr '\r' '\n' < "$1" | sed -n 's/.* \[\(#*\)-*\] \([a-z ,()]*\).*/\2 \1/p' | \
+        awk '{ f = $NF; $NF = ""; if ($0 in best && length(f) < best[$0]) bad = 1;
+               if (length(f) > best[$0]) best[$0] = length(f) } END { exit bad }'
+}
 # progress: a bar on a terminal for a run over a second, none off a terminal or --quiet
 "$B" tabulate --ior 1.5 -s 3 --threads 1 --tolerance 3e-3 -o "$W/p.csv" 2>"$W/p.err" && \
     ! grep -q "$(printf '\r')" "$W/p.err" && \
     ok "no progress bar when stderr is not a terminal" || no "progress off a terminal"
 if command -v script >/dev/null 2>&1 && "$B" --version | grep -q 'OpenEXR on'; then
     script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 5e-4 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
-    grep -q 'p.exr \[#*-*\] *[0-9]*% .*ETA' "$W/p.tty" && ok "a progress bar with stage and ETA on a terminal" || { no "progress on a terminal"; cat "$W/p.tty"; }
+    grep -q 'p.exr.* [0-9]* s' "$W/p.tty" && ok "a progress line with stage and elapsed time on a terminal" || { no "progress on a terminal"; cat "$W/p.tty"; }
+    bars_forward "$W/p.tty" && ok "the table's progress bar never goes backwards" || { no "a bar went backwards"; tr '\r' '\n' < "$W/p.tty"; }
     script -qec "'$B' tabulate -q --ior 1.5 -s 3 --threads 1 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
     [ ! -s "$W/p.tty" ] && ok "--quiet: no progress bar on a terminal" || { no "progress with --quiet"; cat "$W/p.tty"; }
     # a build that lasts over a second on one thread (3 s here), so that the bar shows
     # during the node passes; at 1e-2 (0.9 s) only the error estimate lasted that long
     script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 1e-3 --part transmission -o '$W/p.bsdf'" /dev/null > "$W/p.tty" 2>&1
-    grep -q 'p.bsdf \[#*-*\] .*elevation nodes' "$W/p.tty" && ok "a progress bar for .bsdf" || { no "progress for .bsdf"; cat "$W/p.tty"; }
+    grep -q 'p.bsdf: elevation nodes [0-9]* (+[0-9]*), [0-9]* s' "$W/p.tty" && ok "a progress line for .bsdf" || { no "progress for .bsdf"; cat "$W/p.tty"; }
+    bars_forward "$W/p.tty" && ok "the .bsdf progress bar never goes backwards" || { no "a .bsdf bar went backwards"; tr '\r' '\n' < "$W/p.tty"; }
     script -qec "'$B' tabulate --basis klems-quarter --threads 1 -o '$W/p.xml'" /dev/null > "$W/p.tty" 2>&1
     grep -q 'p.xml \[#*-*\] .*Klems patch averages' "$W/p.tty" && ok "a progress bar for .xml" || { no "progress for .xml"; cat "$W/p.tty"; }
+    ! tr '\r' '\n' < "$W/p.tty" | grep -q 'Klems.*left' && ok "no time left for four blocks of unequal cost" || no "an ETA from four Klems blocks"
+    [ "$(grep -c 'Reflection Back.*as Radiance reads it.*; verdict: exact patch averages over 0-90 deg' "$W/p.tty")" -eq 1 ] && \
+        ok "a Klems file's report lines carry a verdict" || { no "Klems verdict"; cat "$W/p.tty"; }
     printf '[a]\nior = 1.5\nsmoothness = 3\ntolerance = 5e-4\nenter = p.exr\n' > "$W/p.ini"
     script -qec "'$B' build --threads 1 '$W/p.ini'" /dev/null > "$W/p.tty" 2>&1
     grep -q '\[1/1\] a (enter)' "$W/p.tty" && ok "a progress line for build" || { no "progress for build"; cat "$W/p.tty"; }

@@ -53,6 +53,10 @@ int run_parse_metric(const char *word, btdf_metric *metric)
     return 1;
 }
 
+/* Fewer units than this give no time left: four blocks of a Radiance file, or a few
+   passes, differ too much in cost for one's time to predict the next. */
+#define ETA_MIN_UNITS 8
+
 void run_progress_start(run_progress *pr, int on, const char *label)
 {
     memset(pr, 0, sizeof *pr);
@@ -65,7 +69,8 @@ void run_progress_start(run_progress *pr, int on, const char *label)
     pr->t0 = run_now();
 }
 
-/* One line of at most 79 columns: label, bar, percent, stage, time left. Called with
+/* One line of at most 79 columns: label, stage and counts, the bar where the fraction
+   is known, the time elapsed, and the time left where it is honest. Called with
    pr->lock held (or before the ticker runs). */
 static void draw(run_progress *pr, int force)
 {
@@ -81,12 +86,12 @@ static void draw(run_progress *pr, int force)
         for (int k = 0; k < 16; k++)
             bar[k] = k < fill ? '#' : '-';
         bar[16] = 0;
-        if (frac >= 0.05 && frac < 1.0) /* too early an estimate says nothing */
-            snprintf(eta, sizeof eta, "  ETA %.0f s", el * (1.0 - frac) / frac);
-        snprintf(line, sizeof line, "%s [%s] %3.0f%% %s%s", pr->label, bar, 100.0 * frac,
-                 pr->stage, eta);
+        /* The time left, where two updates in a row agreed on it (run_progress_cb) */
+        if (pr->cb_end > now)
+            snprintf(eta, sizeof eta, ", about %.0f s left", pr->cb_end - now);
+        snprintf(line, sizeof line, "%s [%s] %s, %.0f s%s", pr->label, bar, pr->stage, el, eta);
     } else {
-        snprintf(line, sizeof line, "%s: %s (%.0f s)", pr->label, pr->stage, el);
+        snprintf(line, sizeof line, "%s: %s, %.0f s", pr->label, pr->stage, el);
     }
     line[79] = 0; /* one terminal line: a longer one would scroll on every redraw */
     fprintf(stderr, "\r\033[K%s", line);
@@ -136,9 +141,51 @@ static void update(run_progress *pr, const char *stage, double frac)
 void run_progress_cb(void *user, const char *stage, size_t done, size_t todo)
 {
     run_progress *pr = user;
+    if (!pr->on)
+        return;
+    size_t total = done + todo;
+    double frac = total ? (double)done / (double)total : 0.0;
+    if (strncmp(pr->cb_stage, stage, sizeof pr->cb_stage - 1) != 0) { /* a new stage */
+        snprintf(pr->cb_stage, sizeof pr->cb_stage, "%s", stage);
+        pr->cb_total = total;
+        pr->cb_frac = frac;
+        pr->cb_t0 = run_now();
+        pr->cb_unsure = 0;
+        for (int g = 0; g < 4; g++) /* a stage seen to grow before, back after another */
+            pr->cb_unsure |= !strcmp(pr->cb_grew[g], pr->cb_stage);
+        pr->cb_end_prev = 0.0;
+    } else if (total != pr->cb_total || frac < pr->cb_frac) {
+        /* the work grew (refinement splits what it checks): the fraction says nothing */
+        pr->cb_unsure = 1;
+        for (int g = 0; g < 4; g++)
+            if (!pr->cb_grew[g][0] || !strcmp(pr->cb_grew[g], pr->cb_stage)) {
+                snprintf(pr->cb_grew[g], sizeof pr->cb_grew[g], "%s", pr->cb_stage);
+                break;
+            }
+    }
+    /* The time left from the stage's own pace, shown only for a stage of at least
+       ETA_MIN_UNITS units whose total never changed, once a tenth of it is done, and
+       while this update's prediction of its end agrees with the last one's to a fifth
+       of the time left (units of unequal cost make it jump: then none is shown). */
+    double now = run_now(), sel = now - pr->cb_t0, end = 0.0;
+    if (!pr->cb_unsure && total >= ETA_MIN_UNITS && frac >= 0.1 && frac < 1.0)
+        end = now + sel * (1.0 - frac) / frac; /* frac >= 0.1 */
+    int agree = end > 0.0 && pr->cb_end_prev > 0.0 &&
+                fabs(end - pr->cb_end_prev) <= 0.2 * (end - now);
+    pr->cb_end_prev = end;
+    pr->cb_total = total;
+    pr->cb_frac = frac;
+    if (pr->running)
+        pthread_mutex_lock(&pr->lock);
+    pr->cb_end = agree ? end : 0.0;
+    if (pr->running)
+        pthread_mutex_unlock(&pr->lock);
     char what[96];
-    snprintf(what, sizeof what, "%s %zu/%zu", stage, done, done + todo);
-    update(pr, what, done + todo ? (double)done / (double)(done + todo) : 0.0);
+    if (pr->cb_unsure)
+        snprintf(what, sizeof what, "%s %zu (+%zu)", stage, done, todo);
+    else
+        snprintf(what, sizeof what, "%s %zu/%zu", stage, done, total);
+    update(pr, what, pr->cb_unsure ? -1.0 : frac);
 }
 
 void run_progress_stage(run_progress *pr, const char *stage)
@@ -403,6 +450,17 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
             met = met && rk->met;
             if (k == 0 && c == 0)
                 run_progress_end(pr); /* the report lines replace the bar */
+            /* every line its verdict, with the range it covers: a tree's tolerance
+               holds up to BTDF_RAD_TI_CHECKED_DEG (docs/radiance.md); a Klems matrix
+               holds exact patch averages, its e_L1 is the basis's resolution */
+            char verdict[160];
+            if (basis == BTDF_RAD_TREE3)
+                snprintf(verdict, sizeof verdict, "; %s %g %s for light up to %g deg (not "
+                         "held beyond)", rk->met ? "tolerance" : "TOLERANCE", tol,
+                         rk->met ? "met" : "NOT MET", BTDF_RAD_TI_CHECKED_DEG);
+            else
+                snprintf(verdict, sizeof verdict, "; verdict: exact patch averages over "
+                         "0-90 deg (no tolerance: the basis sets e_L1)");
             char chn[48] = "";
             if (nch == 3)
                 snprintf(chn, sizeof chn, ", channel %s (n = %.6g)", report_rad_channel[c],
@@ -418,9 +476,7 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
                         btdf_rad_seconds_build(x), rk->seconds_estimate, rk->test_angles,
                         rk->test_points, rk->e_l1_max, btdf_rad_e_l1_checked(rk),
                         BTDF_RAD_TI_CHECKED_DEG, rk->e_l1_mean, rk->e_max_max, rk->e_t_max,
-                        basis != BTDF_RAD_TREE3 ? ""
-                                                : (rk->met ? "; tolerance met"
-                                                           : "; TOLERANCE NOT MET"));
+                        verdict);
         }
         btdf_rad_set_errors(x, k, el1, et);
     }
