@@ -251,6 +251,14 @@ BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size
                    ".bsdf or .xml%s%s", "", "");
     if (!f->available)
         return switched_off(f, msg, msglen);
+    /* A FIFO would block the open and a device (/dev/zero) never end: only regular
+       files are read (stat first, so that nothing is opened that could hang). */
+    struct stat rs;
+    if (stat(path, &rs) == 0 && !S_ISREG(rs.st_mode))
+        return core_say(BTDF_EINVAL, msg, msglen, "not a regular file (%s): btdftab reads "
+                        "tables, .bsdf and .xml from files%s",
+                        S_ISFIFO(rs.st_mode) ? "a pipe" : S_ISDIR(rs.st_mode) ? "a folder"
+                                                                            : "a device", "");
     /* One wording for a file that cannot be opened, whatever its format. */
     FILE *probe = fopen(path, "rb");
     if (!probe)

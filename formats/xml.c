@@ -15,10 +15,34 @@
 #include "formats/formats.h"
 #include "radiance/radiance.h"
 
-/* Text a reader takes literally: &, < and > escaped, control characters dropped. */
+/* Text a reader takes literally: &, < and > escaped, control characters dropped, a
+   byte outside any UTF-8 sequence (a Latin-1 name) written as the character it is in
+   Latin-1, so the file stays the UTF-8 its prolog declares. */
+/* A byte >= 0x80 at s: its whole UTF-8 sequence, or the byte as its Latin-1 character
+   in UTF-8; returns the bytes of s used. */
+static size_t put_high(FILE *f, const unsigned char *u)
+{
+    size_t n = *u >= 0xF0 && *u <= 0xF4 ? 4 : *u >= 0xE0 && *u < 0xF0 ? 3
+               : *u >= 0xC2 && *u < 0xE0 ? 2 : 1;
+    int whole = n > 1;
+    for (size_t j = 1; whole && j < n; j++)
+        whole = (u[j] & 0xC0) == 0x80;
+    if (whole) {
+        fwrite(u, 1, n, f);
+        return n;
+    }
+    fputc(0xC0 | (*u >> 6), f);
+    fputc(0x80 | (*u & 0x3F), f);
+    return 1;
+}
+
 static void put_text(FILE *f, const char *s)
 {
     for (; s && *s; s++) {
+        if ((unsigned char)*s >= 0x80) {
+            s += put_high(f, (const unsigned char *)s) - 1;
+            continue;
+        }
         if (*s == '&')
             fputs("&amp;", f);
         else if (*s == '<')
@@ -36,6 +60,10 @@ static void put_comment_text(FILE *f, const char *s)
     for (; s && *s; s++) {
         if ((unsigned char)*s < 0x20)
             continue;
+        if ((unsigned char)*s >= 0x80) {
+            s += put_high(f, (const unsigned char *)s) - 1;
+            continue;
+        }
         fputc(*s, f);
         if (*s == '-' && s[1] == '-')
             fputc(' ', f);

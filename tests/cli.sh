@@ -475,9 +475,28 @@ fi
 rm -f "$W"/i.*
 
 # a tree's verdict says the range it covers
-"$B" tabulate --tolerance 0.5 --threads 1 -o "$W/v.xml" 2>"$W/v.err"
+# its name (the file's base name) a Latin-1 byte and 140 bytes of UTF-8: the XML stays
+# UTF-8 (the byte as the character it is in Latin-1), cut at a character's start
+vn="$(printf '\351')$(i=0; while [ $i -lt 70 ]; do printf '\303\251'; i=$((i + 1)); done)"
+"$B" tabulate --tolerance 0.5 --threads 1 -o "$W/$vn.xml" 2>"$W/v.err"
+mv "$W/$vn.xml" "$W/v.xml"
+python3 -c "import sys, xml.etree.ElementTree as E; n = E.parse(sys.argv[1]).find('.//{http://windows.lbl.gov}Name').text; sys.exit(n != '\u00e9' * 64)" "$W/v.xml" && \
+    ok ".xml names: Latin-1 and a cut inside UTF-8 give valid UTF-8 XML" || no ".xml name not valid UTF-8 or cut wrongly"
 [ "$(grep -c 'as Radiance reads it.*; tolerance 0.5 met for light up to 80 deg (not held beyond)$' "$W/v.err")" -eq 4 ] && \
     ok "a tree's verdict names the range it covers" || { no "tree verdict"; cat "$W/v.err"; }
+# inputs that are not files: a FIFO and a device refused at once, no hang
+mkfifo "$W/ff.csv"; ln -s /dev/zero "$W/z.bsdf"
+timeout 20 "$B" inspect "$W/ff.csv" 2>"$W/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "not a regular file (a pipe)" "$W/err" && ok "inspect of a FIFO refused, no hang" || { no "FIFO input: $rc"; cat "$W/err"; }
+echo '30 150 180' | timeout 20 "$B" eval --table "$W/z.bsdf" 2>"$W/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "not a regular file (a device)" "$W/err" && ok "eval --table /dev/zero refused, no hang" || { no "/dev/zero input: $rc"; cat "$W/err"; }
+rm -f "$W/ff.csv" "$W/z.bsdf"
+# .bsdf metadata: the command escaped and whole (quotes, a backslash, Latin-1, 1,076 bytes)
+d=$(printf '%0200d' 0); mkdir -p "$W/$d/$d/$d/$d/$d"; mq="$W/$d/$d/$d/$d/$d/q\"x\\y$(printf '\351').bsdf"
+"$B" tabulate -q --part transmission --tolerance 3e-2 -o "$mq" && "$B" inspect "$mq" | sed -n 's/^metadata *//p' | \
+    python3 -c "import json, sys; c = json.loads(sys.stdin.read())['command']; sys.exit(not (len(c) > 1023 and c.endswith('q\"x\\\\y\u00e9.bsdf')))" && \
+    ok ".bsdf metadata: valid JSON, the command whole and escaped" || no ".bsdf metadata JSON"
+rm -rf "$W/$d"
 # the tool reads its own .xml back: inspect and eval --table
 "$B" inspect "$W/v.xml" > "$W/v.txt" && grep -q '^basis: tree3$' "$W/v.txt" && \
     [ "$(grep -c '^Trans.*leaves, depth [0-9]*, values .*stored e_L1 max' "$W/v.txt")" -eq 2 ] && \

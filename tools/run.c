@@ -16,15 +16,47 @@
 #include "report_json.h"
 #include "run.h"
 
+size_t run_json_escape(const char *s, char *out)
+{
+    size_t k = 0;
+    const unsigned char *u = (const unsigned char *)(s ? s : "");
+    while (*u) {
+        /* a whole UTF-8 sequence passes as it is (RFC 8259 8.1) */
+        size_t n = *u >= 0xF0 && *u <= 0xF4 ? 4 : *u >= 0xE0 ? 3 : *u >= 0xC2 && *u < 0xE0 ? 2 : 1;
+        int whole = *u >= 0x80 && n > 1;
+        for (size_t j = 1; whole && j < n; j++)
+            whole = (u[j] & 0xC0) == 0x80;
+        if (whole) {
+            memcpy(out + k, u, n);
+            k += n;
+            u += n;
+            continue;
+        }
+        if (*u == '"' || *u == '\\') {
+            out[k++] = '\\';
+            out[k++] = (char)*u;
+        } else if (*u < 0x20 || *u >= 0x80) {
+            /* control characters, and a byte no UTF-8 sequence holds, read as Latin-1 */
+            k += (size_t)sprintf(out + k, "\\u%04x", (unsigned)*u);
+        } else {
+            out[k++] = (char)*u;
+        }
+        u++;
+    }
+    out[k] = 0;
+    return k;
+}
+
 void run_json_open(FILE *f, const char *prov)
 {
     fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
             btdf_version_string());
-    for (const char *s = prov ? prov : ""; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            fputc('\\', f); /* JSON string escapes; control characters are dropped */
-        if ((unsigned char)*s >= 0x20)
-            fputc(*s, f);
+    size_t l = prov ? strlen(prov) : 0;
+    char *e = malloc(6 * l + 1);
+    if (e) {
+        run_json_escape(prov, e);
+        fputs(e, f);
+        free(e);
     }
     fprintf(f, "\",\n");
 }
@@ -362,8 +394,19 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
                 "single-precision floats (its default) can loop forever sampling this file; "
                 "render it with pbrt-v3 built with PBRT_FLOAT_AS_DOUBLE (docs/scatfun.md)\n",
                 prog, path, peak, BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0);
-    if (k > 0 && (size_t)k < sizeof meta)
-        snprintf(meta + k, sizeof meta - (size_t)k, ", \"command\": \"%s\"}", prov ? prov : "");
+    /* the command whole and escaped (a quote or a newline in a path, any length): the
+       numbers above fit the buffer, the command goes on in its own */
+    size_t lp = prov ? strlen(prov) : 0;
+    char *metafull = malloc(sizeof meta + 6 * lp + 32);
+    if (metafull && k > 0 && (size_t)k < sizeof meta) {
+        memcpy(metafull, meta, (size_t)k);
+        size_t q = (size_t)k;
+        q += (size_t)sprintf(metafull + q, ", \"command\": \"");
+        q += run_json_escape(prov, metafull + q);
+        memcpy(metafull + q, "\"}", 3);
+    } else if (metafull) {
+        snprintf(metafull, sizeof meta, "%s", meta);
+    }
     int code = 0;
     if (!met && !best_effort) {
         fprintf(stderr, "%s: %s: tolerance %g not met: e_L1 max %.3g (%s)%s%s; nothing written "
@@ -373,7 +416,7 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
     } else {
         /* the file and its report appear together or not at all */
         btdf_outputs_begin();
-        btdf_output what = {NULL, f, NULL, NULL, meta, NULL};
+        btdf_output what = {NULL, f, NULL, NULL, metafull ? metafull : meta, NULL};
         run_progress_stage(pr, "writing");
         st = btdf_write(&what, path, msg, sizeof msg);
         run_progress_end(pr);
@@ -398,6 +441,7 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
     }
     for (int q = 0; q < 4; q++)
         btdf_report_clear(&reps[q]);
+    free(metafull);
     btdf_scatfun_free(f);
     return code;
 }
@@ -425,7 +469,12 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
     base = base ? base + 1 : path;
     char name[128];
     size_t len = strlen(base) > 4 ? strlen(base) - 4 : strlen(base);
-    snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1), base);
+    if (len > sizeof name - 1) { /* cut at a character's start, never inside UTF-8 */
+        len = sizeof name - 1;
+        while (len > 0 && ((unsigned char)base[len] & 0xC0) == 0x80)
+            len--;
+    }
+    snprintf(name, sizeof name, "%.*s", (int)len, base);
     btdf_rad_set_name(x, name);
     btdf_report rep[4 * 3], coarse[4 * 3];
     memset(rep, 0, sizeof rep);

@@ -19,6 +19,11 @@ double run_now(void);
    each on its own line, the last followed by ',' and a newline. */
 void run_json_open(FILE *f, const char *prov);
 
+/* s as the inside of a JSON string into out (room for 6 strlen(s) + 1): quote and
+   backslash escaped, control characters and bytes outside UTF-8 sequences (Latin-1)
+   as \u00XX, UTF-8 sequences kept; returns the length written. */
+size_t run_json_escape(const char *s, char *out);
+
 /* The words the command line and the manifest share: "enter", "leave", "both" as a
    btdf_side (0 for any other word); "l1", "max" as a metric (0 for any other). */
 int run_parse_side(const char *word);
