@@ -571,6 +571,9 @@ expect 2 "expected K/N" "a bad --shard" -- "$B" build --shard 3/2 "$W/lib/scene.
 rm -rf "$W/lib"
 bash -n "$(dirname "$B")/completion/btdftab" 2>/dev/null && grep -q -- '--dry-run' "$(dirname "$B")/completion/btdftab" && \
     ok "bash completion, generated from the option table" || no "bash completion"
+c=$(bash -c '. "$1"; COMP_WORDS=(btdftab tabulate --basis klems-h); COMP_CWORD=3; _btdftab; echo "${COMPREPLY[*]}"' sh "$(dirname "$B")/completion/btdftab")
+d=$(bash -c '. "$1"; COMP_WORDS=(btdftab tabulate --part ""); COMP_CWORD=3; _btdftab; echo "${COMPREPLY[*]}"' sh "$(dirname "$B")/completion/btdftab")
+[ "$c" = "klems-half" ] && [ "$d" = "transmission reflection both" ] && ok "completion offers the values of --basis and --part" || no "completion values: '$c' '$d'"
 "$(dirname "$B")/btdf-bench" --help | grep -q '^usage: btdf-bench' && \
     ok "btdf-bench --help" || no "btdf-bench --help"
 expect 2 "unknown section 'frob'" "btdf-bench: an unknown section" -- "$(dirname "$B")/btdf-bench" frob

@@ -601,7 +601,21 @@ void opt_bash(FILE *f)
     for (const cmd_def *c = cmd_table; c->name; c++)
         fprintf(f, "%s ", c->name);
     fprintf(f, "help --help --version\" -- \"$cur\"))\n        return\n    fi\n");
-    /* Options that take a file name complete file names. */
+    /* Options that take one of a few words complete those words (the words the
+       parsers take: run.c, cli.c, btdf_rad_basis_parse, btdf_model_parse) ... */
+    static const char *const words[][2] = {
+        {"basis", "tree3 klems-full klems-half klems-quarter"},
+        {"part", "transmission reflection both"},
+        {"estimate", "full fast none"},
+        {"side", "enter leave both"},
+        {"metric", "l1 max"},
+        {"model", "xu-sun smith"}};
+    fprintf(f, "    case $prev in\n");
+    for (size_t k = 0; k < sizeof words / sizeof words[0]; k++)
+        fprintf(f, "        --%s) COMPREPLY=($(compgen -W \"%s\" -- \"$cur\")); return ;;\n",
+                words[k][0], words[k][1]);
+    fprintf(f, "    esac\n");
+    /* ... and options that take a file name complete file names. */
     fprintf(f, "    case $prev in\n        ");
     int first = 1;
     for (const opt_def *o = opt_table; o->name; o++)
