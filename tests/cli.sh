@@ -422,6 +422,10 @@ fi
     "$B" eval --help | grep -q -- '--table' && ! "$B" eval --help | grep -q -- '--tolerance' && \
     ok "each command's help lists its own options" || no "per-command help"
 "$B" --man > "$W/man.1" && head -n 3 "$W/man.1" | grep -q '^\.TH BTDFTAB 1' && ok "--man writes a manual page" || no "--man"
+# every key the manifest reader knows (its error message lists them) is in the manual
+keys=$(printf '[a]\nbogus = 1\n' > "$W/k.ini"; "$B" build "$W/k.ini" 2>&1 | sed -n 's/.*(known: \([^)]*\)).*/\1/p' | tr -d ',')
+[ -n "$keys" ] && for k in $keys; do grep -q "^\.B $k\$" "$W/man.1" || { no "man page lacks manifest key $k"; keys=; break; }; done
+[ -n "$keys" ] && ok "the manual lists the manifest keys ($keys)"
 sed 's/\\-/-/g' "$W/man.1" > "$W/man.txt" # troff's \- is a plain dash
 missing=""
 for c in eval tabulate albedo polar build inspect simulate; do
