@@ -54,22 +54,6 @@ static void put_text(FILE *f, const char *s)
     }
 }
 
-/* In a comment "--" is not allowed: write it as "- -". */
-static void put_comment_text(FILE *f, const char *s)
-{
-    for (; s && *s; s++) {
-        if ((unsigned char)*s < 0x20)
-            continue;
-        if ((unsigned char)*s >= 0x80) {
-            s += put_high(f, (const unsigned char *)s) - 1;
-            continue;
-        }
-        fputc(*s, f);
-        if (*s == '-' && s[1] == '-')
-            fputc(' ', f);
-    }
-}
-
 /* A value as written: 6 significant digits (FLT_DIG: reads back to the stored float),
    in as few characters as C's strtod and Radiance's reader take: no "0" before the
    point (".0123"), no "+" or leading zeros in the exponent ("1.2e-5"). Tree leaves
@@ -181,11 +165,6 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                "Transmission Back light entering it (n);\n     Reflection Front light "
                "reflected outside (n), Reflection Back inside (1/n).\n",
             r->p.ior[0]);
-    if (c->opts->provenance) {
-        fputs("     Command: ", f);
-        put_comment_text(f, c->opts->provenance);
-        fputc('\n', f);
-    }
     fputs("-->\n", f);
     fprintf(f, "<WindowElement xmlns=\"http://windows.lbl.gov\" "
                "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
@@ -212,6 +191,12 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
         for (int k = 0; k < r->nblocks; k++)
             fprintf(f, "; %s: e_L1 max %.4g, e_T max %.4g as Radiance reads it%s", r->b[k].label,
                     r->e_l1[k], r->e_t[k], r->channels == 3 ? " (the worst of R, G, B)" : "");
+    /* the command in the element's text, where "--ior" stays as typed (a comment may
+       not hold "--"); last, after every key the reader looks for */
+    if (c->opts->provenance) {
+        fputs("; command: ", f);
+        put_text(f, c->opts->provenance);
+    }
     fprintf(f, "</Comments>\n\t</Material>\n");
     fprintf(f, "\t<DataDefinition>\n");
     if (tree) {

@@ -501,6 +501,8 @@ d=$(printf '%0200d' 0); mkdir -p "$W/$d/$d/$d/$d/$d"; mq="$W/$d/$d/$d/$d/$d/q\"x
     python3 -c "import json, sys; c = json.loads(sys.stdin.read())['command']; sys.exit(not (len(c) > 1023 and c.endswith('q\"x\\\\y\u00e9.bsdf')))" && \
     ok ".bsdf metadata: valid JSON, the command whole and escaped" || no ".bsdf metadata JSON"
 rm -rf "$W/$d"
+grep -q -- '; command: btdftab tabulate --tolerance 0.5 --threads 1 -o ' "$W/v.xml" && ! grep -q -- '- -' "$W/v.xml" && \
+    ok "the .xml holds the command as typed (no '- -')" || no "the .xml's command line"
 # the tool reads its own .xml back: inspect and eval --table
 "$B" inspect "$W/v.xml" > "$W/v.txt" && grep -q '^basis: tree3$' "$W/v.txt" && \
     [ "$(grep -c '^Trans.*leaves, depth [0-9]*, values .*stored e_L1 max' "$W/v.txt")" -eq 2 ] && \
