@@ -40,6 +40,8 @@ typedef struct btdf_format_ops {
     btdf_status (*read_path)(const char *path, btdf_table **out, char *msg, size_t msglen);
     /* Reads a series back (BTDF_NEEDS_SERIES), or NULL. */
     btdf_status (*read_series)(const char *path, btdf_scatfun **out, char *msg, size_t msglen);
+    /* Reads a Radiance BSDF back (BTDF_NEEDS_RADIANCE), or NULL. */
+    btdf_status (*read_rad)(const char *path, struct btdf_rad **out, char *msg, size_t msglen);
     /* Prints what the file stores beside the values (the error report, provenance),
        one "key: value" line each, or NULL when the format stores nothing more. */
     btdf_status (*stored)(const char *path, FILE *out);

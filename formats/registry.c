@@ -7,6 +7,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "btdf_radiance.h"
 #include "formats/formats.h"
 #include "core/core.h"
 #include "io/tmpfile.h"
@@ -53,7 +54,7 @@ BTDF_API int btdf_format_find(const char *path, btdf_format_info *info)
         info->available = f->available;
         info->needs = f->needs;
         info->can_stream = f->write_stream != NULL;
-        info->can_read = f->read_path != NULL || f->read_series != NULL;
+        info->can_read = f->read_path != NULL || f->read_series != NULL || f->read_rad != NULL;
     }
     return 1;
 }
@@ -271,11 +272,19 @@ BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size
         return BTDF_EINVAL;
     memset(in, 0, sizeof *in);
     const btdf_format_ops *f = btdf_format_for_path(path);
-    if (!f || (!f->read_path && !f->read_series))
-        return core_say(BTDF_EINVAL, msg, msglen, "not a file format btdf reads: use .csv, .exr or "
-                   ".bsdf%s%s", "", "");
+    if (!f || (!f->read_path && !f->read_series && !f->read_rad))
+        return core_say(BTDF_EINVAL, msg, msglen, "not a file format btdf reads: use .csv, .exr, "
+                   ".bsdf or .xml%s%s", "", "");
     if (!f->available)
         return switched_off(f, msg, msglen);
+    /* A FIFO would block the open and a device (/dev/zero) never end: only regular
+       files are read (stat first, so that nothing is opened that could hang). */
+    struct stat rs;
+    if (stat(path, &rs) == 0 && !S_ISREG(rs.st_mode))
+        return core_say(BTDF_EINVAL, msg, msglen, "not a regular file (%s): btdftab reads "
+                        "tables, .bsdf and .xml from files%s",
+                        S_ISFIFO(rs.st_mode) ? "a pipe" : S_ISDIR(rs.st_mode) ? "a folder"
+                                                                            : "a device", "");
     /* One wording for a file that cannot be opened, whatever its format. */
     FILE *probe = fopen(path, "rb");
     if (!probe)
@@ -283,6 +292,8 @@ BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size
     fclose(probe);
     if (f->read_series)
         return f->read_series(path, &in->scatfun, msg, msglen);
+    if (f->read_rad)
+        return f->read_rad(path, &in->radiance, msg, msglen);
     return f->read_path(path, &in->table, msg, msglen);
 }
 
@@ -400,5 +411,6 @@ BTDF_API btdf_status btdf_inspect(const char *path, FILE *out, char *msg, size_t
         core_say(st, msg, msglen, "%s: printing failed: %s", path, strerror(errno));
     btdf_table_free(in.table);
     btdf_scatfun_free(in.scatfun);
+    btdf_rad_free(in.radiance);
     return st;
 }

@@ -206,7 +206,21 @@ expect 1 "not a regular file" "--report onto a pipe" -- "$B" tabulate -q --grid 
 [ -p "$W/t.json" ] && ok "the pipe is still a pipe" || no "the pipe was replaced"
 rm -f "$W/t.json"
 expect 2 "are the same file" "--report and -o naming one file" -- "$B" tabulate -q --grid 2,3,3 -o "$W/t.csv" --report "$W/./t.csv"
-expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --tolerance 1e-3 --max-samples 1000 --report "$W/t.json"
+expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --tolerance 1e-3 --max-samples 5000 --report "$W/t.json"
+# .bsdf budgets: predicted before the work, real bounds during it, the verdict's number shown
+expect 3 "node budget, nothing built" "smooth glass beyond the format refused at once" -- "$B" tabulate -q -s 500 -o "$W/t.bsdf"
+expect 3 "coefficient budget, nothing built" "--max-samples below the first pass: no file" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --max-samples 1000 --best-effort
+"$B" tabulate -o "$W/t.bsdf" --part transmission --max-samples 20000 --best-effort 2>"$W/err"; rc=$?
+nco=$("$B" inspect "$W/t.bsdf" | awk '/^coefficients/ {print $2}')
+[ "$rc" -eq 3 ] && [ -n "$nco" ] && [ "$nco" -le 20000 ] && ok "--max-samples bounds a .bsdf ($nco coefficients)" || no "--max-samples 20000: status $rc, $nco coefficients"
+ev=$(sed -n 's/.*tolerance 0.001 not met: e_L1 max \([^ ]*\) (.*/\1/p' "$W/err")
+eb=$(sed -n 's/.*tolerance 0.001 not met: e_L1 max [^ ]* (\([a-z_]*\)).*/\1/p' "$W/err")
+e="$ev $eb"
+[ -n "$ev" ] && grep -q "^btdftab: $W/t.bsdf ($eb, as a renderer reads it):.* e_L1 max $ev mean" "$W/err" && ok "the verdict quotes the report's worst e_L1" || { no "verdict number '$e' not in the report lines"; cat "$W/err"; }
+rm -f "$W/t.bsdf"
+"$B" tabulate -q -o "$W/t.bsdf" --part transmission --max-memory 1 --best-effort; rc=$?
+"$B" inspect "$W/t.bsdf" | awk '/^file size/ {exit !($3 < 1048576)}' && [ "$rc" -eq 3 ] && ok "--max-memory bounds a .bsdf build" || no "--max-memory 1: status $rc"
+rm -f "$W/t.bsdf"
 nl="$W/n
 l.csv"
 "$B" tabulate -q --grid 2,3,3 -o "$nl" && "$B" inspect "$nl" > "$W/out" && \
@@ -285,7 +299,7 @@ head -c 100 /dev/zero > "$W/z.bsdf"
 expect 1 "z.bsdf" "foreign .bsdf" -- "$B" inspect "$W/z.bsdf"
 rm -f "$W/z.bsdf"
 # .bsdf: a lobe too narrow for the format's node budget stops before any work, exit 3
-expect 3 "narrower than one elevation interval" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
+expect 3 "node budget, nothing built" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
 # .bsdf: --report is written; a file without the enter side is refused by eval
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --side leave --part transmission --report "$W/l.json" -o "$W/l.bsdf" && \
     grep -q '"kind": "scatfun"' "$W/l.json" && grep -q '"pbrt_v3_single_precision_safe": true' "$W/l.json" && \
@@ -408,6 +422,10 @@ fi
     "$B" eval --help | grep -q -- '--table' && ! "$B" eval --help | grep -q -- '--tolerance' && \
     ok "each command's help lists its own options" || no "per-command help"
 "$B" --man > "$W/man.1" && head -n 3 "$W/man.1" | grep -q '^\.TH BTDFTAB 1' && ok "--man writes a manual page" || no "--man"
+# every key the manifest reader knows (its error message lists them) is in the manual
+keys=$(printf '[a]\nbogus = 1\n' > "$W/k.ini"; "$B" build "$W/k.ini" 2>&1 | sed -n 's/.*(known: \([^)]*\)).*/\1/p' | tr -d ',')
+[ -n "$keys" ] && for k in $keys; do grep -q "^\.B $k\$" "$W/man.1" || { no "man page lacks manifest key $k"; keys=; break; }; done
+[ -n "$keys" ] && ok "the manual lists the manifest keys ($keys)"
 sed 's/\\-/-/g' "$W/man.1" > "$W/man.txt" # troff's \- is a plain dash
 missing=""
 for c in eval tabulate albedo polar build inspect simulate; do
@@ -460,23 +478,73 @@ fi
     grep -q '^file: .*SCATFUN, [0-9]* bytes' "$W/i.txt" && ok "inspect a .bsdf: stored report, sizes" || { no "inspect .bsdf"; cat "$W/i.txt"; }
 rm -f "$W"/i.*
 
+# a tree's verdict says the range it covers
+# its name (the file's base name) a Latin-1 byte and 140 bytes of UTF-8: the XML stays
+# UTF-8 (the byte as the character it is in Latin-1), cut at a character's start
+vn="$(printf '\351')$(i=0; while [ $i -lt 70 ]; do printf '\303\251'; i=$((i + 1)); done)"
+"$B" tabulate --tolerance 0.5 --threads 1 -o "$W/$vn.xml" 2>"$W/v.err"
+mv "$W/$vn.xml" "$W/v.xml"
+python3 -c "import sys, xml.etree.ElementTree as E; n = E.parse(sys.argv[1]).find('.//{http://windows.lbl.gov}Name').text; sys.exit(n != '\u00e9' * 64)" "$W/v.xml" && \
+    ok ".xml names: Latin-1 and a cut inside UTF-8 give valid UTF-8 XML" || no ".xml name not valid UTF-8 or cut wrongly"
+[ "$(grep -c 'as Radiance reads it.*; tolerance 0.5 met for light up to 80 deg (not held beyond)$' "$W/v.err")" -eq 4 ] && \
+    ok "a tree's verdict names the range it covers" || { no "tree verdict"; cat "$W/v.err"; }
+# inputs that are not files: a FIFO and a device refused at once, no hang
+mkfifo "$W/ff.csv"; ln -s /dev/zero "$W/z.bsdf"
+timeout 20 "$B" inspect "$W/ff.csv" 2>"$W/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "not a regular file (a pipe)" "$W/err" && ok "inspect of a FIFO refused, no hang" || { no "FIFO input: $rc"; cat "$W/err"; }
+echo '30 150 180' | timeout 20 "$B" eval --table "$W/z.bsdf" 2>"$W/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "not a regular file (a device)" "$W/err" && ok "eval --table /dev/zero refused, no hang" || { no "/dev/zero input: $rc"; cat "$W/err"; }
+rm -f "$W/ff.csv" "$W/z.bsdf"
+# .bsdf metadata: the command escaped and whole (quotes, a backslash, Latin-1, 1,076 bytes)
+d=$(printf '%0200d' 0); mkdir -p "$W/$d/$d/$d/$d/$d"; mq="$W/$d/$d/$d/$d/$d/q\"x\\y$(printf '\351').bsdf"
+"$B" tabulate -q --part transmission --tolerance 3e-2 -o "$mq" && "$B" inspect "$mq" | sed -n 's/^metadata *//p' | \
+    python3 -c "import json, sys; c = json.loads(sys.stdin.read())['command']; sys.exit(not (len(c) > 1023 and c.endswith('q\"x\\\\y\u00e9.bsdf')))" && \
+    ok ".bsdf metadata: valid JSON, the command whole and escaped" || no ".bsdf metadata JSON"
+rm -rf "$W/$d"
+grep -q -- '; command: btdftab tabulate --tolerance 0.5 --threads 1 -o ' "$W/v.xml" && ! grep -q -- '- -' "$W/v.xml" && \
+    ok "the .xml holds the command as typed (no '- -')" || no "the .xml's command line"
+# the tool reads its own .xml back: inspect and eval --table
+"$B" inspect "$W/v.xml" > "$W/v.txt" && grep -q '^basis: tree3$' "$W/v.txt" && \
+    [ "$(grep -c '^Trans.*leaves, depth [0-9]*, values .*stored e_L1 max' "$W/v.txt")" -eq 2 ] && \
+    [ "$(grep -c '^Refl.*leaves, depth' "$W/v.txt")" -eq 2 ] && ok "inspect a .xml" || { no "inspect .xml"; cat "$W/v.txt"; }
+# a tree at tolerance 0.5 holds leaf averages: 4.72 against Eq. 25's 5.34 here; the
+# wrong block (light leaving, or n for 1/n) would be off by n^2 = 2.25 or more
+x=$("$B" eval --table "$W/v.xml" 30 160 180); y=$("$B" eval 30 160 180)
+awk -v x="$x" -v y="$y" 'BEGIN { exit !(x > 0.7 * y && x < 1.3 * y) }' && \
+    ok "eval --table of a .xml as Radiance reads it ($x vs $y)" || no "eval --table .xml: $x vs $y"
+expect 1 "reads the transmission of a .xml" "eval --table .xml --part reflection" -- "$B" eval --table "$W/v.xml" --part reflection 30 20 0
+printf '<WindowElement>\n</WindowElement>\n' > "$W/f.xml"
+"$B" inspect "$W/f.xml" 2>"$W/err"; rc=$?
+[ "$rc" -eq 1 ] && grep -q "not a btdftab Radiance BSDF: no <Comments>" "$W/err" && ok "a foreign .xml refused by name" || { no "foreign .xml: $rc"; cat "$W/err"; }
+rm -f "$W/v.xml" "$W/f.xml"
+# bars_forward FILE: within each stage the bar's fill never falls (frames split at CR)
+bars_forward() {
+    tr '\r' '\n' < "$1" | sed -n 's/.* \[\(#*\)-*\] \([a-z ,()]*\).*/\2 \1/p' | \
+        awk '{ f = $NF; $NF = ""; if ($0 in best && length(f) < best[$0]) bad = 1;
+               if (length(f) > best[$0]) best[$0] = length(f) } END { exit bad }'
+}
 # progress: a bar on a terminal for a run over a second, none off a terminal or --quiet
 "$B" tabulate --ior 1.5 -s 3 --threads 1 --tolerance 3e-3 -o "$W/p.csv" 2>"$W/p.err" && \
     ! grep -q "$(printf '\r')" "$W/p.err" && \
     ok "no progress bar when stderr is not a terminal" || no "progress off a terminal"
 if command -v script >/dev/null 2>&1 && "$B" --version | grep -q 'OpenEXR on'; then
     script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 5e-4 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
-    grep -q 'p.exr \[#*-*\] *[0-9]*% .*ETA' "$W/p.tty" && ok "a progress bar with stage and ETA on a terminal" || { no "progress on a terminal"; cat "$W/p.tty"; }
+    grep -q 'p.exr.* [0-9]* s' "$W/p.tty" && ok "a progress line with stage and elapsed time on a terminal" || { no "progress on a terminal"; cat "$W/p.tty"; }
+    bars_forward "$W/p.tty" && ok "the table's progress bar never goes backwards" || { no "a bar went backwards"; tr '\r' '\n' < "$W/p.tty"; }
     script -qec "'$B' tabulate -q --ior 1.5 -s 3 --threads 1 -o '$W/p.exr'" /dev/null > "$W/p.tty" 2>&1
     [ ! -s "$W/p.tty" ] && ok "--quiet: no progress bar on a terminal" || { no "progress with --quiet"; cat "$W/p.tty"; }
     # a build that lasts over a second on one thread (3 s here), so that the bar shows
     # during the node passes; at 1e-2 (0.9 s) only the error estimate lasted that long
     script -qec "'$B' tabulate --ior 1.5 -s 3 --threads 1 --tolerance 1e-3 --part transmission -o '$W/p.bsdf'" /dev/null > "$W/p.tty" 2>&1
-    grep -q 'p.bsdf \[#*-*\] .*elevation nodes' "$W/p.tty" && ok "a progress bar for .bsdf" || { no "progress for .bsdf"; cat "$W/p.tty"; }
+    grep -q 'p.bsdf: elevation nodes [0-9]* (+[0-9]*), [0-9]* s' "$W/p.tty" && ok "a progress line for .bsdf" || { no "progress for .bsdf"; cat "$W/p.tty"; }
+    bars_forward "$W/p.tty" && ok "the .bsdf progress bar never goes backwards" || { no "a .bsdf bar went backwards"; tr '\r' '\n' < "$W/p.tty"; }
     # s = 1: the broad lobe takes half the patch-average work of s = 3 (18 s against
     # 40 s on one loaded thread), still well over the second the bar waits for
     script -qec "'$B' tabulate --basis klems-quarter -s 1 --threads 1 -o '$W/p.xml'" /dev/null > "$W/p.tty" 2>&1
     grep -q 'p.xml \[#*-*\] .*Klems patch averages' "$W/p.tty" && ok "a progress bar for .xml" || { no "progress for .xml"; cat "$W/p.tty"; }
+    ! tr '\r' '\n' < "$W/p.tty" | grep -q 'Klems.*left' && ok "no time left for four blocks of unequal cost" || no "an ETA from four Klems blocks"
+    [ "$(grep -c 'Reflection Back.*as Radiance reads it.*; verdict: exact patch averages over 0-90 deg' "$W/p.tty")" -eq 1 ] && \
+        ok "a Klems file's report lines carry a verdict" || { no "Klems verdict"; cat "$W/p.tty"; }
     printf '[a]\nior = 1.5\nsmoothness = 3\ntolerance = 5e-4\nenter = p.exr\n' > "$W/p.ini"
     script -qec "'$B' build --threads 1 '$W/p.ini'" /dev/null > "$W/p.tty" 2>&1
     grep -q '\[1/1\] a (enter)' "$W/p.tty" && ok "a progress line for build" || { no "progress for build"; cat "$W/p.tty"; }
@@ -511,6 +579,9 @@ expect 2 "expected K/N" "a bad --shard" -- "$B" build --shard 3/2 "$W/lib/scene.
 rm -rf "$W/lib"
 bash -n "$(dirname "$B")/completion/btdftab" 2>/dev/null && grep -q -- '--dry-run' "$(dirname "$B")/completion/btdftab" && \
     ok "bash completion, generated from the option table" || no "bash completion"
+c=$(bash -c '. "$1"; COMP_WORDS=(btdftab tabulate --basis klems-h); COMP_CWORD=3; _btdftab; echo "${COMPREPLY[*]}"' sh "$(dirname "$B")/completion/btdftab")
+d=$(bash -c '. "$1"; COMP_WORDS=(btdftab tabulate --part ""); COMP_CWORD=3; _btdftab; echo "${COMPREPLY[*]}"' sh "$(dirname "$B")/completion/btdftab")
+[ "$c" = "klems-half" ] && [ "$d" = "transmission reflection both" ] && ok "completion offers the values of --basis and --part" || no "completion values: '$c' '$d'"
 "$(dirname "$B")/btdf-bench" --help | grep -q '^usage: btdf-bench' && \
     ok "btdf-bench --help" || no "btdf-bench --help"
 expect 2 "unknown section 'frob'" "btdf-bench: an unknown section" -- "$(dirname "$B")/btdf-bench" frob

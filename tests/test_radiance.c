@@ -259,6 +259,93 @@ static void test_klems_reflection_lookup(void **state)
    of transmission front and back, reflection front and back (slots 0 to 3, the
    writer's), each grown once at the threshold 3e-4 within max_nodes: no calibration,
    to keep the tests short. */
+/* The file btdf_write makes of r, read back whole (*len bytes, malloc'd). */
+static char *xml_bytes(const btdf_rad *r, size_t *len)
+{
+    char path[] = "test_radiance_rt.xml";
+    btdf_output what = {NULL, NULL, NULL, NULL, NULL, r};
+    assert_status(BTDF_OK, btdf_write(&what, path, NULL, 0));
+    FILE *f = fopen(path, "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    assert_true(n > 0);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    fclose(f);
+    remove(path);
+    *len = (size_t)n;
+    return buf;
+}
+
+/* What btdf_rad_read_mem reads of our own file is what was written, node for node and
+   entry for entry (the file's values are the in-memory floats: 4 digits for tree
+   leaves, 6 for Klems entries, 9 for u', v', each reading back to the same float);
+   every prefix of it is refused, and so is a leaf made negative. */
+static void read_back(const btdf_rad *r)
+{
+    size_t len;
+    char *buf = xml_bytes(r, &len);
+    btdf_rad *q = NULL;
+    char msg[256];
+    assert_status(BTDF_OK, btdf_rad_read_mem(buf, len, &q, msg, sizeof msg));
+    assert_int_equal(q->basis, r->basis);
+    assert_int_equal(q->channels, r->channels == 3 ? 3 : 1);
+    assert_int_equal(q->nblocks, r->nblocks);
+    assert_string_equal(q->name, r->name[0] ? r->name : "rough_interface"); /* the writer's default */
+    for (int c = 0; c < r->channels; c++)
+        assert_true(q->p.ior[c] == r->p.ior[c]);
+    assert_true(q->p.smoothness == r->p.smoothness && q->p.k0 == r->p.k0);
+    for (int k = 0; k < r->nblocks; k++) {
+        const rad_block *a = &r->b[k], *b = &q->b[k];
+        assert_string_equal(a->label, b->label);
+        if (r->basis == BTDF_RAD_TREE3) {
+            assert_int_equal(a->leaves, b->leaves);
+            assert_int_equal(a->depth, b->depth);
+            /* the layouts may differ: compare by lookups on a grid of directions */
+            for (int i = 0; i < 17; i++)
+                for (int j = 0; j < 17; j++) {
+                    double ti = 0.09 * i, to = 0.09 * j, ph = 0.37 * (i + j);
+                    double pv[3] = {sin(ti), 0.0, (a->side == BTDF_SIDE_ENTER ? -1 : 1) * cos(ti)};
+                    double sq = a->reflect ? 1.0 : -1.0;
+                    double qv[3] = {sin(to) * cos(ph), sin(to) * sin(ph), sq * pv[2] / fmax(1e-300, fabs(pv[2])) * cos(to)};
+                    double xa[3], xb[3];
+                    btdf_rad_lookup_xyz(r, k, pv, qv, xa);
+                    btdf_rad_lookup_xyz(q, k, pv, qv, xb);
+                    for (int c = 0; c < 3; c++)
+                        assert_true(xa[c] == xb[c]);
+                }
+        } else {
+            size_t np = (size_t)r->kb->npatch;
+            for (size_t e = 0; e < np * np; e++) {
+                assert_true(a->klems[e] == b->klems[e]);
+                if (a->klems_x)
+                    assert_true(a->klems_x[e] == b->klems_x[e] && a->klems_z[e] == b->klems_z[e]);
+            }
+        }
+    }
+    btdf_rad_free(q);
+    /* every cut is found (the stride keeps the test short; the fuzzer tries the rest) */
+    size_t tail = strlen("</WindowElement>\n");
+    for (size_t cut = 0; cut + tail < len; cut += 1 + len / 397) {
+        q = NULL;
+        assert_int_equal(btdf_rad_read_mem(buf, cut, &q, msg, sizeof msg), BTDF_EFORMAT);
+        assert_null(q);
+    }
+    char *v = strstr(buf, "<ScatteringData>");
+    assert_non_null(v);
+    v = strpbrk(v + 16, "0123456789.");
+    assert_non_null(v);
+    memmove(v + 2, v, (size_t)(buf + len - v) - 2); /* drops the final newline */
+    v[0] = '-';
+    v[1] = '1';
+    assert_int_equal(btdf_rad_read_mem(buf, len, &q, msg, sizeof msg), BTDF_EFORMAT);
+    assert_non_null(strstr(msg, "not a btdftab Radiance BSDF"));
+    free(buf);
+}
+
 static btdf_rad *coarse_tree(int first, int last, size_t max_nodes)
 {
     btdf_params p;
@@ -330,6 +417,7 @@ static void test_tree_file(void **state)
     assert_int_equal(depth, 0);
     assert_false(bad);
     assert_true(opens > 1000 && maxd > 4);
+    read_back(r); /* a name with '&' too */
     btdf_rad_free(r);
 }
 
@@ -454,6 +542,7 @@ static void test_tree_colour_neutral(void **state)
     (void)state;
     const double n[3] = {1.5, 1.5, 1.5};
     btdf_rad *r3 = tree_rad(3, n, 0), *r1 = tree_rad(1, n, 0);
+    read_back(r3); /* a colour tree: Y, u', v' of one structure */
     const float wu = (float)(4.0 / 19.0), wv = (float)(9.0 / 19.0);
     size_t lit = 0;
     for (int k = 0; k < 2; k++) {
@@ -720,6 +809,14 @@ static void test_klems_colour_channels(void **state)
     btdf_rad_free(r);
 }
 
+/* The Klems file reads back entry for entry. */
+static void test_klems_read_back(void **state)
+{
+    (void)state;
+    btdf_rad_set_name(klems_q, "Glass \xc3\xa9");
+    read_back(klems_q);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -739,6 +836,7 @@ int main(void)
         cmocka_unit_test(test_klems_reflection_lookup),
         cmocka_unit_test(test_klems_colour_neutral),
         cmocka_unit_test(test_klems_colour_channels),
+        cmocka_unit_test(test_klems_read_back),
     };
     int fails = cmocka_run_group_tests(tests, NULL, NULL);
     return fails + cmocka_run_group_tests(klems, klems_setup, klems_teardown);

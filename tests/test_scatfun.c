@@ -700,15 +700,26 @@ static void test_bad_arguments(void **state)
     p.smoothness = 1e6;
     assert_int_equal(btdf_scatfun_build(&p, 1e-2, BTDF_SIDE_BOTH, 1, &f, msg, sizeof msg), BTDF_EBUDGET);
     assert_null(f);
-    assert_non_null(strstr(msg, "narrower than one elevation interval"));
-    /* a coefficient cap far below what the tolerance needs: the best file, EBUDGET */
+    assert_non_null(strstr(msg, "node budget, nothing built"));
+    /* a coefficient cap below what even the first pass needs: no file, EBUDGET */
     btdf_params_default(&p);
     assert_int_equal(btdf_scatfun_build_limits(&p, 1e-3, BTDF_SIDE_ENTER, 1, 1000, 0, &f, msg, sizeof msg),
                      BTDF_EBUDGET);
-    assert_non_null(f);
+    assert_null(f);
     assert_non_null(strstr(msg, "coefficient budget"));
+    /* a cap the refinement passes on its way: the file answered stays within it (the
+       state that passed the cap is never the answer) */
+    assert_int_equal(btdf_scatfun_build_limits(&p, 1e-3, BTDF_SIDE_BOTH, 1, 20000, 0, &f, msg, sizeof msg),
+                     BTDF_EBUDGET);
+    assert_non_null(f);
+    assert_true(btdf_scatfun_coeff_count(f) <= 20000);
     btdf_scatfun_free(f);
     f = NULL;
+    /* a memory cap below the pair records the nodes need: refused before any work */
+    assert_int_equal(btdf_scatfun_build_limits(&p, 1e-2, BTDF_SIDE_BOTH, 1, 0, 4096, &f, msg, sizeof msg),
+                     BTDF_EBUDGET);
+    assert_null(f);
+    assert_non_null(strstr(msg, "memory budget"));
     double v;
     assert_int_equal(btdf_scatfun_eval(fx.f, -0.1, 3.0, 0.0, &v), BTDF_EDOMAIN);
     assert_int_equal(btdf_scatfun_eval(fx.f, 0.1, 1.0, 0.0, &v), BTDF_EDOMAIN);
@@ -722,6 +733,57 @@ static void test_bad_arguments(void **state)
     btdf_scatfun_free(NULL);
 }
 
+
+/* What a request needs (btdf_scatfun_predict). The spline's law is the one
+   docs/scatfun.md quotes to two digits (a Gaussian through Catmull-Rom nodes 0.5 of
+   its width apart: 3.1e-3 in L1; 0.75: 1.3e-2): 5 % covers the rounding of those
+   figures. The node count is a lower bound: a real build (s = 3 at 1e-2, both sides)
+   has at least that many. Smooth glass the format cannot hold (s = 500 at 1e-2, all
+   four blocks: twelve minutes of work before, then not met) is refused at once. */
+double sf_cr_gauss_l1(double r);
+static void test_predict(void **state)
+{
+    (void)state;
+    assert_true(fabs(sf_cr_gauss_l1(0.5) / 3.1e-3 - 1.0) < 0.05);
+    assert_true(fabs(sf_cr_gauss_l1(0.75) / 1.3e-2 - 1.0) < 0.05);
+    btdf_params p;
+    btdf_params_default(&p);
+    btdf_scatfun_need nd;
+    char msg[512];
+    assert_int_equal(btdf_scatfun_predict(&p, 1e-2, BTDF_SIDE_BOTH, &nd, msg, sizeof msg), BTDF_OK);
+    assert_true(nd.half_nodes >= 8);
+    assert_true(2 * nd.half_nodes + 2 <= btdf_scatfun_node_count(fx.f));
+    assert_true(nd.file_bytes <= btdf_scatfun_file_size(fx.f, NULL));
+    assert_int_equal(btdf_scatfun_predict(&p, 1e-2, BTDF_SIDE_BOTH, NULL, msg, sizeof msg), BTDF_EINVAL);
+    /* the lobe narrows like 1/s: the need grows */
+    size_t k3 = nd.half_nodes;
+    p.smoothness = 100;
+    assert_int_equal(btdf_scatfun_predict(&p, 1e-2, BTDF_SIDE_BOTH, &nd, msg, sizeof msg), BTDF_OK);
+    assert_true(nd.half_nodes > 10 * k3);
+    assert_true(nd.half_nodes <= BTDF_SCATFUN_MAX_HALF_NODES);
+    p.smoothness = 500;
+    btdf_scatfun *f = NULL;
+    assert_int_equal(btdf_scatfun_build(&p, 1e-2, (btdf_side)BTDF_SCATFUN_ALL, 1, &f, msg, sizeof msg),
+                     BTDF_EBUDGET);
+    assert_null(f);
+    assert_non_null(strstr(msg, "half nodes (budget 1024)"));
+}
+
+/* Near the normal the builder seeds nodes at angles doubling from the pole node's (an
+   azimuthal harmonic moves like sin ti there, a square-root cusp in mu): the file has
+   nodes between 0.03 and 0.2 degrees. Without them n = 1.47, s = 28 at 1e-3 left one
+   interval from 0.02 to 0.19 degrees and measured e_L1 0.03 at ti = 0.1 degrees. */
+static void test_nodes_near_pole(void **state)
+{
+    (void)state;
+    size_t n = btdf_scatfun_node_count(fx.f), near = 0;
+    const float *x = btdf_scatfun_nodes(fx.f);
+    for (size_t i = 0; i < n; i++) {
+        double a = acos(fmin(1.0, (double)x[i])) * 180.0 / M_PI;
+        near += a > 0.03 && a < 0.2;
+    }
+    assert_true(near >= 2);
+}
 
 /* The builder skips the pairs sf_unreachable declares dark at every azimuth: each
    such pair must be 0 at every azimuth through the public Eq. 25 (ti = acos mu_s, to =
@@ -974,6 +1036,8 @@ int main(void)
         cmocka_unit_test(test_cosine_transform),
         cmocka_unit_test(test_joint_readings),
         cmocka_unit_test(test_screened_measurement),
+        cmocka_unit_test(test_predict),
+        cmocka_unit_test(test_nodes_near_pole),
     };
     return cmocka_run_group_tests_name("scatfun", tests, setup, teardown);
 }

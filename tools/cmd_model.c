@@ -61,7 +61,7 @@ int cmd_eval(const cli *c)
     if (c->part == BTDF_PART_BOTH)
         return fail(EXIT_USAGE, "--part both: eval reads one part at a time, transmission or "
                                 "reflection");
-    btdf_input in = {NULL, NULL};
+    btdf_input in = {NULL, NULL, NULL};
     const btdf_table *tpart = NULL; /* the part of in.table that is evaluated */
     double ti_range[2] = {0.0, 90.0}; /* degrees */
     if (c->table) {
@@ -81,6 +81,13 @@ int cmd_eval(const cli *c)
                             btdf_part_name((btdf_part)holds));
             }
             table_ti_range(tpart, ti_range);
+        } else if (in.radiance) {
+            if (c->reflection) {
+                btdf_rad_free(in.radiance);
+                return fail(1, "%s: --part reflection: eval reads the transmission of a .xml "
+                               "(its reflection blocks are for renderers)", c->table);
+            }
+            p = *btdf_rad_get_params(in.radiance);
         } else if (c->reflection) {
             btdf_scatfun_free(in.scatfun);
             return fail(1, "%s: --part reflection: eval reads the transmission of a .bsdf (its "
@@ -99,9 +106,10 @@ int cmd_eval(const cli *c)
         return EXIT_USAGE;
     }
     btdf_model_ctx *mx = NULL; /* model full: its tally, made once for every row */
-    if (!in.table && !in.scatfun && p.model == BTDF_MODEL_FULL && !make_ctx(&p, c->threads, &mx))
+    if (!in.table && !in.scatfun && !in.radiance && p.model == BTDF_MODEL_FULL &&
+        !make_ctx(&p, c->threads, &mx))
         return 1;
-    if (npos == 0 && !in.table && !in.scatfun && !mx) { /* the model on rows from stdin */
+    if (npos == 0 && !in.table && !in.scatfun && !in.radiance && !mx) { /* the model on rows from stdin */
         char err[256];
         int rc = eval_stream(stdin, stdout, &p, c->reflection, c->threads, err, sizeof err);
         if (rc)
@@ -162,6 +170,11 @@ int cmd_eval(const cli *c)
         } else if (in.scatfun) {
             /* light entering through the top (index n), as pbrt-v3 would read it */
             btdf_scatfun_eval(in.scatfun, ti, to, phi, out);
+        } else if (in.radiance) {
+            /* light entering the dense medium (index n), as Radiance reads the file */
+            for (int ch = 0; ch < p.channels; ch++)
+                out[ch] = btdf_rad_render(in.radiance, BTDF_SIDE_ENTER, p.channels == 3 ? ch : -1,
+                                          ti, to, phi);
         } else {
             for (int ch = 0; ch < p.channels; ch++)
                 out[ch] = btdf_rho_model_deg(p.model, p.ior[ch], p.smoothness, p.k0, v[0],
@@ -175,6 +188,7 @@ int cmd_eval(const cli *c)
     btdf_model_ctx_free(mx);
     btdf_table_free(in.table);
     btdf_scatfun_free(in.scatfun);
+    btdf_rad_free(in.radiance);
     return stdout_done(code);
 }
 

@@ -601,10 +601,27 @@ void opt_man(FILE *f, const char *version)
     fprintf(f, ".SH EXIT STATUS\n0 success, 1 a failed run (I/O, unreadable table), 2 a usage "
                "error (named in the message), 3 the tolerance was not met within the budget "
                "(nothing is written unless \\fB\\-\\-best\\-effort\\fR).\n");
+    /* the keys manifest.c reads (KEYS there), as docs/pipelines.md states them */
+    static const char *const mkeys[][2] = {
+        {"ior", "n = n_lower / n_upper, or R,G,B (three values)"},
+        {"smoothness", "s, as \\fB\\-\\-smoothness\\fR"},
+        {"k0", "optional, as \\fB\\-\\-k0\\fR"},
+        {"theta_i", "optional, degrees A:B (default 0:90)"},
+        {"tolerance", "optional, as \\fB\\-\\-tolerance\\fR"},
+        {"metric", "optional, l1 or max"},
+        {"part", "optional, transmission, reflection or both, as \\fB\\-\\-part\\fR"},
+        {"enter", "outputs for light entering (index n): .csv .exr .png"},
+        {"leave", "outputs for light leaving (index 1/n)"},
+        {"bsdf", "a .bsdf output, as \\fBtabulate \\-o F.bsdf\\fR"},
+        {"sides", "the sides the .bsdf holds: enter, leave or both"}};
+    fprintf(f, ".SH MANIFEST\nA scene manifest (\\fBbtdftab build\\fR) is an INI file, one "
+               "[section] per material, with the keys:\n");
+    for (size_t k = 0; k < sizeof mkeys / sizeof mkeys[0]; k++)
+        fprintf(f, ".TP\n.B %s\n%s\n", mkeys[k][0], mkeys[k][1]);
     fprintf(f, ".SH FILES\nOutputs are written under a temporary name beside them and renamed "
                "at the end; an interrupted run leaves no output.\n");
-    fprintf(f, ".SH SEE ALSO\nThe project's README.md and docs/ (tables, formats, scatfun, "
-               "pipelines).\n");
+    fprintf(f, ".SH SEE ALSO\nREADME.md and the docs/ folder of the source distribution "
+               "(tables, formats, scatfun, radiance, pipelines; not installed).\n");
 }
 
 /* ------------------------------------------------------------------------- */
@@ -621,7 +638,21 @@ void opt_bash(FILE *f)
     for (const cmd_def *c = cmd_table; c->name; c++)
         fprintf(f, "%s ", c->name);
     fprintf(f, "help --help --version\" -- \"$cur\"))\n        return\n    fi\n");
-    /* Options that take a file name complete file names. */
+    /* Options that take one of a few words complete those words (the words the
+       parsers take: run.c, cli.c, btdf_rad_basis_parse, btdf_model_parse) ... */
+    static const char *const words[][2] = {
+        {"basis", "tree3 klems-full klems-half klems-quarter"},
+        {"part", "transmission reflection both"},
+        {"estimate", "full fast none"},
+        {"side", "enter leave both"},
+        {"metric", "l1 max"},
+        {"model", "xu-sun smith"}};
+    fprintf(f, "    case $prev in\n");
+    for (size_t k = 0; k < sizeof words / sizeof words[0]; k++)
+        fprintf(f, "        --%s) COMPREPLY=($(compgen -W \"%s\" -- \"$cur\")); return ;;\n",
+                words[k][0], words[k][1]);
+    fprintf(f, "    esac\n");
+    /* ... and options that take a file name complete file names. */
     fprintf(f, "    case $prev in\n        ");
     int first = 1;
     for (const opt_def *o = opt_table; o->name; o++)

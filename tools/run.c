@@ -16,15 +16,47 @@
 #include "report_json.h"
 #include "run.h"
 
+size_t run_json_escape(const char *s, char *out)
+{
+    size_t k = 0;
+    const unsigned char *u = (const unsigned char *)(s ? s : "");
+    while (*u) {
+        /* a whole UTF-8 sequence passes as it is (RFC 8259 8.1) */
+        size_t n = *u >= 0xF0 && *u <= 0xF4 ? 4 : *u >= 0xE0 ? 3 : *u >= 0xC2 && *u < 0xE0 ? 2 : 1;
+        int whole = *u >= 0x80 && n > 1;
+        for (size_t j = 1; whole && j < n; j++)
+            whole = (u[j] & 0xC0) == 0x80;
+        if (whole) {
+            memcpy(out + k, u, n);
+            k += n;
+            u += n;
+            continue;
+        }
+        if (*u == '"' || *u == '\\') {
+            out[k++] = '\\';
+            out[k++] = (char)*u;
+        } else if (*u < 0x20 || *u >= 0x80) {
+            /* control characters, and a byte no UTF-8 sequence holds, read as Latin-1 */
+            k += (size_t)sprintf(out + k, "\\u%04x", (unsigned)*u);
+        } else {
+            out[k++] = (char)*u;
+        }
+        u++;
+    }
+    out[k] = 0;
+    return k;
+}
+
 void run_json_open(FILE *f, const char *prov)
 {
     fprintf(f, "{\n  \"program\": \"btdftab\",\n  \"version\": \"%s\",\n  \"command\": \"",
             btdf_version_string());
-    for (const char *s = prov ? prov : ""; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            fputc('\\', f); /* JSON string escapes; control characters are dropped */
-        if ((unsigned char)*s >= 0x20)
-            fputc(*s, f);
+    size_t l = prov ? strlen(prov) : 0;
+    char *e = malloc(6 * l + 1);
+    if (e) {
+        run_json_escape(prov, e);
+        fputs(e, f);
+        free(e);
     }
     fprintf(f, "\",\n");
 }
@@ -53,6 +85,10 @@ int run_parse_metric(const char *word, btdf_metric *metric)
     return 1;
 }
 
+/* Fewer units than this give no time left: four blocks of a Radiance file, or a few
+   passes, differ too much in cost for one's time to predict the next. */
+#define ETA_MIN_UNITS 8
+
 void run_progress_start(run_progress *pr, int on, const char *label)
 {
     memset(pr, 0, sizeof *pr);
@@ -65,7 +101,8 @@ void run_progress_start(run_progress *pr, int on, const char *label)
     pr->t0 = run_now();
 }
 
-/* One line of at most 79 columns: label, bar, percent, stage, time left. Called with
+/* One line of at most 79 columns: label, stage and counts, the bar where the fraction
+   is known, the time elapsed, and the time left where it is honest. Called with
    pr->lock held (or before the ticker runs). */
 static void draw(run_progress *pr, int force)
 {
@@ -81,12 +118,12 @@ static void draw(run_progress *pr, int force)
         for (int k = 0; k < 16; k++)
             bar[k] = k < fill ? '#' : '-';
         bar[16] = 0;
-        if (frac >= 0.05 && frac < 1.0) /* too early an estimate says nothing */
-            snprintf(eta, sizeof eta, "  ETA %.0f s", el * (1.0 - frac) / frac);
-        snprintf(line, sizeof line, "%s [%s] %3.0f%% %s%s", pr->label, bar, 100.0 * frac,
-                 pr->stage, eta);
+        /* The time left, where two updates in a row agreed on it (run_progress_cb) */
+        if (pr->cb_end > now)
+            snprintf(eta, sizeof eta, ", about %.0f s left", pr->cb_end - now);
+        snprintf(line, sizeof line, "%s [%s] %s, %.0f s%s", pr->label, bar, pr->stage, el, eta);
     } else {
-        snprintf(line, sizeof line, "%s: %s (%.0f s)", pr->label, pr->stage, el);
+        snprintf(line, sizeof line, "%s: %s, %.0f s", pr->label, pr->stage, el);
     }
     line[79] = 0; /* one terminal line: a longer one would scroll on every redraw */
     fprintf(stderr, "\r\033[K%s", line);
@@ -136,9 +173,51 @@ static void update(run_progress *pr, const char *stage, double frac)
 void run_progress_cb(void *user, const char *stage, size_t done, size_t todo)
 {
     run_progress *pr = user;
+    if (!pr->on)
+        return;
+    size_t total = done + todo;
+    double frac = total ? (double)done / (double)total : 0.0;
+    if (strncmp(pr->cb_stage, stage, sizeof pr->cb_stage - 1) != 0) { /* a new stage */
+        snprintf(pr->cb_stage, sizeof pr->cb_stage, "%s", stage);
+        pr->cb_total = total;
+        pr->cb_frac = frac;
+        pr->cb_t0 = run_now();
+        pr->cb_unsure = 0;
+        for (int g = 0; g < 4; g++) /* a stage seen to grow before, back after another */
+            pr->cb_unsure |= !strcmp(pr->cb_grew[g], pr->cb_stage);
+        pr->cb_end_prev = 0.0;
+    } else if (total != pr->cb_total || frac < pr->cb_frac) {
+        /* the work grew (refinement splits what it checks): the fraction says nothing */
+        pr->cb_unsure = 1;
+        for (int g = 0; g < 4; g++)
+            if (!pr->cb_grew[g][0] || !strcmp(pr->cb_grew[g], pr->cb_stage)) {
+                snprintf(pr->cb_grew[g], sizeof pr->cb_grew[g], "%s", pr->cb_stage);
+                break;
+            }
+    }
+    /* The time left from the stage's own pace, shown only for a stage of at least
+       ETA_MIN_UNITS units whose total never changed, once a tenth of it is done, and
+       while this update's prediction of its end agrees with the last one's to a fifth
+       of the time left (units of unequal cost make it jump: then none is shown). */
+    double now = run_now(), sel = now - pr->cb_t0, end = 0.0;
+    if (!pr->cb_unsure && total >= ETA_MIN_UNITS && frac >= 0.1 && frac < 1.0)
+        end = now + sel * (1.0 - frac) / frac; /* frac >= 0.1 */
+    int agree = end > 0.0 && pr->cb_end_prev > 0.0 &&
+                fabs(end - pr->cb_end_prev) <= 0.2 * (end - now);
+    pr->cb_end_prev = end;
+    pr->cb_total = total;
+    pr->cb_frac = frac;
+    if (pr->running)
+        pthread_mutex_lock(&pr->lock);
+    pr->cb_end = agree ? end : 0.0;
+    if (pr->running)
+        pthread_mutex_unlock(&pr->lock);
     char what[96];
-    snprintf(what, sizeof what, "%s %zu/%zu", stage, done, done + todo);
-    update(pr, what, done + todo ? (double)done / (double)(done + todo) : 0.0);
+    if (pr->cb_unsure)
+        snprintf(what, sizeof what, "%s %zu (+%zu)", stage, done, todo);
+    else
+        snprintf(what, sizeof what, "%s %zu/%zu", stage, done, total);
+    update(pr, what, pr->cb_unsure ? -1.0 : frac);
 }
 
 void run_progress_stage(run_progress *pr, const char *stage)
@@ -208,6 +287,28 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
 {
     char msg[512] = "";
     btdf_scatfun *f = NULL;
+    /* What the request needs at least (the builder refuses what cannot fit): said
+       before the work when it is large, with the numbers. */
+    btdf_scatfun_need nd;
+    if (!quiet && btdf_scatfun_predict(p, tol, (btdf_side)sides, &nd, NULL, 0) == BTDF_OK &&
+        nd.half_nodes <= BTDF_SCATFUN_MAX_HALF_NODES &&
+        (nd.half_nodes > BTDF_SCATFUN_MAX_HALF_NODES / 2 || nd.build_bytes > ((size_t)1 << 30)))
+        fprintf(stderr,
+                "%s: %s: warning: this request needs at least %zu of the format's %d half "
+                "nodes (a lobe %.3g deg wide, nodes %.3g deg apart), a file of %.3g MB and "
+                "%.3g MB to build, likely minutes; --max-memory and --max-samples bound it\n",
+                prog, path, nd.half_nodes, BTDF_SCATFUN_MAX_HALF_NODES, nd.lobe_deg,
+                nd.spacing_deg, 1e-6 * (double)nd.file_bytes, 1e-6 * (double)nd.build_bytes);
+    /* Reflection below 1e-2: the reflection inside the glass has a cusp where total
+       reflection starts, which the lobe's width does not predict; the measured case
+       (docs/scatfun.md, "What a request needs") is said before the work. */
+    if (!quiet && (sides & (BTDF_SCATFUN_R_TOP | BTDF_SCATFUN_R_BOTTOM)) && tol < 1e-2)
+        fprintf(stderr,
+                "%s: %s: warning: reflection blocks at tolerance %g: n = 1.5, s = 3 with all "
+                "four blocks at 1e-3 measured 592 nodes, 99.7 million coefficients, 2.9 GB "
+                "and 278 CPU s before the coefficient budget stopped it, not met; --part "
+                "transmission, or --max-memory and --max-samples to bound the build\n",
+                prog, path, tol);
     double t0 = run_now();
     btdf_status st = btdf_scatfun_build_progress(p, tol, (btdf_side)sides, threads, max_coeffs,
                                                  max_bytes, run_progress_cb, pr, &f, msg,
@@ -224,6 +325,13 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         return fail(prog, 1, path, msg[0] ? msg : btdf_strerror(st));
     /* The error a renderer will see: the format's own evaluation, per side. */
     int met = 1;
+    double worst = -1.0; /* the largest e_L1 max the report lines show, and its block */
+    const char *worst_name = "";
+    /* the builder's reason without its own estimate (its test angles are not the
+       report's): the message quotes the report's number */
+    char *own = strstr(msg, "; its own estimate");
+    if (own)
+        *own = 0;
     char meta[1024];
     char nb[3][40];
     int k = snprintf(meta, sizeof meta, "{\"program\": \"btdftab %s\", \"ior\": [",
@@ -266,6 +374,10 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         int ok = r.e_l1_max <= tol;
         met = met && ok;
         const char *name = report_block_name[bi];
+        if (r.e_l1_max > worst) {
+            worst = r.e_l1_max;
+            worst_name = name;
+        }
         if (!quiet)
             fprintf(stderr,
                     "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients; "
@@ -287,18 +399,29 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
                 "single-precision floats (its default) can loop forever sampling this file; "
                 "render it with pbrt-v3 built with PBRT_FLOAT_AS_DOUBLE (docs/scatfun.md)\n",
                 prog, path, peak, BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0);
-    if (k > 0 && (size_t)k < sizeof meta)
-        snprintf(meta + k, sizeof meta - (size_t)k, ", \"command\": \"%s\"}", prov ? prov : "");
+    /* the command whole and escaped (a quote or a newline in a path, any length): the
+       numbers above fit the buffer, the command goes on in its own */
+    size_t lp = prov ? strlen(prov) : 0;
+    char *metafull = malloc(sizeof meta + 6 * lp + 32);
+    if (metafull && k > 0 && (size_t)k < sizeof meta) {
+        memcpy(metafull, meta, (size_t)k);
+        size_t q = (size_t)k;
+        q += (size_t)sprintf(metafull + q, ", \"command\": \"");
+        q += run_json_escape(prov, metafull + q);
+        memcpy(metafull + q, "\"}", 3);
+    } else if (metafull) {
+        snprintf(metafull, sizeof meta, "%s", meta);
+    }
     int code = 0;
     if (!met && !best_effort) {
-        fprintf(stderr, "%s: %s: tolerance %g not met%s%s; nothing written (pass --best-effort "
-                        "to write it anyway)\n",
-                prog, path, tol, msg[0] ? ": " : "", msg);
+        fprintf(stderr, "%s: %s: tolerance %g not met: e_L1 max %.3g (%s)%s%s; nothing written "
+                        "(pass --best-effort to write it anyway)\n",
+                prog, path, tol, worst, worst_name, msg[0] ? "; " : "", msg);
         code = 3;
     } else {
         /* the file and its report appear together or not at all */
         btdf_outputs_begin();
-        btdf_output what = {NULL, f, NULL, NULL, meta, NULL};
+        btdf_output what = {NULL, f, NULL, NULL, metafull ? metafull : meta, NULL};
         run_progress_stage(pr, "writing");
         st = btdf_write(&what, path, msg, sizeof msg);
         run_progress_end(pr);
@@ -315,13 +438,15 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
             code = fail(prog, 1, path, msg[0] ? msg : btdf_strerror(st));
         } else if (code == 0 && !met) {
             /* --best-effort wrote it, but the run did not do what was asked */
-            fprintf(stderr, "%s: %s: tolerance %g not met%s%s; written anyway (--best-effort), "
-                            "exit 3\n", prog, path, tol, msg[0] ? ": " : "", msg);
+            fprintf(stderr, "%s: %s: tolerance %g not met: e_L1 max %.3g (%s)%s%s; written "
+                            "anyway (--best-effort), exit 3\n",
+                    prog, path, tol, worst, worst_name, msg[0] ? "; " : "", msg);
             code = 3;
         }
     }
     for (int q = 0; q < 4; q++)
         btdf_report_clear(&reps[q]);
+    free(metafull);
     btdf_scatfun_free(f);
     return code;
 }
@@ -349,7 +474,12 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
     base = base ? base + 1 : path;
     char name[128];
     size_t len = strlen(base) > 4 ? strlen(base) - 4 : strlen(base);
-    snprintf(name, sizeof name, "%.*s", (int)(len < sizeof name ? len : sizeof name - 1), base);
+    if (len > sizeof name - 1) { /* cut at a character's start, never inside UTF-8 */
+        len = sizeof name - 1;
+        while (len > 0 && ((unsigned char)base[len] & 0xC0) == 0x80)
+            len--;
+    }
+    snprintf(name, sizeof name, "%.*s", (int)len, base);
     btdf_rad_set_name(x, name);
     btdf_report rep[4 * 3], coarse[4 * 3];
     memset(rep, 0, sizeof rep);
@@ -374,6 +504,17 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
             met = met && rk->met;
             if (k == 0 && c == 0)
                 run_progress_end(pr); /* the report lines replace the bar */
+            /* every line its verdict, with the range it covers: a tree's tolerance
+               holds up to BTDF_RAD_TI_CHECKED_DEG (docs/radiance.md); a Klems matrix
+               holds exact patch averages, its e_L1 is the basis's resolution */
+            char verdict[160];
+            if (basis == BTDF_RAD_TREE3)
+                snprintf(verdict, sizeof verdict, "; %s %g %s for light up to %g deg (not "
+                         "held beyond)", rk->met ? "tolerance" : "TOLERANCE", tol,
+                         rk->met ? "met" : "NOT MET", BTDF_RAD_TI_CHECKED_DEG);
+            else
+                snprintf(verdict, sizeof verdict, "; verdict: exact patch averages over "
+                         "0-90 deg (no tolerance: the basis sets e_L1)");
             char chn[48] = "";
             if (nch == 3)
                 snprintf(chn, sizeof chn, ", channel %s (n = %.6g)", report_rad_channel[c],
@@ -389,9 +530,7 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
                         btdf_rad_seconds_build(x), rk->seconds_estimate, rk->test_angles,
                         rk->test_points, rk->e_l1_max, btdf_rad_e_l1_checked(rk),
                         BTDF_RAD_TI_CHECKED_DEG, rk->e_l1_mean, rk->e_max_max, rk->e_t_max,
-                        basis != BTDF_RAD_TREE3 ? ""
-                                                : (rk->met ? "; tolerance met"
-                                                           : "; TOLERANCE NOT MET"));
+                        verdict);
         }
         btdf_rad_set_errors(x, k, el1, et);
     }

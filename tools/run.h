@@ -19,13 +19,19 @@ double run_now(void);
    each on its own line, the last followed by ',' and a newline. */
 void run_json_open(FILE *f, const char *prov);
 
+/* s as the inside of a JSON string into out (room for 6 strlen(s) + 1): quote and
+   backslash escaped, control characters and bytes outside UTF-8 sequences (Latin-1)
+   as \u00XX, UTF-8 sequences kept; returns the length written. */
+size_t run_json_escape(const char *s, char *out);
+
 /* The words the command line and the manifest share: "enter", "leave", "both" as a
    btdf_side (0 for any other word); "l1", "max" as a metric (0 for any other). */
 int run_parse_side(const char *word);
 int run_parse_metric(const char *word, btdf_metric *metric);
 
-/* A progress line on standard error for a person watching: a bar, the stage being
-   refined and an estimated time left. Drawn only when `on` (stderr is a terminal and
+/* A progress line on standard error for a person watching: what is known (the stage,
+   its counts, the time elapsed), a bar only while the stage's total stays fixed and its
+   fraction never falls, and a time left only where that is honest (below). Drawn only when `on` (stderr is a terminal and
    not --quiet) and once the run has lasted a second; a ticker thread, started at the
    first update, redraws it 4 times a second (the elapsed time moves even while one
    unit of work runs long); run_progress_end stops the ticker and erases the line, and
@@ -34,6 +40,14 @@ typedef struct run_progress {
     int on, drawn, running, stop;
     char label[96], stage[96];
     double t0, last, frac;
+    /* the builder's stage as last reported: its name, total and fraction; a stage whose
+       total grew or whose fraction fell is shown as counts only, no bar and no ETA */
+    char cb_stage[64];
+    size_t cb_total;
+    double cb_frac, cb_t0, cb_end, cb_end_prev; /* cb_end: the stage's end as the last two updates
+                                      predicted it, when they agreed (else 0) */
+    int cb_unsure;
+    char cb_grew[4][64]; /* stages whose work grew in this run: counts only from then on */
     pthread_t tid;
     pthread_mutex_t lock;
 } run_progress;

@@ -89,9 +89,10 @@ BTDF_API btdf_status btdf_write_table_layers(const btdf_table *t, const btdf_lay
 typedef struct btdf_input {
     btdf_table *table;
     struct btdf_scatfun *scatfun;
+    struct btdf_rad *radiance; /* .xml (btdf_radiance.h: btdf_rad_free) */
 } btdf_input;
 
-/* Reads a file written by btdf_write (.csv, .exr, .bsdf) into *in (zeroed first).
+/* Reads a file written by btdf_write (.csv, .exr, .bsdf, .xml) into *in (zeroed first).
    BTDF_EINVAL for an unknown extension or one that cannot be read back (.png),
    BTDF_ENOTSUP when switched off, BTDF_EFORMAT or BTDF_EIO from the reader. */
 BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size_t msglen);

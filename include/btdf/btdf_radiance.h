@@ -76,6 +76,8 @@ BTDF_API int btdf_rad_channels(const btdf_rad *r);
 BTDF_API void btdf_rad_rgb_to_xyz(double m[3][3]);
 BTDF_API btdf_status btdf_rad_block(const btdf_rad *r, int k, btdf_rad_block_info *info);
 BTDF_API btdf_rad_basis btdf_rad_get_basis(const btdf_rad *r);
+/* The material the file was built for (a file read back: from its Comments). */
+BTDF_API const btdf_params *btdf_rad_get_params(const btdf_rad *r);
 BTDF_API double btdf_rad_seconds_build(const btdf_rad *r);
 
 /* What Radiance's library returns from block k for p on the block's side (the view)
@@ -89,6 +91,21 @@ BTDF_API void btdf_rad_lookup_xyz(const btdf_rad *r, int k, const double p[3],
                                   const double q[3], double xyz[3]);
 BTDF_API double btdf_rad_lookup_channel(const btdf_rad *r, int k, int c, const double p[3],
                                         const double q[3]);
+
+/* What a render gets for light of the given side (ENTER: from -Z, LEAVE: from +Z) in
+   that light's MODEL.md frame (ti in [0, pi/2], to in [pi/2, pi], phi): the block of
+   the view's side at (p = view, q = light), channel c (-1: Y; 0..2: R, G, B of a colour
+   file). Compare with rho(n_light; ti, to, phi). */
+BTDF_API double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti,
+                                double to, double phi);
+
+/* Reads a file btdf_write wrote as .xml (TensorTree3 or Klems, one channel or colour)
+   from len bytes at data: the material's parameters from its Comments, each block's
+   tree or matrix, the name and the stored errors. Anything else is refused
+   (BTDF_EFORMAT, msg naming the first thing wrong); BTDF_EINVAL for NULL pointers,
+   BTDF_ENOMEM. Free *out with btdf_rad_free. */
+BTDF_API btdf_status btdf_rad_read_mem(const void *data, size_t len, btdf_rad **out,
+                                       char *msg, size_t msglen);
 
 /* The error (MODEL.md 6) of what a render gets from block k against Eq. 25 (rho_r
    for a reflection block, R for T) for the light it serves, at test_angles incidences over 0-90 deg (0 = 48) with about

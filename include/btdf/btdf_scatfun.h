@@ -97,14 +97,39 @@ BTDF_API btdf_status btdf_scatfun_build_progress(const btdf_params *p, double to
 /* btdf_scatfun_build with budgets: max_coeffs caps the stored coefficients (0 or more
    than 2^27: 2^27), max_bytes the builder's working memory in series and pair
    records (0: no cap; the file's float copy and per-thread scratch come on top).
-   Reaching one returns BTDF_EBUDGET with the best file reached, as above. A request
-   whose transmitted lobe (about (n' - 1) 2/s rad, n' = max(n, 1/n)) is narrower than
-   90 degrees / BTDF_SCATFUN_MAX_HALF_NODES stops before any work: BTDF_EBUDGET,
-   *out left NULL, the reason in msg (btdf_scatfun_build does the same). */
+   Reaching one returns BTDF_EBUDGET with the best file reached within the budgets
+   (never a state that passed one; the build stops before a pass whose growth in pairs
+   alone would pass one), as above; *out is left NULL when even the first pass passes
+   one. A request whose need (btdf_scatfun_predict) exceeds the node budget, max_coeffs
+   or max_bytes stops before any work: BTDF_EBUDGET, *out left NULL, the numbers in msg
+   (btdf_scatfun_build does the same). msg of a budget reached ends with "; its own
+   estimate e_L1 X > tolerance T", the builder's own measurement (not the report's). */
 BTDF_API btdf_status btdf_scatfun_build_limits(const btdf_params *p, double tolerance,
                                                btdf_side side, int threads, size_t max_coeffs,
                                                size_t max_bytes, btdf_scatfun **out,
                                                char *msg, size_t msglen);
+
+/* What a request needs at least, before any work (btdf_scatfun_predict): the half
+   nodes the narrowest transmitted lobe asks of the spline (its spread from the facet
+   slopes of RMS 2/s refracted by Snell's law, the node spacing from a Catmull-Rom
+   spline's L1 error on a Gaussian of that spread at `tolerance`), and the pairs,
+   coefficients, file bytes and builder memory those nodes imply. Lower bounds: the
+   build needs more where reflection, the pole or grazing angles ask more (docs/scatfun.md,
+   "What a request needs"). */
+typedef struct btdf_scatfun_need {
+    size_t half_nodes;  /* elevation nodes per hemisphere, at least */
+    size_t coeffs;      /* stored coefficients, at least */
+    size_t file_bytes;  /* the file, at least */
+    size_t build_bytes; /* the builder's memory (series, pair records, the file), at least */
+    double lobe_deg;    /* the narrowest lobe's spread, degrees */
+    double spacing_deg; /* the node spacing the spline needs across it, degrees */
+} btdf_scatfun_need;
+
+/* Fills need for the request (arguments as btdf_scatfun_build); BTDF_OK, or BTDF_EINVAL
+   as btdf_scatfun_check. Costs about a millisecond. */
+BTDF_API btdf_status btdf_scatfun_predict(const btdf_params *p, double tolerance,
+                                          btdf_side side, btdf_scatfun_need *need,
+                                          char *msg, size_t msglen);
 
 /* The checks btdf_scatfun_build makes of its arguments before any work: BTDF_OK, or
    BTDF_EINVAL with msg naming the value and what is allowed. */

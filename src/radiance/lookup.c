@@ -112,8 +112,8 @@ double rad_render(const btdf_rad *r, btdf_side light, int c, int chosen, double 
     return rad_lookup_ch(r, k, c, chosen, p, q);
 }
 
-double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti, double to,
-                       double phi)
+BTDF_API double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti,
+                                double to, double phi)
 {
     return rad_render(r, light, c, 0, ti, to, phi);
 }

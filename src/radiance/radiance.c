@@ -148,6 +148,8 @@ BTDF_API btdf_status btdf_rad_block(const btdf_rad *r, int k, btdf_rad_block_inf
 
 BTDF_API btdf_rad_basis btdf_rad_get_basis(const btdf_rad *r) { return r->basis; }
 
+BTDF_API const btdf_params *btdf_rad_get_params(const btdf_rad *r) { return r ? &r->p : NULL; }
+
 BTDF_API double btdf_rad_seconds_build(const btdf_rad *r) { return r ? r->seconds_build : 0.0; }
 
 BTDF_API void btdf_rad_set_name(btdf_rad *r, const char *name)

@@ -119,12 +119,9 @@ void rad_colour_xyz(double y, double u, double v, double xyz[3]);
 
 
 
-/* What a render gets for light of the given side (ENTER: from -Z, LEAVE: from +Z) in
-   that light's MODEL.md frame (ti in [0, pi/2], to in [pi/2, pi], phi): the block of
-   the view's side at (p = view, q = light), channel c (-1: Y). Compare with
-   rho(n_light; ti, to, phi). */
-double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti, double to,
-                       double phi);
+/* Block k (0-3, above) for the index nc: label, sides, n, scale, n_light (radiance.c;
+   formats/xml.c sets up the blocks of a file it reads with it). */
+void rad_block_of(int k, double nc, rad_block *b);
 
 /* The tolerance of a tree is met up to this incidence of the light (80 deg). A light at
    ti is the ring of radius sin ti of the tree's square, so the last 10 degrees lie in

@@ -54,8 +54,6 @@ btdf_status rad_klems_acc(const btdf_params *p, double n, double scale, int refl
 /* A Klems value exactly as the file holds it (6 significant digits, as a float). */
 float rad_klems_value(double v);
 
-/* Block k (0-3, radiance.h) for the index nc: label, sides, n, scale, n_light. */
-void rad_block_of(int k, double nc, rad_block *b);
 /* Block k of a three-channel Klems file r (r->p.ior[0..2], r->kb set): CIE X, Y, Z
    matrices from the channels' exact averages combined linearly, each then rounded. */
 btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t msglen);

@@ -90,6 +90,12 @@ static size_t state_bytes(const build_ctx *c)
     return b;
 }
 
+/* The bytes a kept file holds (its coefficients, cdf and offsets), for the memory cap. */
+static size_t snap_bytes(const btdf_scatfun *f)
+{
+    return f ? (size_t)f->ncoeffs * sizeof(float) + (size_t)f->n * f->n * 12u : 0;
+}
+
 BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
                                         btdf_side side, int threads, btdf_scatfun **out,
                                         char *msg, size_t msglen)
@@ -156,27 +162,30 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
         return st;
     if (max_coeffs == 0 || max_coeffs > MAX_COEFFS_BUILD)
         max_coeffs = MAX_COEFFS_BUILD;
-    /* A lobe narrower than one elevation interval, even with the whole node budget
-       spread evenly over 90 degrees, cannot be followed by nodes shared by every
-       incident angle: stop before any work. The transmitted lobe is about
-       (n' - 1) 2/s rad wide in outgoing angle, n' = max(n, 1/n) (facet slopes of RMS
-       2/s, MODEL.md 2). */
+    /* What the request needs at least (btdf_scatfun_predict), before any work: a
+       request that cannot fit the format's node budget or the caller's budgets is
+       refused with the numbers. */
     {
-        double nw = HUGE_VAL;
-        for (int k = 0; k < p->channels; k++) {
-            double n1 = p->ior[k] >= 1.0 ? p->ior[k] : 1.0 / p->ior[k]; /* ior > 0 (checked) */
-            nw = fmin(nw, (n1 - 1.0) * 2.0 / p->smoothness);           /* s > 0 (checked) */
-        }
-        double least = (M_PI / 2) / (double)BTDF_SCATFUN_MAX_HALF_NODES;
-        if (nw < least)
+        btdf_scatfun_need nd;
+        st = btdf_scatfun_predict(p, tolerance, side, &nd, msg, msglen);
+        if (st != BTDF_OK)
+            return st;
+        const char *what = nd.half_nodes > BTDF_SCATFUN_MAX_HALF_NODES ? "node"
+                           : nd.coeffs > max_coeffs                    ? "coefficient"
+                           : max_bytes && nd.build_bytes > max_bytes   ? "memory"
+                                                                       : NULL;
+        if (what)
             return core_say(BTDF_EBUDGET, msg, msglen,
-                               "the transmitted lobe is about %.3g deg wide (n = %.9g, s = %g), "
-                               "narrower than one elevation interval (%.3g deg) even with all "
-                               "%d half nodes of the format's budget; nothing built: use a "
-                               "facet-space table (.exr/.csv) for this material",
-                               nw * 180.0 / M_PI, p->ior[p->channels == 3 ? 1 : 0],
-                               p->smoothness, least * 180.0 / M_PI,
-                               BTDF_SCATFUN_MAX_HALF_NODES);
+                            "%s budget, nothing built: the transmitted lobe is about %.3g deg wide "
+                            "(n = %.9g, s = %g) and needs nodes %.3g deg apart to meet %g: at "
+                            "least %zu half nodes (budget %d), %zu coefficients (budget %zu), "
+                            "%.3g MB of file and %.3g MB to build%s; a facet-space table "
+                            "(.exr/.csv) holds this material",
+                            what, nd.lobe_deg, p->ior[p->channels == 3 ? 1 : 0],
+                            p->smoothness, nd.spacing_deg, tolerance, nd.half_nodes,
+                            BTDF_SCATFUN_MAX_HALF_NODES, nd.coeffs, max_coeffs,
+                            1e-6 * (double)nd.file_bytes, 1e-6 * (double)nd.build_bytes,
+                            max_bytes ? " (the budget given)" : "");
     }
     double t0 = core_now();
     build_ctx c;
@@ -220,6 +229,12 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
 
     btdf_scatfun *best = NULL;
     double best_err = HUGE_VAL;
+    /* The last file assembled within every budget: what a build stopped by a budget
+       answers with, never a state that already exceeded one. over: the current state
+       exceeded a budget (it is not assembled). */
+    btdf_scatfun *snap = NULL;
+    int over = 0;
+    size_t over_need = 0; /* the coefficients of a state that passed max_coeffs */
     /* T and R of the test angles, kept across the measurements (NULL: computed each time) */
     albedo_memo *memo = albedo_memo_new();
     /* initial half nodes: mu = sin of equal angle steps, denser towards grazing */
@@ -234,8 +249,22 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
     }
     for (size_t j = 0; j < K0; j++)
         P[j] = to_float_node(sin((double)(j + 1) * M_PI / (2.0 * (double)K0)));
-    P[K0 - 1] = POLE_NODE;
-    size_t K = K0;
+    /* Towards the pole, nodes at angles doubling from the pole node's: an azimuthal
+       harmonic m of rho moves like sin^m ti, a square-root cusp in mu = cos ti at the
+       pole for m = 1, which a spline in mu follows only on intervals whose angles
+       shrink geometrically towards it (n = 1.47, s = 28 at 1e-3 with even splits:
+       e_L1 0.03 at ti = 0.1 deg between nodes at 0.02 and 0.19 deg, not met). */
+    size_t K = K0 - 1;
+    {
+        double apole = acos(POLE_NODE), alast = acos(P[K0 - 2]);
+        double a[32];
+        size_t na = 0;
+        for (double t = 2.0 * apole; t < 0.5 * alast && na < 32; t *= 2.0)
+            a[na++] = t;
+        while (na > 0)
+            P[K++] = to_float_node(cos(a[--na]));
+    }
+    P[K++] = POLE_NODE;
     int tighten = 0, local = 0, stall = 0;
     double last_err = HUGE_VAL; /* the previous measurement, for stall */
     const char *limit = "node"; /* which budget stopped refinement */
@@ -267,13 +296,16 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             for (size_t i = 0; c.want[s] && i < K * K; i++)
                 total += c.pairs[s][i].m * (size_t)c.nst;
         if (total > max_coeffs) {
+            over_need = total;
             limit = "coefficient";
             st = BTDF_EBUDGET;
+            over = 1;
             break;
         }
-        if (max_bytes && state_bytes(&c) > max_bytes) {
+        if (max_bytes && state_bytes(&c) + snap_bytes(snap) > max_bytes) {
             limit = "memory";
             st = BTDF_EBUDGET;
+            over = 1;
             break;
         }
         if (core_parallel_for_ws(threads, NBLK * K, sf_job_colcheck, &c, sf_build_ws_new, sf_build_ws_free) ||
@@ -282,9 +314,10 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             st = BTDF_ENOMEM;
             goto done;
         }
-        if (max_bytes && state_bytes(&c) > max_bytes) {
+        if (max_bytes && state_bytes(&c) + snap_bytes(snap) > max_bytes) {
             limit = "memory";
             st = BTDF_EBUDGET;
+            over = 1;
             break;
         }
         /* mark intervals to split */
@@ -425,7 +458,8 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                 best = f;
                 best_err = e;
             } else {
-                btdf_scatfun_free(f);
+                btdf_scatfun_free(snap); /* within the budgets (checked above) */
+                snap = f;
             }
             if (e <= ACCEPT_SHARE * tolerance && !c.capped) {
                 free(split);
@@ -459,6 +493,31 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             free(split);
             st = BTDF_EBUDGET;
             break;
+        }
+        /* The next pass holds (K + nsplit)^2 pairs, each new row and column with series
+           like its neighbours': when that share of growth alone passes a budget, stop
+           on this state (within every budget) rather than build a pass to discard. */
+        {
+            double g = (double)(K + nsplit) * (double)(K + nsplit) / ((double)K * (double)K);
+            if (g * (double)total > (double)max_coeffs ||
+                (max_bytes && g * (double)state_bytes(&c) > (double)max_bytes)) {
+                limit = g * (double)total > (double)max_coeffs ? "coefficient" : "memory";
+                free(split);
+                st = BTDF_EBUDGET;
+                break;
+            }
+        }
+        /* this state is within every budget: keep its file, should the next pass
+           pass one after all (series grow faster than the pairs when they tighten) */
+        if (!over) {
+            btdf_scatfun *f = NULL;
+            st = sf_assemble(&c, &f, msg, msglen);
+            if (st != BTDF_OK) {
+                free(split);
+                goto done;
+            }
+            btdf_scatfun_free(snap);
+            snap = f;
         }
         /* insert split points (rounded to float, strictly inside their interval) */
         double *Q = P + BTDF_SCATFUN_MAX_HALF_NODES;
@@ -503,8 +562,14 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
     if (st == BTDF_EBUDGET || !best) {
         /* keep the finest file reached as the answer, measured honestly */
         btdf_scatfun *f = NULL;
-        if (c.pairs[0] || c.pairs[1]) {
-            btdf_status a = sf_assemble(&c, &f, msg, msglen);
+        btdf_status a = BTDF_OK;
+        if (over) { /* the state passed a budget: the last file within them */
+            f = snap;
+            snap = NULL;
+        } else if (c.pairs[0] || c.pairs[1] || c.pairs[2] || c.pairs[3]) {
+            a = sf_assemble(&c, &f, msg, msglen);
+        }
+        if (f) {
             if (a == BTDF_OK) {
                 double e = 0.0;
                 for (int s = 0; s < NBLK; s++)
@@ -521,6 +586,25 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                 }
             }
         }
+        if (!best && over) {
+            /* even the first pass passed the budget */
+            sf_free_state(&c);
+            free(c.P);
+            free(c.full);
+            free(P);
+            free(fresh);
+            free(ahead);
+            pthread_mutex_destroy(&c.lock);
+            albedo_memo_free(memo);
+            if (over_need)
+                return core_say(BTDF_EBUDGET, msg, msglen,
+                                "coefficient budget, nothing built: the first pass (%zu half "
+                                "nodes) already holds %zu coefficients, more than %zu",
+                                K, over_need, max_coeffs);
+            return core_say(BTDF_EBUDGET, msg, msglen,
+                            "memory budget, nothing built: the first pass (%zu half nodes) "
+                            "already needs more than %zu bytes", K, max_bytes);
+        }
         if (!best) {
             st = BTDF_ENOMEM;
             goto done;
@@ -529,6 +613,7 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             st = BTDF_OK;
     }
 done:
+    btdf_scatfun_free(snap);
     sf_free_state(&c);
     free(c.P);
     free(c.full);
@@ -550,8 +635,8 @@ done:
     *out = best;
     if (st == BTDF_EBUDGET)
         return core_say(BTDF_EBUDGET, msg, msglen,
-                   "%s budget reached (%u nodes, %u coefficients, mMax %u) with estimated "
-                   "e_L1 %.3g > tolerance %g",
+                   "%s budget reached (%u nodes, %u coefficients, mMax %u); its own "
+                   "estimate e_L1 %.3g > tolerance %g",
                    limit, best->n, best->ncoeffs, best->mmax, best_err, tolerance);
     return BTDF_OK;
 }

@@ -215,4 +215,8 @@ int sf_carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned char 
 int sf_set_nodes(build_ctx *c, const double *P, size_t K);
 btdf_status sf_assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t msglen);
 
+/* build_predict.c: the relative L1 error of a unit Gaussian through a uniform
+   Catmull-Rom spline with nodes r standard deviations apart (mean over node phases). */
+double sf_cr_gauss_l1(double r);
+
 #endif /* BTDF_SF_BUILD_H */
