@@ -53,7 +53,8 @@ done
 grep -q '^# model' "$W/a/t.csv" && no "a xu-sun CSV holds a model key" || ok "a xu-sun CSV holds no model key"
 (cd "$W/a" && "$B" tabulate -s 3 --tolerance 0.5 -o t.xml -q) &&
     (cd "$W/b" && "$B" tabulate -s 3 --tolerance 0.5 --model xu-sun -o t.xml -q) &&
-    grep -v 'Command: ' "$W/a/t.xml" >"$W/a/x" && grep -v 'Command: ' "$W/b/t.xml" >"$W/b/x" &&
+    sed 's/; command: [^<]*</</' "$W/a/t.xml" >"$W/a/x" &&
+    sed 's/; command: [^<]*</</' "$W/b/t.xml" >"$W/b/x" &&
     cmp -s "$W/a/x" "$W/b/x" && ok "--model xu-sun: the .xml has the default's bytes" ||
     no "--model xu-sun: the .xml differs from the default's"
 if [ $png = 1 ]; then
