@@ -610,6 +610,7 @@ void opt_man(FILE *f, const char *version)
         {"tolerance", "optional, as \\fB\\-\\-tolerance\\fR"},
         {"metric", "optional, l1 or max"},
         {"part", "optional, transmission, reflection or both, as \\fB\\-\\-part\\fR"},
+        {"model", "optional, xu-sun (default) or smith, as \\fB\\-\\-model\\fR"},
         {"enter", "outputs for light entering (index n): .csv .exr .png"},
         {"leave", "outputs for light leaving (index 1/n)"},
         {"bsdf", "a .bsdf output, as \\fBtabulate \\-o F.bsdf\\fR"},
