@@ -300,6 +300,51 @@ static void compare_with_models(void **state)
     btdf_sim_result_free(r);
 }
 
+/* The reflection comparisons (MODEL.md section 8: Eq. 25's companion reflection, and
+   Smith's for one hit). At s = 30 and ti = 30 the one-hit reflected lobe is a
+   Beckmann lobe of RMS slope 0.067 with V = G = 1 to rounding, so both models must
+   hold within the noise, by the criteria of compare_with_models: chi^2 below its
+   mean 1.069 dof plus 5 standard deviations, e_T within 5 standard errors, e_L1
+   within 5 spreads of its floor; the bins' sum is the model's R to 1e-6. The
+   reflected lobe is twice as wide in theta_o as its slopes (the mirror doubles an
+   angle), so the 0.25 degree bins hold it in some 60 bins. At s = 1 (RMS slope 2)
+   Eq. 25's shadowing V(ti) V(to) removes most of the reflection: it gives R = 0.0030
+   where the surface reflects 0.0088 +- 0.0002 (all orders, seed 7), so e_T of all
+   orders must exceed 20 floors (the floor is the Monte Carlo error alone: 20 of them
+   is no fluctuation). */
+static void compare_reflection(void **state)
+{
+    (void)state;
+    const double n = 1.5, ti = 30 * DEG;
+    char msg[256];
+    btdf_sim_cmp c;
+    btdf_sim_result *r = run(n, 30, &ti, 1, 400000, hist_cmp);
+    const btdf_model models[2] = {BTDF_MODEL_XU_SUN, BTDF_MODEL_SMITH};
+    for (int m = 0; m < 2; m++) {
+        assert_status(BTDF_OK, btdf_sim_compare(r, 0, BTDF_SIM_REFLECTION, 1, models[m], 0.7, &c,
+                                                msg, sizeof msg));
+        double mean = c.dof * 31.0 / 29.0, sd = sqrt(2.0 * c.dof) * 31.0 / 29.0;
+        print_message("R, s = 30, %s: R1 %.5f +- %.5f, model %.5f; chi2 %.1f on %d, e_T %.2g "
+                      "(floor %.2g), e_L1 %.3g (floor %.3g +- %.3g)\n",
+                      m ? "smith" : "eq25", c.total, c.total_se, c.model_total, c.chi2, c.dof,
+                      c.e_T, c.e_T_floor, c.e_L1, c.e_L1_floor, c.e_L1_floor_sd);
+        assert_true(c.dof >= 30);
+        assert_true(c.chi2 < mean + 5 * sd);
+        assert_true(c.e_T < 5 * c.e_T_floor / 0.7978845608);
+        assert_true(c.e_L1 < c.e_L1_floor + 5 * c.e_L1_floor_sd);
+        assert_close(c.model_in_bins, c.model_total, 0, 1e-6);
+    }
+    btdf_sim_result_free(r);
+    r = run(n, 1, &ti, 1, 400000, hist_coarse);
+    assert_status(BTDF_OK, btdf_sim_compare(r, 0, BTDF_SIM_REFLECTION, 0, BTDF_MODEL_XU_SUN,
+                                            0.7, &c, msg, sizeof msg));
+    print_message("R, s = 1, all orders: R %.5f +- %.5f, Eq. 25 %.5f; e_T %.3g (floor %.2g), "
+                  "e_L1 %.3g (floor %.3g +- %.3g)\n", c.total, c.total_se, c.model_total, c.e_T,
+                  c.e_T_floor, c.e_L1, c.e_L1_floor, c.e_L1_floor_sd);
+    assert_true(c.e_T > 20 * c.e_T_floor);
+    btdf_sim_result_free(r);
+}
+
 static void hist_recip(btdf_sim_opts *o)
 {
     o->theta_bins = 45; /* 2 degrees */
@@ -625,6 +670,7 @@ int main(void)
         cmocka_unit_test(large_s_is_eq25),
         cmocka_unit_test(errors_follow_the_decomposition),
         cmocka_unit_test(compare_with_models),
+        cmocka_unit_test(compare_reflection),
         cmocka_unit_test(reciprocity),
         cmocka_unit_test(grid_independence),
         cmocka_unit_test(error_is_honest),
