@@ -122,8 +122,8 @@ sim_gen *sim_gen_new(int n, double dx, double tau)
 size_t sim_surface_bytes(int n)
 {
     size_t nn = (size_t)n * (size_t)n;
-    /* heights, cell bounds (two float arrays), upper levels (at most a third more) */
-    return nn * sizeof(double) + nn * sizeof(float) * 2 + nn * sizeof(float) * 2 / 3 + 256;
+    /* heights, cell bounds (two arrays), upper levels (at most a third more) */
+    return nn * sizeof(double) * 3 + nn * sizeof(double) * 2 / 3 + 256;
 }
 
 void sim_surface_free(sim_surface *s)
@@ -148,8 +148,8 @@ static int build_bounds(sim_surface *s)
         if (k > 0 && side < 2)
             break;
         size_t m = (size_t)side * (size_t)side;
-        s->lo[k] = malloc(m * sizeof(float));
-        s->hi[k] = malloc(m * sizeof(float));
+        s->lo[k] = malloc(m * sizeof(double));
+        s->hi[k] = malloc(m * sizeof(double));
         if (!s->lo[k] || !s->hi[k])
             return -1;
         s->shift[k] = sh;
@@ -173,12 +173,8 @@ static int build_bounds(sim_surface *s)
                         hi = s->hi[k - 1][q] > hi ? s->hi[k - 1][q] : hi;
                     }
                 }
-                /* floats rounded outwards: still bounds, in half the cache */
-                float lf = (float)lo, hf = (float)hi;
-                lf = (double)lf > lo ? nextafterf(lf, -INFINITY) : lf;
-                hf = (double)hf < hi ? nextafterf(hf, INFINITY) : hf;
-                s->lo[k][(size_t)j * (size_t)side + (size_t)i] = lf;
-                s->hi[k][(size_t)j * (size_t)side + (size_t)i] = hf;
+                s->lo[k][(size_t)j * (size_t)side + (size_t)i] = lo;
+                s->hi[k][(size_t)j * (size_t)side + (size_t)i] = hi;
             }
     }
     return 0;

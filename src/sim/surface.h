@@ -19,9 +19,8 @@ typedef struct sim_surface {
     double hmin, hmax;
     int levels;                    /* 1 + block levels */
     int shift[SIM_MAX_LEVELS];     /* log2 of the cells per side of a unit of level k */
-    float *lo[SIM_MAX_LEVELS];     /* per unit: lowest and highest height of its */
-    float *hi[SIM_MAX_LEVELS];     /* triangles, [(j >> shift) * side + (i >> shift)],
-                                      rounded outwards to float */
+    double *lo[SIM_MAX_LEVELS];    /* per unit: lowest and highest height of its */
+    double *hi[SIM_MAX_LEVELS];    /* triangles, [(j >> shift) * side + (i >> shift)] */
 } sim_surface;
 
 /* What one realisation measured. */

@@ -103,7 +103,7 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
     /* d = 0 along an axis: that axis is never crossed */
     double tx = d[0] != 0.0 ? ((double)(i + (si > 0)) * S - o[0]) * w->inv[0] : INFINITY;
     double ty = d[1] != 0.0 ? ((double)(j + (sj > 0)) * S - o[1]) * w->inv[1] : INFINITY;
-    const float *lo = s->lo[k], *hi = s->hi[k];
+    const double *lo = s->lo[k], *hi = s->hi[k];
     double t0 = ta;
     for (;;) {
         double t1 = tx < ty ? tx : ty;
@@ -113,8 +113,7 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
         size_t q = (size_t)((((uint64_t)j & side_m) << sideshift) + ((uint64_t)i & side_m));
         /* Above, a hit needs the ray below the unit's highest point somewhere over it;
            below, above its lowest. */
-        int near = w->sgn > 0.0 ? (za < zb ? za : zb) <= (double)hi[q]
-                                : (za > zb ? za : zb) >= (double)lo[q];
+        int near = w->sgn > 0.0 ? (za < zb ? za : zb) <= hi[q] : (za > zb ? za : zb) >= lo[q];
         if (near) {
             if (k == 0) {
                 if (test_cell(w, i, j, t0, t1))
