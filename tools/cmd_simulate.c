@@ -263,7 +263,8 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
     }
     fprintf(f, "%s},\n", r->count > 1 ? "]" : "");
     if (o->profile || o->pane) {
-        fputs(o->profile ? "  \"profile\": \"1d\",\n  \"compare\": null,\n" : "  \"compare\": null,\n", f);
+        fputs(o->profile ? "  \"profile\": \"1d\",\n  \"compare\": null,\n"
+                         : "  \"compare\": null,\n", f);
         goto surface;
     }
     fputs("  \"compare\": {", f);
@@ -976,7 +977,8 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
         }
         fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (target %.4f), "
                         "correlation length %.4f; %llu rays in %.2f s\n",
-                r->surface.n, r->surface.n, r->surface.rms_height, r->surface.rms_slope,
+                r->surface.n, o.profile ? 1 : r->surface.n, r->surface.rms_height,
+                r->surface.rms_slope,
                 (o.profile ? 1.4142135623730951 : 2.0) / o.smoothness, r->surface.corr_length,
                 (unsigned long long)r->rays_traced, r->seconds);
     }

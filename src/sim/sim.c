@@ -104,9 +104,11 @@ static size_t hist_bins(const btdf_sim_opts *o)
 static double memory_needed(const btdf_sim_opts *o, uint64_t nb)
 {
     double n = (double)grid_n(o), jobs = (double)o->channels * (double)o->n_theta;
-    double tile = (double)sim_surface_bytes((int)n) + (double)sim_scratch_bytes((int)n);
+    int rows = o->profile ? 1 : (int)n; /* a profile is a strip */
+    double tile =
+        (double)sim_surface_bytes((int)n, rows) + (double)sim_scratch_bytes((int)n, rows);
     if (o->pane && o->back_smoothness > 0.0)
-        tile += (double)sim_surface_bytes((int)n); /* the back face's tile */
+        tile += (double)sim_surface_bytes((int)n, rows); /* the back face's tile */
     double hist = (double)hist_bins(o) * 4.0;
     return (double)threads_of(o) * (tile + hist * jobs * 3.0 * 8.0) +
            jobs * (double)nb * Q_COUNT * 8.0 + jobs * hist * sizeof(btdf_sim_est);
@@ -510,7 +512,7 @@ static btdf_status finish(const run_ctx *rc, const uint64_t *hraw, btdf_sim_resu
     sf->n = n;
     sf->dx = tau / o->cells_per_tau;
     sf->tile = sf->dx * n;
-    sf->tile_bytes = sim_surface_bytes(n);
+    sf->tile_bytes = sim_surface_bytes(n, o->profile ? 1 : n);
     double a = 0, b = 0, c = 0;
     int made = 0;
     for (uint64_t i = rc->b0; i < rc->b1; i++)
@@ -593,7 +595,8 @@ BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out,
     btdf_sim_result *res = calloc(1, sizeof *res);
     worker *wk = calloc((size_t)nthreads, sizeof *wk);
     pthread_t *th = calloc((size_t)nthreads, sizeof *th);
-    sim_gen *gen = sim_gen_new(n, tau / o->cells_per_tau, tau);
+    sim_gen *gen = o->profile ? sim_gen_new_profile(n, tau / o->cells_per_tau, tau)
+                              : sim_gen_new(n, tau / o->cells_per_tau, tau);
     double tb = o->back_smoothness; /* the back face's tau */
     sim_gen *gen_back = o->pane && tb > 0.0 ? sim_gen_new(n, tb / o->cells_per_tau, tb) : NULL;
     rc.gen = gen;

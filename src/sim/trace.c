@@ -35,7 +35,7 @@ typedef struct walk_ctx {
 static inline double hgt(const sim_surface *s, int64_t i, int64_t j)
 {
     uint64_t m = (uint64_t)s->n - 1u;
-    return s->h[(((uint64_t)j & m) << s->log2n) + ((uint64_t)i & m)];
+    return s->h[(((uint64_t)j & s->ymask) << s->log2n) + ((uint64_t)i & m)];
 }
 
 /* The part [a, b] of the ray over the plane z = z0 + pb u + pc v (local origin lu, lv). */
@@ -94,6 +94,7 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
     int sh = s->shift[k];
     double S = (double)((int64_t)1 << sh), invS = 1.0 / S; /* powers of two: exact */
     uint64_t side_m = ((uint64_t)s->n >> sh) - 1u;
+    uint64_t side_my = s->ymask >> sh; /* rows per unit - 1: side_m, or 0 on a strip */
     int sideshift = s->log2n - sh;
     int64_t i = (int64_t)floor((o[0] + ta * d[0]) * invS);
     int64_t j = (int64_t)floor((o[1] + ta * d[1]) * invS);
@@ -110,7 +111,7 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
         t1 = t1 < tb ? t1 : tb;
         t1 = t1 > t0 ? t1 : t0;
         double za = o[2] + t0 * d[2], zb = o[2] + t1 * d[2];
-        size_t q = (size_t)((((uint64_t)j & side_m) << sideshift) + ((uint64_t)i & side_m));
+        size_t q = (size_t)((((uint64_t)j & side_my) << sideshift) + ((uint64_t)i & side_m));
         /* Above, a hit needs the ray below the unit's highest point somewhere over it;
            below, above its lowest. */
         int near = w->sgn > 0.0 ? (za < zb ? za : zb) <= hi[q] : (za > zb ? za : zb) >= lo[q];
