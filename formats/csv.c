@@ -137,8 +137,6 @@ static void comment_text(FILE *f, const char *s)
 
 static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
 {
-    (void)msg;
-    (void)msglen;
     const btdf_table *t = c->table;
     const btdf_table *tr = t->refl; /* a table holding both parts: its reflection */
     const btdf_params *p = &t->p;
@@ -177,7 +175,11 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "# rule: %s\n", rule_text(t));
     if (tr)
         fprintf(f, "# rule reflection: %s\n", rule_text(tr));
-    if (p->model == BTDF_MODEL_SMITH)
+    if (p->model == BTDF_MODEL_FULL)
+        fprintf(f, "# model-rule full: rho is the slices' value (smith's, by the rule "
+                   "below) plus the multiply scattered part of the tally in the '# ms' lines "
+                   "(docs/model.md section 12)\n");
+    if (p->model != BTDF_MODEL_XU_SUN)
         fprintf(f, "# model-rule: smith: the incident factor is 1/((1 + Lambda(theta_i)) "
                    "cos(theta_i)) in place of V(theta_i)/cos(theta_i), and facet slices divide "
                    "each node by (1 + Lambda(theta_i)) G2 beside K, G2 the Smith term of its "
@@ -199,6 +201,22 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
         csv_error_line(f, "error", c->opts->report);
     if (tr && c->opts->report_reflection)
         csv_error_line(f, "error reflection", c->opts->report_reflection);
+    if (p->model == BTDF_MODEL_FULL && c->opts->report)
+        fprintf(f, "# error against: full, whose tally has the noise floor %.4g (the largest "
+                   "standard error of its multiply scattered energy over the range)\n",
+                c->opts->report->ms_noise);
+    /* Model full: each channel's tally, which the table adds to its slices. */
+    for (int ch = 0; p->model == BTDF_MODEL_FULL && ch < nch; ch++) {
+        char *txt = table_ms_write(t, ch);
+        if (!txt)
+            return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
+        for (char *q = txt; *q;) {
+            size_t n = strcspn(q, "\n");
+            fprintf(f, "# ms %d: %.*s\n", ch, (int)n, q);
+            q += n + (q[n] == '\n');
+        }
+        free(txt);
+    }
     /* The row count here and the end line make a cut or a lost row detectable. */
     size_t nrows = btdf_table_node_count(t) + (tr ? btdf_table_node_count(tr) : 0);
     fprintf(f, "# rows: %zu\n", nrows);
@@ -331,6 +349,9 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     btdf_table *t = NULL, *tr = NULL, *cur = NULL; /* cur: the part being read */
     dvec rr = {0}, cc = {0}, vv = {0};
     double cur_ti = -1.0;
+    table_ms_text mst; /* model full: the tally's lines, per channel */
+    memset(&mst, 0, sizeof mst);
+    int ms_ch = 0, ms_at = 0;
     char line[4096];
     long ln = 0;
     btdf_status st = BTDF_OK;
@@ -388,6 +409,12 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 have_s = 1;
             } else if (sscanf(line, "# k0: %lf", &p.k0) == 1) {
                 have_k0 = 1;
+            } else if (sscanf(line, "# ms %d:%n", &ms_ch, &ms_at) == 1 && ms_at > 0) {
+                char why[200];
+                const char *txt = line + ms_at + (line[ms_at] == ' ');
+                if (table_ms_text_add(&mst, ms_ch, txt, why, sizeof why) != BTDF_OK)
+                    st = ferr(msg, msglen, path, ln, why);
+                ms_at = 0;
             } else if (sscanf(line, "# model: %63s", word) == 1) {
                 if (!btdf_model_parse(word, &p.model)) {
                     char why[160];
@@ -446,7 +473,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 break;
             }
             char why[200];
-            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK ||
+            btdf_params single = table_single_params(&p); /* full: smith's slices */
+            if (btdf_table_new(kind, &single, &t, why, sizeof why) != BTDF_OK ||
                 btdf_table_set_rule(t, rule, why, sizeof why) != BTDF_OK) {
                 st = ferr(msg, msglen, path, ln, why);
                 break;
@@ -478,8 +506,8 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
                 st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
                 char why[200];
                 if (st == BTDF_OK &&
-                    (btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &p, &tr, why, sizeof why) !=
-                         BTDF_OK ||
+                    (btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &t->p, &tr, why,
+                                    sizeof why) != BTDF_OK ||
                      btdf_table_set_rule(tr, rule_r, why, sizeof why) != BTDF_OK))
                     st = ferr(msg, msglen, path, ln, why);
                 if (st != BTDF_OK)
@@ -546,6 +574,12 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
         else
             tr = NULL; /* owned by t */
     }
+    if (st == BTDF_OK) { /* model full: its tally (after the reflection, which gets it too) */
+        char why[200];
+        if (table_full_from_text(t, p.model, &mst, why, sizeof why) != BTDF_OK)
+            st = ferr(msg, msglen, path, ln, why);
+    }
+    table_ms_text_free(&mst);
     btdf_table_free(tr);
     fclose(f);
     free(rr.v);
@@ -574,7 +608,7 @@ static btdf_status csv_stored(const char *path, FILE *out)
             continue;
         }
         if (!strncmp(line, "# provenance: ", 14) || !strncmp(line, "# error: ", 9) ||
-            !strncmp(line, "# error reflection: ", 20))
+            !strncmp(line, "# error reflection: ", 20) || !strncmp(line, "# error against: ", 17))
             fputs(line + 2, out);
     }
     fclose(f);

@@ -161,13 +161,18 @@ int cmd_tabulate(cli *c, const char *prov)
     }
     if (!out && c->npreview == 0)
         return fail(EXIT_USAGE, "tabulate: no output: give -o FILE (or -o - for CSV on stdout)");
-    if (!check_params(&p))
+    btdf_params single = p; /* full has smith's parameters; the builder makes its tally */
+    if (single.model == BTDF_MODEL_FULL)
+        single.model = BTDF_MODEL_SMITH;
+    if (!check_params(&single))
         return EXIT_USAGE;
     char why[256];
     o.params = p;
     o.part = c->part;
-    if (btdf_table_opts_check(&o, why, sizeof why) == BTDF_ENOTSUP) /* smith's reflection */
-        return fail(EXIT_USAGE, "--part %s: %s", btdf_part_name(c->part), why);
+    /* smith's and full's reflection, full's grid */
+    if (btdf_table_opts_check(&o, why, sizeof why) == BTDF_ENOTSUP)
+        return fail(EXIT_USAGE, "%s%s: %s", o.kind == BTDF_TABLE_GRID ? "--grid" : "--part ",
+                    o.kind == BTDF_TABLE_GRID ? "" : btdf_part_name(c->part), why);
     if (out && strcmp(out, "-") && !fi.available)
         return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
                     fi.name, fi.feature);
