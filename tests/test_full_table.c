@@ -99,7 +99,7 @@ static void against_full(void **state)
    each has a sampling error well below the error itself at this tolerance (the lobe of
    s = 3 spans tens of cells), so they agree within 5 % + 1e-4 (measured: 0.1 %). On
    code that left the tally out of the truth or of T the report would be off by the
-   multiply scattered share, 2 to 10 % of T here. */
+   multiply scattered share, 1 to 9 % of T here (docs/model.md 12). */
 static void report_is_true(void **state)
 {
     (void)state;

@@ -194,8 +194,15 @@ int cmd_tabulate(cli *c, const char *prov)
     if (GIVEN(c, OPT_SIZE) && c->npreview == 0)
         return fail(EXIT_USAGE, "--size applies to pictures: give --preview F.png or -o F.png");
     int renders = 0;
-    for (int k = 0; k < c->npreview; k++)
+    for (int k = 0; k < c->npreview; k++) {
         renders += c->previews[k].kind == BTDF_PREVIEW_RENDER;
+        /* the analytic panels evaluate the model by its btdf_params, which full's tally
+           is not */
+        if (p.model == BTDF_MODEL_FULL && c->previews[k].analytic)
+            return fail(EXIT_USAGE, "--preview render-analytic=%s: --model full: not "
+                        "available yet (render= and montage pictures of the table are)",
+                        c->previews[k].path);
+    }
     if ((GIVEN(c, OPT_LOG_DECADES) || GIVEN(c, OPT_ZOOM)) && renders == 0)
         return fail(EXIT_USAGE, "--%s applies to renders: give --preview render=F.png",
                     GIVEN(c, OPT_ZOOM) ? "zoom" : "log-decades");
