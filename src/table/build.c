@@ -152,22 +152,14 @@ static void budget_text(char *msg, size_t msglen, int which, const btdf_table_op
                  e, e / tol, tol);
 }
 
-/* A table of the part's kind and o's parameters; for model full (ms not NULL) made
-   with smith's and given the tally (table/full.c). */
+/* A table of the part's kind and o's parameters (for model full smith's: the passes
+   build smith's slices, and each is given the tally only to be checked, since the
+   builder's own measures compare the table with smith's kernel). */
 static btdf_status part_table_new(btdf_table_kind kind, const btdf_table_opts *o,
-                                  const btdf_full *const *ms, btdf_table **out, char *msg,
-                                  size_t msglen)
+                                  btdf_table **out, char *msg, size_t msglen)
 {
     btdf_params single = table_single_params(&o->params);
-    btdf_status st = btdf_table_new(kind, &single, out, msg, msglen);
-    if (st == BTDF_OK && ms) {
-        st = table_make_full(*out, ms, msg, msglen);
-        if (st != BTDF_OK) {
-            btdf_table_free(*out);
-            *out = NULL;
-        }
-    }
-    return st;
+    return btdf_table_new(kind, &single, out, msg, msglen);
 }
 
 /* One part: the transmission, or the reflection when o->part is REFLECTION; ms: model
@@ -178,7 +170,7 @@ static btdf_status build_part(const btdf_table_opts *o, const btdf_full *const *
     int refl = tb_opts_refl(o);
     btdf_table_kind kind = refl ? BTDF_TABLE_FACET_REFLECTION : o->kind;
     btdf_table *t;
-    btdf_status st = part_table_new(kind, o, ms, &t, msg, msglen);
+    btdf_status st = part_table_new(kind, o, &t, msg, msglen);
     if (st != BTDF_OK)
         return st;
     if (o->kind != BTDF_TABLE_GRID)
@@ -196,6 +188,8 @@ static btdf_status build_part(const btdf_table_opts *o, const btdf_full *const *
        the table of 1/n over all incident angles, whose facet space is well conditioned
        (btdf.h, BTDF_TABLE_FACET_RECIPROCAL). Errors are still measured for n. */
     btdf_table_opts ob = *o;
+    ob.params = table_single_params(&o->params); /* full: the passes are smith's */
+    btdf_params pmat = ob.params; /* the material's, as the table keeps them */
     int recip = !refl; /* the reflection's facet space is well conditioned for every n */
     for (int c = 0; c < o->params.channels; c++)
         recip = recip && o->params.ior[c] < 1.0;
@@ -229,12 +223,15 @@ static btdf_status build_part(const btdf_table_opts *o, const btdf_full *const *
         if (pass > 0 && o->progress) /* the check fell short: a tighter pass, at most 6 */
             o->progress(o->progress_user, "tighter pass", (size_t)pass, (size_t)(6 - pass));
         table_clear(t);
+        table_strip_full(t);
         t->kind = BTDF_TABLE_FACET;
         t->p = ob.params;
         budget_hit = 0;
         st = tb_facet_pass(&ob, fs, ft, t, &budget_hit, &evals);
         t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : kind;
-        t->p = o->params;
+        t->p = pmat;
+        if (st == BTDF_OK && ms) /* full: checked, and kept, with its tally */
+            st = table_make_full(t, ms, msg, msglen);
         if (st != BTDF_OK)
             break;
         if (o->estimate == BTDF_ESTIMATE_NONE) { /* one pass, unchecked */
@@ -263,7 +260,7 @@ static btdf_status build_part(const btdf_table_opts *o, const btdf_full *const *
         t->check_seed = BUILD_CHECK_SEED;
         if (e < best_e) {
             btdf_table *fresh = NULL;
-            st = part_table_new(kind, o, ms, &fresh, msg, msglen);
+            st = part_table_new(kind, o, &fresh, msg, msglen);
             if (st != BTDF_OK)
                 break;
             fresh->rule = refl ? BTDF_RULE_FRESNEL : BTDF_RULE_CHI;

@@ -61,6 +61,16 @@ btdf_status table_make_full(btdf_table *t, const btdf_full *const *ms, char *msg
     return take_ms(t, ms, msg, msglen);
 }
 
+void table_strip_full(btdf_table *t)
+{
+    for (int c = 0; c < BTDF_MAX_CHANNELS; c++) {
+        btdf_full_free(t->ms[c]);
+        t->ms[c] = NULL;
+    }
+    if (t->p.model == BTDF_MODEL_FULL)
+        t->p.model = BTDF_MODEL_SMITH;
+}
+
 void table_add_ms(const btdf_table *t, double ti, double cti, double cto, double cph,
                   double *out)
 {

@@ -125,6 +125,9 @@ btdf_params table_single_params(const btdf_params *p);
    BTDF_ENOMEM. */
 btdf_status table_make_full(btdf_table *t, const btdf_full *const *ms, char *msg,
                             size_t msglen);
+/* Back to smith's slices alone: frees t's tally (the builder's passes compare the
+   table with smith's kernel). */
+void table_strip_full(btdf_table *t);
 /* Adds the multiply scattered part to out[] for a query of a full table (no-op for
    other models): refl for a reflection table (to is then tr); the angles as
    table_eval_sc takes them, before any swap. */
