@@ -582,6 +582,60 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
     return -1;
 }
 
+/* --merge: the reports read back and merged into *r (*st the merge's status); 0, or
+   the exit status after a message. */
+static int merge_parts(const btdf_sim_opts *o, btdf_sim_result **r, btdf_status *st,
+                       char *msg, size_t msglen)
+{
+    btdf_sim_result *parts = calloc((size_t)merge_n, sizeof *parts);
+    const btdf_sim_result **pp = calloc((size_t)merge_n, sizeof *pp);
+    int rc = parts && pp ? 0 : fail(1, "out of memory");
+    for (int k = 0; k < merge_n && rc == 0; k++) {
+        rc = read_part(merge_files[k], o, &parts[k]);
+        pp[k] = &parts[k];
+    }
+    if (rc == 0)
+        *st = btdf_sim_merge(o, pp, (size_t)merge_n, r, msg, msglen);
+    for (int k = 0; parts && k < merge_n; k++) {
+        free(parts[k].raw_counts);
+        free(parts[k].raw_hist);
+        free(parts[k].raw_stats);
+    }
+    free(parts);
+    free(pp);
+    return rc;
+}
+
+/* The summary on standard error: per case T and R against Eq. 25 (and, for the
+   histograms, the comparisons), then the surface and the rays. */
+static void print_summary(const btdf_sim_opts *o, const btdf_sim_result *r, const double *eqT,
+                          const double *eqR, const btdf_sim_cmp *cmp)
+{
+    for (size_t k = 0; k < r->count; k++) {
+        const btdf_sim_tally *t = &r->tally[k];
+        fprintf(stderr,
+                "ti %g n %g s %g: T %.5f +- %.5f (orders %.5f %.5f %.5f), R %.5f +- %.5f; "
+                "Eq. 25 T %.5f R %.5f; %.3f hits per ray\n",
+                t->theta_i / DEG, t->ior, o->smoothness, t->T.mean, t->T.se,
+                t->T_order[0].mean, t->T_order[1].mean, t->T_order[2].mean, t->R.mean,
+                t->R.se, eqT[k], eqR[k], t->mean_hits.mean);
+        const btdf_sim_cmp *a = &cmp[k * NCMP], *b = a + 1, *c = a + 2;
+        if (!o->profile)
+            fprintf(stderr,
+                "  T against Eq. 25: e_T %.3g (noise %.2g), e_L1 %.3g (noise %.2g +- %.2g); "
+                "one hit (noise %.2g +- %.2g): Eq. 25 e_L1 %.3g chi2/dof %.3g, Smith e_L1 "
+                "%.3g chi2/dof %.3g\n",
+                a->e_T, a->e_T_floor, a->e_L1, a->e_L1_floor, a->e_L1_floor_sd,
+                b->e_L1_floor, b->e_L1_floor_sd, b->e_L1, b->dof ? b->chi2 / b->dof : 0.0,
+                c->e_L1, c->dof ? c->chi2 / c->dof : 0.0);
+    }
+    fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (target %.4f), "
+                    "correlation length %.4f; %llu rays in %.2f s\n",
+            r->surface.n, r->surface.n, r->surface.rms_height, r->surface.rms_slope,
+            (o->profile ? 1.4142135623730951 : 2.0) / o->smoothness, r->surface.corr_length,
+            (unsigned long long)r->rays_traced, r->seconds);
+}
+
 int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
 {
     prog_name = prog;
@@ -646,22 +700,7 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     o.progress_ctx = &pr;
     btdf_sim_result *r = NULL;
     if (merge_n >= 0) {
-        btdf_sim_result *parts = calloc((size_t)merge_n, sizeof *parts);
-        const btdf_sim_result **pp = calloc((size_t)merge_n, sizeof *pp);
-        int rc = parts && pp ? 0 : fail(1, "out of memory");
-        for (int k = 0; k < merge_n && rc == 0; k++) {
-            rc = read_part(merge_files[k], &o, &parts[k]);
-            pp[k] = &parts[k];
-        }
-        if (rc == 0)
-            st = btdf_sim_merge(&o, pp, (size_t)merge_n, &r, msg, sizeof msg);
-        for (int k = 0; parts && k < merge_n; k++) {
-            free(parts[k].raw_counts);
-            free(parts[k].raw_hist);
-            free(parts[k].raw_stats);
-        }
-        free(parts);
-        free(pp);
+        int rc = merge_parts(&o, &r, &st, msg, sizeof msg);
         run_progress_end(&pr);
         if (rc)
             return rc;
@@ -699,31 +738,8 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                 return fail(1, "comparison with the models: %s", msg);
             }
     }
-    if (!quiet) {
-        for (size_t k = 0; k < r->count; k++) {
-            const btdf_sim_tally *t = &r->tally[k];
-            fprintf(stderr,
-                    "ti %g n %g s %g: T %.5f +- %.5f (orders %.5f %.5f %.5f), R %.5f +- %.5f; "
-                    "Eq. 25 T %.5f R %.5f; %.3f hits per ray\n",
-                    t->theta_i / DEG, t->ior, o.smoothness, t->T.mean, t->T.se,
-                    t->T_order[0].mean, t->T_order[1].mean, t->T_order[2].mean, t->R.mean,
-                    t->R.se, eqT[k], eqR[k], t->mean_hits.mean);
-            const btdf_sim_cmp *a = &cmp[k * NCMP], *b = a + 1, *c = a + 2;
-            if (!o.profile)
-                fprintf(stderr,
-                    "  T against Eq. 25: e_T %.3g (noise %.2g), e_L1 %.3g (noise %.2g +- %.2g); "
-                    "one hit (noise %.2g +- %.2g): Eq. 25 e_L1 %.3g chi2/dof %.3g, Smith e_L1 "
-                    "%.3g chi2/dof %.3g\n",
-                    a->e_T, a->e_T_floor, a->e_L1, a->e_L1_floor, a->e_L1_floor_sd,
-                    b->e_L1_floor, b->e_L1_floor_sd, b->e_L1, b->dof ? b->chi2 / b->dof : 0.0,
-                    c->e_L1, c->dof ? c->chi2 / c->dof : 0.0);
-        }
-        fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (target %.4f), "
-                        "correlation length %.4f; %llu rays in %.2f s\n",
-                r->surface.n, r->surface.n, r->surface.rms_height, r->surface.rms_slope,
-                (o.profile ? 1.4142135623730951 : 2.0) / o.smoothness, r->surface.corr_length,
-                (unsigned long long)r->rays_traced, r->seconds);
-    }
+    if (!quiet)
+        print_summary(&o, r, eqT, eqR, cmp);
     code = report ? write_report(report, prov, &o, r, eqT, eqR, cmp) : 0;
     if (code == 0 && dist) {
         size_t n = strlen(dist);
