@@ -322,6 +322,180 @@ static const char usage[] =
     "  REPS     runs per table, 1 to 9 (default 3); each row reports the median\n"
     "Timings depend on the machine's load: quote medians and the machine line.\n";
 
+/* sweep: adaptive and uniform tables, error against run time, four materials */
+static void bench_sweep(const char *header, int reps)
+{
+    printf("%s", header);
+    const struct {
+        const char *label;
+        double n, s;
+    } cases[] = {{"1.5/3", 1.5, 3}, {"1.5/100", 1.5, 100}, {"1/1.5/6", 1 / 1.5, 6},
+                 {"1.0001/3", 1.0001, 3}};
+    const double tols[] = {3e-2, 1e-2, 3e-3, 1e-3};
+    const size_t grids[][3] = {{9, 46, 46}, {17, 91, 91}, {33, 181, 181}, {41, 361, 361}};
+    for (int c = 0; c < 4; c++) {
+        btdf_table_opts o;
+        btdf_table_opts_default(&o);
+        o.params.ior[0] = cases[c].n;
+        o.params.smoothness = cases[c].s;
+        o.ti_max = 80.0 * M_PI / 180.0;
+        for (int k = 0; k < 4; k++) {
+            o.kind = BTDF_TABLE_FACET;
+            o.tolerance = tols[k];
+            run(stdout, "adaptive", cases[c].label, &o, reps);
+        }
+        for (int k = 0; k < 4; k++) {
+            o.kind = BTDF_TABLE_GRID;
+            o.grid_ti = grids[k][0];
+            o.grid_to = grids[k][1];
+            o.grid_phi = grids[k][2];
+            run(stdout, "uniform", cases[c].label, &o, reps);
+        }
+    }
+}
+
+/* tolerances: 1.5/3 over 0:90 at 1e-1 to 1e-4 */
+static void bench_tolerances(const char *header, int reps)
+{
+    /* The full range 0:90 at tolerances 1e-1 to 1e-4 with the default budget, and
+       1e-4 again with a larger one; then the other materials over 0:90. */
+    printf("%s", header);
+    const double tols[] = {1e-1, 3e-2, 2e-2, 1e-2, 5e-3, 3e-3, 1e-3, 3e-4, 1e-4};
+    btdf_table_opts o;
+    btdf_table_opts_default(&o);
+    for (int k = 0; k < 9; k++) {
+        o.tolerance = tols[k];
+        run(stdout, "adaptive", "1.5/3", &o, reps);
+    }
+    o.max_samples = 40000000;
+    o.max_bytes = (size_t)1536 << 20;
+    run(stdout, "adaptive-40M", "1.5/3", &o, reps);
+}
+
+/* fullrange: other materials over 0:90 */
+static void bench_fullrange(const char *header, int reps)
+{
+    printf("%s", header);
+    btdf_table_opts o;
+    const struct {
+        const char *label;
+        double n, s;
+    } more[] = {{"1.5/100", 1.5, 100}, {"1/1.5/6", 1 / 1.5, 6}, {"1.31/20", 1.31, 20},
+                {"3/1000", 3, 1000}};
+    btdf_table_opts_default(&o);
+    for (int c = 0; c < 4; c++) {
+        o.params.ior[0] = more[c].n;
+        o.params.smoothness = more[c].s;
+        for (int k = 0; k < 2; k++) {
+            o.tolerance = k ? 1e-3 : 1e-2;
+            run(stdout, "adaptive", more[c].label, &o, reps);
+        }
+    }
+}
+
+/* nearone: n near 1 beside n = 1.5 */
+static void bench_nearone(int reps)
+{
+    /* n near 1 beside n = 1.5: s = 3, ti 0:80, tolerance 1e-3, default budget. nodes:
+       the table's; evaluations: Eq. 25 points the builder computed (all passes,
+       dropped candidates too); cpu: the build and its check, all threads. */
+    printf("case,n,s,tolerance,ti_deg,slices,nodes,evaluations,seconds_wall,"
+           "seconds_cpu,peak_rss_mib,e_l1_reported,e_l1_dense,status\n");
+    const double ns[] = {1.5, 1.0001, 0.9999, 1.00001};
+    for (int c = 0; c < 4; c++) {
+        btdf_table_opts o;
+        btdf_table_opts_default(&o);
+        o.params.ior[0] = ns[c];
+        o.params.smoothness = 3.0;
+        o.ti_max = 80.0 * M_PI / 180.0;
+        run_near("near-one", &o, reps);
+    }
+}
+
+/* scaling: work against the range and the channels asked */
+static void bench_scaling(const char *header, int reps)
+{
+    /* Work follows what is asked: the full range, half of it, three channels. */
+    printf("%s", header);
+    btdf_table_opts o;
+    btdf_table_opts_default(&o);
+    o.ti_max = M_PI / 2;
+    run(stdout, "adaptive", "1.5/3 ti 0-90", &o, reps);
+    o.ti_max = M_PI / 4;
+    run(stdout, "adaptive", "1.5/3 ti 0-45", &o, reps);
+    o.ti_max = M_PI / 2;
+    o.params.channels = 3;
+    o.params.ior[0] = 1.49;
+    o.params.ior[1] = 1.5;
+    o.params.ior[2] = 1.51;
+    run(stdout, "adaptive", "1.49,1.5,1.51/3 ti 0-90", &o, reps);
+}
+
+/* throughput: the evaluator alone */
+static void bench_evaluator(void)
+{
+    /* The evaluator alone: Eq. 25 on 90 x 180 x 181 (ti, to, phi) into a buffer
+       allocated once, per-ti and per-to terms hoisted, no per-sample trigonometry. */
+    size_t NI = 90, NO = 180, NP = 181;
+    eval_job ej;
+    ej.buf = malloc(NI * NO * NP * sizeof(double));
+    ej.cph = malloc(NP * sizeof(double));
+    ej.sph = malloc(NP * sizeof(double));
+    ej.NO = NO;
+    ej.NP = NP;
+    ej.NI = NI;
+    for (size_t j = 0; j < NP; j++) {
+        ej.cph[j] = cos(M_PI * (double)j / (double)(NP - 1));
+        ej.sph[j] = sin(M_PI * (double)j / (double)(NP - 1));
+    }
+    const int th2[2] = {1, 0};
+    for (int a = 0; a < 2; a++) {
+        double v[9];
+        for (int k = -1; k < 9; k++) {
+            double t0 = now();
+            core_parallel_for(th2[a], NI, eval_slice, &ej);
+            if (k >= 0)
+                v[k] = now() - t0;
+        }
+        double m = median(v, 9);
+        printf("evaluator,threads=%s,90x180x181 into one buffer,%.4f s median of 9,%.3g "
+               "evaluations/s\n", th2[a] ? "1" : "all", m, (double)(NI * NO * NP) / m);
+    }
+    free(ej.buf);
+    free(ej.cph);
+    free(ej.sph);
+}
+
+/* throughput: the GRID table builder */
+static void bench_grid(void)
+{
+    /* Eq. 25 on a full 90 x 180 x 181 grid (the GRID table builder: hoisted per-ti
+       and per-to terms, a vectorisable loop over phi). One warm-up run first. */
+    btdf_table_opts o;
+    btdf_table_opts_default(&o);
+    o.kind = BTDF_TABLE_GRID;
+    o.grid_ti = 90;
+    o.grid_to = 180;
+    o.grid_phi = 181;
+    o.ti_max = 89.0 * M_PI / 180.0;
+    const int th[2] = {1, 0};
+    for (int a = 0; a < 2; a++) {
+        o.threads = th[a];
+        double v[9];
+        for (int k = -1; k < 9; k++) {
+            btdf_table *t = NULL;
+            double t0 = now();
+            btdf_table_build(&o, &t, NULL, 0);
+            if (k >= 0)
+                v[k] = now() - t0;
+            btdf_table_free(t);
+        }
+        double m = median(v, 9);
+        printf("throughput,threads=%s,grid 90x180x181,%.4f s median of 9,%.3g samples/s\n",
+               th[a] ? "1" : "all", m, 90.0 * 180 * 181 / m);
+    }
+}
+
 int main(int argc, char **argv)
 {
     const char *what = argc > 1 ? argv[1] : "all";
@@ -358,164 +532,25 @@ int main(int argc, char **argv)
     }
     const char *header = "method,case,n,s,tolerance,ti_max_deg,samples,seconds_tabulation,"
                          "seconds_estimate,peak_rss_mib,e_l1,e_max,e_t,status\n";
-    if (!strcmp(what, "all") || !strcmp(what, "sweep")) {
-        printf("%s", header);
-        const struct {
-            const char *label;
-            double n, s;
-        } cases[] = {{"1.5/3", 1.5, 3}, {"1.5/100", 1.5, 100}, {"1/1.5/6", 1 / 1.5, 6},
-                     {"1.0001/3", 1.0001, 3}};
-        const double tols[] = {3e-2, 1e-2, 3e-3, 1e-3};
-        const size_t grids[][3] = {{9, 46, 46}, {17, 91, 91}, {33, 181, 181}, {41, 361, 361}};
-        for (int c = 0; c < 4; c++) {
-            btdf_table_opts o;
-            btdf_table_opts_default(&o);
-            o.params.ior[0] = cases[c].n;
-            o.params.smoothness = cases[c].s;
-            o.ti_max = 80.0 * M_PI / 180.0;
-            for (int k = 0; k < 4; k++) {
-                o.kind = BTDF_TABLE_FACET;
-                o.tolerance = tols[k];
-                run(stdout, "adaptive", cases[c].label, &o, reps);
-            }
-            for (int k = 0; k < 4; k++) {
-                o.kind = BTDF_TABLE_GRID;
-                o.grid_ti = grids[k][0];
-                o.grid_to = grids[k][1];
-                o.grid_phi = grids[k][2];
-                run(stdout, "uniform", cases[c].label, &o, reps);
-            }
-        }
-    }
-    if (!strcmp(what, "all") || !strcmp(what, "tolerances")) {
-        /* The full range 0:90 at tolerances 1e-1 to 1e-4 with the default budget, and
-           1e-4 again with a larger one; then the other materials over 0:90. */
-        printf("%s", header);
-        const double tols[] = {1e-1, 3e-2, 2e-2, 1e-2, 5e-3, 3e-3, 1e-3, 3e-4, 1e-4};
-        btdf_table_opts o;
-        btdf_table_opts_default(&o);
-        for (int k = 0; k < 9; k++) {
-            o.tolerance = tols[k];
-            run(stdout, "adaptive", "1.5/3", &o, reps);
-        }
-        o.max_samples = 40000000;
-        o.max_bytes = (size_t)1536 << 20;
-        run(stdout, "adaptive-40M", "1.5/3", &o, reps);
-    }
-    if (!strcmp(what, "all") || !strcmp(what, "fullrange")) {
-        printf("%s", header);
-        btdf_table_opts o;
-        const struct {
-            const char *label;
-            double n, s;
-        } more[] = {{"1.5/100", 1.5, 100}, {"1/1.5/6", 1 / 1.5, 6}, {"1.31/20", 1.31, 20},
-                    {"3/1000", 3, 1000}};
-        btdf_table_opts_default(&o);
-        for (int c = 0; c < 4; c++) {
-            o.params.ior[0] = more[c].n;
-            o.params.smoothness = more[c].s;
-            for (int k = 0; k < 2; k++) {
-                o.tolerance = k ? 1e-3 : 1e-2;
-                run(stdout, "adaptive", more[c].label, &o, reps);
-            }
-        }
-    }
-    if (!strcmp(what, "all") || !strcmp(what, "nearone")) {
-        /* n near 1 beside n = 1.5: s = 3, ti 0:80, tolerance 1e-3, default budget. nodes:
-           the table's; evaluations: Eq. 25 points the builder computed (all passes,
-           dropped candidates too); cpu: the build and its check, all threads. */
-        printf("case,n,s,tolerance,ti_deg,slices,nodes,evaluations,seconds_wall,"
-               "seconds_cpu,peak_rss_mib,e_l1_reported,e_l1_dense,status\n");
-        const double ns[] = {1.5, 1.0001, 0.9999, 1.00001};
-        for (int c = 0; c < 4; c++) {
-            btdf_table_opts o;
-            btdf_table_opts_default(&o);
-            o.params.ior[0] = ns[c];
-            o.params.smoothness = 3.0;
-            o.ti_max = 80.0 * M_PI / 180.0;
-            run_near("near-one", &o, reps);
-        }
-    }
-    if (!strcmp(what, "all") || !strcmp(what, "scaling")) {
-        /* Work follows what is asked: the full range, half of it, three channels. */
-        printf("%s", header);
-        btdf_table_opts o;
-        btdf_table_opts_default(&o);
-        o.ti_max = M_PI / 2;
-        run(stdout, "adaptive", "1.5/3 ti 0-90", &o, reps);
-        o.ti_max = M_PI / 4;
-        run(stdout, "adaptive", "1.5/3 ti 0-45", &o, reps);
-        o.ti_max = M_PI / 2;
-        o.params.channels = 3;
-        o.params.ior[0] = 1.49;
-        o.params.ior[1] = 1.5;
-        o.params.ior[2] = 1.51;
-        run(stdout, "adaptive", "1.49,1.5,1.51/3 ti 0-90", &o, reps);
-    }
+    if (!strcmp(what, "all") || !strcmp(what, "sweep"))
+        bench_sweep(header, reps);
+    if (!strcmp(what, "all") || !strcmp(what, "tolerances"))
+        bench_tolerances(header, reps);
+    if (!strcmp(what, "all") || !strcmp(what, "fullrange"))
+        bench_fullrange(header, reps);
+    if (!strcmp(what, "all") || !strcmp(what, "nearone"))
+        bench_nearone(reps);
+    if (!strcmp(what, "all") || !strcmp(what, "scaling"))
+        bench_scaling(header, reps);
     if (!strcmp(what, "all") || !strcmp(what, "api"))
         api_bench(reps < 5 ? 5 : reps);
     if (!strcmp(what, "all") || !strcmp(what, "bsdf"))
         bsdf_bench(reps);
     /* Last: the child processes above must not inherit this section's buffers, or
        their peak memory would include them. */
-    if (!strcmp(what, "all") || !strcmp(what, "throughput")) {
-        /* The evaluator alone: Eq. 25 on 90 x 180 x 181 (ti, to, phi) into a buffer
-           allocated once, per-ti and per-to terms hoisted, no per-sample trigonometry. */
-        size_t NI = 90, NO = 180, NP = 181;
-        eval_job ej;
-        ej.buf = malloc(NI * NO * NP * sizeof(double));
-        ej.cph = malloc(NP * sizeof(double));
-        ej.sph = malloc(NP * sizeof(double));
-        ej.NO = NO;
-        ej.NP = NP;
-        ej.NI = NI;
-        for (size_t j = 0; j < NP; j++) {
-            ej.cph[j] = cos(M_PI * (double)j / (double)(NP - 1));
-            ej.sph[j] = sin(M_PI * (double)j / (double)(NP - 1));
-        }
-        const int th2[2] = {1, 0};
-        for (int a = 0; a < 2; a++) {
-            double v[9];
-            for (int k = -1; k < 9; k++) {
-                double t0 = now();
-                core_parallel_for(th2[a], NI, eval_slice, &ej);
-                if (k >= 0)
-                    v[k] = now() - t0;
-            }
-            double m = median(v, 9);
-            printf("evaluator,threads=%s,90x180x181 into one buffer,%.4f s median of 9,%.3g "
-                   "evaluations/s\n", th2[a] ? "1" : "all", m, (double)(NI * NO * NP) / m);
-        }
-        free(ej.buf);
-        free(ej.cph);
-        free(ej.sph);
-    }
-    if (!strcmp(what, "all") || !strcmp(what, "throughput")) {
-        /* Eq. 25 on a full 90 x 180 x 181 grid (the GRID table builder: hoisted per-ti
-           and per-to terms, a vectorisable loop over phi). One warm-up run first. */
-        btdf_table_opts o;
-        btdf_table_opts_default(&o);
-        o.kind = BTDF_TABLE_GRID;
-        o.grid_ti = 90;
-        o.grid_to = 180;
-        o.grid_phi = 181;
-        o.ti_max = 89.0 * M_PI / 180.0;
-        const int th[2] = {1, 0};
-        for (int a = 0; a < 2; a++) {
-            o.threads = th[a];
-            double v[9];
-            for (int k = -1; k < 9; k++) {
-                btdf_table *t = NULL;
-                double t0 = now();
-                btdf_table_build(&o, &t, NULL, 0);
-                if (k >= 0)
-                    v[k] = now() - t0;
-                btdf_table_free(t);
-            }
-            double m = median(v, 9);
-            printf("throughput,threads=%s,grid 90x180x181,%.4f s median of 9,%.3g samples/s\n",
-                   th[a] ? "1" : "all", m, 90.0 * 180 * 181 / m);
-        }
-    }
+    if (!strcmp(what, "all") || !strcmp(what, "throughput"))
+        bench_evaluator();
+    if (!strcmp(what, "all") || !strcmp(what, "throughput"))
+        bench_grid();
     return 0;
 }
