@@ -327,6 +327,9 @@ int apply(cli *c, const opt_hit *h)
     case OPT_CELLS:
     case OPT_TILE:
     case OPT_BINS:
+    case OPT_BACK:
+    case OPT_THICKNESS:
+    case OPT_ABSORPTION: return apply_pane(c, h->id, v);
     case OPT_MERGE:
     case OPT_PROFILE:
     case OPT_HELP:
