@@ -127,6 +127,17 @@ static double src_eval(void *user, int k, double ti, double to, double phi)
     return btdf_pane_eval(P, block_side(k), BTDF_PART_TRANSMISSION, 0, ti, M_PI - to, phi);
 }
 
+static void src_eval_phis(void *user, int k, double ti, double to, size_t count,
+                          const double *phi, double *out)
+{
+    const btdf_pane *P = user;
+    if (k >= 2)
+        btdf_pane_eval_phis(P, block_side(k), BTDF_PART_REFLECTION, 0, ti, to, count, phi, out);
+    else
+        btdf_pane_eval_phis(P, block_side(k), BTDF_PART_TRANSMISSION, 0, ti, M_PI - to, count,
+                            phi, out);
+}
+
 static double src_specular(void *user, int k, double ti)
 {
     return btdf_pane_specular(user, block_side(k),
@@ -159,7 +170,7 @@ static int pane_xml(const cli *c, const btdf_pane *P, const char *prov)
              "thickness %.9g mm, absorption %.9g per mm)",
              btdf_model_name(o->front.model), o->front.ior[0], o->front.smoothness, back,
              o->thickness_mm, o->absorption_per_mm);
-    btdf_rad_source src = {(void *)P, src_eval, src_specular, desc};
+    btdf_rad_source src = {(void *)P, src_eval, src_specular, src_eval_phis, desc};
     btdf_rad *x = NULL;
     char msg[512] = "";
     btdf_status st = btdf_rad_build_source(&src, &c->p, c->basis, PANE_TREE_DEPTH, c->threads,

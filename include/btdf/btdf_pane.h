@@ -85,6 +85,11 @@ BTDF_API double btdf_pane_seconds_build(const btdf_pane *p);
    at grazing; never negative, NaN or inf. */
 BTDF_API double btdf_pane_eval(const btdf_pane *p, btdf_pane_side side, btdf_part part, int ch,
                                double ti, double to, double phi);
+/* btdf_pane_eval at count azimuths phi[k] for one (ti, to), into out[count]: the
+   interpolation in cos theta done once (what a Klems or tree builder needs). */
+BTDF_API void btdf_pane_eval_phis(const btdf_pane *p, btdf_pane_side side, btdf_part part,
+                                  int ch, double ti, double to, size_t count, const double *phi,
+                                  double *out);
 /* The weight of the delta part at ti (0 when there is none). */
 BTDF_API double btdf_pane_specular(const btdf_pane *p, btdf_pane_side side, btdf_part part,
                                    int ch, double ti);

@@ -140,6 +140,9 @@ typedef struct btdf_rad_source {
     void *user;
     double (*eval)(void *user, int k, double ti, double to, double phi);
     double (*specular)(void *user, int k, double ti);
+    /* may be NULL: eval at count azimuths for one (ti, to), into out (faster Klems) */
+    void (*eval_phis)(void *user, int k, double ti, double to, size_t count,
+                      const double *phi, double *out);
     const char *description; /* the file's account of itself, e.g. the pane; may be NULL */
 } btdf_rad_source;
 #define BTDF_RAD_SOURCE_DEPTH_MAX 7

@@ -50,33 +50,34 @@ static double interp1(const btdf_pane *P, const double *v, double mu)
     return s;
 }
 
-BTDF_API double btdf_pane_eval(const btdf_pane *P, btdf_pane_side side, btdf_part part, int ch,
-                               double ti, double to, double phi)
+BTDF_API void btdf_pane_eval_phis(const btdf_pane *P, btdf_pane_side side, btdf_part part,
+                                  int ch, double ti, double to, size_t count, const double *phi,
+                                  double *out)
 {
+    for (size_t k = 0; k < count; k++)
+        out[k] = 0.0;
     if (!P || !ok_side(side) || !ok_part(part) || ch < 0 || ch >= P->o.front.channels)
-        return 0.0;
-    if (!(ti >= 0.0 && ti < PI / 2) || !isfinite(phi))
-        return 0.0;
+        return;
+    if (!(ti >= 0.0 && ti < PI / 2))
+        return;
     double muo;
     if (part == BTDF_PART_TRANSMISSION) {
         if (!(to > PI / 2 && to <= PI))
-            return 0.0;
+            return;
         muo = -cos(to);
     } else {
         if (!(to >= 0.0 && to < PI / 2))
-            return 0.0;
+            return;
         muo = cos(to);
     }
     double mui = cos(ti);
     if (!(mui > 0.0) || !(muo > 0.0))
-        return 0.0; /* grazing: the BSDF is 0 there, as in btdf.h */
+        return; /* grazing: the BSDF is 0 there, as in btdf.h */
     const double *c = P->ch[ch].coef[pane_block(side, part)];
     int ki, ko, n = P->n;
-    double wi[4], wo[4];
+    double wi[4], wo[4], bm[BTDF_PANE_MODES_MAX];
     lagrange(P->mu, n, mui, &ki, wi);
     lagrange(P->mu, n, muo, &ko, wo);
-    /* cos(m phi) by the recurrence cos((m+1)x) = 2 cos x cos(mx) - cos((m-1)x) */
-    double c1 = cos(phi), cm_1 = c1, cm = 1.0, sum = 0.0;
     size_t oo = (size_t)n * n;
     for (int m = 0; m < P->m; m++) {
         const double *cc = c + (size_t)m * oo;
@@ -85,14 +86,31 @@ BTDF_API double btdf_pane_eval(const btdf_pane *P, btdf_pane_side side, btdf_par
             const double *row = cc + (size_t)(ki + a) * n + ko;
             v += wi[a] * (wo[0] * row[0] + wo[1] * row[1] + wo[2] * row[2] + wo[3] * row[3]);
         }
-        sum += v * cm;
-        double nx = m == 0 ? c1 : 2.0 * c1 * cm - cm_1;
-        cm_1 = cm;
-        cm = nx;
+        bm[m] = v;
     }
-    /* the truncated series rings a little below 0 far from the lobe: a BSDF is not
-       negative */
-    return sum > 0.0 && isfinite(sum) ? sum : 0.0;
+    for (size_t k = 0; k < count; k++) {
+        if (!isfinite(phi[k]))
+            continue;
+        /* cos(m phi) by the recurrence cos((m+1)x) = 2 cos x cos(mx) - cos((m-1)x) */
+        double c1 = cos(phi[k]), cm_1 = c1, cm = 1.0, sum = 0.0;
+        for (int m = 0; m < P->m; m++) {
+            sum += bm[m] * cm;
+            double nx = m == 0 ? c1 : 2.0 * c1 * cm - cm_1;
+            cm_1 = cm;
+            cm = nx;
+        }
+        /* the truncated series rings a little below 0 far from the lobe: a BSDF is not
+           negative */
+        out[k] = sum > 0.0 && isfinite(sum) ? sum : 0.0;
+    }
+}
+
+BTDF_API double btdf_pane_eval(const btdf_pane *P, btdf_pane_side side, btdf_part part, int ch,
+                               double ti, double to, double phi)
+{
+    double v;
+    btdf_pane_eval_phis(P, side, part, ch, ti, to, 1, &phi, &v);
+    return v;
 }
 
 BTDF_API double btdf_pane_specular(const btdf_pane *P, btdf_pane_side side, btdf_part part,

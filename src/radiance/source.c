@@ -32,6 +32,7 @@ typedef struct src_job {
     int k;
     double *acc; /* [o * np + i] */
     double *rect; /* per patch: w0, w1, p0, p1 */
+    size_t cur;   /* the incident patch (src_klems_bands) */
 } src_job;
 
 static void patch_rect4(const rad_klems_basis *kb, int p, double r[4])
@@ -56,6 +57,41 @@ static void dir_of(double w, double az, double sg, double d[3])
     d[2] = sg * ct;
 }
 
+/* The outgoing patches of incident node p by bands: in a band every patch has the same 3
+   polar nodes, so the source is asked once per polar node for all the band's azimuths. */
+static void src_klems_bands(const src_job *J, int k, const double p[3], double sq, double wgi)
+{
+    const rad_klems_basis *kb = J->kb;
+    int np = kb->npatch, first = 0;
+    size_t i = (size_t)(J->cur);
+    double to = acos(fmin(1.0, fabs(p[2]))), azp = atan2(p[1], p[0]);
+    double phi[3 * 64], val[3 * 64];
+    for (int band = 0; band < kb->nbands; band++) {
+        int nb = kb->nphi[band];
+        const double *r0 = J->rect + 4 * first;
+        for (int c = 0; c < SRC_Q; c++) {
+            double w = r0[0] + (r0[1] - r0[0]) * 0.5 * (g3x[c] + 1.0);
+            double ti = asin(sqrt(w));
+            for (int j = 0; j < nb; j++) {
+                const double *ro = J->rect + 4 * (first + j);
+                for (int d = 0; d < SRC_Q; d++)
+                    phi[j * SRC_Q + d] = azp - (ro[2] + (ro[3] - ro[2]) * 0.5 * (g3x[d] + 1.0));
+            }
+            J->s->eval_phis(J->s->user, k, ti, to, (size_t)(nb * SRC_Q), phi, val);
+            for (int j = 0; j < nb; j++) {
+                double s = 0.0;
+                for (int d = 0; d < SRC_Q; d++) {
+                    double v = val[j * SRC_Q + d];
+                    s += g3w[c] * g3w[d] * 0.25 * (isfinite(v) && v > 0.0 ? v : 0.0);
+                }
+                J->acc[(size_t)(first + j) * np + i] += wgi * s;
+            }
+        }
+        first += nb;
+    }
+    (void)sq;
+}
+
 /* One incident patch i of block k: M[o][i] = 1/(L_i L_o) int_i int_o f cos cos, by 3 x 3
    Gauss points in (w, phi) over each patch (projected solid angle dw/2 dphi); p is the
    reverse of the incident patch's direction of travel (klems.c), q the outgoing patch's
@@ -63,7 +99,9 @@ static void dir_of(double w, double az, double sg, double d[3])
    through) direction has the incident patch's index. */
 static void src_klems_in(void *arg, size_t i)
 {
-    const src_job *J = arg;
+    src_job JJ = *(const src_job *)arg;
+    JJ.cur = i;
+    const src_job *J = &JJ;
     const rad_klems_basis *kb = J->kb;
     int np = kb->npatch, k = J->k, refl = k >= 2;
     double sp = k % 2 == 0 ? -1.0 : 1.0, sq = refl ? sp : -sp;
@@ -81,6 +119,9 @@ static void src_klems_in(void *arg, size_t i)
             p[0] = -t[0];
             p[1] = -t[1];
             p[2] = -t[2];
+            if (J->s->eval_phis) {
+                src_klems_bands(J, k, p, sq, wgi);
+            } else
             for (int o = 0; o < np; o++) {
                 const double *ro = J->rect + 4 * o;
                 double s = 0.0;
@@ -115,7 +156,7 @@ static btdf_status src_klems(const btdf_rad_source *s, btdf_rad *r, int threads,
     for (size_t p = 0; p < np; p++)
         patch_rect4(kb, (int)p, rect + 4 * p);
     for (int k = 0; k < 4; k++) {
-        src_job J = {s, kb, k, acc, rect};
+        src_job J = {s, kb, k, acc, rect, 0};
         core_parallel_for(threads, np, src_klems_in, &J);
         r->b[k].klems = malloc(sizeof(float) * np * np);
         if (!r->b[k].klems) {
