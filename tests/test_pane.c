@@ -166,8 +166,10 @@ static void reciprocity(void **state)
 }
 
 /* The default quadrature against a finer one (nodes and modes x 1.5): MODEL.md 6's e_L1
-   over 0-80 deg, both sides, both parts. Measured 6.5e-4 at (72, 96) against (96, 128)
-   for n = 1.5, s = 3, flat back; 2e-3 is what docs/pane.md states. */
+   over 0-80 deg, both sides, both parts. Measured at n = 1.5, s = 3, flat back, 4 mm:
+   1.24e-3 at (72, 96) against (108, 144) (btdf-bench pane), 6.5e-4 against (96, 128);
+   36 nodes against 72 gave 3.1e-2, so the bound 2e-3 fails a quadrature that is too
+   coarse. */
 static void convergence(void **state)
 {
     (void)state;
