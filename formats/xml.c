@@ -153,9 +153,18 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     }
     int tree = r->basis == RAD_BASIS_TREE3;
     fprintf(f, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n");
-    fprintf(f, "<!-- Written by btdftab %s: Xu & Sun (2008) Eq. 25, the BTDF of a rough "
-               "dielectric interface. Values are the BTDF in 1/sr (no cosine factor).\n",
-            BTDF_VERSION_STRING);
+    int sys = r->system[0] != 0; /* a caller's BSDF: a pane's system (docs/pane.md) */
+    if (sys)
+        fprintf(f, "<!-- Written by btdftab %s: the system BSDF of %s, air to air.\n"
+                   "     Values are the BSDF in 1/sr (no cosine factor). Radiance's -Z side "
+                   "faces the front face: Transmission Front serves light from +Z (on the "
+                   "back face),\n     Transmission Back light from -Z (on the front face); "
+                   "Reflection Front light on -Z, Reflection Back on +Z.\n",
+                BTDF_VERSION_STRING, r->system);
+    else
+        fprintf(f, "<!-- Written by btdftab %s: Xu & Sun (2008) Eq. 25, the BTDF of a rough "
+                   "dielectric interface. Values are the BTDF in 1/sr (no cosine factor).\n",
+                BTDF_VERSION_STRING);
     /* a model other than xu-sun says so (xu-sun files keep their bytes) */
     if (r->p.model == BTDF_MODEL_SMITH)
         fprintf(f, "     Model: smith: the facets of Eq. 25 with the height-correlated Smith "
@@ -165,7 +174,8 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
         fprintf(f, "     Colour: R, G, B in Radiance's RGB (its default primaries, equal-energy "
                    "white) for n = %.9g, %.9g, %.9g, written as CIE %s.\n",
                 r->p.ior[0], r->p.ior[1], r->p.ior[2], tree ? "Y, u', v'" : "X, Y, Z");
-    fprintf(f, "     In Radiance the surface normal points into the dense medium (index n = %.9g).\n"
+    if (!sys)
+        fprintf(f, "     In Radiance the surface normal points into the dense medium (index n = %.9g).\n"
                "     Transmission Front serves light from the dense side (leaving it, 1/n), "
                "Transmission Back light entering it (n);\n     Reflection Front light "
                "reflected outside (n), Reflection Back inside (1/n).\n",
@@ -176,14 +186,17 @@ static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
                "xsi:schemaLocation=\"http://windows.lbl.gov/BSDF-v1.4.xsd\">\n");
     fprintf(f, "<WindowElementType>System</WindowElementType>\n<FileType>BSDF</FileType>\n");
     fprintf(f, "<Optical>\n<Layer>\n\t<Material>\n\t\t<Name>");
-    put_text(f, r->name[0] ? r->name : "rough_interface");
+    put_text(f, r->name[0] ? r->name : (sys ? "pane" : "rough_interface"));
     fprintf(f, "</Name>\n\t\t<Manufacturer>btdftab %s</Manufacturer>\n", BTDF_VERSION_STRING);
     fprintf(f, "\t\t<Thickness unit=\"Millimeter\">0</Thickness>\n"
                "\t\t<DeviceType>Other</DeviceType>\n");
     const char *what = r->p.model == BTDF_MODEL_SMITH
                            ? "Xu and Sun 2008 facets with the Smith term (model smith)"
                            : "Xu and Sun 2008 Eq. 25";
-    if (r->channels == 3)
+    if (sys)
+        fprintf(f, "\t\t<Comments>%s: n = %.9g, s = %.9g, k0 = %.9g; basis %s", r->system,
+                r->p.ior[0], r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
+    else if (r->channels == 3)
         fprintf(f, "\t\t<Comments>%s rough interface: n = %.9g (R), "
                    "%.9g (G), %.9g (B) in Radiance's RGB, written as CIE %s; s = %.9g, "
                    "k0 = %.9g; basis %s",

@@ -763,5 +763,20 @@ expect 2 "expected K/N" "simulate --shard 0/3" -- "$B" simulate $O --shard 0/3 -
 expect 2 "--shard needs --report" "simulate --shard without a report" -- "$B" simulate $O --shard 1/3
 rm -f "$W/one.json" "$W/one.csv" "$W/s1.json" "$W/s2.json" "$W/s3.json" "$W/m.json" "$W/m.csv"
 
+# a pane (--back, docs/pane.md): its albedo, its .xml, and bad input (usage, nothing written)
+v=$("$B" albedo --back smooth --thickness 4 --absorption 0.1 -s 3 0 | tail -n 1)
+case "$v" in 0,*) ok "albedo --back: one row" ;; *) no "albedo --back: $v" ;; esac
+"$B" tabulate -q --back smooth --thickness 4 -s 3 --basis klems-quarter -o "$W/p.xml" &&
+    grep -q "the system BSDF of a pane in air" "$W/p.xml" && ok "tabulate --back to .xml" ||
+    no "tabulate --back to .xml"
+rm -f "$W/p.xml"
+expect 2 "give --back" "--thickness without --back" -- "$B" albedo --thickness 4
+expect 2 "thickness: -1 mm" "--thickness -1" -- "$B" albedo --back smooth --thickness -1
+expect 2 "absorption: -2 per mm" "--absorption -2" -- "$B" albedo --back 3 --absorption -2
+expect 2 "give smooth, or a smoothness" "--back 0" -- "$B" albedo --back 0
+expect 2 "written to .xml" "--back with a .csv" -- "$B" tabulate --back smooth -o "$W/t.csv"
+expect 2 "a pane in air needs an index above 1" "--back with n < 1" -- \
+    "$B" tabulate --back smooth --ior 0.8 -o "$W/t.xml"
+
 echo "$pass passed, $failn failed"
 [ "$failn" -eq 0 ]

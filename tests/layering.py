@@ -15,6 +15,7 @@ ALLOWED = {
     'scatfun': {'core', 'model', 'estimate'},
     'radiance': {'core', 'model', 'estimate'},
     'sim': {'core', 'io', 'model', 'estimate'},  # the simulator (src/sim/)
+    'pane': {'core', 'model', 'estimate'},  # the system BSDF of a pane (src/pane/)
     'preview': {'core', 'model', 'table'},
     'formats': {'core', 'io', 'model', 'formats', 'table', 'scatfun', 'radiance'},
 }
@@ -22,7 +23,7 @@ ALLOWED = {
 FORMATS_OBJECTS = {'table/table.h', 'scatfun/scatfun.h', 'radiance/radiance.h'}
 # Public headers: include/btdf/ and the generated configuration.
 PUBLIC = {'btdf.h', 'btdf_io.h', 'btdf_preview.h', 'btdf_radiance.h', 'btdf_scatfun.h',
-          'btdf_sim.h', 'btdf_config.h'}
+          'btdf_sim.h', 'btdf_pane.h', 'btdf_config.h'}
 # System headers confined to one place (layout: STYLE section 9).
 # FFTW: the .bsdf builder's cosine transforms, and the simulator's spectral filter that
 # makes its Gaussian surfaces (src/sim/surface.c).

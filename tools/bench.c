@@ -302,6 +302,8 @@ static void bsdf_bench(int reps)
 }
 
 
+void bench_pane(FILE *f, int reps); /* bench_pane.c */
+
 static const char usage[] =
     "usage: btdf-bench [SECTION [REPS]]\n"
     "Prints the machine, then CSV rows of timings and errors (docs/benchmarks.md).\n"
@@ -318,7 +320,9 @@ static const char usage[] =
     "           plain DDA; not part of all), simhit (first hits only: the DDA,\n"
     "           the hierarchy and, if built with it, Embree on the same rays), or\n"
     "           full (the model full at n = 1.5, s = 1: its tally on 1 and 2 threads,\n"
-    "           and its evaluations; not part of all)\n"
+    "           and its evaluations; not part of all), or pane (a pane's system,\n"
+    "           1.5/3, flat back, 4 mm, and its Klems full and tree3 files; not part\n"
+    "           of all)\n"
     "  REPS     runs per table, 1 to 9 (default 3); each row reports the median\n"
     "Timings depend on the machine's load: quote medians and the machine line.\n";
 
@@ -508,7 +512,8 @@ int main(int argc, char **argv)
     if (strcmp(what, "all") && strcmp(what, "sweep") && strcmp(what, "scaling") &&
         strcmp(what, "api") && strcmp(what, "throughput") && strcmp(what, "tolerances") &&
         strcmp(what, "fullrange") && strcmp(what, "nearone") && strcmp(what, "bsdf") &&
-        strcmp(what, "sim") && strcmp(what, "simhit") && strcmp(what, "full")) {
+        strcmp(what, "sim") && strcmp(what, "simhit") && strcmp(what, "full") &&
+        strcmp(what, "pane")) {
         fprintf(stderr, "btdf-bench: unknown section '%s'\n%s", what, usage);
         return 2;
     }
@@ -528,6 +533,10 @@ int main(int argc, char **argv)
     }
     if (!strcmp(what, "full")) {
         bench_full(stdout, reps);
+        return 0;
+    }
+    if (!strcmp(what, "pane")) { /* tools/bench_pane.c */
+        bench_pane(stdout, reps);
         return 0;
     }
     const char *header = "method,case,n,s,tolerance,ti_max_deg,samples,seconds_tabulation,"

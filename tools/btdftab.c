@@ -139,6 +139,8 @@ int main(int argc, char **argv)
     int code = parse_command(cmd, argc - 1, argv + 1, &c);
     if (code >= 0)
         return code;
+    if (GIVEN(&c, OPT_BACK) || GIVEN(&c, OPT_THICKNESS) || GIVEN(&c, OPT_ABSORPTION))
+        return cmd_pane(&c, cmd->bit, prov); /* a pane's system (tools/cmd_pane.c) */
     switch (cmd->bit) {
     case CMD_EVAL: return cmd_eval(&c);
     case CMD_TABULATE: return cmd_tabulate(&c, prov);

@@ -348,12 +348,12 @@ int apply(cli *c, const opt_hit *h)
     case OPT_CELLS:
     case OPT_TILE:
     case OPT_BINS:
+    case OPT_BACK:
+    case OPT_THICKNESS:
+    case OPT_ABSORPTION: return apply_pane(c, h->id, v);
     case OPT_MERGE:
     case OPT_PROFILE:
-    case OPT_BACK: /* the pane of simulate: tools/cmd_simulate_pane.c */
-    case OPT_THICKNESS:
-    case OPT_ABSORPTION:
-    case OPT_LIGHT:
+    case OPT_LIGHT: /* the pane of simulate: tools/cmd_simulate_pane.c */
     case OPT_HELP:
     case OPT_END: break;
     }

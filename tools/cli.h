@@ -51,6 +51,8 @@ typedef struct cli {
     double mat_n[BTDF_PREVIEW_MAX_CURVES], mat_s[BTDF_PREVIEW_MAX_CURVES];
     double angles[BTDF_PREVIEW_MAX_CURVES];
     size_t nm, na;
+    int back_smooth;      /* --back smooth */
+    double back_s, thickness, absorption; /* --back S, --thickness, --absorption */
     const char *pos[512]; /* positional arguments */
     int npos;
 } cli;
@@ -91,6 +93,10 @@ void warn_albedo(const btdf_params *p, double ti_deg, double rt, const char *wha
 double albedo_min(const btdf_params *p, double ti);
 int cmd_albedo(const cli *c);
 int cmd_polar(const cli *c);
+
+/* cmd_pane.c: a pane's system (--back): its options, tabulate to .xml, albedo */
+int apply_pane(cli *c, int id, const char *v);
+int cmd_pane(const cli *c, unsigned cmd, const char *prov);
 
 /* cmd_tabulate.c: tabulate (tables, .bsdf, .xml), inspect */
 int cmd_tabulate(cli *c, const char *prov);

@@ -127,6 +127,29 @@ BTDF_API double btdf_rad_e_l1_checked(const btdf_report *rep);
 BTDF_API void btdf_rad_set_name(btdf_rad *r, const char *name);
 BTDF_API void btdf_rad_set_errors(btdf_rad *r, int k, double e_l1, double e_t);
 
+/* A file of a caller's BSDF in place of Eq. 25 (the system of a pane, btdf_pane.h):
+   eval(user, k, ti, to, phi) is what block k (above: 0 transmission of light from +Z,
+   1 from -Z, 2 reflection on -Z, 3 on +Z) serves, light at ti from its side's normal,
+   view at to from the view side's normal (both [0, pi/2]), phi of btdf.h; 1/sr without
+   a cosine, reciprocal air to air. specular(user, k, ti) (may be NULL) is a delta's
+   weight in the mirror or straight-through direction, put on the diagonal (Klems) or in
+   the leaf holding that direction (tree). Klems: 3 x 3 Gauss points over every patch
+   pair; tree3: a full tree of `depth` levels, each leaf the value at its centre. p gives
+   n for the frame and the Comments (one channel). */
+typedef struct btdf_rad_source {
+    void *user;
+    double (*eval)(void *user, int k, double ti, double to, double phi);
+    double (*specular)(void *user, int k, double ti);
+    /* may be NULL: eval at count azimuths for one (ti, to), into out (faster Klems) */
+    void (*eval_phis)(void *user, int k, double ti, double to, size_t count,
+                      const double *phi, double *out);
+    const char *description; /* the file's account of itself, e.g. the pane; may be NULL */
+} btdf_rad_source;
+#define BTDF_RAD_SOURCE_DEPTH_MAX 7
+BTDF_API btdf_status btdf_rad_build_source(const btdf_rad_source *s, const btdf_params *p,
+                                           btdf_rad_basis basis, int depth, int threads,
+                                           btdf_rad **out, char *msg, size_t msglen);
+
 #ifdef __cplusplus
 }
 #endif

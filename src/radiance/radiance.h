@@ -96,6 +96,8 @@ struct btdf_rad {
     double seconds_build;
     /* Filled by the caller before writing, for the file's descriptive fields. */
     char name[128];               /* the material's name in the scene */
+    char system[512];             /* a caller's BSDF (btdf_rad_build_source): what it is;
+                                     "" for Eq. 25's own files */
     int reported;                 /* 1 when e_l1, e_t below hold the blocks' reports */
     double e_l1[RAD_MAX_BLOCKS], e_t[RAD_MAX_BLOCKS];
 };
