@@ -245,6 +245,17 @@ expect 1 "standard output" "albedo into a full disk" -- sh -c "'$B' albedo > /de
 expect 1 "standard output" "eval into a full disk" -- sh -c "'$B' eval 30 150 180 > /dev/full"
 expect 1 "standard output" "--version into a full disk" -- sh -c "'$B' --version > /dev/full"
 expect 2 "takes nothing after it" "--version extra" -- "$B" --version extra
+for c in tabulate eval simulate; do
+    expect 1 "standard output: No space left" "$c --help into a full disk" -- sh -c "'$B' $c --help > /dev/full"
+done
+expect 2 "--help takes no value, not '--help=yes'" "--help=yes" -- "$B" --help=yes
+expect 2 "--help takes no value, not '--help=yes'" "tabulate --help=yes" -- "$B" tabulate --help=yes
+expect 2 "--quiet takes no value" "--quiet=1" -- "$B" tabulate --quiet=1 -o "$W/t.csv"
+# '--report -' names no file (nor standard output, which may carry the table): refused
+for c in "tabulate -q --grid 2,3,3 -o t.csv" "simulate -q --rays 100"; do
+    expect 2 "--report: '-': the report is a file" "$c --report -" -- \
+        sh -c "cd '$W' && '$B' $c --report -; s=\$?; [ ! -e ./- ] || { rm -f ./-; s=9; }; exit \$s"
+done
 # a killed run's temporary: our name's shape, an hour old, no writer's lock
 echo half > "$W/.k.csv.btdftmp0123456789abcdef.csv"
 touch -d '1 hour ago' "$W/.k.csv.btdftmp0123456789abcdef.csv"

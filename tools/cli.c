@@ -180,7 +180,11 @@ int apply(cli *c, const opt_hit *h)
         fail(EXIT_USAGE, "--part: '%s': must be transmission, reflection or both", v);
         return 0;
     case OPT_OUTPUT: c->out = v; return 1;
-    case OPT_REPORT: c->report = v; return 1;
+    case OPT_REPORT:
+        if (!strcmp(v, "-")) /* not standard output: it may carry the table (-o -) */
+            return fail(EXIT_USAGE, "--report: '-': the report is a file; give FILE.json"), 0;
+        c->report = v;
+        return 1;
     case OPT_TOLERANCE: return parse_double("--tolerance", v, &c->o.tolerance);
     case OPT_METRIC:
         if (run_parse_metric(v, &c->o.metric))
@@ -351,7 +355,7 @@ int parse_command(const cmd_def *cmd, int argc, char **argv, cli *c)
     for (int k = 0; k < nh; k++)
         if (hits[k].id == OPT_HELP) {
             opt_help(stdout, cmd);
-            return fflush(stdout) == 0 ? 0 : 1;
+            return stdout_done(0);
         }
     for (int k = 0; k < nh; k++) {
         GIVEN(c, hits[k].id)++;

@@ -4,6 +4,7 @@
    not at all, by btdf_write_buffer). */
 #include "cmd_simulate.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -722,7 +723,9 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
     for (int k = 0; k < nh; k++)
         if (hits[k].id == OPT_HELP) {
             opt_help(stdout, cmd);
-            return fflush(stdout) == 0 ? 0 : 1;
+            if (fflush(stdout) != 0 || ferror(stdout)) /* a full disk, a closed pipe */
+                return fail(1, "standard output: %s", strerror(errno));
+            return 0;
         }
     int merging = 0;
     for (int k = 0; k < nh; k++)
@@ -790,7 +793,11 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
                 return 2;
             o->max_memory = v << 20;
             break;
-        case OPT_REPORT: *report = s; break;
+        case OPT_REPORT:
+            if (!strcmp(s, "-")) /* not standard output, as tabulate's */
+                return fail(2, "--report: '-': the report is a file; give FILE.json");
+            *report = s;
+            break;
         case OPT_QUIET: *quiet = 1; break;
         case OPT_PREVIEW: {
             size_t n = strlen(s);

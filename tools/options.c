@@ -399,7 +399,12 @@ int opt_parse(const char *prog, const cmd_def *cmd, int argc, char **argv, opt_h
         if (c == -1)
             break;
         if (c == '?') {
-            if (optopt) {
+            const char *a = args[optind - 1];
+            const opt_def *o = a[0] == '-' && a[1] == '-' && strchr(a, '=') ? by_long(cmd, a)
+                                                                             : NULL;
+            if (o && !o->value) { /* "--help=yes": a known option that takes no value */
+                fprintf(stderr, "%s: --%s takes no value, not '%s'\n", prog, o->name, a);
+            } else if (optopt) {
                 char s[3] = {'-', (char)optopt, '\0'};
                 unknown_option(prog, cmd, s);
             } else {
