@@ -256,6 +256,18 @@ for c in "tabulate -q --grid 2,3,3 -o t.csv" "simulate -q --rays 100"; do
     expect 2 "--report: '-': the report is a file" "$c --report -" -- \
         sh -c "cd '$W' && '$B' $c --report -; s=\$?; [ ! -e ./- ] || { rm -f ./-; s=9; }; exit \$s"
 done
+# extensions in any case, for every output and input (the formats' registry reads them so)
+mkdir "$W/uc"
+printf '[a]\nior = 1.5\nsmoothness = 3\ntolerance = 5e-2\ntheta_i = 0:10\nenter = M.CSV\n' > "$W/uc/m.ini"
+"$B" build -q "$W/uc/m.ini" && echo '5 150 180' | "$B" eval --table "$W/uc/M.CSV" >/dev/null && \
+    "$B" simulate -q --rays 100 --report "$W/uc/S.JSON" -o "$W/uc/S.CSV" && [ -s "$W/uc/S.CSV" ] && \
+    ok "upper-case extensions: a manifest's output, simulate -o" || no "upper-case extensions refused"
+if "$B" --version | grep -q 'PNG on'; then
+    "$B" tabulate -q --grid 2,3,3 -o "$W/uc/t.csv" --preview "$W/uc/Q.PNG" && "$B" polar -o "$W/uc/P.PNG" && \
+        "$B" simulate -q --rays 100 --preview "$W/uc/S.PNG" && [ -s "$W/uc/Q.PNG" ] && [ -s "$W/uc/S.PNG" ] && \
+        ok "upper-case .PNG for --preview, polar and simulate" || no "upper-case .PNG refused"
+fi
+rm -rf "$W/uc"
 # a killed run's temporary: our name's shape, an hour old, no writer's lock
 echo half > "$W/.k.csv.btdftmp0123456789abcdef.csv"
 touch -d '1 hour ago' "$W/.k.csv.btdftmp0123456789abcdef.csv"

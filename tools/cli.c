@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* cli.c: the command line into struct cli (through the option table of
    options.c), and the checks and helpers several commands share. */
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -37,7 +38,12 @@ int fail(int code, const char *fmt, ...)
 int ends_with(const char *s, const char *suffix)
 {
     size_t ls = strlen(s), lx = strlen(suffix);
-    return ls >= lx && strcmp(s + ls - lx, suffix) == 0;
+    if (ls < lx)
+        return 0;
+    for (size_t i = 0; i < lx; i++) /* extensions in any case, as the formats' registry */
+        if (tolower((unsigned char)s[ls - lx + i]) != tolower((unsigned char)suffix[i]))
+            return 0;
+    return 1;
 }
 
 /* ------------------------------------------------------------------------- */

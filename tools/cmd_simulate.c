@@ -4,6 +4,7 @@
    not at all, by btdf_write_buffer). */
 #include "cmd_simulate.h"
 
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -27,6 +28,18 @@
 
 static const char *prog_name = "btdftab";
 static double deg_given[MAX_ANGLES]; /* the angles as given, for the report */
+
+/* s ends in ext, in any case (as the formats' registry reads extensions) */
+static int ext_is(const char *s, const char *ext)
+{
+    size_t n = strlen(s), l = strlen(ext);
+    if (n < l)
+        return 0;
+    for (size_t i = 0; i < l; i++)
+        if (tolower((unsigned char)s[n - l + i]) != tolower((unsigned char)ext[i]))
+            return 0;
+    return 1;
+}
 
 static int fail(int code, const char *fmt, ...)
 {
@@ -466,9 +479,9 @@ static int parse_bins(const char *v, int *nt, int *np)
 static int parse_output(const char *v, const char **out)
 {
     size_t n = strlen(v);
-    if (n < 5 || (strcmp(v + n - 4, ".csv") && strcmp(v + n - 4, ".exr")))
+    if (n < 5 || (!ext_is(v, ".csv") && !ext_is(v, ".exr")))
         return fail(2, "-o '%s': the distribution is written as .csv or .exr", v);
-    if (!strcmp(v + n - 4, ".exr") && !btdf_format_available(".exr"))
+    if (ext_is(v, ".exr") && !btdf_format_available(".exr"))
         return fail(2, "-o '%s': this build has no OpenEXR (meson -Dopenexr=enabled)", v);
     *out = v;
     return -1;
@@ -801,7 +814,7 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
         case OPT_QUIET: *quiet = 1; break;
         case OPT_PREVIEW: {
             size_t n = strlen(s);
-            if (n < 5 || strcmp(s + n - 4, ".png"))
+            if (n < 5 || !ext_is(s, ".png"))
                 return fail(2, "--preview '%s': the picture is a .png", s);
             if (!btdf_format_available(".png"))
                 return fail(2, "--preview '%s': this build has no pictures (meson -Dpng=enabled)",
@@ -879,7 +892,7 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     if (dist && btdf_output_check(dist, msg, sizeof msg) != BTDF_OK)
         return fail(1, "%s: %s", dist, msg);
     /* an EXR table's slices need distinct angles: said before the run, not after it */
-    if (dist && !strcmp(dist + strlen(dist) - 4, ".exr"))
+    if (dist && ext_is(dist, ".exr"))
         for (size_t i = 0; i < o.n_theta; i++)
             for (size_t j = 0; j < i; j++)
                 if (o.theta_i[i] == o.theta_i[j])
@@ -975,11 +988,9 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                 (unsigned long long)r->rays_traced, r->seconds);
     }
     code = report ? write_report(report, prov, &o, r, eqT, eqR, cmp) : 0;
-    if (code == 0 && dist) {
-        size_t n = strlen(dist);
-        code = strcmp(dist + n - 4, ".exr") ? write_dist(dist, prov, &o, r)
-                                            : write_dist_exr(dist, prov, &o, r);
-    }
+    if (code == 0 && dist)
+        code = !ext_is(dist, ".exr") ? write_dist(dist, prov, &o, r)
+                                     : write_dist_exr(dist, prov, &o, r);
     if (code == 0 && preview_path)
         code = write_preview(preview_path, r);
     free(eqT);

@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* manifest.c: `btdftab build scene.ini`, the outputs of a scene's materials and nothing more. */
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -130,7 +131,12 @@ static int split_outputs(manifest *mf, const char *key, const char *value, char 
 static int ends_with(const char *s, const char *x)
 {
     size_t ls = strlen(s), lx = strlen(x);
-    return ls >= lx && strcmp(s + ls - lx, x) == 0;
+    if (ls < lx)
+        return 0;
+    for (size_t i = 0; i < lx; i++) /* extensions in any case, as the formats' registry */
+        if (tolower((unsigned char)s[ls - lx + i]) != tolower((unsigned char)x[i]))
+            return 0;
+    return 1;
 }
 
 /* A section that sets nothing is a mistake (a misspelt name, a lost block). */
