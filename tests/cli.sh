@@ -324,9 +324,11 @@ rm -f "$W/z.bsdf"
 # .bsdf: a lobe too narrow for the format's node budget stops before any work, exit 3
 expect 3 "node budget, nothing built" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
 # .bsdf: --report is written; a file without the enter side is refused by eval
+# (its numbers the shortest decimals that read back: 1.5, 0.7 and 0.03, not 17 digits)
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --side leave --part transmission --report "$W/l.json" -o "$W/l.bsdf" && \
     grep -q '"kind": "scatfun"' "$W/l.json" && grep -q '"pbrt_v3_single_precision_safe": true' "$W/l.json" && \
-    grep -q '"leave": {"met": true' "$W/l.json" && ok ".bsdf --report" || no ".bsdf --report"
+    grep -q '"leave": {"met": true' "$W/l.json" && grep -q '"k0": 0.7,' "$W/l.json" && \
+    grep -q '"tolerance": 0.03,' "$W/l.json" && ok ".bsdf --report" || no ".bsdf --report"
 expect 1 "holds no 'enter' side" "eval --table of a leave-only .bsdf" -- "$B" eval --table "$W/l.bsdf" 30 150 180
 # .bsdf: the full interface by default (four blocks, each reported), --part transmission
 # the two transmission blocks only; --part reflection/both is refused for .xml
@@ -505,8 +507,11 @@ rm -f "$W"/i.*
 # its name (the file's base name) a Latin-1 byte and 140 bytes of UTF-8: the XML stays
 # UTF-8 (the byte as the character it is in Latin-1), cut at a character's start
 vn="$(printf '\351')$(i=0; while [ $i -lt 70 ]; do printf '\303\251'; i=$((i + 1)); done)"
-"$B" tabulate --tolerance 0.5 --threads 1 -o "$W/$vn.xml" 2>"$W/v.err"
+"$B" tabulate --tolerance 0.5 --threads 1 -o "$W/$vn.xml" --report "$W/v.json" 2>"$W/v.err"
 mv "$W/$vn.xml" "$W/v.xml"
+grep -q '"k0": 0.7,' "$W/v.json" && grep -q '"label": "Transmission Back", .*"n": 1.5,' "$W/v.json" && \
+    ok "a .xml report's numbers: the shortest decimals that read back" || no ".xml report numbers: $(grep -m 2 '"k0"\|"n":' "$W/v.json")"
+rm -f "$W/v.json"
 python3 -c "import sys, xml.etree.ElementTree as E; n = E.parse(sys.argv[1]).find('.//{http://windows.lbl.gov}Name').text; sys.exit(n != '\u00e9' * 64)" "$W/v.xml" && \
     ok ".xml names: Latin-1 and a cut inside UTF-8 give valid UTF-8 XML" || no ".xml name not valid UTF-8 or cut wrongly"
 [ "$(grep -c 'as Radiance reads it.*; tolerance 0.5 met for light up to 80 deg (not held beyond)$' "$W/v.err")" -eq 4 ] && \
