@@ -74,6 +74,11 @@ expect 2 "not a number" "n = nan" -- "$B" tabulate --ior nan -o "$W/t.csv"
 expect 2 "not a number" "n = inf" -- "$B" tabulate --ior inf -o "$W/t.csv"
 expect 2 "must be > 0" "n <= 0" -- "$B" tabulate --ior -1.5 -o "$W/t.csv"
 expect 2 "smoothness 0" "s = 0" -- "$B" tabulate -s 0 -o "$W/t.csv"
+# a value just past its bound is shown as given, not rounded onto the bound
+expect 2 "index of refraction 1000.0000001: must lie in \[0.001, 1000\]" "n just above 1000" -- "$B" tabulate --ior 1000.0000001 -o "$W/t.csv"
+expect 2 "smoothness 1000000.5: must lie" "s just above 1e6" -- "$B" tabulate -s 1000000.5 -o "$W/t.csv"
+expect 2 "tolerance 1.0000000001: must lie" "tolerance just above 1" -- "$B" tabulate --tolerance 1.0000000001 -o "$W/t.csv"
+expect 2 "tolerance 0.50000001: must lie" ".bsdf tolerance just above 0.5" -- "$B" tabulate --tolerance 0.50000001 -o "$W/t.bsdf"
 expect 2 "smoothness -3" "s < 0" -- "$B" tabulate -s -3 -o "$W/t.csv"
 expect 2 "theta-o 45" "theta-o out of range" -- "$B" eval 30 45 180
 expect 2 "theta-i 95" "theta-i out of range" -- "$B" eval 95 150 180
