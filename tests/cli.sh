@@ -203,6 +203,17 @@ rm -f "$W/m/d.csv"; mkdir "$W/m/d.csv"
 "$B" build -q "$W/m/v.ini" 2>"$W/err"; rc=$?
 [ "$rc" -eq 2 ] && grep -q "is a folder" "$W/err" && ok "build refuses an output replaced by a folder" || no "folder output: $rc $(cat "$W/err")"
 "$B" build "$W/m/v.ini" 2>&1 | grep -q "up to date" && no "folder output counted as up to date" || ok "a folder is never up to date"
+# a stamp that became a folder: refused by name before the table is built
+rmdir "$W/m/d.csv"; "$B" build -q "$W/m/v.ini"; rm -f "$W/m/.d.csv.btdftab-stamp"; mkdir "$W/m/.d.csv.btdftab-stamp"
+"$B" build "$W/m/v.ini" 2>"$W/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "v.ini:6: output '.*d.csv': its stamp '.d.csv.btdftab-stamp' is a folder" "$W/err" && \
+    ! grep -q "slices" "$W/err" && ok "a stamp replaced by a folder: named, nothing built" || { no "folder stamp: $rc"; cat "$W/err"; }
+rmdir "$W/m/.d.csv.btdftab-stamp"
+# a name too long, in a folder not made yet: refused before the folder and the table
+{ mat a; echo "enter = $W/m/nd/$(printf 'x%.0s' $(seq 1 300)).csv"; } > "$W/m/v.ini"
+"$B" build "$W/m/v.ini" 2>"$W/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "v.ini:6: .*the file name is longer than 255 bytes" "$W/err" && [ ! -e "$W/m/nd" ] && \
+    ok "a name too long in a missing folder: refused before any work" || { no "long name in a missing folder: $rc"; cat "$W/err"; }
 rm -rf "$W/m"
 
 # files the tool must never destroy or accept; outputs of one run appear together

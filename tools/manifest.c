@@ -468,21 +468,24 @@ static int mine(const manifest_opts *mo, int j)
     return mo->shard_n <= 1 || j % mo->shard_n == mo->shard_k - 1;
 }
 
-static int write_stamp(const char *out, const char *stamp)
+/* why: the writer's message (a stamp that became a folder, a full disk). */
+static int write_stamp(const char *out, const char *stamp, char *why, size_t whylen)
 {
     char sp[4200];
     stamp_path(sp, sizeof sp, out);
-    return btdf_write_buffer(sp, NULL, stamp, strlen(stamp), NULL, 0) == BTDF_OK;
+    return btdf_write_buffer(sp, NULL, stamp, strlen(stamp), why, whylen) == BTDF_OK;
 }
 
 /* The stamp of a file just written: its parameters, then what identifies its content. */
-static int write_stamp_for(const char *out, const char *stamp)
+static int write_stamp_for(const char *out, const char *stamp, char *why, size_t whylen)
 {
     char id[128], full[4096 + 128];
-    if (!content_id(out, id, sizeof id))
+    if (!content_id(out, id, sizeof id)) {
+        snprintf(why, whylen, "cannot read it back: %s", strerror(errno));
         return 0;
+    }
     snprintf(full, sizeof full, "%s%s", stamp, id);
-    return write_stamp(out, full);
+    return write_stamp(out, full, why, whylen);
 }
 
 static int fail(const char *prog, const char *fmt, const char *a, const char *b)
@@ -563,10 +566,11 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
                         prov, mo->quiet, mo->best_effort, &pr};
     int code = run_table(&rq);
     *done += nouts;
+    char why[512] = "";
     for (int k = 0; k < ntodo && code == 0; k++)
-        if (!write_stamp_for(todo[k].path, stamp)) {
+        if (!write_stamp_for(todo[k].path, stamp, why, sizeof why)) {
             fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, todo[k].path,
-                    strerror(errno));
+                    why);
             code = 1;
         }
     return code;
@@ -617,9 +621,9 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
                               mo->best_effort, prov, &pr);
         if (code != 0)
             return code;
-        if (!write_stamp_for(outs[k], stamp)) {
-            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, outs[k],
-                    strerror(errno));
+        char why[512] = "";
+        if (!write_stamp_for(outs[k], stamp, why, sizeof why)) {
+            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, outs[k], why);
             return 1;
         }
     }
@@ -692,10 +696,23 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
                               : key == K_LEAVE ? m->leave[k - m->nenter]
                                                : m->bsdf[k - m->nenter - m->nleave];
             /* a missing folder is created at build time: what is above it must allow it */
-            int dir_exists = 1;
-            if (!parents_creatable(out, &dir_exists, msg, sizeof msg) ||
-                (dir_exists && btdf_output_check(out, msg, sizeof msg) != BTDF_OK)) {
+            int dir_exists = 1, bad = !parents_creatable(out, &dir_exists, msg, sizeof msg);
+            /* the name's own checks (its length, a folder or non-file there: EINVAL) hold
+               before its folder exists too; a missing folder (EIO) is made at build time */
+            if (!bad) {
+                btdf_status oc = btdf_output_check(out, msg, sizeof msg);
+                bad = dir_exists ? oc != BTDF_OK : oc == BTDF_EINVAL;
+            }
+            if (bad) {
                 snprintf(why, whylen, "output '%.300s': %.400s", out, msg);
+                return m->key_line[key];
+            }
+            char sp[4200];
+            stamp_path(sp, sizeof sp, out);
+            if (dir_exists && btdf_output_check(sp, msg, sizeof msg) == BTDF_EINVAL) {
+                const char *sb = strrchr(sp, '/');
+                snprintf(why, whylen, "output '%.200s': its stamp '%.100s' %.150s", out,
+                         sb ? sb + 1 : sp, msg);
                 return m->key_line[key];
             }
             if (btdf_same_file(out, mo->path)) {
