@@ -401,6 +401,11 @@ rm -f "$W/d1.csv" "$W/d2.csv" "$W/rerr" "$W/berr"
 expect 2 "must be transmission, reflection or both" "tabulate: bad --part" -- "$B" tabulate --part mirror -o "$W/t.csv"
 expect 2 "grid tables hold the transmission only" "--part reflection with --grid" -- "$B" tabulate --part reflection --grid 3,4,4 -o "$W/t.csv"
 expect 2 "applies to .csv, .exr and .bsdf" "--part reflection for .xml" -- "$B" tabulate --part reflection -o "$W/t.xml"
+# options of tables and renders that a .xml or .bsdf cannot honour are refused, not ignored
+for o in "--zoom 4" "--log-decades 3" "--estimate none"; do
+    expect 2 "${o%% *} does not apply to .xml" ".xml refuses $o" -- "$B" tabulate $o -o "$W/t.xml"
+    expect 2 "${o%% *} was given" ".bsdf refuses $o" -- "$B" tabulate $o -o "$W/t.bsdf"
+done
 if "$B" --version | grep -q 'OpenEXR on'; then
     "$B" tabulate -q --ior 1.5 -s 3 --theta-i 0:40 --tolerance 1e-2 --part both -o "$W/b.exr" && \
         x=$(echo "30 30 180" | "$B" eval --table "$W/b.exr" --part reflection) && \
