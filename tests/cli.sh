@@ -310,6 +310,20 @@ expect 2 "not a number" "--ior in hexadecimal" -- "$B" tabulate --ior 0x1.8p0 -o
 expect 2 "--grid" "--grid with blanks" -- "$B" tabulate --grid ' 3, 5, 5' -o "$W/t.csv"
 expect 2 "--grid" "--grid in hexadecimal" -- "$B" tabulate --grid 0x3,5,5 -o "$W/t.csv"
 expect 2 "line 1: expected three angles" "eval input in hexadecimal" -- sh -c "echo '0x1e 150 180' | '$B' eval"
+expect 2 "line 1: a number is out of range" "eval input 1e-320 (a subnormal)" -- sh -c "echo '1e-320 150 180' | '$B' eval"
+# numbers of any length, read whole by every reader (they were cut at 32, 64 or 128 bytes)
+z=$(printf '0%.0s' $(seq 1 200))
+"$B" tabulate -q --grid 2,3,3 --theta-i "${z}5:40" -o "$W/z.csv" && \
+    [ "$(awk -F, '!/^#/ && NR > 1 { print $1; exit }' "$W/z.csv")" = 5 ] && \
+    echo "${z}30 150 180" | "$B" eval --table "$W/z.csv" > /dev/null && \
+    [ "$(echo "${z}30 150 180" | "$B" eval)" = "$("$B" eval 30 150 180)" ] && \
+    "$B" simulate -q --rays 100 --theta-i "${z}30:40:10" --report "$W/z.json" && \
+    ok "201-digit numbers in --theta-i, eval rows, eval --table rows, simulate --theta-i" || no "long numbers cut or refused"
+if "$B" --version | grep -q 'PNG on'; then
+    "$B" polar -o "$W/z.png" --material "${z}1.4:3" --size "${z}640x480" && [ -s "$W/z.png" ] && \
+        ok "201-digit numbers in --material and --size" || no "long --material or --size"
+fi
+rm -f "$W"/z.*
 
 # budgets are bounds
 expect 3 "below the 4199 nodes" "--max-samples below the coarsest table" -- "$B" tabulate -q --max-samples 1000 --best-effort -o "$W/t.csv"

@@ -80,6 +80,17 @@ int parse_ior(const char *val, btdf_params *p)
     return 1;
 }
 
+/* The n bytes at s as a string of its own (malloc'd), or NULL when out of memory. */
+static char *span_copy(const char *s, size_t n)
+{
+    char *b = malloc(n + 1);
+    if (b) {
+        memcpy(b, s, n);
+        b[n] = '\0';
+    }
+    return b;
+}
+
 /* A:B in degrees within [lo, hi], A <= B (A < B when strict). */
 int parse_range(const char *flag, const char *s, double lo, double hi, int strict,
                 double *a, double *b)
@@ -89,9 +100,14 @@ int parse_range(const char *flag, const char *s, double lo, double hi, int stric
         fail(EXIT_USAGE, "%s: '%s': expected A:B in degrees, e.g. %g:%g", flag, s, lo, hi);
         return 0;
     }
-    char buf[128];
-    snprintf(buf, sizeof buf, "%.*s", (int)(colon - s), s);
-    if (!parse_double(flag, buf, a) || !parse_double(flag, colon + 1, b))
+    char *buf = span_copy(s, (size_t)(colon - s)); /* any length: no silent cut */
+    if (!buf) {
+        fail(1, "out of memory");
+        return 0;
+    }
+    int good = parse_double(flag, buf, a) && parse_double(flag, colon + 1, b);
+    free(buf);
+    if (!good)
         return 0;
     if (!(*a >= lo && *b <= hi && (strict ? *a < *b : *a <= *b))) {
         fail(EXIT_USAGE, "%s: '%s': need %g <= A %s B <= %g degrees", flag, s, lo,
@@ -133,13 +149,12 @@ int parse_preview(const char *s, preview_req *r)
 int parse_picture_size(const char *s, int *w, int *h)
 {
     const char *x = strchr(s, 'x');
-    char buf[32];
+    char *buf = x ? span_copy(s, (size_t)(x - s)) : NULL; /* any length, as every number */
     size_t W = 0, H = 0;
-    if (x && (size_t)(x - s) < sizeof buf)
-        snprintf(buf, sizeof buf, "%.*s", (int)(x - s), s);
-    if (!x || (size_t)(x - s) >= sizeof buf ||
-        num_size(buf, 64, BTDF_PREVIEW_MAX_SIDE, &W) ||
-        num_size(x + 1, 64, BTDF_PREVIEW_MAX_SIDE, &H)) {
+    int bad = !buf || num_size(buf, 64, BTDF_PREVIEW_MAX_SIDE, &W) ||
+              num_size(x + 1, 64, BTDF_PREVIEW_MAX_SIDE, &H);
+    free(buf);
+    if (bad) {
         fail(EXIT_USAGE, "--size: '%s': expected WxH, each in [64, %d] pixels", s,
              BTDF_PREVIEW_MAX_SIDE);
         return 0;
@@ -259,15 +274,20 @@ int apply(cli *c, const opt_hit *h)
         return 1;
     case OPT_MATERIAL: {
         const char *colon = strchr(v, ':');
-        char buf[64];
         if (!colon || c->nm == BTDF_PREVIEW_MAX_CURVES) {
             fail(EXIT_USAGE, "--material: '%s': expected N:S (at most %d)", v,
                  BTDF_PREVIEW_MAX_CURVES);
             return 0;
         }
-        snprintf(buf, sizeof buf, "%.*s", (int)(colon - v), v);
-        if (!parse_double("--material", buf, &c->mat_n[c->nm]) ||
-            !parse_double("--material", colon + 1, &c->mat_s[c->nm]))
+        char *buf = span_copy(v, (size_t)(colon - v)); /* any length: no silent cut */
+        if (!buf) {
+            fail(1, "out of memory");
+            return 0;
+        }
+        int good = parse_double("--material", buf, &c->mat_n[c->nm]) &&
+                   parse_double("--material", colon + 1, &c->mat_s[c->nm]);
+        free(buf);
+        if (!good)
             return 0;
         c->nm++;
         return 1;
@@ -455,12 +475,15 @@ int read_row(const char *line, double *v, int want)
         if (n == want)
             return -1;
         size_t len = strcspn(s, " \t,\r\n#");
-        char tok[64];
-        if (len >= sizeof tok)
+        char small[64], *tok = len < sizeof small ? small : malloc(len + 1);
+        if (!tok) /* a token of any length, as eval's stream reads it */
             return -1;
         memcpy(tok, s, len);
         tok[len] = 0;
-        if (num_double(tok, &v[n]) != NULL)
+        const char *why = num_double(tok, &v[n]);
+        if (tok != small)
+            free(tok);
+        if (why != NULL)
             return -1;
         n++;
         s += len;

@@ -58,15 +58,20 @@ static int parse_angles(const char *v, double *ti, size_t *n)
     double a[MAX_ANGLES];
     int k = 0;
     if (strchr(v, ':')) {
-        char buf[128];
+        char *buf = malloc(strlen(v) + 1); /* any length: no silent cut */
         double lo, hi, st;
-        snprintf(buf, sizeof buf, "%s", v);
+        if (!buf)
+            return fail(1, "out of memory"), 0;
+        strcpy(buf, v);
         char *c1 = strchr(buf, ':'), *c2 = c1 ? strchr(c1 + 1, ':') : NULL;
-        if (!c2)
+        if (!c2) {
+            free(buf);
             return fail(2, "--theta-i: '%s': expected A:B:STEP in degrees, e.g. 0:80:10", v), 0;
+        }
         *c1 = *c2 = 0;
-        if (num_double(buf, &lo) || num_double(c1 + 1, &hi) || num_double(c2 + 1, &st) ||
-            !(st > 0) || !(hi >= lo) || (hi - lo) / st >= MAX_ANGLES)
+        int bad = num_double(buf, &lo) || num_double(c1 + 1, &hi) || num_double(c2 + 1, &st);
+        free(buf);
+        if (bad || !(st > 0) || !(hi >= lo) || (hi - lo) / st >= MAX_ANGLES)
             return fail(2, "--theta-i: '%s': need A <= B and STEP > 0, at most %d angles", v,
                         MAX_ANGLES), 0;
         for (double t = lo; t <= hi + 1e-9 * st; t = lo + st * (double)k)
