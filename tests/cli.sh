@@ -519,6 +519,10 @@ head -n 1 "$W/n.csv" | grep -q '^theta_i_deg,' && ok "the CSV's first line is it
 rm -f "$W/n.csv"
 v=$("$B" albedo --ior 1.5 -s 100 0 89.9 | tail -n 1)
 case "$v" in 89.9,0.006994374,0.01008812,*) ok "albedo in 7 significant digits ($v)" ;; *) no "albedo digits: $v" ;; esac
+# T and R below the smallest normal double are 0 (1.2e-317 and 2.2e-318 here), never
+# a subnormal that the tool's own readers refuse
+v=$("$B" albedo -q -s 1e-3 45 | tail -n 1)
+[ "$v" = "45,0,0.9497601,0,0" ] && ok "albedo: an underflow prints 0" || no "albedo underflow: $v"
 "$B" tabulate -q --grid 2,3,3 --k0 0.7 -o "$W/n.csv" --report "$W/n.json" && grep -q '"k0": 0.7,' "$W/n.json" && \
     ok "the JSON report prints 0.7" || no "JSON numbers: $(grep k0 "$W/n.json")"
 rm -f "$W"/n.*
