@@ -233,6 +233,9 @@ ev=$(sed -n 's/.*tolerance 0.001 not met: e_L1 max \([^ ]*\) (.*/\1/p' "$W/err")
 eb=$(sed -n 's/.*tolerance 0.001 not met: e_L1 max [^ ]* (\([a-z_]*\)).*/\1/p' "$W/err")
 e="$ev $eb"
 [ -n "$ev" ] && grep -q "^btdftab: $W/t.bsdf ($eb, as a renderer reads it):.* e_L1 max $ev mean" "$W/err" && ok "the verdict quotes the report's worst e_L1" || { no "verdict number '$e' not in the report lines"; cat "$W/err"; }
+# each block's line says which figures are the file's (sizes, build time) and which its own
+[ "$(grep -c "as a renderer reads it): [0-9]* nodes, [0-9]* coefficients and build [0-9.]* s of the whole file; this block's estimate [0-9.]* s" "$W/err")" -eq 2 ] && \
+    ok ".bsdf block lines: the file's build time, the block's estimate" || { no ".bsdf block lines' times"; cat "$W/err"; }
 rm -f "$W/t.bsdf"
 "$B" tabulate -q -o "$W/t.bsdf" --part transmission --max-memory 1 --best-effort; rc=$?
 "$B" inspect "$W/t.bsdf" | awk '/^file size/ {exit !($3 < 1048576)}' && [ "$rc" -eq 3 ] && ok "--max-memory bounds a .bsdf build" || no "--max-memory 1: status $rc"
@@ -553,7 +556,7 @@ grep -q '"k0": 0.7,' "$W/v.json" && grep -q '"label": "Transmission Back", .*"n"
 rm -f "$W/v.json"
 python3 -c "import sys, xml.etree.ElementTree as E; n = E.parse(sys.argv[1]).find('.//{http://windows.lbl.gov}Name').text; sys.exit(n != '\u00e9' * 64)" "$W/v.xml" && \
     ok ".xml names: Latin-1 and a cut inside UTF-8 give valid UTF-8 XML" || no ".xml name not valid UTF-8 or cut wrongly"
-[ "$(grep -c 'as Radiance reads it.*; tolerance 0.5 met for light up to 80 deg (not held beyond)$' "$W/v.err")" -eq 4 ] && \
+[ "$(grep -c 'as Radiance reads it.*; build [0-9.]* s of all blocks, this block.s estimate [0-9.]* s .*; tolerance 0.5 met for light up to 80 deg (not held beyond)$' "$W/v.err")" -eq 4 ] && \
     ok "a tree's verdict names the range it covers" || { no "tree verdict"; cat "$W/v.err"; }
 # inputs that are not files: a FIFO and a device refused at once, no hang
 mkfifo "$W/ff.csv"; ln -s /dev/zero "$W/z.bsdf"
