@@ -460,6 +460,9 @@ if "$B" --version | grep -q 'PNG on'; then
     "$B" polar -o "$W/p.png" --material 1.4:3 --material 0.714:3 --angles 0,30 && [ -s "$W/p.png" ] && \
         ok "polar picture" || no "polar"
     rm -f "$W"/*.png
+    # a failing PNG write says why (libpng says only "Write Error"), and leaves no file
+    expect 1 "PNG: Write Error: File too large" "PNG write error names its cause" -- \
+        sh -c "trap '' XFSZ; ulimit -f 4; exec '$B' tabulate -q --grid 5,5,5 -o '$W/t.png'"
     expect 2 "kind must be" "bad preview kind" -- "$B" tabulate --preview sketch="$W/t.png"
     "$B" tabulate -q --theta-i 0:30 --tolerance 1e-2 --preview render="$W/z.png" --zoom 4 \
         --log-decades 3 && [ -s "$W/z.png" ] && ok "render with --zoom and --log-decades" || \
