@@ -474,6 +474,15 @@ if "$B" --version | grep -q 'PNG on'; then
         --preview render="$W/z.png"
     expect 2 "at least 480 x 360" "polar below its readable size" -- "$B" polar -o "$W/p.png" \
         --size 400x300
+    # five curves of both parts: the default height grows to fit the legend (739 pixels
+    # here, the height the refusal of a given 960x720 names); a given size is kept
+    five="--material 1.4:1 --material 1.4:3 --material 1.4:6 --material 1.2:3 --material 1.6:3"
+    "$B" polar --part both $five -o "$W/p5.png" && \
+        [ "$(od -An -j 16 -N 8 -tx1 "$W/p5.png" | tr -d ' \n')" = 000003c0000002e3 ] && \
+        ok "polar --part both, 5 curves: the default size grows to 960 x 739" || no "polar 5 curves at its default size"
+    rm -f "$W/p5.png"
+    expect 2 "at least 739 pixels high" "polar 5 curves at a given 960x720" -- "$B" polar --part both $five \
+        --size 960x720 -o "$W/t.png"
 else
     expect 1 "switched off at build time (-Dpng=disabled)" "no PNG" -- "$B" tabulate -o "$W/t.png"
 fi
