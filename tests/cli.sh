@@ -226,6 +226,9 @@ expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" 
 # .bsdf budgets: predicted before the work, real bounds during it, the verdict's number shown
 expect 3 "node budget, nothing built" "smooth glass beyond the format refused at once" -- "$B" tabulate -q -s 500 -o "$W/t.bsdf"
 expect 3 "coefficient budget, nothing built" "--max-samples below the first pass: no file" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --max-samples 1000 --best-effort
+# four blocks at 1e-3: warned at once with what such a build measured, before the work
+expect 3 "warning: reflection blocks at tolerance 0.001: .* 592 nodes, 99.7 million coefficients, 2.9 GB and 278 CPU s" \
+    "four blocks at 1e-3: the warning names the build's size first" -- "$B" tabulate -o "$W/t.bsdf" --tolerance 1e-3 --max-samples 1000
 "$B" tabulate -o "$W/t.bsdf" --part transmission --max-samples 20000 --best-effort 2>"$W/err"; rc=$?
 nco=$("$B" inspect "$W/t.bsdf" | awk '/^coefficients/ {print $2}')
 [ "$rc" -eq 3 ] && [ -n "$nco" ] && [ "$nco" -le 20000 ] && ok "--max-samples bounds a .bsdf ($nco coefficients)" || no "--max-samples 20000: status $rc, $nco coefficients"
@@ -336,6 +339,8 @@ s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
 "$B" tabulate -q --ior 1.5,1.45,1.4 --tolerance 1e-5 --max-memory 1 --best-effort -o "$W/b.csv" --report "$W/b.json"
 s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
 [ -n "$s" ] && [ $((s * 32)) -le 1048576 ] && ok "3 channels at --max-memory 1: $s nodes, $((s * 32)) bytes" || no "--max-memory 1: $s nodes"
+expect 3 "the memory cap (8000000 samples, 1 MiB) stopped refinement" "a memory failure names the memory cap" -- \
+    "$B" tabulate -q --tolerance 1e-5 --max-memory 1 -o "$W/t.csv"
 rm -f "$W"/b.*
 
 # adaptive tables name their slice rule, and inspect says it
