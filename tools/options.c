@@ -52,7 +52,8 @@ const opt_def opt_table[] = {
     {OPT_METRIC, "metric", 0, "l1|max", 0, CMD_TABULATE,
      "which error must meet E (default l1)"},
     {OPT_GRID, "grid", 0, "NI,NO,NPHI", 0, CMD_TABULATE,
-     "a plain regular grid in (theta_i, theta_o, phi) instead"},
+     "a plain regular grid in (theta_i, theta_o, phi) instead: N points spaced\n"
+     "evenly over each range, both ends included (91,91,181: 1-degree steps)"},
     {OPT_SIDE, "side", 0, "S", 0, CMD_TABULATE,
      "enter (index n, default), leave (index 1/n); for .bsdf also both (the\n"
      "default there)"},
