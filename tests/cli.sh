@@ -379,6 +379,11 @@ expect 1 "holds no 'enter' side" "eval --table of a leave-only .bsdf" -- "$B" ev
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 --part reflection -o "$W/r.bsdf" && \
     "$B" inspect "$W/r.bsdf" | grep -q '^sides *none' && ok ".bsdf --part reflection" || \
     no ".bsdf --part reflection"
+# with --side leave: the reflection of light from below, and the line says so (no 'leave')
+"$B" tabulate --ior 1.5 -s 3 --tolerance 5e-2 --part reflection --side leave -o "$W/r.bsdf" 2>"$W/err" && \
+    "$B" inspect "$W/r.bsdf" > "$W/i.txt" && grep -q '^sides *none' "$W/i.txt" && grep -q '^reflection *bottom$' "$W/i.txt" && \
+    [ "$(grep -c 'r.bsdf (reflection_bottom, as a renderer reads it)' "$W/err")" -eq 1 ] && ! grep -q '(leave,' "$W/err" && \
+    ok ".bsdf --part reflection --side leave: the bottom reflection alone, named so" || { no ".bsdf reflection --side leave"; cat "$W/err" "$W/i.txt"; }
 rm -f "$W/f.bsdf" "$W/r.bsdf" "$W/f.json"
 # .bsdf: --best-effort writes a file that missed the tolerance and still exits 3; the
 # default tolerance of a four-block file is 1e-2 (1e-3 outgrows the format)
