@@ -242,7 +242,7 @@ int cmd_tabulate(cli *c, const char *prov)
         outs[nouts++] = (run_table_out){c->previews[k].path, po, 0};
     }
     run_table_req rq = {prog, out, o, c->part != BTDF_PART_TRANSMISSION, outs, nouts,
-                        c->report, prov, c->quiet, c->best_effort, &pr};
+                        c->report, prov, c->quiet, c->best_effort, &pr, NULL};
     return run_table(&rq);
 }
 

@@ -411,12 +411,18 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     char prov[256], who[256];
     snprintf(prov, sizeof prov, "btdftab build, material [%s], side %s", m->name, side);
     snprintf(who, sizeof who, "%s: %s (%s)", mo->prog, m->name, side);
+    int missed = 0;
     run_table_req rq = {who, NULL, o, m->part != BTDF_PART_TRANSMISSION, todo, ntodo, NULL,
-                        prov, mo->quiet, mo->best_effort, &pr};
+                        prov, mo->quiet, mo->best_effort, &pr, &missed};
     int code = run_table(&rq);
     *done += nouts;
+    /* written above its tolerance (--best-effort): no stamp, so that it is not called
+       up to date later */
+    if (code == 0 && missed && !mo->quiet)
+        fprintf(stderr, "%s: %s (%s): written with --best-effort above its tolerance: no "
+                        "stamp, so the next build makes it again\n", mo->prog, m->name, side);
     char why[512] = "";
-    for (int k = 0; k < ntodo && code == 0; k++)
+    for (int k = 0; k < ntodo && code == 0 && !missed; k++)
         if (!write_stamp_for(todo[k].path, stamp, why, sizeof why)) {
             fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, todo[k].path,
                     why);

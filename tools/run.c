@@ -727,6 +727,8 @@ int run_table(const run_table_req *rq)
                     : strstr(msg, "budget") ? "raise --max-samples (and --max-memory)"
                                              : "try again with --estimate full");
             code = 3;
+        } else if (rq->missed) {
+            *rq->missed = 1;
         }
     }
     if (!estimated) {
