@@ -24,7 +24,7 @@ const opt_def opt_table[] = {
      "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused;\n"
      "tabulate writes it to .csv and .exr, the files record it) or full (smith plus the\n"
      "light scattered two or more times, tallied once per material by a random walk:\n"
-     "R + T = 1; eval, albedo and polar only)"},
+     "R + T = 1; eval, albedo, polar and tabulate to .csv and .exr, which keep the tally)"},
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
      "evaluate a written table (.csv, .exr, .bsdf) instead of Eq. 25; the file gives\n"
      "the material, so --ior, --smoothness and --k0 do not apply"},
@@ -653,7 +653,7 @@ void opt_bash(FILE *f)
         {"estimate", "full fast none"},
         {"side", "enter leave both"},
         {"metric", "l1 max"},
-        {"model", "xu-sun smith"}};
+        {"model", "xu-sun smith full"}};
     fprintf(f, "    case $prev in\n");
     for (size_t k = 0; k < sizeof words / sizeof words[0]; k++)
         fprintf(f, "        --%s) COMPREPLY=($(compgen -W \"%s\" -- \"$cur\")); return ;;\n",
@@ -671,7 +671,7 @@ void opt_bash(FILE *f)
         }
     fprintf(f, ")\n            COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n");
     /* the models this build evaluates (btdf_params_check) */
-    fprintf(f, "        --model)\n            COMPREPLY=($(compgen -W \"xu-sun smith\" -- \"$cur\")); "
+    fprintf(f, "        --model)\n            COMPREPLY=($(compgen -W \"xu-sun smith full\" -- \"$cur\")); "
                "return ;;\n    esac\n");
     fprintf(f, "    local opts\n    case ${COMP_WORDS[1]} in\n");
     for (const cmd_def *c = cmd_table; c->name; c++) {
