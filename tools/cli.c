@@ -380,6 +380,10 @@ int apply(cli *c, const opt_hit *h)
     case OPT_BINS:
     case OPT_MERGE:
     case OPT_PROFILE:
+    case OPT_BACK: /* the pane of simulate: tools/cmd_simulate_pane.c */
+    case OPT_THICKNESS:
+    case OPT_ABSORPTION:
+    case OPT_LIGHT:
     case OPT_HELP:
     case OPT_END: break;
     }

@@ -159,8 +159,9 @@ int cmd_tabulate(cli *c, const char *prov)
            n = 1.5, s = 3); the samplers and metadata carry the model already. */
         if (c->p.model != BTDF_MODEL_XU_SUN && fi.needs == BTDF_NEEDS_SERIES)
             return fail(EXIT_USAGE, "%s: --model %s: not available for this format yet "
-                        "(.csv, .exr and .xml take it; xu-sun is the model of every format)",
-                        out, btdf_model_name(c->p.model));
+                        "(%s take it; xu-sun is the model of every format)",
+                        out, btdf_model_name(c->p.model),
+                        c->p.model == BTDF_MODEL_FULL ? ".csv and .exr" : ".csv, .exr and .xml");
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)

@@ -121,6 +121,16 @@ const opt_def opt_table[] = {
      "2d (default): the surface; 1d: the paper's setting, a profile z = h(x) and\n"
      "rays in its plane of incidence (distribution per radian of theta_o, no\n"
      "comparison with Eq. 25's 2D BTDF)"},
+    {OPT_BACK, "back", 0, "smooth|S", 0, SIM,
+     "simulate a pane instead of one interface: the surface above is its front face,\n"
+     "this its back face, flat (smooth) or rough with smoothness S (an independent\n"
+     "surface); R is on the lit side, T through, A absorbed (docs/simulation.md)"},
+    {OPT_THICKNESS, "thickness", 0, "MM", 0, SIM, "the pane's thickness in mm (default 4)"},
+    {OPT_ABSORPTION, "absorption", 0, "PER_MM", 0, SIM,
+     "the pane's absorption coefficient per mm, Beer-Lambert along each path inside\n"
+     "(default 0)"},
+    {OPT_LIGHT, "light", 0, "front|back", 0, SIM,
+     "the face of the pane the light arrives on (default front)"},
     {OPT_RAYS, "rays", 0, "K", 0, SIM, "rays per angle and channel (default 1000000)"},
     {OPT_SEED, "seed", 0, "X", 0, SIM, "seed of the surfaces and rays (default 1)"},
     {OPT_CELLS, "cells-per-tau", 0, "C", 0, SIM,
@@ -653,7 +663,8 @@ void opt_bash(FILE *f)
         {"estimate", "full fast none"},
         {"side", "enter leave both"},
         {"metric", "l1 max"},
-        {"model", "xu-sun smith full"}};
+        {"model", "xu-sun smith full"},
+        {"light", "front back"}};
     fprintf(f, "    case $prev in\n");
     for (size_t k = 0; k < sizeof words / sizeof words[0]; k++)
         fprintf(f, "        --%s) COMPREPLY=($(compgen -W \"%s\" -- \"$cur\")); return ;;\n",
