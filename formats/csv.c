@@ -276,9 +276,57 @@ static int split(char *s, char **fld, int maxf)
     return n;
 }
 
+/* s is a plain decimal: digits with one point and an exponent at most, a sign in front;
+   no blanks, hexadecimal, inf or nan (the tool's one rule for numbers). */
+static int decimal(const char *s)
+{
+    const char *p = s + (*s == '+' || *s == '-');
+    size_t a = strspn(p, "0123456789"), b = 0;
+    p += a;
+    if (*p == '.') {
+        b = strspn(p + 1, "0123456789");
+        p += 1 + b;
+    }
+    if (a + b == 0)
+        return 0;
+    if (*p == 'e' || *p == 'E') {
+        p += 1 + (p[1] == '+' || p[1] == '-');
+        size_t c = strspn(p, "0123456789");
+        if (c == 0)
+            return 0;
+        p += c;
+    }
+    return *p == '\0';
+}
+
+/* The numbers of a header line after its key, each after one blank, up to the line's
+   end: how many (at most max), or -1 if anything else is there. */
+static int header_nums(const char *s, double *v, int max)
+{
+    int n = 0;
+    while (*s == ' ') {
+        size_t l = strcspn(++s, " \r\n");
+        char tok[64];
+        if (n == max || l == 0 || l >= sizeof tok)
+            return -1;
+        memcpy(tok, s, l);
+        tok[l] = '\0';
+        char *e;
+        errno = 0;
+        v[n] = strtod(tok, &e);
+        if (!decimal(tok) || *e || errno == ERANGE || !isfinite(v[n]))
+            return -1;
+        n++;
+        s += l;
+    }
+    return strspn(s, "\r\n") == strlen(s) && n > 0 ? n : -1;
+}
+
 static int num(const char *s, double *out)
 {
     char *e;
+    if (!decimal(s))
+        return 0;
     errno = 0;
     double v = strtod(s, &e);
     if (e == s || *e || errno == ERANGE || !isfinite(v))
@@ -395,13 +443,23 @@ static btdf_status csv_comment(csv_state *s, const char *line, const char *path,
     } else if (sscanf(line, "# slice-rule: %63s", word) == 1) {
         if (!btdf_table_rule_parse(word, &s->rule))
             st = ferr(msg, msglen, path, s->ln, "slice-rule must be plain, chi or fresnel");
-    } else if (sscanf(line, "# channels: %d", &s->p.channels) == 1) {
+    } else if (!strncmp(line, "# channels:", 11)) {
+        double c = 0;
+        if (header_nums(line + 11, &c, 1) != 1 || (c != 1 && c != 3))
+            st = ferr(msg, msglen, path, s->ln, "'# channels' must be 1 or 3");
+        s->p.channels = (int)c;
         s->have_ch = 1;
     } else if (!strncmp(line, "# ior:", 6)) {
-        s->have_ior = sscanf(line + 6, "%lf %lf %lf", &s->p.ior[0], &s->p.ior[1], &s->p.ior[2]);
-    } else if (sscanf(line, "# smoothness: %lf", &s->p.smoothness) == 1) {
+        s->have_ior = header_nums(line + 6, s->p.ior, 3);
+        if (s->have_ior < 0)
+            st = ferr(msg, msglen, path, s->ln, "'# ior' must be 1 or 3 decimal numbers");
+    } else if (!strncmp(line, "# smoothness:", 13)) {
+        if (header_nums(line + 13, &s->p.smoothness, 1) != 1)
+            st = ferr(msg, msglen, path, s->ln, "'# smoothness' must be a decimal number");
         s->have_s = 1;
-    } else if (sscanf(line, "# k0: %lf", &s->p.k0) == 1) {
+    } else if (!strncmp(line, "# k0:", 5)) {
+        if (header_nums(line + 5, &s->p.k0, 1) != 1)
+            st = ferr(msg, msglen, path, s->ln, "'# k0' must be a decimal number");
         s->have_k0 = 1;
     } else if (sscanf(line, "# ms %d:%n", &ms_ch, &ms_at) == 1 && ms_at > 0) {
         char why[200];

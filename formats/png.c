@@ -19,8 +19,12 @@ typedef struct png_err {
 static void on_png_error(png_structp png, png_const_charp text)
 {
     png_err *e = png_get_error_ptr(png);
+    /* libpng's own writer says "Write Error" when fwrite fails: the cause is errno's
+       (a full disk, a file size limit) */
+    int io = errno != 0 && strcmp(text, "Write Error") == 0;
     if (e && e->text[0] == '\0')
-        snprintf(e->text, sizeof e->text, "%s", text);
+        snprintf(e->text, sizeof e->text, "%s%s%s", text, io ? ": " : "",
+                 io ? strerror(errno) : "");
     png_longjmp(png, 1);
 }
 

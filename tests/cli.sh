@@ -74,6 +74,11 @@ expect 2 "not a number" "n = nan" -- "$B" tabulate --ior nan -o "$W/t.csv"
 expect 2 "not a number" "n = inf" -- "$B" tabulate --ior inf -o "$W/t.csv"
 expect 2 "must be > 0" "n <= 0" -- "$B" tabulate --ior -1.5 -o "$W/t.csv"
 expect 2 "smoothness 0" "s = 0" -- "$B" tabulate -s 0 -o "$W/t.csv"
+# a value just past its bound is shown as given, not rounded onto the bound
+expect 2 "index of refraction 1000.0000001: must lie in \[0.001, 1000\]" "n just above 1000" -- "$B" tabulate --ior 1000.0000001 -o "$W/t.csv"
+expect 2 "smoothness 1000000.5: must lie" "s just above 1e6" -- "$B" tabulate -s 1000000.5 -o "$W/t.csv"
+expect 2 "tolerance 1.0000000001: must lie" "tolerance just above 1" -- "$B" tabulate --tolerance 1.0000000001 -o "$W/t.csv"
+expect 2 "tolerance 0.50000001: must lie" ".bsdf tolerance just above 0.5" -- "$B" tabulate --tolerance 0.50000001 -o "$W/t.bsdf"
 expect 2 "smoothness -3" "s < 0" -- "$B" tabulate -s -3 -o "$W/t.csv"
 expect 2 "theta-o 45" "theta-o out of range" -- "$B" eval 30 45 180
 expect 2 "theta-i 95" "theta-i out of range" -- "$B" eval 95 150 180
@@ -152,6 +157,17 @@ meta_at() { grep -abo '{"program": "btdftab' "$1" | tail -n 1 | cut -d: -f1; }
     ok "manifest .bsdf with part = both: tabulate's file (four blocks)" || no "manifest .bsdf differs from tabulate's"
 rm -rf "$W/m"
 
+# a --best-effort table above its tolerance (1e-7 at 80 degrees: the budget stops it short)
+# gets no stamp, so the next build makes it again rather than call it up to date
+mkdir -p "$W/be"
+printf '[a]\nior = 1.5\nsmoothness = 3\ntheta_i = 80:80\ntolerance = 1e-7\nenter = a.csv\n' > "$W/be/m.ini"
+"$B" build --best-effort "$W/be/m.ini" 2>"$W/err"; rc=$?
+[ "$rc" -eq 0 ] && [ -s "$W/be/a.csv" ] && [ ! -e "$W/be/.a.csv.btdftab-stamp" ] && \
+    grep -q "written with --best-effort above its tolerance: no stamp" "$W/err" && \
+    "$B" build --dry-run "$W/be/m.ini" | grep -q "a.csv: no stamp beside it" && \
+    ok "build --best-effort above the tolerance: no stamp, built again next time" || { no "best-effort stamp: $rc"; cat "$W/err"; }
+rm -rf "$W/be"
+
 # manifests are checked whole before any work; damaged outputs are rebuilt
 mkdir -p "$W/m"
 mat() { printf '[%s]\nior = 1.5\nsmoothness = 3\ntheta_i = 0:10\ntolerance = %s\n' "$1" "${2:-5e-2}"; }
@@ -198,6 +214,17 @@ rm -f "$W/m/d.csv"; mkdir "$W/m/d.csv"
 "$B" build -q "$W/m/v.ini" 2>"$W/err"; rc=$?
 [ "$rc" -eq 2 ] && grep -q "is a folder" "$W/err" && ok "build refuses an output replaced by a folder" || no "folder output: $rc $(cat "$W/err")"
 "$B" build "$W/m/v.ini" 2>&1 | grep -q "up to date" && no "folder output counted as up to date" || ok "a folder is never up to date"
+# a stamp that became a folder: refused by name before the table is built
+rmdir "$W/m/d.csv"; "$B" build -q "$W/m/v.ini"; rm -f "$W/m/.d.csv.btdftab-stamp"; mkdir "$W/m/.d.csv.btdftab-stamp"
+"$B" build "$W/m/v.ini" 2>"$W/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "v.ini:6: output '.*d.csv': its stamp '.d.csv.btdftab-stamp' is a folder" "$W/err" && \
+    ! grep -q "slices" "$W/err" && ok "a stamp replaced by a folder: named, nothing built" || { no "folder stamp: $rc"; cat "$W/err"; }
+rmdir "$W/m/.d.csv.btdftab-stamp"
+# a name too long, in a folder not made yet: refused before the folder and the table
+{ mat a; echo "enter = $W/m/nd/$(printf 'x%.0s' $(seq 1 300)).csv"; } > "$W/m/v.ini"
+"$B" build "$W/m/v.ini" 2>"$W/err"; rc=$?
+[ "$rc" -eq 2 ] && grep -q "v.ini:6: .*the file name is longer than 255 bytes" "$W/err" && [ ! -e "$W/m/nd" ] && \
+    ok "a name too long in a missing folder: refused before any work" || { no "long name in a missing folder: $rc"; cat "$W/err"; }
 rm -rf "$W/m"
 
 # files the tool must never destroy or accept; outputs of one run appear together
@@ -210,6 +237,9 @@ expect 3 "nothing written" ".bsdf whose tolerance is not met: no report either" 
 # .bsdf budgets: predicted before the work, real bounds during it, the verdict's number shown
 expect 3 "node budget, nothing built" "smooth glass beyond the format refused at once" -- "$B" tabulate -q -s 500 -o "$W/t.bsdf"
 expect 3 "coefficient budget, nothing built" "--max-samples below the first pass: no file" -- "$B" tabulate -q -o "$W/t.bsdf" --part transmission --max-samples 1000 --best-effort
+# four blocks at 1e-3: warned at once with what such a build measured, before the work
+expect 3 "warning: reflection blocks at tolerance 0.001: .* 592 nodes, 99.7 million coefficients, 2.9 GB and 278 CPU s" \
+    "four blocks at 1e-3: the warning names the build's size first" -- "$B" tabulate -o "$W/t.bsdf" --tolerance 1e-3 --max-samples 1000
 "$B" tabulate -o "$W/t.bsdf" --part transmission --max-samples 20000 --best-effort 2>"$W/err"; rc=$?
 nco=$("$B" inspect "$W/t.bsdf" | awk '/^coefficients/ {print $2}')
 [ "$rc" -eq 3 ] && [ -n "$nco" ] && [ "$nco" -le 20000 ] && ok "--max-samples bounds a .bsdf ($nco coefficients)" || no "--max-samples 20000: status $rc, $nco coefficients"
@@ -217,6 +247,9 @@ ev=$(sed -n 's/.*tolerance 0.001 not met: e_L1 max \([^ ]*\) (.*/\1/p' "$W/err")
 eb=$(sed -n 's/.*tolerance 0.001 not met: e_L1 max [^ ]* (\([a-z_]*\)).*/\1/p' "$W/err")
 e="$ev $eb"
 [ -n "$ev" ] && grep -q "^btdftab: $W/t.bsdf ($eb, as a renderer reads it):.* e_L1 max $ev mean" "$W/err" && ok "the verdict quotes the report's worst e_L1" || { no "verdict number '$e' not in the report lines"; cat "$W/err"; }
+# each block's line says which figures are the file's (sizes, build time) and which its own
+[ "$(grep -c "as a renderer reads it): [0-9]* nodes, [0-9]* coefficients and build [0-9.]* s of the whole file; this block's estimate [0-9.]* s" "$W/err")" -eq 2 ] && \
+    ok ".bsdf block lines: the file's build time, the block's estimate" || { no ".bsdf block lines' times"; cat "$W/err"; }
 rm -f "$W/t.bsdf"
 "$B" tabulate -q -o "$W/t.bsdf" --part transmission --max-memory 1 --best-effort; rc=$?
 "$B" inspect "$W/t.bsdf" | awk '/^file size/ {exit !($3 < 1048576)}' && [ "$rc" -eq 3 ] && ok "--max-memory bounds a .bsdf build" || no "--max-memory 1: status $rc"
@@ -245,6 +278,29 @@ expect 1 "standard output" "albedo into a full disk" -- sh -c "'$B' albedo > /de
 expect 1 "standard output" "eval into a full disk" -- sh -c "'$B' eval 30 150 180 > /dev/full"
 expect 1 "standard output" "--version into a full disk" -- sh -c "'$B' --version > /dev/full"
 expect 2 "takes nothing after it" "--version extra" -- "$B" --version extra
+for c in tabulate eval simulate; do
+    expect 1 "standard output: No space left" "$c --help into a full disk" -- sh -c "'$B' $c --help > /dev/full"
+done
+expect 2 "--help takes no value, not '--help=yes'" "--help=yes" -- "$B" --help=yes
+expect 2 "--help takes no value, not '--help=yes'" "tabulate --help=yes" -- "$B" tabulate --help=yes
+expect 2 "--quiet takes no value" "--quiet=1" -- "$B" tabulate --quiet=1 -o "$W/t.csv"
+# '--report -' names no file (nor standard output, which may carry the table): refused
+for c in "tabulate -q --grid 2,3,3 -o t.csv" "simulate -q --rays 100"; do
+    expect 2 "--report: '-': the report is a file" "$c --report -" -- \
+        sh -c "cd '$W' && '$B' $c --report -; s=\$?; [ ! -e ./- ] || { rm -f ./-; s=9; }; exit \$s"
+done
+# extensions in any case, for every output and input (the formats' registry reads them so)
+mkdir "$W/uc"
+printf '[a]\nior = 1.5\nsmoothness = 3\ntolerance = 5e-2\ntheta_i = 0:10\nenter = M.CSV\n' > "$W/uc/m.ini"
+"$B" build -q "$W/uc/m.ini" && echo '5 150 180' | "$B" eval --table "$W/uc/M.CSV" >/dev/null && \
+    "$B" simulate -q --rays 100 --report "$W/uc/S.JSON" -o "$W/uc/S.CSV" && [ -s "$W/uc/S.CSV" ] && \
+    ok "upper-case extensions: a manifest's output, simulate -o" || no "upper-case extensions refused"
+if "$B" --version | grep -q 'PNG on'; then
+    "$B" tabulate -q --grid 2,3,3 -o "$W/uc/t.csv" --preview "$W/uc/Q.PNG" && "$B" polar -o "$W/uc/P.PNG" && \
+        "$B" simulate -q --rays 100 --preview "$W/uc/S.PNG" && [ -s "$W/uc/Q.PNG" ] && [ -s "$W/uc/S.PNG" ] && \
+        ok "upper-case .PNG for --preview, polar and simulate" || no "upper-case .PNG refused"
+fi
+rm -rf "$W/uc"
 # a killed run's temporary: our name's shape, an hour old, no writer's lock
 echo half > "$W/.k.csv.btdftmp0123456789abcdef.csv"
 touch -d '1 hour ago' "$W/.k.csv.btdftmp0123456789abcdef.csv"
@@ -271,6 +327,20 @@ expect 2 "not a number" "--ior in hexadecimal" -- "$B" tabulate --ior 0x1.8p0 -o
 expect 2 "--grid" "--grid with blanks" -- "$B" tabulate --grid ' 3, 5, 5' -o "$W/t.csv"
 expect 2 "--grid" "--grid in hexadecimal" -- "$B" tabulate --grid 0x3,5,5 -o "$W/t.csv"
 expect 2 "line 1: expected three angles" "eval input in hexadecimal" -- sh -c "echo '0x1e 150 180' | '$B' eval"
+expect 2 "line 1: a number is out of range" "eval input 1e-320 (a subnormal)" -- sh -c "echo '1e-320 150 180' | '$B' eval"
+# numbers of any length, read whole by every reader (they were cut at 32, 64 or 128 bytes)
+z=$(printf '0%.0s' $(seq 1 200))
+"$B" tabulate -q --grid 2,3,3 --theta-i "${z}5:40" -o "$W/z.csv" && \
+    [ "$(awk -F, '!/^#/ && NR > 1 { print $1; exit }' "$W/z.csv")" = 5 ] && \
+    echo "${z}30 150 180" | "$B" eval --table "$W/z.csv" > /dev/null && \
+    [ "$(echo "${z}30 150 180" | "$B" eval)" = "$("$B" eval 30 150 180)" ] && \
+    "$B" simulate -q --rays 100 --theta-i "${z}30:40:10" --report "$W/z.json" && \
+    ok "201-digit numbers in --theta-i, eval rows, eval --table rows, simulate --theta-i" || no "long numbers cut or refused"
+if "$B" --version | grep -q 'PNG on'; then
+    "$B" polar -o "$W/z.png" --material "${z}1.4:3" --size "${z}640x480" && [ -s "$W/z.png" ] && \
+        ok "201-digit numbers in --material and --size" || no "long --material or --size"
+fi
+rm -f "$W"/z.*
 
 # budgets are bounds
 expect 3 "below the 4199 nodes" "--max-samples below the coarsest table" -- "$B" tabulate -q --max-samples 1000 --best-effort -o "$W/t.csv"
@@ -280,6 +350,8 @@ s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
 "$B" tabulate -q --ior 1.5,1.45,1.4 --tolerance 1e-5 --max-memory 1 --best-effort -o "$W/b.csv" --report "$W/b.json"
 s=$(sed -n 's/.*"samples": \([0-9]*\).*/\1/p' "$W/b.json")
 [ -n "$s" ] && [ $((s * 32)) -le 1048576 ] && ok "3 channels at --max-memory 1: $s nodes, $((s * 32)) bytes" || no "--max-memory 1: $s nodes"
+expect 3 "the memory cap (8000000 samples, 1 MiB) stopped refinement" "a memory failure names the memory cap" -- \
+    "$B" tabulate -q --tolerance 1e-5 --max-memory 1 -o "$W/t.csv"
 rm -f "$W"/b.*
 
 # adaptive tables name their slice rule, and inspect says it
@@ -301,9 +373,11 @@ rm -f "$W/z.bsdf"
 # .bsdf: a lobe too narrow for the format's node budget stops before any work, exit 3
 expect 3 "node budget, nothing built" "hopeless .bsdf" -- "$B" tabulate --ior 1.000001 -s 1e6 -o "$W/t.bsdf"
 # .bsdf: --report is written; a file without the enter side is refused by eval
+# (its numbers the shortest decimals that read back: 1.5, 0.7 and 0.03, not 17 digits)
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 3e-2 --side leave --part transmission --report "$W/l.json" -o "$W/l.bsdf" && \
     grep -q '"kind": "scatfun"' "$W/l.json" && grep -q '"pbrt_v3_single_precision_safe": true' "$W/l.json" && \
-    grep -q '"leave": {"met": true' "$W/l.json" && ok ".bsdf --report" || no ".bsdf --report"
+    grep -q '"leave": {"met": true' "$W/l.json" && grep -q '"k0": 0.7,' "$W/l.json" && \
+    grep -q '"tolerance": 0.03,' "$W/l.json" && ok ".bsdf --report" || no ".bsdf --report"
 expect 1 "holds no 'enter' side" "eval --table of a leave-only .bsdf" -- "$B" eval --table "$W/l.bsdf" 30 150 180
 # .bsdf: the full interface by default (four blocks, each reported), --part transmission
 # the two transmission blocks only; --part reflection/both is refused for .xml
@@ -316,6 +390,11 @@ expect 1 "holds no 'enter' side" "eval --table of a leave-only .bsdf" -- "$B" ev
 "$B" tabulate -q --ior 1.5 -s 3 --tolerance 5e-2 --part reflection -o "$W/r.bsdf" && \
     "$B" inspect "$W/r.bsdf" | grep -q '^sides *none' && ok ".bsdf --part reflection" || \
     no ".bsdf --part reflection"
+# with --side leave: the reflection of light from below, and the line says so (no 'leave')
+"$B" tabulate --ior 1.5 -s 3 --tolerance 5e-2 --part reflection --side leave -o "$W/r.bsdf" 2>"$W/err" && \
+    "$B" inspect "$W/r.bsdf" > "$W/i.txt" && grep -q '^sides *none' "$W/i.txt" && grep -q '^reflection *bottom$' "$W/i.txt" && \
+    [ "$(grep -c 'r.bsdf (reflection_bottom, as a renderer reads it)' "$W/err")" -eq 1 ] && ! grep -q '(leave,' "$W/err" && \
+    ok ".bsdf --part reflection --side leave: the bottom reflection alone, named so" || { no ".bsdf reflection --side leave"; cat "$W/err" "$W/i.txt"; }
 rm -f "$W/f.bsdf" "$W/r.bsdf" "$W/f.json"
 # .bsdf: --best-effort writes a file that missed the tolerance and still exits 3; the
 # default tolerance of a four-block file is 1e-2 (1e-3 outgrows the format)
@@ -360,6 +439,11 @@ rm -f "$W/d1.csv" "$W/d2.csv" "$W/rerr" "$W/berr"
 expect 2 "must be transmission, reflection or both" "tabulate: bad --part" -- "$B" tabulate --part mirror -o "$W/t.csv"
 expect 2 "grid tables hold the transmission only" "--part reflection with --grid" -- "$B" tabulate --part reflection --grid 3,4,4 -o "$W/t.csv"
 expect 2 "applies to .csv, .exr and .bsdf" "--part reflection for .xml" -- "$B" tabulate --part reflection -o "$W/t.xml"
+# options of tables and renders that a .xml or .bsdf cannot honour are refused, not ignored
+for o in "--zoom 4" "--log-decades 3" "--estimate none"; do
+    expect 2 "${o%% *} does not apply to .xml" ".xml refuses $o" -- "$B" tabulate $o -o "$W/t.xml"
+    expect 2 "${o%% *} was given" ".bsdf refuses $o" -- "$B" tabulate $o -o "$W/t.bsdf"
+done
 if "$B" --version | grep -q 'OpenEXR on'; then
     "$B" tabulate -q --ior 1.5 -s 3 --theta-i 0:40 --tolerance 1e-2 --part both -o "$W/b.exr" && \
         x=$(echo "30 30 180" | "$B" eval --table "$W/b.exr" --part reflection) && \
@@ -397,6 +481,9 @@ if "$B" --version | grep -q 'PNG on'; then
     "$B" polar -o "$W/p.png" --material 1.4:3 --material 0.714:3 --angles 0,30 && [ -s "$W/p.png" ] && \
         ok "polar picture" || no "polar"
     rm -f "$W"/*.png
+    # a failing PNG write says why (libpng says only "Write Error"), and leaves no file
+    expect 1 "PNG: Write Error: File too large" "PNG write error names its cause" -- \
+        sh -c "trap '' XFSZ; ulimit -f 4; exec '$B' tabulate -q --grid 5,5,5 -o '$W/t.png'"
     expect 2 "kind must be" "bad preview kind" -- "$B" tabulate --preview sketch="$W/t.png"
     "$B" tabulate -q --theta-i 0:30 --tolerance 1e-2 --preview render="$W/z.png" --zoom 4 \
         --log-decades 3 && [ -s "$W/z.png" ] && ok "render with --zoom and --log-decades" || \
@@ -408,6 +495,15 @@ if "$B" --version | grep -q 'PNG on'; then
         --preview render="$W/z.png"
     expect 2 "at least 480 x 360" "polar below its readable size" -- "$B" polar -o "$W/p.png" \
         --size 400x300
+    # five curves of both parts: the default height grows to fit the legend (739 pixels
+    # here, the height the refusal of a given 960x720 names); a given size is kept
+    five="--material 1.4:1 --material 1.4:3 --material 1.4:6 --material 1.2:3 --material 1.6:3"
+    "$B" polar --part both $five -o "$W/p5.png" && \
+        [ "$(od -An -j 16 -N 8 -tx1 "$W/p5.png" | tr -d ' \n')" = 000003c0000002e3 ] && \
+        ok "polar --part both, 5 curves: the default size grows to 960 x 739" || no "polar 5 curves at its default size"
+    rm -f "$W/p5.png"
+    expect 2 "at least 739 pixels high" "polar 5 curves at a given 960x720" -- "$B" polar --part both $five \
+        --size 960x720 -o "$W/t.png"
 else
     expect 1 "switched off at build time (-Dpng=disabled)" "no PNG" -- "$B" tabulate -o "$W/t.png"
 fi
@@ -459,6 +555,10 @@ head -n 1 "$W/n.csv" | grep -q '^theta_i_deg,' && ok "the CSV's first line is it
 rm -f "$W/n.csv"
 v=$("$B" albedo --ior 1.5 -s 100 0 89.9 | tail -n 1)
 case "$v" in 89.9,0.006994374,0.01008812,*) ok "albedo in 7 significant digits ($v)" ;; *) no "albedo digits: $v" ;; esac
+# T and R below the smallest normal double are 0 (1.2e-317 and 2.2e-318 here), never
+# a subnormal that the tool's own readers refuse
+v=$("$B" albedo -q -s 1e-3 45 | tail -n 1)
+[ "$v" = "45,0,0.9497601,0,0" ] && ok "albedo: an underflow prints 0" || no "albedo underflow: $v"
 "$B" tabulate -q --grid 2,3,3 --k0 0.7 -o "$W/n.csv" --report "$W/n.json" && grep -q '"k0": 0.7,' "$W/n.json" && \
     ok "the JSON report prints 0.7" || no "JSON numbers: $(grep k0 "$W/n.json")"
 rm -f "$W"/n.*
@@ -482,11 +582,14 @@ rm -f "$W"/i.*
 # its name (the file's base name) a Latin-1 byte and 140 bytes of UTF-8: the XML stays
 # UTF-8 (the byte as the character it is in Latin-1), cut at a character's start
 vn="$(printf '\351')$(i=0; while [ $i -lt 70 ]; do printf '\303\251'; i=$((i + 1)); done)"
-"$B" tabulate --tolerance 0.5 --threads 1 -o "$W/$vn.xml" 2>"$W/v.err"
+"$B" tabulate --tolerance 0.5 --threads 1 -o "$W/$vn.xml" --report "$W/v.json" 2>"$W/v.err"
 mv "$W/$vn.xml" "$W/v.xml"
+grep -q '"k0": 0.7,' "$W/v.json" && grep -q '"label": "Transmission Back", .*"n": 1.5,' "$W/v.json" && \
+    ok "a .xml report's numbers: the shortest decimals that read back" || no ".xml report numbers: $(grep -m 2 '"k0"\|"n":' "$W/v.json")"
+rm -f "$W/v.json"
 python3 -c "import sys, xml.etree.ElementTree as E; n = E.parse(sys.argv[1]).find('.//{http://windows.lbl.gov}Name').text; sys.exit(n != '\u00e9' * 64)" "$W/v.xml" && \
     ok ".xml names: Latin-1 and a cut inside UTF-8 give valid UTF-8 XML" || no ".xml name not valid UTF-8 or cut wrongly"
-[ "$(grep -c 'as Radiance reads it.*; tolerance 0.5 met for light up to 80 deg (not held beyond)$' "$W/v.err")" -eq 4 ] && \
+[ "$(grep -c 'as Radiance reads it.*; build [0-9.]* s of all blocks, this block.s estimate [0-9.]* s .*; tolerance 0.5 met for light up to 80 deg (not held beyond)$' "$W/v.err")" -eq 4 ] && \
     ok "a tree's verdict names the range it covers" || { no "tree verdict"; cat "$W/v.err"; }
 # inputs that are not files: a FIFO and a device refused at once, no hang
 mkfifo "$W/ff.csv"; ln -s /dev/zero "$W/z.bsdf"

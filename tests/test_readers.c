@@ -220,6 +220,53 @@ static void csv_previous_format(void **state)
     btdf_table_free(t);
 }
 
+/* Header and row numbers are plain decimals, as the tool reads every number: hex, a
+   blank before or after, inf or a stray channel count are refused, each naming its key. */
+static void csv_header_numbers(void **state)
+{
+    (void)state;
+    char path[512], bad[512];
+    snprintf(path, sizeof path, "%s/h.csv", dir);
+    snprintf(bad, sizeof bad, "%s/bad.csv", dir);
+    btdf_table *t = small_grid(3);
+    assert_status(BTDF_OK, btdf_table_write(t, path, NULL, NULL, 0));
+    btdf_table_free(t);
+    size_t n;
+    char *b = (char *)slurp(path, &n);
+    b[n] = '\0';
+    static const struct {
+        const char *from, *to, *why;
+    } cases[] = {
+        {"# smoothness: 3\n", "# smoothness: 0x3\n", "'# smoothness' must be a decimal"},
+        {"# smoothness: 3\n", "# smoothness:  3\n", "'# smoothness' must be a decimal"},
+        {"# smoothness: 3\n", "# smoothness: 0x1.8p1\n", "'# smoothness' must be a decimal"},
+        {"# k0: 0.7\n", "# k0: 0.7 \n", "'# k0' must be a decimal"},
+        {"# channels: 3\n", "# channels: 0x3\n", "'# channels' must be 1 or 3"},
+        {"# channels: 3\n", "# channels: 2\n", "'# channels' must be 1 or 3"},
+        {"# ior: 1.5 1.5 1.5\n", "# ior: 1.5 inf 1.5\n", "'# ior' must be 1 or 3 decimal"},
+        {"# ior: 1.5 1.5 1.5\n", "# ior: 1.5 1.5 0x7\n", "'# ior' must be 1 or 3 decimal"},
+        {"\n0,90,0,0,", "\n0,90,0,0x0,", "malformed"}, /* rho_r of the first row */
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char *at = strstr(b, cases[k].from);
+        assert_non_null(at);
+        size_t lf = strlen(cases[k].from), lt = strlen(cases[k].to), pre = (size_t)(at - b);
+        char *c = malloc(n + lt + 1);
+        assert_non_null(c);
+        memcpy(c, b, pre);
+        memcpy(c + pre, cases[k].to, lt);
+        memcpy(c + pre + lt, at + lf, n - pre - lf);
+        spill(bad, c, n - lf + lt);
+        free(c);
+        const char *why = refused(bad);
+        if (!strstr(why, cases[k].why)) {
+            print_error("'%s': '%s' lacks '%s'\n", cases[k].to, why, cases[k].why);
+            fail();
+        }
+    }
+    free(b);
+}
+
 #if BTDF_HAVE_OPENEXR
 /* Sets the data window of the first part to (0,0)-(mx,my) in the header bytes. */
 static int patch_window(unsigned char *b, size_t n, int32_t mx, int32_t my)
@@ -289,6 +336,7 @@ int main(void)
         cmocka_unit_test(csv_cuts),
         cmocka_unit_test(csv_rows_lost_or_added),
         cmocka_unit_test(csv_previous_format),
+        cmocka_unit_test(csv_header_numbers),
 #if BTDF_HAVE_OPENEXR
         cmocka_unit_test(exr_declared_sizes),
 #endif

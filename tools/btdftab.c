@@ -93,6 +93,11 @@ int main(int argc, char **argv)
                 !strcmp(name, "-V") || !strcmp(name, "--man");
     if (alone && argc > 2)
         return fail(EXIT_USAGE, "%s takes nothing after it, not '%s'", name, argv[2]);
+    static const char *const bare[] = {"--help=", "--version=", "--man="};
+    for (size_t k = 0; k < sizeof bare / sizeof bare[0]; k++)
+        if (!strncmp(name, bare[k], strlen(bare[k])))
+            return fail(EXIT_USAGE, "%.*s takes no value, not '%s'", (int)strlen(bare[k]) - 1,
+                        name, name);
     if (!strcmp(name, "--help") || !strcmp(name, "-h")) {
         opt_help(stdout, NULL);
         return stdout_done(0);
@@ -103,7 +108,7 @@ int main(int argc, char **argv)
         if (argc != 3 || strcmp(argv[2], "bash"))
             return fail(EXIT_USAGE, "--completion: give 'bash' (the only shell supported)");
         opt_bash(stdout);
-        return fflush(stdout) == 0 ? 0 : 1;
+        return stdout_done(0);
     }
     if (!strcmp(name, "--man")) {
         opt_man(stdout, btdf_version_string());

@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* cli.c: the command line into struct cli (through the option table of
    options.c), and the checks and helpers several commands share. */
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <signal.h>
@@ -37,7 +38,12 @@ int fail(int code, const char *fmt, ...)
 int ends_with(const char *s, const char *suffix)
 {
     size_t ls = strlen(s), lx = strlen(suffix);
-    return ls >= lx && strcmp(s + ls - lx, suffix) == 0;
+    if (ls < lx)
+        return 0;
+    for (size_t i = 0; i < lx; i++) /* extensions in any case, as the formats' registry */
+        if (tolower((unsigned char)s[ls - lx + i]) != tolower((unsigned char)suffix[i]))
+            return 0;
+    return 1;
 }
 
 /* ------------------------------------------------------------------------- */
@@ -74,6 +80,17 @@ int parse_ior(const char *val, btdf_params *p)
     return 1;
 }
 
+/* The n bytes at s as a string of its own (malloc'd), or NULL when out of memory. */
+static char *span_copy(const char *s, size_t n)
+{
+    char *b = malloc(n + 1);
+    if (b) {
+        memcpy(b, s, n);
+        b[n] = '\0';
+    }
+    return b;
+}
+
 /* A:B in degrees within [lo, hi], A <= B (A < B when strict). */
 int parse_range(const char *flag, const char *s, double lo, double hi, int strict,
                 double *a, double *b)
@@ -83,9 +100,14 @@ int parse_range(const char *flag, const char *s, double lo, double hi, int stric
         fail(EXIT_USAGE, "%s: '%s': expected A:B in degrees, e.g. %g:%g", flag, s, lo, hi);
         return 0;
     }
-    char buf[128];
-    snprintf(buf, sizeof buf, "%.*s", (int)(colon - s), s);
-    if (!parse_double(flag, buf, a) || !parse_double(flag, colon + 1, b))
+    char *buf = span_copy(s, (size_t)(colon - s)); /* any length: no silent cut */
+    if (!buf) {
+        fail(1, "out of memory");
+        return 0;
+    }
+    int good = parse_double(flag, buf, a) && parse_double(flag, colon + 1, b);
+    free(buf);
+    if (!good)
         return 0;
     if (!(*a >= lo && *b <= hi && (strict ? *a < *b : *a <= *b))) {
         fail(EXIT_USAGE, "%s: '%s': need %g <= A %s B <= %g degrees", flag, s, lo,
@@ -127,13 +149,12 @@ int parse_preview(const char *s, preview_req *r)
 int parse_picture_size(const char *s, int *w, int *h)
 {
     const char *x = strchr(s, 'x');
-    char buf[32];
+    char *buf = x ? span_copy(s, (size_t)(x - s)) : NULL; /* any length, as every number */
     size_t W = 0, H = 0;
-    if (x && (size_t)(x - s) < sizeof buf)
-        snprintf(buf, sizeof buf, "%.*s", (int)(x - s), s);
-    if (!x || (size_t)(x - s) >= sizeof buf ||
-        num_size(buf, 64, BTDF_PREVIEW_MAX_SIDE, &W) ||
-        num_size(x + 1, 64, BTDF_PREVIEW_MAX_SIDE, &H)) {
+    int bad = !buf || num_size(buf, 64, BTDF_PREVIEW_MAX_SIDE, &W) ||
+              num_size(x + 1, 64, BTDF_PREVIEW_MAX_SIDE, &H);
+    free(buf);
+    if (bad) {
         fail(EXIT_USAGE, "--size: '%s': expected WxH, each in [64, %d] pixels", s,
              BTDF_PREVIEW_MAX_SIDE);
         return 0;
@@ -177,15 +198,20 @@ static int apply_grid(cli *c, const char *v)
 static int apply_material(cli *c, const char *v)
 {
     const char *colon = strchr(v, ':');
-    char buf[64];
     if (!colon || c->nm == BTDF_PREVIEW_MAX_CURVES) {
         fail(EXIT_USAGE, "--material: '%s': expected N:S (at most %d)", v,
              BTDF_PREVIEW_MAX_CURVES);
         return 0;
     }
-    snprintf(buf, sizeof buf, "%.*s", (int)(colon - v), v);
-    if (!parse_double("--material", buf, &c->mat_n[c->nm]) ||
-        !parse_double("--material", colon + 1, &c->mat_s[c->nm]))
+    char *buf = span_copy(v, (size_t)(colon - v)); /* any length: no silent cut */
+    if (!buf) {
+        fail(1, "out of memory");
+        return 0;
+    }
+    int good = parse_double("--material", buf, &c->mat_n[c->nm]) &&
+               parse_double("--material", colon + 1, &c->mat_s[c->nm]);
+    free(buf);
+    if (!good)
         return 0;
     c->nm++;
     return 1;
@@ -273,7 +299,11 @@ int apply(cli *c, const opt_hit *h)
         fail(EXIT_USAGE, "--part: '%s': must be transmission, reflection or both", v);
         return 0;
     case OPT_OUTPUT: c->out = v; return 1;
-    case OPT_REPORT: c->report = v; return 1;
+    case OPT_REPORT:
+        if (!strcmp(v, "-")) /* not standard output: it may carry the table (-o -) */
+            return fail(EXIT_USAGE, "--report: '-': the report is a file; give FILE.json"), 0;
+        c->report = v;
+        return 1;
     case OPT_TOLERANCE: return parse_double("--tolerance", v, &c->o.tolerance);
     case OPT_METRIC:
         if (run_parse_metric(v, &c->o.metric))
@@ -376,7 +406,7 @@ int parse_command(const cmd_def *cmd, int argc, char **argv, cli *c)
     for (int k = 0; k < nh; k++)
         if (hits[k].id == OPT_HELP) {
             opt_help(stdout, cmd);
-            return fflush(stdout) == 0 ? 0 : 1;
+            return stdout_done(0);
         }
     for (int k = 0; k < nh; k++) {
         GIVEN(c, hits[k].id)++;
@@ -470,12 +500,15 @@ int read_row(const char *line, double *v, int want)
         if (n == want)
             return -1;
         size_t len = strcspn(s, " \t,\r\n#");
-        char tok[64];
-        if (len >= sizeof tok)
+        char small[64], *tok = len < sizeof small ? small : malloc(len + 1);
+        if (!tok) /* a token of any length, as eval's stream reads it */
             return -1;
         memcpy(tok, s, len);
         tok[len] = 0;
-        if (num_double(tok, &v[n]) != NULL)
+        const char *why = num_double(tok, &v[n]);
+        if (tok != small)
+            free(tok);
+        if (why != NULL)
             return -1;
         n++;
         s += len;

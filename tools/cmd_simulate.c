@@ -5,6 +5,8 @@
    are written by simulate_out.c. */
 #include "cmd_simulate.h"
 
+#include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -36,6 +38,18 @@ int simulate_vfail(int code, const char *fmt, va_list ap)
     return code;
 }
 
+/* s ends in ext, in any case (as the formats' registry reads extensions) */
+static int ext_is(const char *s, const char *ext)
+{
+    size_t n = strlen(s), l = strlen(ext);
+    if (n < l)
+        return 0;
+    for (size_t i = 0; i < l; i++)
+        if (tolower((unsigned char)s[n - l + i]) != tolower((unsigned char)ext[i]))
+            return 0;
+    return 1;
+}
+
 static int fail(int code, const char *fmt, ...)
 {
     va_list ap;
@@ -51,15 +65,20 @@ static int parse_angles(const char *v, double *ti, size_t *n)
     double a[MAX_ANGLES];
     int k = 0;
     if (strchr(v, ':')) {
-        char buf[128];
+        char *buf = malloc(strlen(v) + 1); /* any length: no silent cut */
         double lo, hi, st;
-        snprintf(buf, sizeof buf, "%s", v);
+        if (!buf)
+            return fail(1, "out of memory"), 0;
+        strcpy(buf, v);
         char *c1 = strchr(buf, ':'), *c2 = c1 ? strchr(c1 + 1, ':') : NULL;
-        if (!c2)
+        if (!c2) {
+            free(buf);
             return fail(2, "--theta-i: '%s': expected A:B:STEP in degrees, e.g. 0:80:10", v), 0;
+        }
         *c1 = *c2 = 0;
-        if (num_double(buf, &lo) || num_double(c1 + 1, &hi) || num_double(c2 + 1, &st) ||
-            !(st > 0) || !(hi >= lo) || (hi - lo) / st >= MAX_ANGLES)
+        int bad = num_double(buf, &lo) || num_double(c1 + 1, &hi) || num_double(c2 + 1, &st);
+        free(buf);
+        if (bad || !(st > 0) || !(hi >= lo) || (hi - lo) / st >= MAX_ANGLES)
             return fail(2, "--theta-i: '%s': need A <= B and STEP > 0, at most %d angles", v,
                         MAX_ANGLES), 0;
         for (double t = lo; t <= hi + 1e-9 * st; t = lo + st * (double)k)
@@ -354,9 +373,9 @@ static int parse_bins(const char *v, int *nt, int *np)
 static int parse_output(const char *v, const char **out)
 {
     size_t n = strlen(v);
-    if (n < 5 || (strcmp(v + n - 4, ".csv") && strcmp(v + n - 4, ".exr")))
+    if (n < 5 || (!ext_is(v, ".csv") && !ext_is(v, ".exr")))
         return fail(2, "-o '%s': the distribution is written as .csv or .exr", v);
-    if (!strcmp(v + n - 4, ".exr") && !btdf_format_available(".exr"))
+    if (ext_is(v, ".exr") && !btdf_format_available(".exr"))
         return fail(2, "-o '%s': this build has no OpenEXR (meson -Dopenexr=enabled)", v);
     *out = v;
     return -1;
@@ -483,7 +502,9 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
     for (int k = 0; k < nh; k++)
         if (hits[k].id == OPT_HELP) {
             opt_help(stdout, cmd);
-            return fflush(stdout) == 0 ? 0 : 1;
+            if (fflush(stdout) != 0 || ferror(stdout)) /* a full disk, a closed pipe */
+                return fail(1, "standard output: %s", strerror(errno));
+            return 0;
         }
     int merging = 0;
     for (int k = 0; k < nh; k++)
@@ -551,11 +572,15 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
                 return 2;
             o->max_memory = v << 20;
             break;
-        case OPT_REPORT: *report = s; break;
+        case OPT_REPORT:
+            if (!strcmp(s, "-")) /* not standard output, as tabulate's */
+                return fail(2, "--report: '-': the report is a file; give FILE.json");
+            *report = s;
+            break;
         case OPT_QUIET: *quiet = 1; break;
         case OPT_PREVIEW: {
             size_t n = strlen(s);
-            if (n < 5 || strcmp(s + n - 4, ".png"))
+            if (n < 5 || !ext_is(s, ".png"))
                 return fail(2, "--preview '%s': the picture is a .png", s);
             if (!btdf_format_available(".png"))
                 return fail(2, "--preview '%s': this build has no pictures (meson -Dpng=enabled)",
@@ -697,7 +722,7 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     if (dist && btdf_output_check(dist, msg, sizeof msg) != BTDF_OK)
         return fail(1, "%s: %s", dist, msg);
     /* an EXR table's slices need distinct angles: said before the run, not after it */
-    if (dist && !strcmp(dist + strlen(dist) - 4, ".exr"))
+    if (dist && ext_is(dist, ".exr"))
         for (size_t i = 0; i < o.n_theta; i++)
             for (size_t j = 0; j < i; j++)
                 if (o.theta_i[i] == o.theta_i[j])
@@ -755,11 +780,9 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     if (!quiet)
         print_summary(&o, r, eqT, eqR, cmp);
     code = report ? write_report(report, prov, &o, r, eqT, eqR, cmp) : 0;
-    if (code == 0 && dist) {
-        size_t n = strlen(dist);
-        code = strcmp(dist + n - 4, ".exr") ? write_dist(dist, prov, &o, r)
-                                            : write_dist_exr(dist, prov, &o, r);
-    }
+    if (code == 0 && dist)
+        code = !ext_is(dist, ".exr") ? write_dist(dist, prov, &o, r)
+                                     : write_dist_exr(dist, prov, &o, r);
     if (code == 0 && preview_path)
         code = write_preview(preview_path, r);
     free(eqT);

@@ -49,13 +49,14 @@ static int tabulate_series(const cli *c, const char *prov)
 {
     static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
                                         OPT_PHI, OPT_METRIC, OPT_SIZE, OPT_LOG_DECADES,
-                                        OPT_ZOOM};
+                                        OPT_ZOOM, OPT_ESTIMATE};
     for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
         if (GIVEN(c, table_only[k]))
             return fail(EXIT_USAGE, "%s: --theta-i, --theta-o, --phi, --grid, --metric, "
-                                    "--preview, --size, --log-decades and --zoom do not apply "
-                                    "to .bsdf (the file covers every direction of both "
-                                    "hemispheres; --%s was given)",
+                                    "--preview, --size, --log-decades, --zoom and --estimate "
+                                    "do not apply to .bsdf (the file covers every direction of "
+                                    "both hemispheres, and its blocks are always checked in "
+                                    "full; --%s was given)",
                         c->out, opt_find(table_only[k])->name);
     if (c->report && !folder_writable(c->report))
         return 1;
@@ -81,11 +82,13 @@ static int tabulate_radiance(const cli *c, const char *prov)
 {
     static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
                                         OPT_PHI, OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY,
-                                        OPT_SIZE, OPT_SIDE};
+                                        OPT_SIZE, OPT_SIDE, OPT_LOG_DECADES, OPT_ZOOM,
+                                        OPT_ESTIMATE};
     for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
         if (GIVEN(c, table_only[k]))
             return fail(EXIT_USAGE, "%s: --%s does not apply to .xml (it holds every "
-                                    "direction, light from either side)",
+                                    "direction, light from either side, and its blocks are "
+                                    "always checked in full)",
                         c->out, opt_find(table_only[k])->name);
     if (GIVEN(c, OPT_TOLERANCE) && c->basis != BTDF_RAD_TREE3)
         return fail(EXIT_USAGE, "--tolerance: a Klems matrix holds exact patch averages; its "
@@ -261,7 +264,7 @@ int cmd_tabulate(cli *c, const char *prov)
         outs[nouts++] = (run_table_out){c->previews[k].path, po, 0};
     }
     run_table_req rq = {prog, out, o, c->part != BTDF_PART_TRANSMISSION, outs, nouts,
-                        c->report, prov, c->quiet, c->best_effort, &pr};
+                        c->report, prov, c->quiet, c->best_effort, &pr, NULL};
     return run_table(&rq);
 }
 

@@ -3,6 +3,7 @@
 #include "evalstream.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
@@ -29,8 +30,9 @@ typedef struct job {
     chunk c[CHUNKS];
 } job;
 
-/* Up to `want` numbers separated by blanks or commas; how many, -1 on junk. The
-   rules of the tool's other row readers. */
+/* Up to `want` numbers separated by blanks or commas; how many, -1 on junk, -2 on a
+   number out of range (a subnormal, as numparse refuses it). The rules of the tool's
+   other row readers. */
 static int row(const char *s, const char *end, double *v, int want)
 {
     int n = 0;
@@ -50,6 +52,8 @@ static int row(const char *s, const char *end, double *v, int want)
         double x = fastnum_strtod(s, &e);
         if (e == s || e != t || !isfinite(x))
             return -1;
+        if (x != 0.0 && fabs(x) < DBL_MIN)
+            return -2;
         v[n++] = x;
         s = e;
     }
@@ -85,6 +89,12 @@ static void run_chunk(job *j, size_t i)
         s = nl ? nl + 1 : c->end;
         if (k == 0)
             continue; /* blank or comment line */
+        if (k == -2) {
+            c->bad_line = ln;
+            snprintf(c->msg, sizeof c->msg, "a number is out of range (its magnitude is below "
+                                            "2.2e-308, the smallest normal double)");
+            return;
+        }
         if (k != 3) {
             c->bad_line = ln;
             snprintf(c->msg, sizeof c->msg, "expected three angles 'TI %s PHI'",

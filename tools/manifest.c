@@ -1,5 +1,6 @@
 /* SPDX-License-Identifier: MIT */
 /* manifest.c: `btdftab build scene.ini`, the outputs of a scene's materials and nothing more. */
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -131,7 +132,12 @@ static int split_outputs(manifest *mf, const char *key, const char *value, char 
 static int ends_with(const char *s, const char *x)
 {
     size_t ls = strlen(s), lx = strlen(x);
-    return ls >= lx && strcmp(s + ls - lx, x) == 0;
+    if (ls < lx)
+        return 0;
+    for (size_t i = 0; i < lx; i++) /* extensions in any case, as the formats' registry */
+        if (tolower((unsigned char)s[ls - lx + i]) != tolower((unsigned char)x[i]))
+            return 0;
+    return 1;
 }
 
 /* A section that sets nothing is a mistake (a misspelt name, a lost block). */
@@ -402,14 +408,21 @@ static int do_side(const manifest_opts *mo, const material *m, int leave, char *
     char prov[256], who[256];
     snprintf(prov, sizeof prov, "btdftab build, material [%s], side %s", m->name, side);
     snprintf(who, sizeof who, "%s: %s (%s)", mo->prog, m->name, side);
+    int missed = 0;
     run_table_req rq = {who, NULL, o, m->part != BTDF_PART_TRANSMISSION, todo, ntodo, NULL,
-                        prov, mo->quiet, mo->best_effort, &pr};
+                        prov, mo->quiet, mo->best_effort, &pr, &missed};
     int code = run_table(&rq);
     *done += nouts;
-    for (int k = 0; k < ntodo && code == 0; k++)
-        if (!write_stamp_for(todo[k].path, stamp)) {
+    /* written above its tolerance (--best-effort): no stamp, so that it is not called
+       up to date later */
+    if (code == 0 && missed && !mo->quiet)
+        fprintf(stderr, "%s: %s (%s): written with --best-effort above its tolerance: no "
+                        "stamp, so the next build makes it again\n", mo->prog, m->name, side);
+    char why[512] = "";
+    for (int k = 0; k < ntodo && code == 0 && !missed; k++)
+        if (!write_stamp_for(todo[k].path, stamp, why, sizeof why)) {
             fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, todo[k].path,
-                    strerror(errno));
+                    why);
             code = 1;
         }
     return code;
@@ -460,9 +473,9 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
                               mo->best_effort, prov, &pr);
         if (code != 0)
             return code;
-        if (!write_stamp_for(outs[k], stamp)) {
-            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, outs[k],
-                    strerror(errno));
+        char why[512] = "";
+        if (!write_stamp_for(outs[k], stamp, why, sizeof why)) {
+            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, outs[k], why);
             return 1;
         }
     }
@@ -535,10 +548,23 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
                               : key == K_LEAVE ? m->leave[k - m->nenter]
                                                : m->bsdf[k - m->nenter - m->nleave];
             /* a missing folder is created at build time: what is above it must allow it */
-            int dir_exists = 1;
-            if (!parents_creatable(out, &dir_exists, msg, sizeof msg) ||
-                (dir_exists && btdf_output_check(out, msg, sizeof msg) != BTDF_OK)) {
+            int dir_exists = 1, bad = !parents_creatable(out, &dir_exists, msg, sizeof msg);
+            /* the name's own checks (its length, a folder or non-file there: EINVAL) hold
+               before its folder exists too; a missing folder (EIO) is made at build time */
+            if (!bad) {
+                btdf_status oc = btdf_output_check(out, msg, sizeof msg);
+                bad = dir_exists ? oc != BTDF_OK : oc == BTDF_EINVAL;
+            }
+            if (bad) {
                 snprintf(why, whylen, "output '%.300s': %.400s", out, msg);
+                return m->key_line[key];
+            }
+            char sp[4200];
+            stamp_path(sp, sizeof sp, out);
+            if (dir_exists && btdf_output_check(sp, msg, sizeof msg) == BTDF_EINVAL) {
+                const char *sb = strrchr(sp, '/');
+                snprintf(why, whylen, "output '%.200s': its stamp '%.100s' %.150s", out,
+                         sb ? sb + 1 : sp, msg);
                 return m->key_line[key];
             }
             if (btdf_same_file(out, mo->path)) {

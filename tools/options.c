@@ -62,7 +62,8 @@ const opt_def opt_table[] = {
     {OPT_METRIC, "metric", 0, "l1|max", 0, CMD_TABULATE,
      "which error must meet E (default l1)"},
     {OPT_GRID, "grid", 0, "NI,NO,NPHI", 0, CMD_TABULATE,
-     "a plain regular grid in (theta_i, theta_o, phi) instead"},
+     "a plain regular grid in (theta_i, theta_o, phi) instead: N points spaced\n"
+     "evenly over each range, both ends included (91,91,181: 1-degree steps)"},
     {OPT_SIDE, "side", 0, "S", 0, CMD_TABULATE,
      "enter (index n, default), leave (index 1/n); for .bsdf also both (the\n"
      "default there)"},
@@ -419,7 +420,12 @@ int opt_parse(const char *prog, const cmd_def *cmd, int argc, char **argv, opt_h
         if (c == -1)
             break;
         if (c == '?') {
-            if (optopt) {
+            const char *a = args[optind - 1];
+            const opt_def *o = a[0] == '-' && a[1] == '-' && strchr(a, '=') ? by_long(cmd, a)
+                                                                             : NULL;
+            if (o && !o->value) { /* "--help=yes": a known option that takes no value */
+                fprintf(stderr, "%s: --%s takes no value, not '%s'\n", prog, o->name, a);
+            } else if (optopt) {
                 char s[3] = {'-', (char)optopt, '\0'};
                 unknown_option(prog, cmd, s);
             } else {

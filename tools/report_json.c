@@ -197,14 +197,15 @@ int report_json_series(const char *prog, const char *report, const btdf_params *
     run_json_open(m, prov);
     fprintf(m, "  \"kind\": \"scatfun\",\n  \"ior\": [");
     for (int c = 0; c < p->channels; c++)
-        fprintf(m, "%s%.17g", c ? ", " : "", p->ior[c]);
+        fprintf(m, "%s%s", c ? ", " : "", num(p->ior[c]));
     double peak = btdf_scatfun_a0_peak(f);
-    fprintf(m, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n  \"model\": \"%s\",\n"
-               "  \"tolerance\": %.17g,\n"
+    fprintf(m, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n  \"model\": \"%s\",\n"
+               "  \"tolerance\": %s,\n"
                "  \"metric\": \"l1\",\n  \"met\": %s,\n  \"nodes\": %zu,\n  \"coefficients\": %zu,\n"
                "  \"max_order\": %zu,\n  \"seconds_build\": %.6f,\n  \"a0_peak\": %.6g,\n"
                "  \"pbrt_v3_single_precision_safe\": %s,\n  \"sides\": {\n",
-            p->smoothness, p->k0, btdf_model_name(p->model), tol, met ? "true" : "false",
+            num(p->smoothness), num(p->k0), btdf_model_name(p->model), num(tol),
+            met ? "true" : "false",
             btdf_scatfun_node_count(f),
             btdf_scatfun_coeff_count(f), btdf_scatfun_max_order(f), seconds, peak,
             peak <= BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0 ? "true" : "false");
@@ -271,15 +272,16 @@ void report_json_radiance(FILE *f, const btdf_rad *x, const btdf_params *p,
             btdf_rad_basis_name(btdf_rad_get_basis(x)));
     fprintf(f, "  \"ior\": [");
     for (int c = 0; c < nch; c++)
-        fprintf(f, "%s%.17g", c ? ", " : "", p->ior[c]);
-    fprintf(f, "],\n  \"smoothness\": %.17g,\n  \"k0\": %.17g,\n  \"model\": \"%s\",\n",
-            p->smoothness, p->k0, btdf_model_name(p->model));
+        fprintf(f, "%s%s", c ? ", " : "", num(p->ior[c]));
+    fprintf(f, "],\n  \"smoothness\": %s,\n  \"k0\": %s,\n  \"model\": \"%s\",\n",
+            num(p->smoothness), num(p->k0), btdf_model_name(p->model));
     if (nch == 3) {
         double m[3][3];
         btdf_rad_rgb_to_xyz(m);
-        fprintf(f, "  \"rgb_to_xyz\": [[%.17g, %.17g, %.17g], [%.17g, %.17g, %.17g], "
-                   "[%.17g, %.17g, %.17g]],\n",
-                m[0][0], m[0][1], m[0][2], m[1][0], m[1][1], m[1][2], m[2][0], m[2][1], m[2][2]);
+        fprintf(f, "  \"rgb_to_xyz\": [");
+        for (int i = 0; i < 3; i++)
+            fprintf(f, "%s[%s, %s, %s]", i ? ", " : "", num(m[i][0]), num(m[i][1]), num(m[i][2]));
+        fprintf(f, "],\n");
     }
     fprintf(f, "  \"seconds_build\": %.6f,\n  \"blocks\": [\n", btdf_rad_seconds_build(x));
     const double d2r = 3.14159265358979323846 / 180.0;
@@ -288,9 +290,9 @@ void report_json_radiance(FILE *f, const btdf_rad *x, const btdf_params *p,
         btdf_rad_block_info b;
         btdf_rad_block(x, k, &b);
         int refl = strncmp(b.label, "Reflection", 10) == 0;
-        fprintf(f, "   {\"label\": \"%s\", \"side\": \"%s\", \"reflection\": %s, \"n\": %.17g,\n",
+        fprintf(f, "   {\"label\": \"%s\", \"side\": \"%s\", \"reflection\": %s, \"n\": %s,\n",
                 b.label, b.light == BTDF_SIDE_ENTER ? "enter" : "leave", refl ? "true" : "false",
-                b.n_light);
+                num(b.n_light));
         const btdf_report *r0 = &rep[k * 3];
         fprintf(f, "    \"values\": %zu, \"depth\": %d, \"tolerance\": %.9g, \"met\": %s,\n",
                 b.values, b.depth, r0->tolerance, r0->met ? "true" : "false");
@@ -303,7 +305,7 @@ void report_json_radiance(FILE *f, const btdf_rad *x, const btdf_params *p,
             fprintf(f, "    \"channels\": [\n");
             for (int c = 0; c < 3; c++) {
                 double nl = b.light == BTDF_SIDE_ENTER ? p->ior[c] : 1.0 / p->ior[c];
-                fprintf(f, "     {\"channel\": \"%s\", \"n\": %.17g,\n", report_rad_channel[c], nl);
+                fprintf(f, "     {\"channel\": \"%s\", \"n\": %s,\n", report_rad_channel[c], num(nl));
                 rad_json_report(f, &rep[k * 3 + c], &coarse[k * 3 + c], "      ");
                 fprintf(f, "}%s\n", c < 2 ? "," : "");
             }

@@ -414,8 +414,9 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
         }
         if (!quiet)
             fprintf(stderr,
-                    "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients; "
-                    "build %.3f s, estimate %.3f s (%zu angles, %zu points); e_L1 max %.3g "
+                    "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients and "
+                    "build %.3f s of the whole file; this block's estimate %.3f s (%zu angles, "
+                    "%zu points); e_L1 max %.3g "
                     "mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
                     prog, path, name, btdf_scatfun_node_count(f), btdf_scatfun_coeff_count(f),
                     t1 - t0, e1 - e0, r.test_angles, r.test_points, r.e_l1_max, r.e_l1_mean,
@@ -545,8 +546,9 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
                          p->ior[c]);
             if (!quiet)
                 fprintf(stderr,
-                        "%s: %s: %s (light %s, as Radiance reads it%s): %zu %s; build %.3f s, "
-                        "estimate %.3f s (%zu angles, %zu points); e_L1 max %.3g (%.3g up to "
+                        "%s: %s: %s (light %s, as Radiance reads it%s): %zu %s; build %.3f s "
+                        "of all blocks, this block's estimate %.3f s (%zu angles, %zu points); "
+                        "e_L1 max %.3g (%.3g up to "
                         "%g deg) mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
                         prog, path, b.label,
                         b.light == BTDF_SIDE_ENTER ? "entering, n" : "leaving, 1/n", chn,
@@ -729,6 +731,8 @@ int run_table(const run_table_req *rq)
                     : strstr(msg, "budget") ? "raise --max-samples (and --max-memory)"
                                              : "try again with --estimate full");
             code = 3;
+        } else if (rq->missed) {
+            *rq->missed = 1;
         }
     }
     if (!estimated) {

@@ -115,6 +115,7 @@ typedef struct run_table_req {
     const char *prov;   /* the provenance written into the outputs */
     int quiet, best_effort;
     run_progress *pr;
+    int *missed; /* set to 1 when best_effort wrote a table above its tolerance (or NULL) */
 } run_table_req;
 
 /* Exit status: 0 (also a missed tolerance written with best_effort), 1 failed run, 2 bad

@@ -13,7 +13,7 @@
 
 /* .NAME.btdftab-stamp beside the output; for a name too long for that to fit in 255
    bytes, the name is cut and a hash of the whole name keeps it unique. */
-static void stamp_path(char *buf, size_t len, const char *out)
+void stamp_path(char *buf, size_t len, const char *out)
 {
     const char *base = strrchr(out, '/');
     base = base ? base + 1 : out;
@@ -143,19 +143,22 @@ int parents_creatable(const char *path, int *exists, char *why, size_t whylen)
     return 1;
 }
 
-static int write_stamp(const char *out, const char *stamp)
+/* why: the writer's message (a stamp that became a folder, a full disk). */
+static int write_stamp(const char *out, const char *stamp, char *why, size_t whylen)
 {
     char sp[4200];
     stamp_path(sp, sizeof sp, out);
-    return btdf_write_buffer(sp, NULL, stamp, strlen(stamp), NULL, 0) == BTDF_OK;
+    return btdf_write_buffer(sp, NULL, stamp, strlen(stamp), why, whylen) == BTDF_OK;
 }
 
 /* The stamp of a file just written: its parameters, then what identifies its content. */
-int write_stamp_for(const char *out, const char *stamp)
+int write_stamp_for(const char *out, const char *stamp, char *why, size_t whylen)
 {
     char id[128], full[4096 + 128];
-    if (!content_id(out, id, sizeof id))
+    if (!content_id(out, id, sizeof id)) {
+        snprintf(why, whylen, "cannot read it back: %s", strerror(errno));
         return 0;
+    }
     snprintf(full, sizeof full, "%s%s", stamp, id);
-    return write_stamp(out, full);
+    return write_stamp(out, full, why, whylen);
 }

@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -17,6 +18,16 @@ btdf_status core_say(btdf_status st, char *msg, size_t msglen, const char *fmt, 
         va_end(ap);
     }
     return st;
+}
+
+const char *core_num(double x, char buf[32])
+{
+    for (int prec = 1; prec <= 17; prec++) { /* 17 digits read back for every double */
+        snprintf(buf, 32, "%.*g", prec, x);
+        if (strtod(buf, NULL) == x || x != x)
+            break;
+    }
+    return buf;
 }
 
 double core_now(void)

@@ -20,6 +20,10 @@
 btdf_status core_say(btdf_status st, char *msg, size_t msglen, const char *fmt, ...)
     CORE_PRINTF(4, 5);
 
+/* x as the shortest %g text that reads back as x (at most 17 digits), in buf; returns buf.
+   For messages: "1000.0000001", not "1000", beside a bound it exceeds. */
+const char *core_num(double x, char buf[32]);
+
 /* Monotonic wall clock in seconds. */
 double core_now(void);
 

@@ -65,30 +65,31 @@ BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t m
         return core_say(BTDF_EINVAL, msg, msglen, "parameters missing (NULL)");
     if (p->channels != 1 && p->channels != 3)
         return core_say(BTDF_EINVAL, msg, msglen, "channels %d: must be 1 or 3", p->channels);
+    char t[32]; /* the value as given (core_num), not rounded to %g's 6 digits */
     for (int c = 0; c < p->channels; c++) {
         double n = p->ior[c];
         if (!isfinite(n))
-            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %g: must be a finite number", n);
+            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %s: must be a finite number", core_num(n, t));
         if (n <= 0.0)
-            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %g: must be > 0", n);
+            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %s: must be > 0", core_num(n, t));
         if (fabs(n - 1.0) < BTDF_IOR_ONE_EPS)
             return core_say(BTDF_EINVAL, msg, msglen,
-                        "index of refraction %.17g: n = 1 has no BTDF (every facet transmits "
+                        "index of refraction %s: n = 1 has no BTDF (every facet transmits "
                         "undeviated, so the transmission is a delta); use n != 1, "
                         "e.g. 1.0001",
-                        n);
+                        core_num(n, t));
         if (n < BTDF_IOR_MIN || n > BTDF_IOR_MAX)
-            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %g: must lie in [0.001, 1000]", n);
+            return core_say(BTDF_EINVAL, msg, msglen, "index of refraction %s: must lie in [0.001, 1000]", core_num(n, t));
     }
     double s = p->smoothness;
     if (!isfinite(s))
-        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %g: must be a finite number", s);
+        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %s: must be a finite number", core_num(s, t));
     if (s <= 0.0)
-        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %g: must be > 0", s);
+        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %s: must be > 0", core_num(s, t));
     if (s < BTDF_S_MIN || s > BTDF_S_MAX)
-        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %g: must lie in [0.001, 1e6]", s);
+        return core_say(BTDF_EINVAL, msg, msglen, "smoothness %s: must lie in [0.001, 1e6]", core_num(s, t));
     if (!isfinite(p->k0) || p->k0 < 0.0 || p->k0 > BTDF_K0_MAX)
-        return core_say(BTDF_EINVAL, msg, msglen, "k0 %g: must lie in [0, 100]", p->k0);
+        return core_say(BTDF_EINVAL, msg, msglen, "k0 %s: must lie in [0, 100]", core_num(p->k0, t));
     if (p->model == BTDF_MODEL_FULL)
         return core_say(BTDF_ENOTSUP, msg, msglen,
                         "model full: made once per material by btdf_model_ctx_new or "

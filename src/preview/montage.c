@@ -98,7 +98,8 @@ static int montage_layout(montage_plot *mp, char *msg, size_t msglen)
                      "in the table's coordinates, row 0 on top%s",
                      o->title ? mp->title : "", o->title ? "; " : "",
                      p->channels == 3 ? "R" : "Y", DECADES,
-                     shown < mp->n ? "; evenly spaced slices" : "");
+                     shown < mp->n ? "; slices picked evenly by index, first and last included "
+                                  "(their angles label them)" : "");
     if (recip && k > 0 && (size_t)k < sublen)
         /* The slices are the facet table of 1/n at ti' = pi - to (btdf.h): say so, and
            label each tile with the outgoing angle of the light leaving. */

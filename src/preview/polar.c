@@ -96,6 +96,7 @@ typedef struct polar_plot {
     int refl, trans; /* which halves are drawn */
     int smith, full; /* polar shares one model */
     int W, H;
+    int H_needed;        /* the height the layout asked for when H was too small */
     double vmax, vmax_r; /* the largest peaks below and above */
     int own, own_r;      /* each curve on its own scale (below, above) */
     int nt, nt_r;        /* tick counts and steps of the radial scales */
@@ -367,6 +368,7 @@ static int polar_layout(polar_plot *pp, plot_canvas *c, char *msg, size_t msglen
                (refl ? fmin(Rh, (Hn - fixed - band0) / 2.0)
                      : polar_radius(Hn, fixed, Rh, band0, &band)) < rf * fmin(W, Hn * 4.0 / 3.0))
             Hn++;
+        pp->H_needed = Hn;
         return say(BTDF_EINVAL, msg, msglen,
                    "%d x %d pixels leave a plot radius of %.0f pixels beside the legend of %zu "
                    "curves: at least %d pixels high at this width",
@@ -613,16 +615,25 @@ int pv_draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t 
     if (st != BTDF_OK)
         goto done;
     polar_peaks(pp);
-    if (plot_canvas_init(c, pp->W, pp->H, pv_white) != 0) {
-        st = say(BTDF_ENOMEM, msg, msglen, "out of memory for a %d x %d picture", pp->W, pp->H);
-        goto done;
+    /* twice at most: a default height too small for the legend grows to what the
+       layout asks (a height given is kept, and its refusal names the one needed) */
+    for (int pass = 0; pass < 2; pass++) {
+        if (plot_canvas_init(c, pp->W, pp->H, pv_white) != 0) {
+            st = say(BTDF_ENOMEM, msg, msglen, "out of memory for a %d x %d picture", pp->W,
+                     pp->H);
+            goto done;
+        }
+        pp->fs = pv_clampd(fmin(pp->W, pp->H * 4.0 / 3.0) / 62.0, 10.0, 16.0);
+        pp->fsS = fmax(PV_MIN_TEXT, 0.88 * pp->fs);
+        pp->m = 0.8 * pp->fs;
+        pp->lineS = plot_text_height(c, pp->fsS);
+        polar_texts(pp, c);
+        st = polar_layout(pp, c, msg, msglen);
+        if (st == BTDF_OK || o->height || pp->H_needed <= pp->H)
+            break;
+        plot_canvas_free(c);
+        pp->H = pp->H_needed;
     }
-    pp->fs = pv_clampd(fmin(pp->W, pp->H * 4.0 / 3.0) / 62.0, 10.0, 16.0);
-    pp->fsS = fmax(PV_MIN_TEXT, 0.88 * pp->fs);
-    pp->m = 0.8 * pp->fs;
-    pp->lineS = plot_text_height(c, pp->fsS);
-    polar_texts(pp, c);
-    st = polar_layout(pp, c, msg, msglen);
     if (st != BTDF_OK)
         goto fail;
     polar_grid(pp, c);

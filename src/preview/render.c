@@ -116,13 +116,14 @@ static int render_texts(render_plot *rp, char *msg, size_t msglen)
     size_t footlen = sizeof rp->foot;
     render_title(rp->title, sizeof rp->title, p);
     int lit_inside = p->ior[0] < 1.0;
-    char shown[80] = "face 1 W wide";
+    /* lengths in face widths ("W" read as watts) */
+    char shown[120] = "a square face; lengths in face widths";
     if (Z > 1.0)
-        snprintf(shown, sizeof shown, "the central %.3g W of a face 1 W wide (zoom %g)", 1.0 / Z,
-                 Z);
+        snprintf(shown, sizeof shown, "the central %.3g of a square face (zoom %g); lengths in "
+                 "face widths", 1.0 / Z, Z);
     snprintf(rp->sub, sizeof rp->sub,
              "%s; point light on its axis in the light's medium (%s the block); eye "
-             "0.8 W from the face on its axis, %s",
+             "0.8 widths from the face on its axis, %s",
              shown, lit_inside ? "inside" : "outside", lit_inside ? "outside" : "inside");
     char scale[160];
     if (D > 0.0)
@@ -146,7 +147,7 @@ static int render_texts(render_plot *rp, char *msg, size_t msglen)
     }
     if (k > 0 && (size_t)k < footlen)
         snprintf(foot + k, footlen - (size_t)k,
-                 "; far: 100 W, nearly normal incidence (Fig. 10); near: 0.8 W (Fig. 11); "
+                 "; far: 100 widths, nearly normal incidence (Fig. 10); near: 0.8 widths (Fig. 11); "
                  "btdftab " BTDF_VERSION_STRING);
     rp->head = o->title ? o->title : rp->title;
     return BTDF_OK;
@@ -291,9 +292,9 @@ static void render_row(const render_plot *rp, plot_canvas *c, int row, double *t
         pv_colour_bar(c, x0 + P + 0.6 * fs, y0, rp->barw, P, plot_cmap, tops, "0", NULL, 0, fsS);
     }
     char rl[80];
-    snprintf(rl, sizeof rl, "light %s: %.3g W from the face", row == 0 ? "far" : "near", depth);
+    snprintf(rl, sizeof rl, "light %s: %.3g widths from the face", row == 0 ? "far" : "near", depth);
     if (plot_text_width(c, rl, PV_MIN_TEXT) > P) /* small panels: the short form */
-        snprintf(rl, sizeof rl, "%s: %.3g W", row == 0 ? "far" : "near", depth);
+        snprintf(rl, sizeof rl, "%s: %.3g widths", row == 0 ? "far" : "near", depth);
     plot_text_up(c, m + lineS / 2, y0 + P / 2.0, rl, plot_text_fit(c, rl, fsS, PV_MIN_TEXT, P),
                  pv_ink);
 }

@@ -110,7 +110,8 @@ BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
     if (st != BTDF_OK)
         return st;
     if (!(tolerance >= 1e-6 && tolerance <= 0.5))
-        return core_say(BTDF_EINVAL, msg, msglen, "tolerance %g: must lie in [1e-6, 0.5]", tolerance);
+        return core_say(BTDF_EINVAL, msg, msglen, "tolerance %s: must lie in [1e-6, 0.5]",
+                        core_num(tolerance, (char[32]){0}));
     if ((int)side < 1 || (int)side > BTDF_SCATFUN_ALL)
         return core_say(BTDF_EINVAL, msg, msglen,
                            "blocks %d: must be a mask of 1 (transmission entering), 2 "

@@ -65,7 +65,8 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
                                     "start < end", o->ti_max - o->ti_min);
     } else if (o->kind == BTDF_TABLE_FACET || o->kind == BTDF_TABLE_FACET_RECIPROCAL) {
         if (!(o->tolerance >= 1e-7 && o->tolerance <= 1.0))
-            return core_say(BTDF_EINVAL, msg, msglen, "tolerance %g: must lie in [1e-7, 1]", o->tolerance);
+            return core_say(BTDF_EINVAL, msg, msglen, "tolerance %s: must lie in [1e-7, 1]",
+                            core_num(o->tolerance, (char[32]){0}));
         if (o->estimate != BTDF_ESTIMATE_FULL && o->estimate != BTDF_ESTIMATE_FAST &&
             o->estimate != BTDF_ESTIMATE_NONE)
             return core_say(BTDF_EINVAL, msg, msglen, "estimate mode %lld: must be full (0), fast (1) or none (2)",
