@@ -33,6 +33,11 @@ static const double full_crit_off[] = {-6, -3, -1.5, -0.5, 0.5, 1.5, 3, 6};
 #define FULL_CHUNK 8192u  /* paths per work item (its own random stream) */
 #define FULL_MAX_EVENTS 4096 /* a path longer than this is counted lost */
 
+/* the public view of the series (btdf_full_get_series) has these sizes */
+typedef char full_series_k_check[FULL_K == BTDF_FULL_SERIES_K ? 1 : -1];
+typedef char full_series_m_check[FULL_M == BTDF_FULL_SERIES_M ? 1 : -1];
+typedef char full_series_n_check[FULL_NODES_MAX == BTDF_FULL_SERIES_NODES ? 1 : -1];
+
 struct btdf_full {
     double n, s, alpha;
     uint64_t paths, seed;
@@ -577,6 +582,18 @@ BTDF_API void btdf_full_info(const btdf_full *f, btdf_full_stats *st)
         double d = fabs(T1 + R1 - f->e1[k][0] - f->e1[k][1]);
         st->order1_gap = fmax(st->order1_gap, d);
     }
+}
+
+BTDF_API btdf_status btdf_full_get_series(const btdf_full *f, btdf_full_series *out)
+{
+    if (!f || !out)
+        return BTDF_EINVAL;
+    memset(out, 0, sizeof *out);
+    out->nodes = f->nodes;
+    memcpy(out->node_deg, f->node_deg, sizeof f->node_deg);
+    memcpy(out->poly, f->poly, sizeof f->poly);
+    memcpy(out->coef, f->coef, sizeof f->coef);
+    return BTDF_OK;
 }
 
 /* ------------------------------------------------------------------------- */
