@@ -30,13 +30,14 @@ import os
 
 import numpy as np
 
-__all__ = ["rho", "rho_deg", "rho_r", "rho_r_deg", "T", "R", "albedo", "fresnel_t",
+__all__ = ["params_check", "rho", "rho_deg", "rho_r", "rho_r_deg", "T", "R", "albedo", "fresnel_t",
            "fresnel_r", "Table", "Bsdf", "Full", "open", "build", "version", "BtdfError",
            "library_path", "MODELS"]
 
 MAX_CHANNELS = 3
 _KINDS = {0: "facet", 1: "grid", 2: "facet-reciprocal", 3: "facet-reflection"}
 _PARTS = {"transmission": 1, "reflection": 2, "both": 3}
+_RULES = {0: "plain", 1: "chi", 2: "fresnel"}
 MODELS = ("xu-sun", "smith", "full")  # btdf_model: 0, 1, 2
 _MODEL_IDS = {name: k for k, name in enumerate(MODELS)}
 FULL_PATHS_DEFAULT = 200000  # BTDF_FULL_PATHS_DEFAULT
@@ -176,6 +177,7 @@ def _declare(lib):
     f("btdf_table_write", i, vp, cp, vp, cp, sz)
     f("btdf_table_free", None, vp)
     f("btdf_table_get_kind", i, vp)
+    f("btdf_table_get_rule", i, vp)
     f("btdf_table_get_params", pp, vp)
     f("btdf_table_slice_count", sz, vp)
     f("btdf_table_node_count", sz, vp)
@@ -270,6 +272,12 @@ def _out(arr, shape):
 
 def _dp(a):
     return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
+
+
+def params_check(ior, smoothness, k0=0.7, model="xu-sun"):
+    """Checks a material as btdf_params_check does (ior: one index or three); raises
+    ValueError naming the value and what is allowed."""
+    _ior_params(ior, smoothness, k0, 1 if _model_id(model) == 2 else _model_id(model))
 
 
 def rho(ior, smoothness, ti, to, phi, k0=0.7, model="xu-sun", paths=None, seed=None):
@@ -591,6 +599,8 @@ class Table:
         self.k0 = p.k0
         self.model = MODELS[p.model] if 0 <= p.model < len(MODELS) else str(p.model)
         self.kind = _KINDS.get(lib.btdf_table_get_kind(self._h), "unknown")
+        # how facet slices interpolate (btdf_table_rule): rho itself, rho / K or rho / Fr
+        self.rule = _RULES.get(lib.btdf_table_get_rule(self._h), "unknown")
         self.parts = {1: "transmission", 2: "reflection", 3: "both"}.get(
             lib.btdf_table_parts(self._h), "unknown")
 
