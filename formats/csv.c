@@ -310,6 +310,234 @@ static btdf_status flush_slice(btdf_table *t, double ti, dvec *rr, dvec *cc, dve
     return st;
 }
 
+/* What csv_read knows so far: the keys seen, the tables and the slice being read. */
+typedef struct csv_state {
+    btdf_params p;
+    int have_kind, have_ch, have_ior, have_s, have_k0, header;
+    int have_rows, have_end, last_nl;
+    char version[80]; /* from "# btdftab VERSION table" */
+    int part_col, have_parts; /* a file holding both parts */
+    size_t declared, ended, seen;
+    btdf_table_kind kind;
+    btdf_table_rule rule; /* files from before the rule had a name: plain */
+    btdf_table_rule rule_r; /* the reflection's, in a file holding both */
+    btdf_table *t, *tr, *cur; /* cur: the part being read */
+    dvec rr, cc, vv;
+    double cur_ti;
+    long ln;
+} csv_state;
+
+static void csv_state_init(csv_state *s)
+{
+    memset(s, 0, sizeof *s);
+    btdf_params_default(&s->p);
+    s->last_nl = 1;
+    snprintf(s->version, sizeof s->version, "an unnamed version");
+    s->kind = BTDF_TABLE_FACET;
+    s->rule = BTDF_RULE_PLAIN;
+    s->rule_r = BTDF_RULE_PLAIN;
+    s->cur_ti = -1.0;
+}
+
+/* A comment line of the table (# kind, # ior, # rows, # end, ...) into the state. */
+static btdf_status csv_comment(csv_state *s, const char *line, const char *path, char *msg,
+                               size_t msglen)
+{
+    btdf_status st = BTDF_OK;
+    char word[64];
+    if (s->header && !strncmp(line, "# end:", 6)) {
+        char tail;
+        if (!s->have_rows)
+            return ferr(msg, msglen, path, s->ln,
+                        "an '# end' line but no '# rows' line before the node rows");
+        if (sscanf(line, "# end: %zu rows%c", &s->ended, &tail) != 2 || tail != '\n' ||
+            line[7] < '0' || line[7] > '9')
+            st = ferr(msg, msglen, path, s->ln, "malformed '# end: N rows' line");
+        s->have_end = 1;
+    } else if (!s->t && !strncmp(line, "# rows:", 7)) {
+        char tail;
+        if (sscanf(line, "# rows: %zu%c", &s->declared, &tail) != 2 || tail != '\n' ||
+            line[8] < '0' || line[8] > '9')
+            st = ferr(msg, msglen, path, s->ln, "malformed '# rows: N' line");
+        s->have_rows = 1;
+    } else if (!s->t && sscanf(line, "# btdftab %63s table", word) == 1) {
+        snprintf(s->version, sizeof s->version, "btdftab %s", word);
+    } else if (sscanf(line, "# kind: %63s", word) == 1) {
+        s->have_kind = 1;
+        if (!table_kind_parse(word, &s->kind))
+            st = ferr(msg, msglen, path, s->ln,
+                      "kind must be facet, facet-reciprocal, grid or facet-reflection");
+    } else if (!strncmp(line, "# parts: transmission, reflection", 33)) {
+        s->have_parts = 1;
+    } else if (sscanf(line, "# slice-rule reflection: %63s", word) == 1) {
+        if (!btdf_table_rule_parse(word, &s->rule_r))
+            st = ferr(msg, msglen, path, s->ln, "slice-rule must be plain, chi or fresnel");
+    } else if (sscanf(line, "# slice-rule: %63s", word) == 1) {
+        if (!btdf_table_rule_parse(word, &s->rule))
+            st = ferr(msg, msglen, path, s->ln, "slice-rule must be plain, chi or fresnel");
+    } else if (sscanf(line, "# channels: %d", &s->p.channels) == 1) {
+        s->have_ch = 1;
+    } else if (!strncmp(line, "# ior:", 6)) {
+        s->have_ior = sscanf(line + 6, "%lf %lf %lf", &s->p.ior[0], &s->p.ior[1], &s->p.ior[2]);
+    } else if (sscanf(line, "# smoothness: %lf", &s->p.smoothness) == 1) {
+        s->have_s = 1;
+    } else if (sscanf(line, "# k0: %lf", &s->p.k0) == 1) {
+        s->have_k0 = 1;
+    } else if (sscanf(line, "# model: %63s", word) == 1) {
+        if (!btdf_model_parse(word, &s->p.model)) {
+            char why[160];
+            snprintf(why, sizeof why, "model '%s': must be xu-sun, smith or full",
+                     word);
+            st = ferr(msg, msglen, path, s->ln, why);
+        }
+    }
+    return st;
+}
+
+/* The first node row: every key the rows need is there; the table is made. The
+   comments may come before the header row or after it (btdftab writes them after
+   it): the parameters are needed by the first node row. */
+static btdf_status csv_begin(csv_state *s, const char *path, char *msg, size_t msglen)
+{
+    if (s->part_col != s->have_parts || (s->part_col && kind_is_reflection(s->kind))) {
+        return ferr(msg, msglen, path, s->ln,
+                  "a part column needs the '# parts: transmission, reflection' line "
+                  "and a transmission kind, and that line the column");
+    }
+    /* Name every missing key, and the writer: a file of another version
+       says so rather than look damaged. '# rows' is not required: without it
+       the file is of the format before row counts (0.3.0 and earlier). */
+    if (!s->have_kind || !s->have_ch || !s->have_s || !s->have_k0 || s->have_ior <= 0) {
+        char why[320];
+        snprintf(why, sizeof why,
+                 "missing%s%s%s%s%s comment before the first node row (the file "
+                 "says it was written by %s; this reader is btdftab %s)",
+                 s->have_kind ? "" : " '# kind'", s->have_ch ? "" : " '# channels'",
+                 s->have_ior > 0 ? "" : " '# ior'", s->have_s ? "" : " '# smoothness'",
+                 s->have_k0 ? "" : " '# k0'", s->version, BTDF_VERSION_STRING);
+        return ferr(msg, msglen, path, s->ln, why);
+    }
+    if (s->have_ior != s->p.channels) {
+        char why[160];
+        snprintf(why, sizeof why,
+                 "'# ior' gives %d values but '# channels' says %d (written by %s)",
+                 s->have_ior, s->p.channels, s->version);
+        return ferr(msg, msglen, path, s->ln, why);
+    }
+    if (!s->have_rows && s->part_col) {
+        return ferr(msg, msglen, path, s->ln,
+                  "a part column needs the '# rows' line before the node rows");
+    }
+    char why[200];
+    if (btdf_table_new(s->kind, &s->p, &s->t, why, sizeof why) != BTDF_OK ||
+        btdf_table_set_rule(s->t, s->rule, why, sizeof why) != BTDF_OK) {
+        return ferr(msg, msglen, path, s->ln, why);
+    }
+    s->cur = s->t;
+    return BTDF_OK;
+}
+
+/* A node row: its part (a file holding both), angles and values onto the slice. */
+static btdf_status csv_row(csv_state *s, char *line, const char *path, char *msg,
+                           size_t msglen)
+{
+    btdf_status st = BTDF_OK;
+    char *fld[16];
+    int nf = split(line, fld, 16);
+    int want = 3 + s->p.channels + 3 + s->part_col;
+    if (nf != want) {
+        char why[80];
+        snprintf(why, sizeof why, "expected %d fields, found %d", want, nf);
+        return ferr(msg, msglen, path, s->ln, why);
+    }
+    if (s->part_col) {
+        const char *pw = fld[nf - 1];
+        int is_r = !strcmp(pw, "reflection");
+        if (!is_r && strcmp(pw, "transmission")) {
+            return ferr(msg, msglen, path, s->ln, "part must be transmission or reflection");
+        }
+        if (!is_r && s->tr) {
+            return ferr(msg, msglen, path, s->ln,
+                      "a transmission row after the reflection rows began");
+        }
+        if (is_r && !s->tr) { /* the transmission is complete: on to the reflection */
+            st = flush_slice(s->t, s->cur_ti, &s->rr, &s->cc, &s->vv, path, s->ln, msg, msglen);
+            char why[200];
+            if (st == BTDF_OK &&
+                (btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &s->p, &s->tr, why, sizeof why) !=
+                     BTDF_OK ||
+                 btdf_table_set_rule(s->tr, s->rule_r, why, sizeof why) != BTDF_OK))
+                st = ferr(msg, msglen, path, s->ln, why);
+            if (st != BTDF_OK)
+                return st;
+            s->cur = s->tr;
+            s->cur_ti = -1.0;
+        }
+        nf--; /* the numbers end before the part */
+    }
+    double ti, row, col, v[BTDF_MAX_CHANNELS];
+    int ok = num(fld[nf - 3], &ti) && num(fld[nf - 2], &row) && num(fld[nf - 1], &col);
+    for (int ch = 0; ch < s->p.channels && ok; ch++)
+        ok = num(fld[3 + ch], &v[ch]);
+    if (!ok) {
+        return ferr(msg, msglen, path, s->ln, "a number is malformed or not finite");
+    }
+    if (++s->seen > s->declared && s->have_rows) {
+        return ferr(msg, msglen, path, s->ln, "more node rows than '# rows' declares");
+    }
+    if (ti != s->cur_ti) {
+        st = flush_slice(s->cur, s->cur_ti, &s->rr, &s->cc, &s->vv, path, s->ln, msg, msglen);
+        s->cur_ti = ti;
+    }
+    if (st == BTDF_OK && !(push(&s->rr, row) && push(&s->cc, col)))
+        st = BTDF_ENOMEM;
+    for (int ch = 0; ch < s->p.channels && st == BTDF_OK; ch++)
+        if (!push(&s->vv, v[ch]))
+            st = BTDF_ENOMEM;
+    return st;
+}
+
+/* The checks after the last line (st: the reading's status so far): the header,
+   the counts, the last slice, the reflection attached. */
+static btdf_status csv_finish(csv_state *s, btdf_status st, const char *path, char *msg,
+                              size_t msglen)
+{
+    if (st == BTDF_OK && !s->header)
+        st = ferr(msg, msglen, path, s->ln, "no header row: empty or foreign file");
+    if (st == BTDF_OK && !s->have_rows && s->t && !s->last_nl)
+        st = ferr(msg, msglen, path, s->ln,
+                  "the last node row has no line end: the file is cut short");
+    if (st == BTDF_OK && !s->have_end && (s->have_rows || !s->t)) {
+        char why[160];
+        snprintf(why, sizeof why,
+                 "the file is cut short: no '# end' line (%zu of the %zu declared rows read)",
+                 s->seen, s->declared);
+        st = ferr(msg, msglen, path, s->ln, why);
+    }
+    if (st == BTDF_OK && s->have_rows && (s->ended != s->declared || s->seen != s->declared)) {
+        char why[160];
+        snprintf(why, sizeof why, "'# rows: %zu' and '# end: %zu rows' but %zu node rows",
+                 s->declared, s->ended, s->seen);
+        st = ferr(msg, msglen, path, s->ln, why);
+    }
+    if (st == BTDF_OK && !s->t)
+        st = ferr(msg, msglen, path, s->ln, "no table rows");
+    if (st == BTDF_OK)
+        st = flush_slice(s->cur, s->cur_ti, &s->rr, &s->cc, &s->vv, path, s->ln, msg, msglen);
+    if (st == BTDF_OK && s->t->ns == 0)
+        st = ferr(msg, msglen, path, s->ln, "no table rows");
+    if (st == BTDF_OK && s->part_col && (!s->tr || s->tr->ns == 0))
+        st = ferr(msg, msglen, path, s->ln, "the file declares both parts but has no reflection rows");
+    if (st == BTDF_OK && s->tr) {
+        char why[200];
+        if (btdf_table_attach_reflection(s->t, s->tr, why, sizeof why) != BTDF_OK)
+            st = ferr(msg, msglen, path, s->ln, why);
+        else
+            s->tr = NULL; /* owned by t */
+    }
+    return st;
+}
+
 static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_t msglen)
 {
     FILE *f = fopen(path, "r");
@@ -318,244 +546,54 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
             snprintf(msg, msglen, "cannot open %s: %s", path, strerror(errno));
         return BTDF_EIO;
     }
-    btdf_params p;
-    btdf_params_default(&p);
-    int have_kind = 0, have_ch = 0, have_ior = 0, have_s = 0, have_k0 = 0, header = 0;
-    int have_rows = 0, have_end = 0, last_nl = 1;
-    char version[80] = "an unnamed version"; /* from "# btdftab VERSION table" */
-    int part_col = 0, have_parts = 0; /* a file holding both parts */
-    size_t declared = 0, ended = 0, seen = 0;
-    btdf_table_kind kind = BTDF_TABLE_FACET;
-    btdf_table_rule rule = BTDF_RULE_PLAIN; /* files from before the rule had a name */
-    btdf_table_rule rule_r = BTDF_RULE_PLAIN; /* the reflection's, in a file holding both */
-    btdf_table *t = NULL, *tr = NULL, *cur = NULL; /* cur: the part being read */
-    dvec rr = {0}, cc = {0}, vv = {0};
-    double cur_ti = -1.0;
+    csv_state s;
+    csv_state_init(&s);
     char line[4096];
-    long ln = 0;
     btdf_status st = BTDF_OK;
     while (st == BTDF_OK && fgets(line, sizeof line, f)) {
-        ln++;
-        last_nl = strchr(line, '\n') != NULL;
-        if (!last_nl && !feof(f)) {
-            st = ferr(msg, msglen, path, ln, "line longer than 4095 bytes");
+        s.ln++;
+        s.last_nl = strchr(line, '\n') != NULL;
+        if (!s.last_nl && !feof(f)) {
+            st = ferr(msg, msglen, path, s.ln, "line longer than 4095 bytes");
             break;
         }
-        if (have_end) {
+        if (s.have_end) {
             if (strspn(line, " \t\r\n") != strlen(line))
-                st = ferr(msg, msglen, path, ln, "text after the '# end' line");
+                st = ferr(msg, msglen, path, s.ln, "text after the '# end' line");
             continue;
         }
         if (line[0] == '#') {
-            char word[64];
-            if (header && !strncmp(line, "# end:", 6)) {
-                char tail;
-                if (!have_rows) {
-                    st = ferr(msg, msglen, path, ln,
-                              "an '# end' line but no '# rows' line before the node rows");
-                    break;
-                }
-                if (sscanf(line, "# end: %zu rows%c", &ended, &tail) != 2 || tail != '\n' ||
-                    line[7] < '0' || line[7] > '9')
-                    st = ferr(msg, msglen, path, ln, "malformed '# end: N rows' line");
-                have_end = 1;
-            } else if (!t && !strncmp(line, "# rows:", 7)) {
-                char tail;
-                if (sscanf(line, "# rows: %zu%c", &declared, &tail) != 2 || tail != '\n' ||
-                    line[8] < '0' || line[8] > '9')
-                    st = ferr(msg, msglen, path, ln, "malformed '# rows: N' line");
-                have_rows = 1;
-            } else if (!t && sscanf(line, "# btdftab %63s table", word) == 1) {
-                snprintf(version, sizeof version, "btdftab %s", word);
-            } else if (sscanf(line, "# kind: %63s", word) == 1) {
-                have_kind = 1;
-                if (!table_kind_parse(word, &kind))
-                    st = ferr(msg, msglen, path, ln,
-                              "kind must be facet, facet-reciprocal, grid or facet-reflection");
-            } else if (!strncmp(line, "# parts: transmission, reflection", 33)) {
-                have_parts = 1;
-            } else if (sscanf(line, "# slice-rule reflection: %63s", word) == 1) {
-                if (!btdf_table_rule_parse(word, &rule_r))
-                    st = ferr(msg, msglen, path, ln, "slice-rule must be plain, chi or fresnel");
-            } else if (sscanf(line, "# slice-rule: %63s", word) == 1) {
-                if (!btdf_table_rule_parse(word, &rule))
-                    st = ferr(msg, msglen, path, ln, "slice-rule must be plain, chi or fresnel");
-            } else if (sscanf(line, "# channels: %d", &p.channels) == 1) {
-                have_ch = 1;
-            } else if (!strncmp(line, "# ior:", 6)) {
-                have_ior = sscanf(line + 6, "%lf %lf %lf", &p.ior[0], &p.ior[1], &p.ior[2]);
-            } else if (sscanf(line, "# smoothness: %lf", &p.smoothness) == 1) {
-                have_s = 1;
-            } else if (sscanf(line, "# k0: %lf", &p.k0) == 1) {
-                have_k0 = 1;
-            } else if (sscanf(line, "# model: %63s", word) == 1) {
-                if (!btdf_model_parse(word, &p.model)) {
-                    char why[160];
-                    snprintf(why, sizeof why, "model '%s': must be xu-sun, smith or full",
-                             word);
-                    st = ferr(msg, msglen, path, ln, why);
-                }
-            }
+            st = csv_comment(&s, line, path, msg, msglen);
             continue;
         }
-        if (!header) {
+        if (!s.header) {
             if (strncmp(line, "theta_i_deg,", 12) != 0) {
-                st = ferr(msg, msglen, path, ln,
+                st = ferr(msg, msglen, path, s.ln,
                           "not a btdftab table CSV (expected the header row theta_i_deg,...)");
                 break;
             }
-            header = 1;
+            s.header = 1;
             size_t hl = strcspn(line, "\r\n");
-            part_col = hl >= 5 && !strncmp(line + hl - 5, ",part", 5);
+            s.part_col = hl >= 5 && !strncmp(line + hl - 5, ",part", 5);
             continue;
         }
-        /* The comments may come before the header row or after it (btdftab writes
-           them after it): the parameters are needed by the first node row. */
-        if (!t) {
-            if (part_col != have_parts || (part_col && kind_is_reflection(kind))) {
-                st = ferr(msg, msglen, path, ln,
-                          "a part column needs the '# parts: transmission, reflection' line "
-                          "and a transmission kind, and that line the column");
-                break;
-            }
-            /* Name every missing key, and the writer: a file of another version
-               says so rather than look damaged. '# rows' is not required: without it
-               the file is of the format before row counts (0.3.0 and earlier). */
-            if (!have_kind || !have_ch || !have_s || !have_k0 || have_ior <= 0) {
-                char why[320];
-                snprintf(why, sizeof why,
-                         "missing%s%s%s%s%s comment before the first node row (the file "
-                         "says it was written by %s; this reader is btdftab %s)",
-                         have_kind ? "" : " '# kind'", have_ch ? "" : " '# channels'",
-                         have_ior > 0 ? "" : " '# ior'", have_s ? "" : " '# smoothness'",
-                         have_k0 ? "" : " '# k0'", version, BTDF_VERSION_STRING);
-                st = ferr(msg, msglen, path, ln, why);
-                break;
-            }
-            if (have_ior != p.channels) {
-                char why[160];
-                snprintf(why, sizeof why,
-                         "'# ior' gives %d values but '# channels' says %d (written by %s)",
-                         have_ior, p.channels, version);
-                st = ferr(msg, msglen, path, ln, why);
-                break;
-            }
-            if (!have_rows && part_col) {
-                st = ferr(msg, msglen, path, ln,
-                          "a part column needs the '# rows' line before the node rows");
-                break;
-            }
-            char why[200];
-            if (btdf_table_new(kind, &p, &t, why, sizeof why) != BTDF_OK ||
-                btdf_table_set_rule(t, rule, why, sizeof why) != BTDF_OK) {
-                st = ferr(msg, msglen, path, ln, why);
-                break;
-            }
-            cur = t;
-        }
-        char *fld[16];
-        int nf = split(line, fld, 16);
-        int want = 3 + p.channels + 3 + part_col;
-        if (nf != want) {
-            char why[80];
-            snprintf(why, sizeof why, "expected %d fields, found %d", want, nf);
-            st = ferr(msg, msglen, path, ln, why);
+        if (!s.t && (st = csv_begin(&s, path, msg, msglen)) != BTDF_OK)
             break;
-        }
-        if (part_col) {
-            const char *pw = fld[nf - 1];
-            int is_r = !strcmp(pw, "reflection");
-            if (!is_r && strcmp(pw, "transmission")) {
-                st = ferr(msg, msglen, path, ln, "part must be transmission or reflection");
-                break;
-            }
-            if (!is_r && tr) {
-                st = ferr(msg, msglen, path, ln,
-                          "a transmission row after the reflection rows began");
-                break;
-            }
-            if (is_r && !tr) { /* the transmission is complete: on to the reflection */
-                st = flush_slice(t, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
-                char why[200];
-                if (st == BTDF_OK &&
-                    (btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &p, &tr, why, sizeof why) !=
-                         BTDF_OK ||
-                     btdf_table_set_rule(tr, rule_r, why, sizeof why) != BTDF_OK))
-                    st = ferr(msg, msglen, path, ln, why);
-                if (st != BTDF_OK)
-                    break;
-                cur = tr;
-                cur_ti = -1.0;
-            }
-            nf--; /* the numbers end before the part */
-        }
-        double ti, row, col, v[BTDF_MAX_CHANNELS];
-        int ok = num(fld[nf - 3], &ti) && num(fld[nf - 2], &row) && num(fld[nf - 1], &col);
-        for (int ch = 0; ch < p.channels && ok; ch++)
-            ok = num(fld[3 + ch], &v[ch]);
-        if (!ok) {
-            st = ferr(msg, msglen, path, ln, "a number is malformed or not finite");
-            break;
-        }
-        if (++seen > declared && have_rows) {
-            st = ferr(msg, msglen, path, ln, "more node rows than '# rows' declares");
-            break;
-        }
-        if (ti != cur_ti) {
-            st = flush_slice(cur, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
-            cur_ti = ti;
-        }
-        if (st == BTDF_OK && !(push(&rr, row) && push(&cc, col)))
-            st = BTDF_ENOMEM;
-        for (int ch = 0; ch < p.channels && st == BTDF_OK; ch++)
-            if (!push(&vv, v[ch]))
-                st = BTDF_ENOMEM;
+        st = csv_row(&s, line, path, msg, msglen);
     }
     if (st == BTDF_OK && ferror(f))
-        st = ferr(msg, msglen, path, ln, "read error");
-    if (st == BTDF_OK && !header)
-        st = ferr(msg, msglen, path, ln, "no header row: empty or foreign file");
-    if (st == BTDF_OK && !have_rows && t && !last_nl)
-        st = ferr(msg, msglen, path, ln,
-                  "the last node row has no line end: the file is cut short");
-    if (st == BTDF_OK && !have_end && (have_rows || !t)) {
-        char why[160];
-        snprintf(why, sizeof why,
-                 "the file is cut short: no '# end' line (%zu of the %zu declared rows read)",
-                 seen, declared);
-        st = ferr(msg, msglen, path, ln, why);
-    }
-    if (st == BTDF_OK && have_rows && (ended != declared || seen != declared)) {
-        char why[160];
-        snprintf(why, sizeof why, "'# rows: %zu' and '# end: %zu rows' but %zu node rows",
-                 declared, ended, seen);
-        st = ferr(msg, msglen, path, ln, why);
-    }
-    if (st == BTDF_OK && !t)
-        st = ferr(msg, msglen, path, ln, "no table rows");
-    if (st == BTDF_OK)
-        st = flush_slice(cur, cur_ti, &rr, &cc, &vv, path, ln, msg, msglen);
-    if (st == BTDF_OK && t->ns == 0)
-        st = ferr(msg, msglen, path, ln, "no table rows");
-    if (st == BTDF_OK && part_col && (!tr || tr->ns == 0))
-        st = ferr(msg, msglen, path, ln, "the file declares both parts but has no reflection rows");
-    if (st == BTDF_OK && tr) {
-        char why[200];
-        if (btdf_table_attach_reflection(t, tr, why, sizeof why) != BTDF_OK)
-            st = ferr(msg, msglen, path, ln, why);
-        else
-            tr = NULL; /* owned by t */
-    }
-    btdf_table_free(tr);
+        st = ferr(msg, msglen, path, s.ln, "read error");
+    st = csv_finish(&s, st, path, msg, msglen);
+    btdf_table_free(s.tr);
     fclose(f);
-    free(rr.v);
-    free(cc.v);
-    free(vv.v);
+    free(s.rr.v);
+    free(s.cc.v);
+    free(s.vv.v);
     if (st != BTDF_OK) {
-        btdf_table_free(t);
+        btdf_table_free(s.t);
         return st;
     }
-    *out = t;
+    *out = s.t;
     return BTDF_OK;
 }
 
