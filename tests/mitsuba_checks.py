@@ -1078,7 +1078,7 @@ if __name__ == "__main__":
         albedo_checks(1000000)
         furnace_checks(64, 64)
         full_albedo_checks(1000000)
-        slab_furnace_checks(64, 64)
+        slab_furnace_checks(64, 256)
         render_checks(256, 64, REPEATS)
     else:
         weight_checks(10000)

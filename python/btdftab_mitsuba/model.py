@@ -334,9 +334,12 @@ class FullSeries:
         return k, w
 
     def _node(self, k):
-        v = 0.0
+        """node_deg[k] in double (a float32 weight would lose the series' digits)."""
+        if not _jit():
+            return self.nodes[k]
+        v = mi.Float64(0.0)
         for j, x in enumerate(self.nodes):
-            v = dr.select(k == j, x, v)
+            v = dr.select(k == j, mi.Float64(x), v)
         return v
 
     def energies(self, ti_deg):
@@ -344,10 +347,13 @@ class FullSeries:
         k, w = self.locate(ti_deg)
         out = []
         for h in (0, 1):
-            e0 = e1 = 0.0
-            for j in range(len(self.nodes)):
-                e0 = dr.select(k == j, self.energy[j][h], e0)
-                e1 = dr.select(k + 1 == j, self.energy[j][h], e1)
+            if not _jit():
+                e0, e1 = self.energy[k][h], self.energy[k + 1][h]
+            else:
+                e0 = e1 = mi.Float64(0.0)
+                for j in range(len(self.nodes)):
+                    e0 = dr.select(k == j, mi.Float64(self.energy[j][h]), e0)
+                    e1 = dr.select(k + 1 == j, mi.Float64(self.energy[j][h]), e1)
             out.append(dr.maximum((1.0 - w) * e0 + w * e1, 0.0))
         return out
 
