@@ -399,11 +399,10 @@ static btdf_status csv_comment(csv_state *s, const char *line, const char *path,
    it): the parameters are needed by the first node row. */
 static btdf_status csv_begin(csv_state *s, const char *path, char *msg, size_t msglen)
 {
-    if (s->part_col != s->have_parts || (s->part_col && kind_is_reflection(s->kind))) {
+    if (s->part_col != s->have_parts || (s->part_col && kind_is_reflection(s->kind)))
         return ferr(msg, msglen, path, s->ln,
-                  "a part column needs the '# parts: transmission, reflection' line "
-                  "and a transmission kind, and that line the column");
-    }
+                    "a part column needs the '# parts: transmission, reflection' line "
+                    "and a transmission kind, and that line the column");
     /* Name every missing key, and the writer: a file of another version
        says so rather than look damaged. '# rows' is not required: without it
        the file is of the format before row counts (0.3.0 and earlier). */
@@ -424,10 +423,9 @@ static btdf_status csv_begin(csv_state *s, const char *path, char *msg, size_t m
                  s->have_ior, s->p.channels, s->version);
         return ferr(msg, msglen, path, s->ln, why);
     }
-    if (!s->have_rows && s->part_col) {
+    if (!s->have_rows && s->part_col)
         return ferr(msg, msglen, path, s->ln,
-                  "a part column needs the '# rows' line before the node rows");
-    }
+                    "a part column needs the '# rows' line before the node rows");
     char why[200];
     if (btdf_table_new(s->kind, &s->p, &s->t, why, sizeof why) != BTDF_OK ||
         btdf_table_set_rule(s->t, s->rule, why, sizeof why) != BTDF_OK) {
@@ -453,13 +451,11 @@ static btdf_status csv_row(csv_state *s, char *line, const char *path, char *msg
     if (s->part_col) {
         const char *pw = fld[nf - 1];
         int is_r = !strcmp(pw, "reflection");
-        if (!is_r && strcmp(pw, "transmission")) {
+        if (!is_r && strcmp(pw, "transmission"))
             return ferr(msg, msglen, path, s->ln, "part must be transmission or reflection");
-        }
-        if (!is_r && s->tr) {
+        if (!is_r && s->tr)
             return ferr(msg, msglen, path, s->ln,
-                      "a transmission row after the reflection rows began");
-        }
+                        "a transmission row after the reflection rows began");
         if (is_r && !s->tr) { /* the transmission is complete: on to the reflection */
             st = flush_slice(s->t, s->cur_ti, &s->rr, &s->cc, &s->vv, path, s->ln, msg, msglen);
             char why[200];
@@ -479,12 +475,10 @@ static btdf_status csv_row(csv_state *s, char *line, const char *path, char *msg
     int ok = num(fld[nf - 3], &ti) && num(fld[nf - 2], &row) && num(fld[nf - 1], &col);
     for (int ch = 0; ch < s->p.channels && ok; ch++)
         ok = num(fld[3 + ch], &v[ch]);
-    if (!ok) {
+    if (!ok)
         return ferr(msg, msglen, path, s->ln, "a number is malformed or not finite");
-    }
-    if (++s->seen > s->declared && s->have_rows) {
+    if (++s->seen > s->declared && s->have_rows)
         return ferr(msg, msglen, path, s->ln, "more node rows than '# rows' declares");
-    }
     if (ti != s->cur_ti) {
         st = flush_slice(s->cur, s->cur_ti, &s->rr, &s->cc, &s->vv, path, s->ln, msg, msglen);
         s->cur_ti = ti;

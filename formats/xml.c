@@ -498,6 +498,51 @@ static btdf_status bad(xml_in *x, const char *what)
     return core_say(BTDF_EFORMAT, x->msg, x->msglen, "not a btdftab Radiance BSDF: %s", what);
 }
 
+/* The <ScatteringData> [b, be) of channel w of block rb: a tensor tree (the Visible
+   tree makes the nodes, a colour tree fills their values) or an npatch x npatch Klems
+   matrix. */
+static btdf_status xml_block_data(xml_in *x, rad_block *rb, int w, int tree, size_t np,
+                                  const char *b, const char *be)
+{
+    if (tree) {
+        if (w > 0 && !rb->cv) {
+            if (!rb->nodes)
+                return bad(x, "a colour tree before its Visible tree");
+            rb->cv = calloc(rb->nnodes * RAD_CV, sizeof *rb->cv);
+            if (!rb->cv)
+                return core_say(BTDF_ENOMEM, x->msg, x->msglen, "out of memory");
+        }
+        tree_in t = {rb, w == 0 ? 0 : rb->nnodes, w, 0};
+        if (w == 0) {
+            rb->nodes = malloc(64 * sizeof *rb->nodes);
+            if (!rb->nodes)
+                return core_say(BTDF_ENOMEM, x->msg, x->msglen, "out of memory");
+            t.cap = 64;
+            rb->nodes[0] = (rad_node){-1, 0.0f};
+            rb->nnodes = 1;
+        }
+        const char *tp = b;
+        if (!tree_node(&t, &tp, be, 0, 0) || xml_skip(tp, be) != be)
+            return bad(x, "a tensor tree that is not nested {...} of 1 or 8 values "
+                          "(or the Visible tree's structure)");
+        if (w == 0)
+            rb->depth = t.depth;
+    } else {
+        float **m = w == 0 ? &rb->klems : (w == 1 ? &rb->klems_x : &rb->klems_z);
+        *m = malloc(np * np * sizeof **m);
+        if (!*m)
+            return core_say(BTDF_ENOMEM, x->msg, x->msglen, "out of memory");
+        const char *vp = b;
+        for (size_t i = 0; i < np * np; i++)
+            if (!xml_value(&vp, be, &(*m)[i]))
+                return bad(x, "a Klems matrix without its npatch x npatch values "
+                              "(finite, >= 0)");
+        if (xml_skip(vp, be) != be)
+            return bad(x, "a Klems matrix with more values than npatch x npatch");
+    }
+    return BTDF_OK;
+}
+
 static btdf_status xml_parse(xml_in *x, btdf_rad *r)
 {
     const char *s = x->s, *e = x->end, *b, *be;
@@ -610,43 +655,9 @@ static btdf_status xml_parse(xml_in *x, btdf_rad *r)
             seen[w][k] = 1;
             if (!xml_elem(bb, bbe, "ScatteringData", &b, &be))
                 return bad(x, "a block without <ScatteringData>");
-            rad_block *rb = &r->b[k];
-            if (tree) {
-                if (w > 0 && !rb->cv) {
-                    if (!rb->nodes)
-                        return bad(x, "a colour tree before its Visible tree");
-                    rb->cv = calloc(rb->nnodes * RAD_CV, sizeof *rb->cv);
-                    if (!rb->cv)
-                        return core_say(BTDF_ENOMEM, x->msg, x->msglen, "out of memory");
-                }
-                tree_in t = {rb, w == 0 ? 0 : rb->nnodes, w, 0};
-                if (w == 0) {
-                    rb->nodes = malloc(64 * sizeof *rb->nodes);
-                    if (!rb->nodes)
-                        return core_say(BTDF_ENOMEM, x->msg, x->msglen, "out of memory");
-                    t.cap = 64;
-                    rb->nodes[0] = (rad_node){-1, 0.0f};
-                    rb->nnodes = 1;
-                }
-                const char *tp = b;
-                if (!tree_node(&t, &tp, be, 0, 0) || xml_skip(tp, be) != be)
-                    return bad(x, "a tensor tree that is not nested {...} of 1 or 8 values "
-                                  "(or the Visible tree's structure)");
-                if (w == 0)
-                    rb->depth = t.depth;
-            } else {
-                float **m = w == 0 ? &rb->klems : (w == 1 ? &rb->klems_x : &rb->klems_z);
-                *m = malloc(np * np * sizeof **m);
-                if (!*m)
-                    return core_say(BTDF_ENOMEM, x->msg, x->msglen, "out of memory");
-                const char *vp = b;
-                for (size_t i = 0; i < np * np; i++)
-                    if (!xml_value(&vp, be, &(*m)[i]))
-                        return bad(x, "a Klems matrix without its npatch x npatch values "
-                                      "(finite, >= 0)");
-                if (xml_skip(vp, be) != be)
-                    return bad(x, "a Klems matrix with more values than npatch x npatch");
-            }
+            btdf_status st = xml_block_data(x, &r->b[k], w, tree, np, b, be);
+            if (st != BTDF_OK)
+                return st;
         }
         if (xml_elem(q, de, "WavelengthDataBlock", &b, &be))
             return bad(x, "a <WavelengthData> with more than four blocks");

@@ -157,6 +157,99 @@ void cli_defaults(cli *c)
     c->ph1 = 180.0;
 }
 
+/* --grid NI,NO,NPHI: a plain regular grid */
+static int apply_grid(cli *c, const char *v)
+{
+    size_t n3[3];
+    const char *why = num_size_list(v, 1, 100000, n3, 3);
+    if (why) {
+        fail(EXIT_USAGE, "--grid: '%s': %s (NI,NO,NPHI)", v, why);
+        return 0;
+    }
+    c->o.kind = BTDF_TABLE_GRID;
+    c->o.grid_ti = n3[0];
+    c->o.grid_to = n3[1];
+    c->o.grid_phi = n3[2];
+    return 1;
+}
+
+/* --material N:S, repeatable */
+static int apply_material(cli *c, const char *v)
+{
+    const char *colon = strchr(v, ':');
+    char buf[64];
+    if (!colon || c->nm == BTDF_PREVIEW_MAX_CURVES) {
+        fail(EXIT_USAGE, "--material: '%s': expected N:S (at most %d)", v,
+             BTDF_PREVIEW_MAX_CURVES);
+        return 0;
+    }
+    snprintf(buf, sizeof buf, "%.*s", (int)(colon - v), v);
+    if (!parse_double("--material", buf, &c->mat_n[c->nm]) ||
+        !parse_double("--material", colon + 1, &c->mat_s[c->nm]))
+        return 0;
+    c->nm++;
+    return 1;
+}
+
+/* --angles A,B,...: the polar plot's incidences, in [0, 90) */
+static int apply_angles(cli *c, const char *v)
+{
+    int k = 0;
+    const char *why = num_double_list(v, c->angles, 1, BTDF_PREVIEW_MAX_CURVES, &k);
+    if (why) {
+        fail(EXIT_USAGE, "--angles: '%s': %s", v, why);
+        return 0;
+    }
+    for (int i = 0; i < k; i++)
+        if (!(c->angles[i] >= 0.0 && c->angles[i] < 90.0)) {
+            fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees", c->angles[i]);
+            return 0;
+        }
+    c->na = (size_t)k;
+    return 1;
+}
+
+/* --shard K/N */
+static int apply_shard(cli *c, const char *v)
+{
+    /* digits only on both sides of the slash, at most 6 each (N <= 100000): no
+       blanks, no signs, nothing sscanf's %d would wrap */
+    long k = 0, n = 0;
+    const char *q = v;
+    int dk = 0, dn = 0;
+    for (; *q >= '0' && *q <= '9' && dk < 7; q++, dk++)
+        k = k * 10 + (*q - '0');
+    int slash = *q == '/';
+    if (slash)
+        q++;
+    for (; *q >= '0' && *q <= '9' && dn < 7; q++, dn++)
+        n = n * 10 + (*q - '0');
+    if (!slash || *q || dk == 0 || dn == 0 || dk > 6 || dn > 6 || n < 1 || n > 100000 ||
+        k < 1 || k > n) {
+        fail(EXIT_USAGE, "--shard: '%s': expected K/N with 1 <= K <= N, e.g. 3/8", v);
+        return 0;
+    }
+    c->shard_k = (int)k;
+    c->shard_n = (int)n;
+    return 1;
+}
+
+/* --estimate full|fast|none */
+static int apply_estimate(cli *c, const char *v)
+{
+    if (!strcmp(v, "full"))
+        c->o.estimate = BTDF_ESTIMATE_FULL;
+    else if (!strcmp(v, "fast"))
+        c->o.estimate = BTDF_ESTIMATE_FAST;
+    else if (!strcmp(v, "none"))
+        c->o.estimate = BTDF_ESTIMATE_NONE;
+    else {
+        fail(EXIT_USAGE, "--estimate: '%s': must be full, fast or none", v);
+        return 0;
+    }
+    return 1;
+}
+
 /* Takes one option's value into c; 0 after a usage error. */
 int apply(cli *c, const opt_hit *h)
 {
@@ -187,19 +280,7 @@ int apply(cli *c, const opt_hit *h)
             return 1;
         fail(EXIT_USAGE, "--metric: '%s': must be l1 or max", v);
         return 0;
-    case OPT_GRID: {
-        size_t n3[3];
-        const char *why = num_size_list(v, 1, 100000, n3, 3);
-        if (why) {
-            fail(EXIT_USAGE, "--grid: '%s': %s (NI,NO,NPHI)", v, why);
-            return 0;
-        }
-        c->o.kind = BTDF_TABLE_GRID;
-        c->o.grid_ti = n3[0];
-        c->o.grid_to = n3[1];
-        c->o.grid_phi = n3[2];
-        return 1;
-    }
+    case OPT_GRID: return apply_grid(c, v);
     case OPT_BASIS:
         if (btdf_rad_basis_parse(v, &c->basis))
             return 1;
@@ -247,73 +328,13 @@ int apply(cli *c, const opt_hit *h)
             return 0;
         }
         return 1;
-    case OPT_MATERIAL: {
-        const char *colon = strchr(v, ':');
-        char buf[64];
-        if (!colon || c->nm == BTDF_PREVIEW_MAX_CURVES) {
-            fail(EXIT_USAGE, "--material: '%s': expected N:S (at most %d)", v,
-                 BTDF_PREVIEW_MAX_CURVES);
-            return 0;
-        }
-        snprintf(buf, sizeof buf, "%.*s", (int)(colon - v), v);
-        if (!parse_double("--material", buf, &c->mat_n[c->nm]) ||
-            !parse_double("--material", colon + 1, &c->mat_s[c->nm]))
-            return 0;
-        c->nm++;
-        return 1;
-    }
-    case OPT_ANGLES: {
-        int k = 0;
-        const char *why = num_double_list(v, c->angles, 1, BTDF_PREVIEW_MAX_CURVES, &k);
-        if (why) {
-            fail(EXIT_USAGE, "--angles: '%s': %s", v, why);
-            return 0;
-        }
-        for (int i = 0; i < k; i++)
-            if (!(c->angles[i] >= 0.0 && c->angles[i] < 90.0)) {
-                fail(EXIT_USAGE, "--angles: %g: must lie in [0, 90) degrees", c->angles[i]);
-                return 0;
-            }
-        c->na = (size_t)k;
-        return 1;
-    }
+    case OPT_MATERIAL: return apply_material(c, v);
+    case OPT_ANGLES: return apply_angles(c, v);
     case OPT_FORCE: c->force = 1; return 1;
     case OPT_DRY_RUN: c->dry_run = 1; return 1;
-    case OPT_SHARD: {
-        /* digits only on both sides of the slash, at most 6 each (N <= 100000): no
-           blanks, no signs, nothing sscanf's %d would wrap */
-        long k = 0, n = 0;
-        const char *q = v;
-        int dk = 0, dn = 0;
-        for (; *q >= '0' && *q <= '9' && dk < 7; q++, dk++)
-            k = k * 10 + (*q - '0');
-        int slash = *q == '/';
-        if (slash)
-            q++;
-        for (; *q >= '0' && *q <= '9' && dn < 7; q++, dn++)
-            n = n * 10 + (*q - '0');
-        if (!slash || *q || dk == 0 || dn == 0 || dk > 6 || dn > 6 || n < 1 || n > 100000 ||
-            k < 1 || k > n) {
-            fail(EXIT_USAGE, "--shard: '%s': expected K/N with 1 <= K <= N, e.g. 3/8", v);
-            return 0;
-        }
-        c->shard_k = (int)k;
-        c->shard_n = (int)n;
-        return 1;
-    }
+    case OPT_SHARD: return apply_shard(c, v);
     case OPT_BEST_EFFORT: c->best_effort = 1; return 1;
-    case OPT_ESTIMATE:
-        if (!strcmp(v, "full"))
-            c->o.estimate = BTDF_ESTIMATE_FULL;
-        else if (!strcmp(v, "fast"))
-            c->o.estimate = BTDF_ESTIMATE_FAST;
-        else if (!strcmp(v, "none"))
-            c->o.estimate = BTDF_ESTIMATE_NONE;
-        else {
-            fail(EXIT_USAGE, "--estimate: '%s': must be full, fast or none", v);
-            return 0;
-        }
-        return 1;
+    case OPT_ESTIMATE: return apply_estimate(c, v);
     case OPT_QUIET: c->quiet = 1; return 1;
     case OPT_DIGITS: {
         size_t d;

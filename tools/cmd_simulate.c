@@ -1,7 +1,8 @@
 /* SPDX-License-Identifier: MIT */
 /* cmd_simulate.c: btdftab simulate: options into btdf_sim_opts, the run with a
    progress bar, the summary on standard error and the JSON report (written whole or
-   not at all, by btdf_write_buffer). */
+   not at all, by btdf_write_buffer); the distribution's CSV and EXR and the preview
+   are written by simulate_out.c. */
 #include "cmd_simulate.h"
 
 #include <math.h>
@@ -20,21 +21,26 @@
 #include "options.h"
 #include "run.h"
 #include "simchart.h"
-
-#define MAX_ANGLES 1000
-#define DEG (3.14159265358979323846 / 180.0)
+#include "simulate_out.h"
 
 static const char *prog_name = "btdftab";
-static double deg_given[MAX_ANGLES]; /* the angles as given, for the report */
+double deg_given[MAX_ANGLES]; /* the angles as given, for the report */
+int profile_1d;               /* --profile 1d: bins measure radians of theta_o, not sr */
+
+int simulate_vfail(int code, const char *fmt, va_list ap)
+{
+    fprintf(stderr, "%s: simulate: ", prog_name);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    return code;
+}
 
 static int fail(int code, const char *fmt, ...)
 {
     va_list ap;
-    fprintf(stderr, "%s: simulate: ", prog_name);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    code = simulate_vfail(code, fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
     return code;
 }
 
@@ -308,127 +314,6 @@ surface:;
     return 0;
 }
 
-/* Integral of |cos to| over histogram bin (theta_bin, any phi bin), sr: the bin's
-   solid angle weighted by the cosine, both halves of |phi| counted. */
-static int profile_1d; /* --profile 1d: bins measure radians of theta_o, not sr */
-
-static double cos_sr(int nt, int np, int it)
-{
-    double w = 1.5707963267948966 / nt, a = sin(w * it), b = sin(w * (it + 1));
-    if (profile_1d) /* integral of |cos to| d to over the bin, one side of the normal */
-        return b - a;
-    return 0.5 * (b * b - a * a) * 2.0 * (3.141592653589793 / np);
-}
-
-static void cnum(FILE *f, double x)
-{
-    char b[40];
-    btdf_format_double(isfinite(x) ? x : 0.0, b, sizeof b); /* never NaN in a file */
-    fputs(b, f);
-}
-
-/* The outgoing distribution as CSV (docs/simulation.md): the header row, the comment
-   block of docs/formats.md's conventions, one row per (case, part, bin), the end line.
-   Built in memory and written whole by btdf_write_buffer (a temporary renamed at the
-   end), so an error leaves no file. */
-static int write_dist(const char *path, const char *prov, const btdf_sim_opts *o,
-                      const btdf_sim_result *r)
-{
-    char *buf = NULL;
-    size_t len = 0;
-    FILE *f = open_memstream(&buf, &len);
-    if (!f)
-        return fail(1, "%s: out of memory for the table", path);
-    int nt = r->theta_bins, np = r->phi_bins;
-    unsigned long long rows = (unsigned long long)r->count * 2ull * (unsigned long long)nt *
-                              (unsigned long long)np;
-    fputs("theta_i_deg,theta_o_deg,phi_deg,channel,part,rho,rho_se,rho_1,rho_1_se,ti_rad,"
-          "to_rad,phi_rad,cos_sr\n", f);
-    fprintf(f, "# btdftab %s simulation\n# kind: simulated\n# channels: %d\n# ior:",
-            btdf_version_string(), o->channels);
-    for (int c = 0; c < o->channels; c++) {
-        fputc(c ? ',' : ' ', f);
-        cnum(f, o->ior[c]);
-    }
-    fputs("\n# smoothness: ", f);
-    cnum(f, o->smoothness);
-    if (profile_1d)
-        fputs("\n# units: a 1D profile (rays in the plane of incidence): rho in 1/rad, no cosine "
-              "factor, the fraction of the incident flux in the bin / cos_sr, cos_sr the "
-              "integral of |cos theta_o| d theta_o over the bin (rad); phi 0 backward, 180 "
-              "forward; rho_se its standard error; angles in degrees and radians\n",
-              f);
-    else
-        fputs("\n# units: rho in 1/sr, no cosine factor, the bin's mean weighted by |cos "
-              "theta_o| (fraction of the incident flux in the bin / cos_sr); rho_se its "
-              "standard error; angles in degrees and radians; cos_sr in sr\n",
-              f);
-    fprintf(f, "# bins: %d in theta_o per hemisphere, %d in |phi| over [0, 180] degrees "
-               "(180 is forward); nodes at the bins' centres\n",
-            nt, np);
-    fprintf(f, "# rays: %llu per angle and channel, seed %llu, %llu batches (one surface "
-               "realisation each)\n",
-            (unsigned long long)o->rays, (unsigned long long)o->seed,
-            (unsigned long long)r->tally[0].batches);
-    if (prov) {
-        fputs("# provenance: ", f);
-        for (const unsigned char *c = (const unsigned char *)prov; *c; c++) {
-            if (*c < 0x20 || *c == 0x7f)
-                fprintf(f, "\\x%02x", *c); /* control bytes as C escapes */
-            else
-                fputc(*c, f);
-        }
-        fputc('\n', f);
-    }
-    fprintf(f, "# rows: %llu\n", rows);
-    double wt = 90.0 / nt, wp = 180.0 / np;
-    for (size_t k = 0; k < r->count; k++) {
-        const btdf_sim_tally *t = &r->tally[k];
-        for (int part = 0; part < 2; part++) {
-            const btdf_sim_est *all = part ? t->hist_R : t->hist_T;
-            const btdf_sim_est *one = part ? t->hist_R1 : t->hist_T1;
-            for (int it = 0; it < nt; it++) {
-                double cs = cos_sr(nt, np, it);
-                double inv = cs > 0.0 ? 1.0 / cs : 0.0; /* cs > 0 for every bin; kept safe */
-                double tc = (it + 0.5) * wt, to = part ? tc : 180.0 - tc;
-                for (int ip = 0; ip < np; ip++) {
-                    size_t i = (size_t)it * (size_t)np + (size_t)ip;
-                    double pc = (ip + 0.5) * wp;
-                    fprintf(f, "%.10g,%.10g,%.10g,%d,%s,", deg_given[k % o->n_theta], to, pc,
-                            t->channel, part ? "reflection" : "transmission");
-                    cnum(f, all[i].mean * inv);
-                    fputc(',', f);
-                    cnum(f, all[i].se * inv);
-                    fputc(',', f);
-                    cnum(f, one[i].mean * inv);
-                    fputc(',', f);
-                    cnum(f, one[i].se * inv);
-                    fputc(',', f);
-                    cnum(f, t->theta_i);
-                    fputc(',', f);
-                    cnum(f, to * DEG);
-                    fputc(',', f);
-                    cnum(f, pc * DEG);
-                    fputc(',', f);
-                    cnum(f, cs);
-                    fputc('\n', f);
-                }
-            }
-        }
-    }
-    fprintf(f, "# end: %llu rows\n", rows);
-    if (fclose(f) != 0) {
-        free(buf);
-        return fail(1, "%s: out of memory for the table", path);
-    }
-    char msg[512];
-    btdf_status st = btdf_write_buffer(path, ".csv", buf, len, msg, sizeof msg);
-    free(buf);
-    if (st != BTDF_OK)
-        return fail(1, "%s: %s", path, msg);
-    return 0;
-}
-
 /* --merge's reports (the positional arguments), --shard K/N */
 static const char *merge_files[256];
 static int merge_n = -1; /* -1: no --merge */
@@ -471,134 +356,6 @@ static int parse_output(const char *v, const char **out)
         return fail(2, "-o '%s': this build has no OpenEXR (meson -Dopenexr=enabled)", v);
     *out = v;
     return -1;
-}
-
-/* The transmitted distribution as an EXR grid table (rows theta_o increasing over
-   (90, 180], cols the |phi| bins' centres, one slice per incident angle in increasing
-   order, a channel per --ior value) with layers error, one_hit and one_hit_error
-   (btdf_write_table_layers): the values of the CSV's rho, rho_se, rho_1, rho_1_se
-   rows of part transmission, as 32-bit floats. The reflection is in the CSV only: a
-   grid table holds transmission. */
-static int write_dist_exr(const char *path, const char *prov, const btdf_sim_opts *o,
-                          const btdf_sim_result *r)
-{
-    size_t nti = o->n_theta, order[MAX_ANGLES];
-    for (size_t k = 0; k < nti; k++)
-        order[k] = k;
-    for (size_t i = 1; i < nti; i++) /* insertion sort of the angles, few of them */
-        for (size_t j = i; j > 0 && o->theta_i[order[j]] < o->theta_i[order[j - 1]]; j--) {
-            size_t t = order[j];
-            order[j] = order[j - 1];
-            order[j - 1] = t;
-        }
-    for (size_t i = 1; i < nti; i++)
-        if (o->theta_i[order[i]] == o->theta_i[order[i - 1]])
-            return fail(2, "-o %s: angle %g deg given twice (a table's slices need distinct "
-                           "angles)", path, deg_given[order[i]]);
-    int nt = r->theta_bins, np = r->phi_bins, ch = o->channels;
-    size_t nodes = (size_t)nt * (size_t)np;
-    double *rows = malloc((size_t)nt * sizeof *rows), *cols = malloc((size_t)np * sizeof *cols);
-    double *val = malloc(4 * nodes * (size_t)ch * sizeof *val);
-    btdf_table *tab[4] = {NULL, NULL, NULL, NULL};
-    char msg[512] = "";
-    int code = 0;
-    if (!rows || !cols || !val) {
-        code = fail(1, "%s: out of memory for the table", path);
-        goto out;
-    }
-    for (int it = 0; it < nt; it++) /* row i: theta bin nt - 1 - i, so to increases */
-        rows[it] = 3.14159265358979323846 - (nt - 1 - it + 0.5) * (1.5707963267948966 / nt);
-    for (int ip = 0; ip < np; ip++)
-        cols[ip] = (ip + 0.5) * (3.14159265358979323846 / np);
-    btdf_params p;
-    btdf_params_default(&p);
-    p.channels = ch;
-    for (int c = 0; c < ch; c++)
-        p.ior[c] = o->ior[c];
-    p.smoothness = o->smoothness;
-    for (int l = 0; l < 4 && !code; l++)
-        if (btdf_table_new(BTDF_TABLE_GRID, &p, &tab[l], msg, sizeof msg) != BTDF_OK)
-            code = fail(1, "%s: %s", path, msg);
-    for (size_t i = 0; i < nti && !code; i++) {
-        size_t k = order[i];
-        for (int c = 0; c < ch; c++) {
-            const btdf_sim_tally *t = &r->tally[(size_t)c * nti + k];
-            for (int it = 0; it < nt; it++) {
-                int bin = nt - 1 - it;
-                double cs = cos_sr(nt, np, bin);
-                double inv = cs > 0.0 ? 1.0 / cs : 0.0; /* cs > 0 for every bin; kept safe */
-                for (int ip = 0; ip < np; ip++) {
-                    size_t h = (size_t)bin * (size_t)np + (size_t)ip;
-                    size_t at = ((size_t)it * (size_t)np + (size_t)ip) * (size_t)ch + (size_t)c;
-                    val[at] = t->hist_T[h].mean * inv;
-                    val[nodes * (size_t)ch + at] = t->hist_T[h].se * inv;
-                    val[2 * nodes * (size_t)ch + at] = t->hist_T1[h].mean * inv;
-                    val[3 * nodes * (size_t)ch + at] = t->hist_T1[h].se * inv;
-                }
-            }
-        }
-        for (int l = 0; l < 4 && !code; l++)
-            if (btdf_table_add_slice(tab[l], o->theta_i[k], (size_t)nt, rows, (size_t)np, cols,
-                                     val + (size_t)l * nodes * (size_t)ch, msg,
-                                     sizeof msg) != BTDF_OK)
-                code = fail(1, "%s: %s", path, msg);
-    }
-    if (!code) {
-        btdf_layer layers[3] = {{"error", tab[1]}, {"one_hit", tab[2]}, {"one_hit_error", tab[3]}};
-        btdf_write_opts w = {NULL, prov, NULL};
-        btdf_status st = btdf_write_table_layers(
-            tab[0], layers, 3,
-            o->profile ? "rho of a 1D profile simulated by btdftab simulate (all orders), "
-                         "1/rad: the bin's flux over the integral of |cos theta_o| d theta_o; "
-                         "layers: error (its standard error), one_hit and one_hit_error"
-                       : "rho simulated by btdftab simulate (all orders), the bin's mean "
-                         "weighted by |cos theta_o|, no cosine factor; layers: error (its "
-                         "standard error), one_hit and one_hit_error (one surface hit)",
-            &w, path, msg, sizeof msg);
-        if (st != BTDF_OK)
-            code = fail(1, "%s: %s", path, msg);
-    }
-out:
-    for (int l = 0; l < 4; l++)
-        btdf_table_free(tab[l]);
-    free(rows);
-    free(cols);
-    free(val);
-    return code;
-}
-
-/* --preview: a panel per case, the transmitted lobe in the plane of incidence. */
-static int write_preview(const char *path, const btdf_sim_result *r)
-{
-    simchart_panel pn[BTDF_CHART_MAX_PANELS];
-    btdf_chart_panel cp[BTDF_CHART_MAX_PANELS];
-    char msg[512] = "";
-    size_t n = r->count;
-    int code = 0;
-    for (size_t k = 0; k < n && !code; k++) {
-        if (simchart_lobe(r, k, 0.7, &pn[k], msg, sizeof msg) != 0) {
-            code = fail(1, "--preview: %s", msg);
-            n = k + 1;
-            break;
-        }
-        cp[k] = (btdf_chart_panel){pn[k].title, pn[k].series, pn[k].nseries};
-    }
-    if (!code) {
-        btdf_chart ch = {"\xce\xb8o from the downward normal (" "\xc2\xb0" "; < 0 backward, > 0 forward)",
-                         r->profile ? "\xcf\x81 |cos \xce\xb8o| (1/rad), 1D profile"
-                                    : "\xcf\x81 |cos \xce\xb8o| (1/sr), bin mean",
-                         0, -90.0, 90.0, cp, n, 0};
-        btdf_preview_opts po;
-        btdf_preview_opts_default(&po);
-        po.kind = BTDF_PREVIEW_CHART;
-        po.chart = &ch;
-        po.title = "btdftab simulate: the transmitted lobe in the plane of incidence";
-        if (btdf_preview_write(&po, path, msg, sizeof msg) != BTDF_OK)
-            code = fail(1, "%s: %s", path, msg);
-    }
-    for (size_t k = 0; k < n; k++)
-        simchart_panel_free(&pn[k]);
-    return code;
 }
 
 /* Reads n numbers of the JSON array that follows key in text (integers into u or
@@ -825,6 +582,60 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
     return -1;
 }
 
+/* --merge: the reports read back and merged into *r (*st the merge's status); 0, or
+   the exit status after a message. */
+static int merge_parts(const btdf_sim_opts *o, btdf_sim_result **r, btdf_status *st,
+                       char *msg, size_t msglen)
+{
+    btdf_sim_result *parts = calloc((size_t)merge_n, sizeof *parts);
+    const btdf_sim_result **pp = calloc((size_t)merge_n, sizeof *pp);
+    int rc = parts && pp ? 0 : fail(1, "out of memory");
+    for (int k = 0; k < merge_n && rc == 0; k++) {
+        rc = read_part(merge_files[k], o, &parts[k]);
+        pp[k] = &parts[k];
+    }
+    if (rc == 0)
+        *st = btdf_sim_merge(o, pp, (size_t)merge_n, r, msg, msglen);
+    for (int k = 0; parts && k < merge_n; k++) {
+        free(parts[k].raw_counts);
+        free(parts[k].raw_hist);
+        free(parts[k].raw_stats);
+    }
+    free(parts);
+    free(pp);
+    return rc;
+}
+
+/* The summary on standard error: per case T and R against Eq. 25 (and, for the
+   histograms, the comparisons), then the surface and the rays. */
+static void print_summary(const btdf_sim_opts *o, const btdf_sim_result *r, const double *eqT,
+                          const double *eqR, const btdf_sim_cmp *cmp)
+{
+    for (size_t k = 0; k < r->count; k++) {
+        const btdf_sim_tally *t = &r->tally[k];
+        fprintf(stderr,
+                "ti %g n %g s %g: T %.5f +- %.5f (orders %.5f %.5f %.5f), R %.5f +- %.5f; "
+                "Eq. 25 T %.5f R %.5f; %.3f hits per ray\n",
+                t->theta_i / DEG, t->ior, o->smoothness, t->T.mean, t->T.se,
+                t->T_order[0].mean, t->T_order[1].mean, t->T_order[2].mean, t->R.mean,
+                t->R.se, eqT[k], eqR[k], t->mean_hits.mean);
+        const btdf_sim_cmp *a = &cmp[k * NCMP], *b = a + 1, *c = a + 2;
+        if (!o->profile)
+            fprintf(stderr,
+                "  T against Eq. 25: e_T %.3g (noise %.2g), e_L1 %.3g (noise %.2g +- %.2g); "
+                "one hit (noise %.2g +- %.2g): Eq. 25 e_L1 %.3g chi2/dof %.3g, Smith e_L1 "
+                "%.3g chi2/dof %.3g\n",
+                a->e_T, a->e_T_floor, a->e_L1, a->e_L1_floor, a->e_L1_floor_sd,
+                b->e_L1_floor, b->e_L1_floor_sd, b->e_L1, b->dof ? b->chi2 / b->dof : 0.0,
+                c->e_L1, c->dof ? c->chi2 / c->dof : 0.0);
+    }
+    fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (target %.4f), "
+                    "correlation length %.4f; %llu rays in %.2f s\n",
+            r->surface.n, r->surface.n, r->surface.rms_height, r->surface.rms_slope,
+            (o->profile ? 1.4142135623730951 : 2.0) / o->smoothness, r->surface.corr_length,
+            (unsigned long long)r->rays_traced, r->seconds);
+}
+
 int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
 {
     prog_name = prog;
@@ -889,22 +700,7 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     o.progress_ctx = &pr;
     btdf_sim_result *r = NULL;
     if (merge_n >= 0) {
-        btdf_sim_result *parts = calloc((size_t)merge_n, sizeof *parts);
-        const btdf_sim_result **pp = calloc((size_t)merge_n, sizeof *pp);
-        int rc = parts && pp ? 0 : fail(1, "out of memory");
-        for (int k = 0; k < merge_n && rc == 0; k++) {
-            rc = read_part(merge_files[k], &o, &parts[k]);
-            pp[k] = &parts[k];
-        }
-        if (rc == 0)
-            st = btdf_sim_merge(&o, pp, (size_t)merge_n, &r, msg, sizeof msg);
-        for (int k = 0; parts && k < merge_n; k++) {
-            free(parts[k].raw_counts);
-            free(parts[k].raw_hist);
-            free(parts[k].raw_stats);
-        }
-        free(parts);
-        free(pp);
+        int rc = merge_parts(&o, &r, &st, msg, sizeof msg);
         run_progress_end(&pr);
         if (rc)
             return rc;
@@ -942,31 +738,8 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
                 return fail(1, "comparison with the models: %s", msg);
             }
     }
-    if (!quiet) {
-        for (size_t k = 0; k < r->count; k++) {
-            const btdf_sim_tally *t = &r->tally[k];
-            fprintf(stderr,
-                    "ti %g n %g s %g: T %.5f +- %.5f (orders %.5f %.5f %.5f), R %.5f +- %.5f; "
-                    "Eq. 25 T %.5f R %.5f; %.3f hits per ray\n",
-                    t->theta_i / DEG, t->ior, o.smoothness, t->T.mean, t->T.se,
-                    t->T_order[0].mean, t->T_order[1].mean, t->T_order[2].mean, t->R.mean,
-                    t->R.se, eqT[k], eqR[k], t->mean_hits.mean);
-            const btdf_sim_cmp *a = &cmp[k * NCMP], *b = a + 1, *c = a + 2;
-            if (!o.profile)
-                fprintf(stderr,
-                    "  T against Eq. 25: e_T %.3g (noise %.2g), e_L1 %.3g (noise %.2g +- %.2g); "
-                    "one hit (noise %.2g +- %.2g): Eq. 25 e_L1 %.3g chi2/dof %.3g, Smith e_L1 "
-                    "%.3g chi2/dof %.3g\n",
-                    a->e_T, a->e_T_floor, a->e_L1, a->e_L1_floor, a->e_L1_floor_sd,
-                    b->e_L1_floor, b->e_L1_floor_sd, b->e_L1, b->dof ? b->chi2 / b->dof : 0.0,
-                    c->e_L1, c->dof ? c->chi2 / c->dof : 0.0);
-        }
-        fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (target %.4f), "
-                        "correlation length %.4f; %llu rays in %.2f s\n",
-                r->surface.n, r->surface.n, r->surface.rms_height, r->surface.rms_slope,
-                (o.profile ? 1.4142135623730951 : 2.0) / o.smoothness, r->surface.corr_length,
-                (unsigned long long)r->rays_traced, r->seconds);
-    }
+    if (!quiet)
+        print_summary(&o, r, eqT, eqR, cmp);
     code = report ? write_report(report, prov, &o, r, eqT, eqR, cmp) : 0;
     if (code == 0 && dist) {
         size_t n = strlen(dist);

@@ -274,19 +274,11 @@ double run_series_tolerance(int part, int given, double tol)
     return (!part || (part & BTDF_PART_REFLECTION)) ? 1e-2 : tol;
 }
 
-int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
-               int threads, int quiet, int best_effort, const char *prov, run_progress *pr)
+/* What the request needs at least (the builder refuses what cannot fit) and the
+   reflection below 1e-2, said before the work (unless quiet). */
+static void series_warnings(const char *prog, const char *path, const btdf_params *p,
+                            double tol, int sides, int quiet)
 {
-    return run_series_ex(prog, path, p, tol, sides, threads, quiet, best_effort, prov, NULL, 0, 0,
-                         pr);
-}
-
-int run_series_ex(const char *prog, const char *path, const btdf_params *p, double tol,
-                  int sides, int threads, int quiet, int best_effort, const char *prov,
-                  const char *report, size_t max_coeffs, size_t max_bytes, run_progress *pr)
-{
-    char msg[512] = "";
-    btdf_scatfun *f = NULL;
     /* What the request needs at least (the builder refuses what cannot fit): said
        before the work when it is large, with the numbers. */
     btdf_scatfun_need nd;
@@ -309,6 +301,66 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
                 "and 278 CPU s before the coefficient budget stopped it, not met; --part "
                 "transmission, or --max-memory and --max-samples to bound the build\n",
                 prog, path, tol);
+}
+
+/* The .bsdf metadata's JSON up to the material (program, ior, smoothness, k0,
+   tolerance, the model unless xu-sun) into meta; returns snprintf's count so far. */
+static int series_meta(char *meta, size_t len, const btdf_params *p, double tol)
+{
+    char nb[3][40];
+    int k = snprintf(meta, len, "{\"program\": \"btdftab %s\", \"ior\": [",
+                     btdf_version_string());
+    for (int c = 0; c < p->channels && k > 0 && (size_t)k < len; c++) {
+        btdf_format_double(p->ior[c], nb[0], sizeof nb[0]);
+        k += snprintf(meta + k, len - (size_t)k, "%s%s", c ? ", " : "", nb[0]);
+    }
+    btdf_format_double(p->smoothness, nb[0], sizeof nb[0]);
+    btdf_format_double(p->k0, nb[1], sizeof nb[1]);
+    btdf_format_double(tol, nb[2], sizeof nb[2]);
+    if (k > 0 && (size_t)k < len)
+        k += snprintf(meta + k, len - (size_t)k,
+                      "], \"smoothness\": %s, \"k0\": %s, \"tolerance\": %s", nb[0], nb[1],
+                      nb[2]);
+    /* the model, for every model but xu-sun (whose files keep their bytes: no key is
+       xu-sun) */
+    if (p->model != BTDF_MODEL_XU_SUN && k > 0 && (size_t)k < len)
+        k += snprintf(meta + k, len - (size_t)k, ", \"model\": \"%s\"",
+                      btdf_model_name(p->model));
+    return k;
+}
+
+/* meta (k bytes of a buffer of len) with the command whole and escaped (a quote or a
+   newline in a path, any length) and the closing brace; NULL when out of memory. */
+static char *series_metafull(const char *meta, size_t len, int k, const char *prov)
+{
+    size_t lp = prov ? strlen(prov) : 0;
+    char *metafull = malloc(len + 6 * lp + 32);
+    if (metafull && k > 0 && (size_t)k < len) {
+        memcpy(metafull, meta, (size_t)k);
+        size_t q = (size_t)k;
+        q += (size_t)sprintf(metafull + q, ", \"command\": \"");
+        q += run_json_escape(prov, metafull + q);
+        memcpy(metafull + q, "\"}", 3);
+    } else if (metafull) {
+        snprintf(metafull, len, "%s", meta);
+    }
+    return metafull;
+}
+
+int run_series(const char *prog, const char *path, const btdf_params *p, double tol, int sides,
+               int threads, int quiet, int best_effort, const char *prov, run_progress *pr)
+{
+    return run_series_ex(prog, path, p, tol, sides, threads, quiet, best_effort, prov, NULL, 0, 0,
+                         pr);
+}
+
+int run_series_ex(const char *prog, const char *path, const btdf_params *p, double tol,
+                  int sides, int threads, int quiet, int best_effort, const char *prov,
+                  const char *report, size_t max_coeffs, size_t max_bytes, run_progress *pr)
+{
+    char msg[512] = "";
+    btdf_scatfun *f = NULL;
+    series_warnings(prog, path, p, tol, sides, quiet);
     double t0 = run_now();
     btdf_status st = btdf_scatfun_build_progress(p, tol, (btdf_side)sides, threads, max_coeffs,
                                                  max_bytes, run_progress_cb, pr, &f, msg,
@@ -333,25 +385,7 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
     if (own)
         *own = 0;
     char meta[1024];
-    char nb[3][40];
-    int k = snprintf(meta, sizeof meta, "{\"program\": \"btdftab %s\", \"ior\": [",
-                     btdf_version_string());
-    for (int c = 0; c < p->channels && k > 0 && (size_t)k < sizeof meta; c++) {
-        btdf_format_double(p->ior[c], nb[0], sizeof nb[0]);
-        k += snprintf(meta + k, sizeof meta - (size_t)k, "%s%s", c ? ", " : "", nb[0]);
-    }
-    btdf_format_double(p->smoothness, nb[0], sizeof nb[0]);
-    btdf_format_double(p->k0, nb[1], sizeof nb[1]);
-    btdf_format_double(tol, nb[2], sizeof nb[2]);
-    if (k > 0 && (size_t)k < sizeof meta)
-        k += snprintf(meta + k, sizeof meta - (size_t)k,
-                      "], \"smoothness\": %s, \"k0\": %s, \"tolerance\": %s", nb[0], nb[1],
-                      nb[2]);
-    /* the model, for every model but xu-sun (whose files keep their bytes: no key is
-       xu-sun) */
-    if (p->model != BTDF_MODEL_XU_SUN && k > 0 && (size_t)k < sizeof meta)
-        k += snprintf(meta + k, sizeof meta - (size_t)k, ", \"model\": \"%s\"",
-                      btdf_model_name(p->model));
+    int k = series_meta(meta, sizeof meta, p, tol);
     btdf_report reps[4];
     memset(reps, 0, sizeof reps);
     for (int bi = 0; bi < 4; bi++) {
@@ -401,17 +435,7 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
                 prog, path, peak, BTDF_SCATFUN_PBRT_FLOAT_SAFE_A0);
     /* the command whole and escaped (a quote or a newline in a path, any length): the
        numbers above fit the buffer, the command goes on in its own */
-    size_t lp = prov ? strlen(prov) : 0;
-    char *metafull = malloc(sizeof meta + 6 * lp + 32);
-    if (metafull && k > 0 && (size_t)k < sizeof meta) {
-        memcpy(metafull, meta, (size_t)k);
-        size_t q = (size_t)k;
-        q += (size_t)sprintf(metafull + q, ", \"command\": \"");
-        q += run_json_escape(prov, metafull + q);
-        memcpy(metafull + q, "\"}", 3);
-    } else if (metafull) {
-        snprintf(metafull, sizeof meta, "%s", meta);
-    }
+    char *metafull = series_metafull(meta, sizeof meta, k, prov);
     int code = 0;
     if (!met && !best_effort) {
         fprintf(stderr, "%s: %s: tolerance %g not met: e_L1 max %.3g (%s)%s%s; nothing written "

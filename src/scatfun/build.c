@@ -143,69 +143,60 @@ BTDF_API btdf_status btdf_scatfun_build_progress(const btdf_params *p, double to
                       msg, msglen);
 }
 
-/* The builder: checks, context and fold factors, then the refinement loop (one pass of
-   series and checks, split marks, fronts spread, the file's own measurement that
-   accepts, splits locally or tightens, splits inserted, the best file kept). It is one
-   function of about 410 lines because the loop's phases share a dozen locals (the
-   nodes P, fresh, ahead, best, best_err, tighten, local, stall, last_err, limit) and
-   one cleanup path; cutting them into functions over a build_loop struct beside
-   build_ctx is a change of its own, to be checked against byte-identical files. */
-static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side side,
-                              int threads, size_t max_coeffs, size_t max_bytes,
-                              btdf_progress_fn progress, void *user, btdf_scatfun **out,
-                              char *msg, size_t msglen)
+/* The arguments checked, *max_coeffs set (0: the builder's own cap), and what the
+   request needs at least (btdf_scatfun_predict), before any work: a request that
+   cannot fit the format's node budget or the caller's budgets is refused with the
+   numbers. */
+static btdf_status build_fits(const btdf_params *p, double tolerance, btdf_side side,
+                              size_t *max_coeffs_io, size_t max_bytes, char *msg, size_t msglen)
 {
-    if (!out)
-        return core_say(BTDF_EINVAL, msg, msglen, "output pointer missing");
     btdf_status st = btdf_scatfun_check(p, tolerance, side, msg, msglen);
     if (st != BTDF_OK)
         return st;
-    if (max_coeffs == 0 || max_coeffs > MAX_COEFFS_BUILD)
-        max_coeffs = MAX_COEFFS_BUILD;
-    /* What the request needs at least (btdf_scatfun_predict), before any work: a
-       request that cannot fit the format's node budget or the caller's budgets is
-       refused with the numbers. */
-    {
-        btdf_scatfun_need nd;
-        st = btdf_scatfun_predict(p, tolerance, side, &nd, msg, msglen);
-        if (st != BTDF_OK)
-            return st;
-        const char *what = nd.half_nodes > BTDF_SCATFUN_MAX_HALF_NODES ? "node"
-                           : nd.coeffs > max_coeffs                    ? "coefficient"
-                           : max_bytes && nd.build_bytes > max_bytes   ? "memory"
-                                                                       : NULL;
-        if (what)
-            return core_say(BTDF_EBUDGET, msg, msglen,
-                            "%s budget, nothing built: the transmitted lobe is about %.3g deg wide "
-                            "(n = %.9g, s = %g) and needs nodes %.3g deg apart to meet %g: at "
-                            "least %zu half nodes (budget %d), %zu coefficients (budget %zu), "
-                            "%.3g MB of file and %.3g MB to build%s; a facet-space table "
-                            "(.exr/.csv) holds this material",
-                            what, nd.lobe_deg, p->ior[p->channels == 3 ? 1 : 0],
-                            p->smoothness, nd.spacing_deg, tolerance, nd.half_nodes,
-                            BTDF_SCATFUN_MAX_HALF_NODES, nd.coeffs, max_coeffs,
-                            1e-6 * (double)nd.file_bytes, 1e-6 * (double)nd.build_bytes,
-                            max_bytes ? " (the budget given)" : "");
-    }
-    double t0 = core_now();
-    build_ctx c;
-    memset(&c, 0, sizeof c);
-    if (pthread_mutex_init(&c.lock, NULL) != 0)
-        return core_say(BTDF_ENOMEM, msg, msglen, "cannot create a mutex");
-    c.p = p;
-    c.nc = p->channels;
-    c.nst = p->channels == 3 ? 3 : 1;
-    for (int k = 0; k < c.nc; k++) {
-        c.ior[BLK_T_ENTER][k] = c.ior[BLK_R_TOP][k] = p->ior[k];
+    if (*max_coeffs_io == 0 || *max_coeffs_io > MAX_COEFFS_BUILD)
+        *max_coeffs_io = MAX_COEFFS_BUILD;
+    size_t max_coeffs = *max_coeffs_io;
+    btdf_scatfun_need nd;
+    st = btdf_scatfun_predict(p, tolerance, side, &nd, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    const char *what = nd.half_nodes > BTDF_SCATFUN_MAX_HALF_NODES ? "node"
+                       : nd.coeffs > max_coeffs                    ? "coefficient"
+                       : max_bytes && nd.build_bytes > max_bytes   ? "memory"
+                                                                   : NULL;
+    if (what)
+        return core_say(BTDF_EBUDGET, msg, msglen,
+                        "%s budget, nothing built: the transmitted lobe is about %.3g deg wide "
+                        "(n = %.9g, s = %g) and needs nodes %.3g deg apart to meet %g: at "
+                        "least %zu half nodes (budget %d), %zu coefficients (budget %zu), "
+                        "%.3g MB of file and %.3g MB to build%s; a facet-space table "
+                        "(.exr/.csv) holds this material",
+                        what, nd.lobe_deg, p->ior[p->channels == 3 ? 1 : 0],
+                        p->smoothness, nd.spacing_deg, tolerance, nd.half_nodes,
+                        BTDF_SCATFUN_MAX_HALF_NODES, nd.coeffs, max_coeffs,
+                        1e-6 * (double)nd.file_bytes, 1e-6 * (double)nd.build_bytes,
+                        max_bytes ? " (the budget given)" : "");
+    return BTDF_OK;
+}
+
+/* The context's fixed part: the material, the blocks asked, each block's index and
+   pbrt-v3 fold factors, the azimuth grid bounds and the first error budget. */
+static void build_ctx_setup(build_ctx *c, const btdf_params *p, btdf_side side, double tolerance)
+{
+    c->p = p;
+    c->nc = p->channels;
+    c->nst = p->channels == 3 ? 3 : 1;
+    for (int k = 0; k < c->nc; k++) {
+        c->ior[BLK_T_ENTER][k] = c->ior[BLK_R_TOP][k] = p->ior[k];
         /* ior >= BTDF_IOR_MIN > 0 (checked) */
-        c.ior[BLK_T_LEAVE][k] = c.ior[BLK_R_BOTTOM][k] = 1.0 / p->ior[k];
+        c->ior[BLK_T_LEAVE][k] = c->ior[BLK_R_BOTTOM][k] = 1.0 / p->ior[k];
     }
     for (int b = 0; b < NBLK; b++) {
-        c.want[b] = ((int)side & blk_mask[b]) != 0;
+        c->want[b] = ((int)side & blk_mask[b]) != 0;
         for (int k = 0; k < 3; k++)
-            c.fold[b][k] = 1.0;
+            c->fold[b][k] = 1.0;
     }
-    if (c.nc == 3) {
+    if (c->nc == 3) {
         /* pbrt-v3 scales transmission by e^2 with the header's one eta = n_G: reading
            T_LEAVE for light from above gives n_G^2 rho_c(1/n_c; o->i), and the truth is
            n_c^2 rho_c(1/n_c; o->i) (reciprocity), so that block carries (n_c/n_G)^2;
@@ -213,40 +204,26 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
            rho_c(n_c; o->i)/n_c^2, so it carries (n_G/n_c)^2. Reflection has no factor. */
         for (int k = 0; k < 3; k++) {
             double q = p->ior[k] / p->ior[1]; /* ior > 0 (checked) */
-            c.fold[BLK_T_LEAVE][k] = q * q;
-            c.fold[BLK_T_ENTER][k] = 1.0 / (q * q);
+            c->fold[BLK_T_LEAVE][k] = q * q;
+            c->fold[BLK_T_ENTER][k] = 1.0 / (q * q);
         }
     }
     /* The lobe spans about 2/s rad of facet tilt; a first azimuth grid of about 8 s
        points puts several samples across it, so no lobe falls between samples. The
        narrowest pairs need that; a transmission pair starts on the grid its own lobe
        and edges need (sf_first_grid), at most this. */
-    c.nmin = pow2_at_least(fmax(NMIN_PHI, 8.0 * p->smoothness));
-    if (c.nmin > BTDF_SCATFUN_MAX_PHI / 2)
-        c.nmin = BTDF_SCATFUN_MAX_PHI / 2;
-    c.nmax = BTDF_SCATFUN_MAX_PHI;
-    c.budget = tolerance;
+    c->nmin = pow2_at_least(fmax(NMIN_PHI, 8.0 * p->smoothness));
+    if (c->nmin > BTDF_SCATFUN_MAX_PHI / 2)
+        c->nmin = BTDF_SCATFUN_MAX_PHI / 2;
+    c->nmax = BTDF_SCATFUN_MAX_PHI;
+    c->budget = tolerance;
+}
 
-    btdf_scatfun *best = NULL;
-    double best_err = HUGE_VAL;
-    /* The last file assembled within every budget: what a build stopped by a budget
-       answers with, never a state that already exceeded one. over: the current state
-       exceeded a budget (it is not assembled). */
-    btdf_scatfun *snap = NULL;
-    int over = 0;
-    size_t over_need = 0; /* the coefficients of a state that passed max_coeffs */
-    /* T and R of the test angles, kept across the measurements (NULL: computed each time) */
-    albedo_memo *memo = albedo_memo_new();
-    /* initial half nodes: mu = sin of equal angle steps, denser towards grazing */
+/* The first half nodes into P; returns their count. Initial half nodes: mu = sin of
+   equal angle steps, denser towards grazing. */
+static size_t first_nodes(double *P)
+{
     size_t K0 = 8;
-    double *P = malloc(BTDF_SCATFUN_MAX_HALF_NODES * 2 * sizeof *P);
-    /* fresh[j]: interval j was made by the last pass's split; ahead: fronts (below) */
-    unsigned char *fresh = calloc(BTDF_SCATFUN_MAX_HALF_NODES * 2, 1);
-    unsigned char *ahead = calloc(BTDF_SCATFUN_MAX_HALF_NODES, 1);
-    if (!P || !fresh || !ahead) {
-        st = BTDF_ENOMEM;
-        goto done;
-    }
     for (size_t j = 0; j < K0; j++)
         P[j] = to_float_node(sin((double)(j + 1) * M_PI / (2.0 * (double)K0)));
     /* Towards the pole, nodes at angles doubling from the pole node's: an azimuthal
@@ -265,169 +242,429 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             P[K++] = to_float_node(cos(a[--na]));
     }
     P[K++] = POLE_NODE;
+    return K;
+}
+
+/* One pass on the half nodes P[0..K): the norms, the pair series and the interval
+   checks; *total their coefficients. BTDF_EBUDGET with *limit (and *over_need for the
+   coefficients) when the state passes a budget, BTDF_ENOMEM, or BTDF_OK. */
+static btdf_status pass_series(build_ctx *c, const double *P, size_t K, int threads,
+                               size_t max_coeffs, size_t max_bytes, const btdf_scatfun *snap,
+                               size_t *total, size_t *over_need, const char **limit)
+{
+    if (sf_set_nodes(c, P, K))
+        return BTDF_ENOMEM;
+    c->nint = K;
+    if (sf_ensure_state(c))
+        return BTDF_ENOMEM;
+    for (size_t j = 0; j < K; j++)
+        /* checked where a split would put the node, so check series become pairs */
+        c->mid[j] = to_float_node(split_point(P, K, j, 0.5));
+    /* the norms of new nodes and midpoints (each its own job: same values on any
+       number of threads) */
+    core_parallel_for(threads, K * NBLK * 2, sf_job_norms, c);
+    for (size_t j = 0; j < K; j++)
+        c->hasTn[j] = c->hasTm[j] = 1;
+    if (core_parallel_for_ws(threads, NBLK * K, sf_job_row, c, sf_build_ws_new, sf_build_ws_free) || c->oom)
+        return BTDF_ENOMEM;
+    size_t n = 0;
+    for (int s = 0; s < NBLK; s++)
+        for (size_t i = 0; c->want[s] && i < K * K; i++)
+            n += c->pairs[s][i].m * (size_t)c->nst;
+    *total = n;
+    if (n > max_coeffs) {
+        *over_need = n;
+        *limit = "coefficient";
+        return BTDF_EBUDGET;
+    }
+    if (max_bytes && state_bytes(c) + snap_bytes(snap) > max_bytes) {
+        *limit = "memory";
+        return BTDF_EBUDGET;
+    }
+    if (core_parallel_for_ws(threads, NBLK * K, sf_job_colcheck, c, sf_build_ws_new, sf_build_ws_free) ||
+        core_parallel_for_ws(threads, NBLK * K, sf_job_rowcheck, c, sf_build_ws_new, sf_build_ws_free) ||
+        c->oom)
+        return BTDF_ENOMEM;
+    if (max_bytes && state_bytes(c) + snap_bytes(snap) > max_bytes) {
+        *limit = "memory";
+        return BTDF_EBUDGET;
+    }
+    return BTDF_OK;
+}
+
+/* Marks in split the intervals whose checks fail their share, and lowers *endr, the
+   cut of the last interval, where its error needs a finer one; -1 when out of memory. */
+static int mark_splits(const build_ctx *c, const double *P, size_t K, unsigned char *split,
+                       double *endr)
+{
+    /* The checks bound both readings of every block (norms_at): DIRECT, the light
+       in the slow index, integrates the error over the fast one; ADJOINT, the light
+       in the fast index, over the slow one. One interval check serves both with the
+       axes swapped: the fast-midpoint gaps (errc) summed along a row are the DIRECT
+       error there, summed down a column of rows the ADJOINT error of the light at
+       that midpoint; the slow-midpoint gaps (gapr) the other way round. A
+       three-channel transmission block is read ADJOINT only (sf_pair_norm). */
+    double *ea = calloc(K, sizeof *ea);
+    if (!ea)
+        return -1;
+    int rowbad = 0; /* once a row fails, also split the ones close to failing */
+    for (int s = 0; s < NBLK; s++) {
+        if (!c->want[s])
+            continue;
+        int direct = !(c->nst == 3 && !blk_refl[s]);
+        for (size_t j = 0; direct && j < K; j++)
+            rowbad |= c->errr[s][j] > share_row(c);
+    }
+    for (int s = 0; s < NBLK; s++) {
+        if (!c->want[s])
+            continue;
+        int direct = !(c->nst == 3 && !blk_refl[s]);
+        for (size_t r = 0; direct && r < K; r++) {
+            double sum = 0.0;
+            for (size_t j = 0; j < K; j++) {
+                double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
+                sum += wid * c->errc[s][r * K + j];
+            }
+            if (sum <= share_col(c))
+                continue;
+            for (size_t j = 0; j < K; j++) {
+                double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
+                if (wid * c->errc[s][r * K + j] > share_col(c) / (double)K)
+                    split[j] = 1;
+            }
+        }
+        for (size_t j = 0; direct && j < K; j++)
+            if (c->errr[s][j] > share_row(c) && j == K - 1)
+                /* error ~ the last interval's angle: aim at half the share */
+                *endr = fmin(*endr, fmax(1.0 / 64.0, 0.5 * share_row(c) / c->errr[s][j]));
+        for (size_t j = 0; direct && j < K; j++)
+            if (c->errr[s][j] > (rowbad ? 0.7 : 1.0) * share_row(c))
+                split[j] = 1;
+        /* ADJOINT, light at fast node col: the slow-midpoint gaps down the column */
+        for (size_t col = 0; col < K; col++) {
+            double sum = 0.0;
+            for (size_t j = 0; j < K; j++) {
+                double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
+                /* the camera's cosine, the slow midpoint's: the ADJOINT integral's
+                   weight (norms_at) */
+                ea[j] = wid * c->mid[j] * c->gapr[s][j * K + col] *
+                        sf_adj_ratio(c, c->Tm[j][s], c->Tn[col][s]);
+                sum += ea[j];
+            }
+            if (sum <= share_col(c))
+                continue;
+            for (size_t j = 0; j < K; j++)
+                if (ea[j] > share_col(c) / (double)K)
+                    split[j] = 1;
+        }
+        /* ADJOINT, light at fast midpoint j: the fast-midpoint gaps over the rows */
+        for (size_t j = 0; j < K; j++) {
+            double tot = 0.0;
+            for (size_t r = 0; r < K; r++) {
+                double lo = r == 0 ? 0.0 : P[r - 1], hi = r + 1 < K ? P[r + 1] : P[r];
+                tot += 0.5 * (hi - lo) * P[r] * c->errc[s][r * K + j] *
+                       sf_adj_ratio(c, c->Tn[r][s], c->Tm[j][s]);
+            }
+            if (tot > share_row(c)) {
+                split[j] = 1;
+                if (j == K - 1)
+                    *endr = fmin(*endr, fmax(1.0 / 64.0, 0.5 * share_row(c) / tot));
+            }
+        }
+    }
+    free(ea);
+    return 0;
+}
+
+/* The fronts: split marks spread beside the intervals just split (ahead is scratch of
+   K bytes); returns the intervals to split. */
+static size_t spread_fronts(unsigned char *split, const unsigned char *fresh,
+                            unsigned char *ahead, size_t K)
+{
+    /* Fronts. A new node is also a new row and column of pairs, and the checks sum
+       over rows and columns: an interval next to a freshly split one can fail only
+       because the new rows now see it (measured for n = 1.5, s = 3 at 1e-3: the
+       failing interval moved one step outwards per pass, its check at 3.1, 2.6,
+       2.2, 1.7, 1.3 times the share, six passes). When an interval that was not
+       just split fails beside one that was, split the next one outwards too: the
+       front moves two intervals per pass. */
+    for (size_t j = 0; j < K; j++)
+        ahead[j] = 0;
+    for (size_t j = 0; j < K; j++) {
+        if (!split[j] || fresh[j])
+            continue;
+        if (j > 0 && fresh[j - 1] && j + 1 < K && !fresh[j + 1])
+            ahead[j + 1] = 1;
+        if (j + 1 < K && fresh[j + 1] && j > 0 && !fresh[j - 1])
+            ahead[j - 1] = 1;
+    }
+    for (size_t j = 0; j < K; j++)
+        split[j] |= ahead[j];
+    size_t nsplit = 0;
+    for (size_t j = 0; j < K; j++)
+        nsplit += split[j];
+    return nsplit;
+}
+
+/* Inserts the split points of the marked intervals into the K = *Kp half nodes P
+   (frees split), marks fresh the intervals they make and carries the series over:
+   BTDF_OK, BTDF_EBUDGET when float spacing leaves nothing to split, or BTDF_ENOMEM. */
+static btdf_status insert_splits(build_ctx *c, double *P, size_t *Kp, unsigned char *split,
+                                 unsigned char *fresh, double endr, int threads)
+{
+    /* insert split points (rounded to float, strictly inside their interval) */
+    size_t K = *Kp, KQ = 0;
+    double *Q = P + BTDF_SCATFUN_MAX_HALF_NODES;
+    unsigned char *ins = calloc(K, 1);
+    if (!ins) {
+        free(split);
+        return BTDF_ENOMEM;
+    }
+    if (endr > 0.5)
+        endr = 0.5;
+    for (size_t j = 0; j < K; j++) {
+        double lo = j == 0 ? 0.0 : P[j - 1];
+        double m = to_float_node(split_point(P, K, j, endr));
+        if (split[j] && m > lo && m < P[j]) {
+            fresh[KQ] = 1;
+            Q[KQ++] = m;
+            ins[j] = m == c->mid[j] ? 1 : 2;
+            fresh[KQ] = 1;
+        } else {
+            fresh[KQ] = 0;
+        }
+        Q[KQ++] = P[j];
+    }
+    free(split);
+    if (KQ == K) {
+        free(ins);
+        return BTDF_EBUDGET; /* float spacing reached: nothing left to split */
+    }
+    if (sf_carry_over(c, Q, KQ, ins, threads)) {
+        free(ins);
+        return BTDF_ENOMEM;
+    }
+    free(ins);
+    memcpy(P, Q, KQ * sizeof *P);
+    *Kp = KQ;
+    return BTDF_OK;
+}
+
+/* e_L1 of the file f over the blocks built (quick_l1 per block, the largest): with
+   split, the measurement that marks the test angles above mark_at. */
+static double file_l1(const build_ctx *c, const btdf_scatfun *f, int threads, uint64_t seed,
+                      albedo_memo *memo, const double *P, size_t K, double mark_at,
+                      double accept_at, unsigned char *split, size_t *nmark)
+{
+    double e = 0.0;
+    for (int s = 0; s < NBLK; s++)
+        if (c->want[s])
+            e = fmax(e, quick_l1(f, c->p, (btdf_side)blk_mask[s], threads, seed, memo, P, K,
+                                 mark_at, accept_at, split, nmark));
+    return e;
+}
+
+/* The node checks pass: the state's file, measured (*e), marking in split the
+   intervals of the test angles that miss (*nmark of them); kept as *best when it meets
+   the acceptance and beats *best_err, else as *snap. */
+static btdf_status measure_state(build_ctx *c, double tolerance, int threads, uint64_t seed,
+                                 albedo_memo *memo, const double *P, size_t K,
+                                 unsigned char *split, size_t *nmark, double *e,
+                                 btdf_scatfun **best, double *best_err, btdf_scatfun **snap,
+                                 char *msg, size_t msglen)
+{
+    btdf_scatfun *f = NULL;
+    btdf_status st = sf_assemble(c, &f, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    *e = file_l1(c, f, threads, seed, memo, P, K, MARK_SHARE * tolerance,
+                 ACCEPT_SHARE * tolerance, split, nmark);
+    /* A failing measurement may have skipped its refinement (stop_above): its
+       e is a lower bound, so such a file is not kept as the best; should the
+       budget run out, the last file is measured whole below. */
+    if (*e < *best_err && *e <= ACCEPT_SHARE * tolerance) {
+        btdf_scatfun_free(*best);
+        *best = f;
+        *best_err = *e;
+    } else {
+        btdf_scatfun_free(*snap); /* within the budgets (checked above) */
+        *snap = f;
+    }
+    return BTDF_OK;
+}
+
+/* The budget splitting nsplit of K intervals would pass, or NULL: the node budget, or
+   one that the growth alone passes, as the next pass holds (K + nsplit)^2 pairs, each
+   new row and column with series like its neighbours'. */
+static const char *growth_limit(const build_ctx *c, size_t K, size_t nsplit, size_t total,
+                                size_t max_coeffs, size_t max_bytes)
+{
+    if (K + nsplit > BTDF_SCATFUN_MAX_HALF_NODES)
+        return "node";
+    double g = (double)(K + nsplit) * (double)(K + nsplit) / ((double)K * (double)K);
+    if (g * (double)total > (double)max_coeffs ||
+        (max_bytes && g * (double)state_bytes(c) > (double)max_bytes))
+        return g * (double)total > (double)max_coeffs ? "coefficient" : "memory";
+    return NULL;
+}
+
+/* The finest file reached, measured whole, as *best when there is none or it is better:
+   after a budget, the last file within them (*snap, taken); else the state's own. */
+static void keep_finest(build_ctx *c, int threads, uint64_t seed, albedo_memo *memo, int over,
+                        btdf_scatfun **snap, btdf_scatfun **best, double *best_err, char *msg,
+                        size_t msglen)
+{
+    btdf_scatfun *f = NULL;
+    btdf_status a = BTDF_OK;
+    if (over) { /* the state passed a budget: the last file within them */
+        f = *snap;
+        *snap = NULL;
+    } else if (c->pairs[0] || c->pairs[1] || c->pairs[2] || c->pairs[3]) {
+        a = sf_assemble(c, &f, msg, msglen);
+    }
+    if (f) {
+        if (a == BTDF_OK) {
+            double e = file_l1(c, f, threads, seed, memo, NULL, 0, 0.0, 0.0, NULL, NULL);
+            if (e < *best_err || !*best) {
+                btdf_scatfun_free(*best);
+                *best = f;
+                *best_err = e;
+            } else {
+                btdf_scatfun_free(f);
+            }
+        }
+    }
+}
+
+/* The builder's working memory and its lock. */
+static void free_work(build_ctx *c, double *P, unsigned char *fresh, unsigned char *ahead)
+{
+    sf_free_state(c);
+    free(c->P);
+    free(c->full);
+    free(P);
+    free(fresh);
+    free(ahead);
+    pthread_mutex_destroy(&c->lock);
+}
+
+/* Even the first pass passed a budget: nothing built. */
+static btdf_status first_pass_over(size_t K, size_t over_need, size_t max_coeffs,
+                                   size_t max_bytes, char *msg, size_t msglen)
+{
+    if (over_need)
+        return core_say(BTDF_EBUDGET, msg, msglen,
+                        "coefficient budget, nothing built: the first pass (%zu half "
+                        "nodes) already holds %zu coefficients, more than %zu",
+                        K, over_need, max_coeffs);
+    return core_say(BTDF_EBUDGET, msg, msglen,
+                    "memory budget, nothing built: the first pass (%zu half nodes) "
+                    "already needs more than %zu bytes", K, max_bytes);
+}
+
+/* The intervals to split (*split, K bytes, *nsplit of them set: mark_splits and the
+   fronts) and the last interval's cut *endr; -1 when out of memory. */
+static int plan_splits(const build_ctx *c, const double *P, size_t K,
+                       const unsigned char *fresh, unsigned char *ahead,
+                       unsigned char **split, size_t *nsplit, double *endr)
+{
+    *split = calloc(K, 1);
+    if (!*split)
+        return -1;
+    if (mark_splits(c, P, K, *split, endr)) {
+        free(*split);
+        *split = NULL;
+        return -1;
+    }
+    *nsplit = spread_fronts(*split, fresh, ahead, K);
+    return 0;
+}
+
+/* The answer: best stamped with its tolerance and build time (since t0), the measured
+   T and R handed over, into *out; st BTDF_EBUDGET says which budget stopped it. */
+static btdf_status hand_over(btdf_scatfun *best, albedo_memo *memo, double tolerance,
+                             double t0, btdf_status st, const char *limit, double best_err,
+                             btdf_scatfun **out, char *msg, size_t msglen)
+{
+    best->tolerance = tolerance;
+    best->seconds_build = core_now() - t0;
+    if (memo) { /* the file's reports test the same knot midpoints: hand over T and R */
+        albedo_memo_free(best->memo);
+        best->memo = memo;
+    }
+    *out = best;
+    if (st == BTDF_EBUDGET)
+        return core_say(BTDF_EBUDGET, msg, msglen,
+                   "%s budget reached (%u nodes, %u coefficients, mMax %u); its own "
+                   "estimate e_L1 %.3g > tolerance %g",
+                   limit, best->n, best->ncoeffs, best->mmax, best_err, tolerance);
+    return BTDF_OK;
+}
+
+/* The builder: checks (build_fits), context and fold factors (build_ctx_setup), the
+   first nodes, then the refinement loop: one pass of series and checks (pass_series),
+   split marks and fronts (plan_splits), the file's own measurement that accepts,
+   splits locally or tightens (measure_state), the budgets (growth_limit), splits
+   inserted (insert_splits); then the best file kept (keep_finest, hand_over). The
+   loop's decisions stay here: they share the counters tighten, local, stall and
+   last_err and one cleanup path. */
+static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side side,
+                              int threads, size_t max_coeffs, size_t max_bytes,
+                              btdf_progress_fn progress, void *user, btdf_scatfun **out,
+                              char *msg, size_t msglen)
+{
+    if (!out)
+        return core_say(BTDF_EINVAL, msg, msglen, "output pointer missing");
+    btdf_status st = build_fits(p, tolerance, side, &max_coeffs, max_bytes, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
+    double t0 = core_now();
+    build_ctx c;
+    memset(&c, 0, sizeof c);
+    if (pthread_mutex_init(&c.lock, NULL) != 0)
+        return core_say(BTDF_ENOMEM, msg, msglen, "cannot create a mutex");
+    build_ctx_setup(&c, p, side, tolerance);
+
+    btdf_scatfun *best = NULL;
+    double best_err = HUGE_VAL;
+    /* The last file assembled within every budget: what a build stopped by a budget
+       answers with, never a state that already exceeded one. over: the current state
+       exceeded a budget (it is not assembled). */
+    btdf_scatfun *snap = NULL;
+    int over = 0;
+    size_t over_need = 0; /* the coefficients of a state that passed max_coeffs */
+    /* T and R of the test angles, kept across the measurements (NULL: computed each time) */
+    albedo_memo *memo = albedo_memo_new();
+    double *P = malloc(BTDF_SCATFUN_MAX_HALF_NODES * 2 * sizeof *P);
+    /* fresh[j]: interval j was made by the last pass's split; ahead: fronts (below) */
+    unsigned char *fresh = calloc(BTDF_SCATFUN_MAX_HALF_NODES * 2, 1);
+    unsigned char *ahead = calloc(BTDF_SCATFUN_MAX_HALF_NODES, 1);
+    if (!P || !fresh || !ahead) {
+        st = BTDF_ENOMEM;
+        goto done;
+    }
+    size_t K = first_nodes(P);
     int tighten = 0, local = 0, stall = 0;
     double last_err = HUGE_VAL; /* the previous measurement, for stall */
     const char *limit = "node"; /* which budget stopped refinement */
-    st = BTDF_OK;
-    for (int pass = 0;; pass++) {
-        if (sf_set_nodes(&c, P, K)) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        c.nint = K;
-        if (sf_ensure_state(&c)) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        for (size_t j = 0; j < K; j++)
-            /* checked where a split would put the node, so check series become pairs */
-            c.mid[j] = to_float_node(split_point(P, K, j, 0.5));
-        /* the norms of new nodes and midpoints (each its own job: same values on any
-           number of threads) */
-        core_parallel_for(threads, K * NBLK * 2, sf_job_norms, &c);
-        for (size_t j = 0; j < K; j++)
-            c.hasTn[j] = c.hasTm[j] = 1;
-        if (core_parallel_for_ws(threads, NBLK * K, sf_job_row, &c, sf_build_ws_new, sf_build_ws_free) || c.oom) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
+    for (;;) {
         size_t total = 0;
-        for (int s = 0; s < NBLK; s++)
-            for (size_t i = 0; c.want[s] && i < K * K; i++)
-                total += c.pairs[s][i].m * (size_t)c.nst;
-        if (total > max_coeffs) {
-            over_need = total;
-            limit = "coefficient";
-            st = BTDF_EBUDGET;
-            over = 1;
-            break;
-        }
-        if (max_bytes && state_bytes(&c) + snap_bytes(snap) > max_bytes) {
-            limit = "memory";
-            st = BTDF_EBUDGET;
-            over = 1;
-            break;
-        }
-        if (core_parallel_for_ws(threads, NBLK * K, sf_job_colcheck, &c, sf_build_ws_new, sf_build_ws_free) ||
-            core_parallel_for_ws(threads, NBLK * K, sf_job_rowcheck, &c, sf_build_ws_new, sf_build_ws_free) ||
-            c.oom) {
-            st = BTDF_ENOMEM;
+        st = pass_series(&c, P, K, threads, max_coeffs, max_bytes, snap, &total, &over_need,
+                         &limit);
+        if (st == BTDF_ENOMEM)
             goto done;
-        }
-        if (max_bytes && state_bytes(&c) + snap_bytes(snap) > max_bytes) {
-            limit = "memory";
-            st = BTDF_EBUDGET;
+        if (st == BTDF_EBUDGET) {
             over = 1;
             break;
         }
         /* mark intervals to split */
-        unsigned char *split = calloc(K, 1);
-        if (!split) {
-            st = BTDF_ENOMEM;
-            goto done;
-        }
+        unsigned char *split = NULL;
         size_t nsplit = 0;
         double endr = 1.0;
-        /* The checks bound both readings of every block (norms_at): DIRECT, the light
-           in the slow index, integrates the error over the fast one; ADJOINT, the light
-           in the fast index, over the slow one. One interval check serves both with the
-           axes swapped: the fast-midpoint gaps (errc) summed along a row are the DIRECT
-           error there, summed down a column of rows the ADJOINT error of the light at
-           that midpoint; the slow-midpoint gaps (gapr) the other way round. A
-           three-channel transmission block is read ADJOINT only (sf_pair_norm). */
-        double *ea = calloc(K, sizeof *ea);
-        if (!ea) {
-            free(split);
+        if (plan_splits(&c, P, K, fresh, ahead, &split, &nsplit, &endr)) {
             st = BTDF_ENOMEM;
             goto done;
         }
-        int rowbad = 0; /* once a row fails, also split the ones close to failing */
-        for (int s = 0; s < NBLK; s++) {
-            if (!c.want[s])
-                continue;
-            int direct = !(c.nst == 3 && !blk_refl[s]);
-            for (size_t j = 0; direct && j < K; j++)
-                rowbad |= c.errr[s][j] > share_row(&c);
-        }
-        for (int s = 0; s < NBLK; s++) {
-            if (!c.want[s])
-                continue;
-            int direct = !(c.nst == 3 && !blk_refl[s]);
-            for (size_t r = 0; direct && r < K; r++) {
-                double sum = 0.0;
-                for (size_t j = 0; j < K; j++) {
-                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
-                    sum += wid * c.errc[s][r * K + j];
-                }
-                if (sum <= share_col(&c))
-                    continue;
-                for (size_t j = 0; j < K; j++) {
-                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
-                    if (wid * c.errc[s][r * K + j] > share_col(&c) / (double)K)
-                        split[j] = 1;
-                }
-            }
-            for (size_t j = 0; direct && j < K; j++)
-                if (c.errr[s][j] > share_row(&c) && j == K - 1)
-                    /* error ~ the last interval's angle: aim at half the share */
-                    endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / c.errr[s][j]));
-            for (size_t j = 0; direct && j < K; j++)
-                if (c.errr[s][j] > (rowbad ? 0.7 : 1.0) * share_row(&c))
-                    split[j] = 1;
-            /* ADJOINT, light at fast node col: the slow-midpoint gaps down the column */
-            for (size_t col = 0; col < K; col++) {
-                double sum = 0.0;
-                for (size_t j = 0; j < K; j++) {
-                    double wid = P[j] - (j == 0 ? 0.0 : P[j - 1]);
-                    /* the camera's cosine, the slow midpoint's: the ADJOINT integral's
-                       weight (norms_at) */
-                    ea[j] = wid * c.mid[j] * c.gapr[s][j * K + col] *
-                            sf_adj_ratio(&c, c.Tm[j][s], c.Tn[col][s]);
-                    sum += ea[j];
-                }
-                if (sum <= share_col(&c))
-                    continue;
-                for (size_t j = 0; j < K; j++)
-                    if (ea[j] > share_col(&c) / (double)K)
-                        split[j] = 1;
-            }
-            /* ADJOINT, light at fast midpoint j: the fast-midpoint gaps over the rows */
-            for (size_t j = 0; j < K; j++) {
-                double tot = 0.0;
-                for (size_t r = 0; r < K; r++) {
-                    double lo = r == 0 ? 0.0 : P[r - 1], hi = r + 1 < K ? P[r + 1] : P[r];
-                    tot += 0.5 * (hi - lo) * P[r] * c.errc[s][r * K + j] *
-                           sf_adj_ratio(&c, c.Tn[r][s], c.Tm[j][s]);
-                }
-                if (tot > share_row(&c)) {
-                    split[j] = 1;
-                    if (j == K - 1)
-                        endr = fmin(endr, fmax(1.0 / 64.0, 0.5 * share_row(&c) / tot));
-                }
-            }
-        }
-        free(ea);
-        /* Fronts. A new node is also a new row and column of pairs, and the checks sum
-           over rows and columns: an interval next to a freshly split one can fail only
-           because the new rows now see it (measured for n = 1.5, s = 3 at 1e-3: the
-           failing interval moved one step outwards per pass, its check at 3.1, 2.6,
-           2.2, 1.7, 1.3 times the share, six passes). When an interval that was not
-           just split fails beside one that was, split the next one outwards too: the
-           front moves two intervals per pass. */
-        for (size_t j = 0; j < K; j++)
-            ahead[j] = 0;
-        for (size_t j = 0; j < K; j++) {
-            if (!split[j] || fresh[j])
-                continue;
-            if (j > 0 && fresh[j - 1] && j + 1 < K && !fresh[j + 1])
-                ahead[j + 1] = 1;
-            if (j + 1 < K && fresh[j + 1] && j > 0 && !fresh[j - 1])
-                ahead[j - 1] = 1;
-        }
-        for (size_t j = 0; j < K; j++)
-            split[j] |= ahead[j];
-        for (size_t j = 0; j < K; j++)
-            nsplit += split[j];
         if (progress) /* K nodes checked, nsplit intervals to split */
             progress(user, tighten ? "series (tighter)" : "elevation nodes", K, nsplit);
         if (nsplit == 0) {
@@ -436,30 +673,13 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                interval midpoints only; the report hunts for the worst angles), keeping
                every series; only when that finds nothing to split, halve the shares
                and recompute everything. */
-            btdf_scatfun *f = NULL;
-            st = sf_assemble(&c, &f, msg, msglen);
+            double e = 0.0;
+            size_t nmark = 0;
+            st = measure_state(&c, tolerance, threads, QUICK_SEED + (uint64_t)local, memo, P,
+                               K, split, &nmark, &e, &best, &best_err, &snap, msg, msglen);
             if (st != BTDF_OK) {
                 free(split);
                 goto done;
-            }
-            double e = 0.0;
-            size_t nmark = 0;
-            for (int s = 0; s < NBLK; s++)
-                if (c.want[s])
-                    e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
-                                         QUICK_SEED + (uint64_t)local, memo, P, K,
-                                         MARK_SHARE * tolerance, ACCEPT_SHARE * tolerance,
-                                         split, &nmark));
-            /* A failing measurement may have skipped its refinement (stop_above): its
-               e is a lower bound, so such a file is not kept as the best; should the
-               budget run out, the last file is measured whole below. */
-            if (e < best_err && e <= ACCEPT_SHARE * tolerance) {
-                btdf_scatfun_free(best);
-                best = f;
-                best_err = e;
-            } else {
-                btdf_scatfun_free(snap); /* within the budgets (checked above) */
-                snap = f;
             }
             if (e <= ACCEPT_SHARE * tolerance && !c.capped) {
                 free(split);
@@ -488,24 +708,14 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
                 continue;       /* same nodes, tighter series and checks */
             }
         }
-        if (K + nsplit > BTDF_SCATFUN_MAX_HALF_NODES) {
-            limit = "node";
+        /* The node budget, and the next pass's growth: when that alone passes a budget,
+           stop on this state (within every budget) rather than build a pass to discard. */
+        const char *grown = growth_limit(&c, K, nsplit, total, max_coeffs, max_bytes);
+        if (grown) {
+            limit = grown;
             free(split);
             st = BTDF_EBUDGET;
             break;
-        }
-        /* The next pass holds (K + nsplit)^2 pairs, each new row and column with series
-           like its neighbours': when that share of growth alone passes a budget, stop
-           on this state (within every budget) rather than build a pass to discard. */
-        {
-            double g = (double)(K + nsplit) * (double)(K + nsplit) / ((double)K * (double)K);
-            if (g * (double)total > (double)max_coeffs ||
-                (max_bytes && g * (double)state_bytes(&c) > (double)max_bytes)) {
-                limit = g * (double)total > (double)max_coeffs ? "coefficient" : "memory";
-                free(split);
-                st = BTDF_EBUDGET;
-                break;
-            }
         }
         /* this state is within every budget: keep its file, should the next pass
            pass one after all (series grow faster than the pairs when they tighten) */
@@ -519,91 +729,21 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
             btdf_scatfun_free(snap);
             snap = f;
         }
-        /* insert split points (rounded to float, strictly inside their interval) */
-        double *Q = P + BTDF_SCATFUN_MAX_HALF_NODES;
-        unsigned char *ins = calloc(K, 1);
-        if (!ins) {
-            free(split);
-            st = BTDF_ENOMEM;
-            goto done;
-        }
-        size_t KQ = 0;
-        if (endr > 0.5)
-            endr = 0.5;
-        for (size_t j = 0; j < K; j++) {
-            double lo = j == 0 ? 0.0 : P[j - 1];
-            double m = to_float_node(split_point(P, K, j, endr));
-            if (split[j] && m > lo && m < P[j]) {
-                fresh[KQ] = 1;
-                Q[KQ++] = m;
-                ins[j] = m == c.mid[j] ? 1 : 2;
-                fresh[KQ] = 1;
-            } else {
-                fresh[KQ] = 0;
-            }
-            Q[KQ++] = P[j];
-        }
-        free(split);
-        if (KQ == K) {
-            free(ins);
-            st = BTDF_EBUDGET; /* float spacing reached: nothing left to split */
+        st = insert_splits(&c, P, &K, split, fresh, endr, threads);
+        if (st == BTDF_EBUDGET)
             break;
-        }
-        if (sf_carry_over(&c, Q, KQ, ins, threads)) {
-            free(ins);
-            st = BTDF_ENOMEM;
+        if (st != BTDF_OK)
             goto done;
-        }
-        free(ins);
-        memcpy(P, Q, KQ * sizeof *P);
-        K = KQ;
-        (void)pass;
     }
     if (st == BTDF_EBUDGET || !best) {
         /* keep the finest file reached as the answer, measured honestly */
-        btdf_scatfun *f = NULL;
-        btdf_status a = BTDF_OK;
-        if (over) { /* the state passed a budget: the last file within them */
-            f = snap;
-            snap = NULL;
-        } else if (c.pairs[0] || c.pairs[1] || c.pairs[2] || c.pairs[3]) {
-            a = sf_assemble(&c, &f, msg, msglen);
-        }
-        if (f) {
-            if (a == BTDF_OK) {
-                double e = 0.0;
-                for (int s = 0; s < NBLK; s++)
-                    if (c.want[s])
-                        e = fmax(e, quick_l1(f, p, (btdf_side)blk_mask[s], threads,
-                                             QUICK_SEED + (uint64_t)local, memo, NULL, 0,
-                                             0.0, 0.0, NULL, NULL));
-                if (e < best_err || !best) {
-                    btdf_scatfun_free(best);
-                    best = f;
-                    best_err = e;
-                } else {
-                    btdf_scatfun_free(f);
-                }
-            }
-        }
+        keep_finest(&c, threads, QUICK_SEED + (uint64_t)local, memo, over, &snap, &best,
+                    &best_err, msg, msglen);
         if (!best && over) {
             /* even the first pass passed the budget */
-            sf_free_state(&c);
-            free(c.P);
-            free(c.full);
-            free(P);
-            free(fresh);
-            free(ahead);
-            pthread_mutex_destroy(&c.lock);
+            free_work(&c, P, fresh, ahead);
             albedo_memo_free(memo);
-            if (over_need)
-                return core_say(BTDF_EBUDGET, msg, msglen,
-                                "coefficient budget, nothing built: the first pass (%zu half "
-                                "nodes) already holds %zu coefficients, more than %zu",
-                                K, over_need, max_coeffs);
-            return core_say(BTDF_EBUDGET, msg, msglen,
-                            "memory budget, nothing built: the first pass (%zu half nodes) "
-                            "already needs more than %zu bytes", K, max_bytes);
+            return first_pass_over(K, over_need, max_coeffs, max_bytes, msg, msglen);
         }
         if (!best) {
             st = BTDF_ENOMEM;
@@ -614,29 +754,11 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
     }
 done:
     btdf_scatfun_free(snap);
-    sf_free_state(&c);
-    free(c.P);
-    free(c.full);
-    free(P);
-    free(fresh);
-    free(ahead);
-    pthread_mutex_destroy(&c.lock);
+    free_work(&c, P, fresh, ahead);
     if (st != BTDF_OK && st != BTDF_EBUDGET) {
         albedo_memo_free(memo);
         btdf_scatfun_free(best);
         return st;
     }
-    best->tolerance = tolerance;
-    best->seconds_build = core_now() - t0;
-    if (memo) { /* the file's reports test the same knot midpoints: hand over T and R */
-        albedo_memo_free(best->memo);
-        best->memo = memo;
-    }
-    *out = best;
-    if (st == BTDF_EBUDGET)
-        return core_say(BTDF_EBUDGET, msg, msglen,
-                   "%s budget reached (%u nodes, %u coefficients, mMax %u); its own "
-                   "estimate e_L1 %.3g > tolerance %g",
-                   limit, best->n, best->ncoeffs, best->mmax, best_err, tolerance);
-    return BTDF_OK;
+    return hand_over(best, memo, tolerance, t0, st, limit, best_err, out, msg, msglen);
 }
