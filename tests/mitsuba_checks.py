@@ -507,13 +507,16 @@ def eval_r_check(label, kw, pairs=10000, seed=3):
     wis = [wis[i] for i in keep]
     wos = [wos[i] for i in keep]
     flip = lambda v: [v[0], v[1], -v[2]]  # noqa: E731
-    refs = []
-    for a, c in zip(wis, wos):
-        r = (lb.rho_r(pf, *angles(a, c)) if a[2] > 0
-             else lb.rho_r(pb, *angles(flip(a), flip(c))))
-        refs.append([x * abs(c[2]) for x in r])
     for mode, mname in ((mi.TransportMode.Importance, "importance"),
                         (mi.TransportMode.Radiance, "radiance")):
+        # the light arrives along wi (importance) or wo (radiance): rho_r of xu-sun and
+        # smith is reciprocal, full's multiply scattered part only in the mean
+        refs = []
+        for a, c in zip(wis, wos):
+            src, dst = (c, a) if mode == mi.TransportMode.Radiance else (a, c)
+            r = (lb.rho_r(pf, *angles(src, dst)) if src[2] > 0
+                 else lb.rho_r(pb, *angles(flip(src), flip(dst))))
+            refs.append([x * abs(c[2]) for x in r])
         got = eval_many(b, mode, wis, wos)
         max_rel, peak = [0.0, 0.0], [0.0, 0.0]
         bad = 0

@@ -17,8 +17,9 @@ rho(wo -> wi) |cos wo|; in importance mode rho(wi -> wo) |cos wo|.
 
 Reflection: rho_r = Fr D V(ti) V(tr) / (4 cos ti cos tr), evaluated from the model
 (index n for light arriving in front, 1/n from behind, with total internal reflection
-on the facets), in both modes: the tables hold transmission only. It is reciprocal, so
-both transport modes give rho_r |cos wo|. `part` = both (default), transmission (the
+on the facets), in both modes: the tables hold transmission only. It is reciprocal for
+xu-sun and smith; it is evaluated for light arriving along wo in radiance mode, along wi
+in importance mode, which matters for full. `part` = both (default), transmission (the
 transmission-only surface of earlier releases) or reflection.
 
 Models: `model` (mode analytic) is xu-sun (default), smith or full; a table's model is
@@ -307,7 +308,10 @@ def _make_class():
                 value = dr.select(trans, self._spectrum(vals) * dr.abs(wo.z), value)
             if en_r:
                 refl = active & (wi.z * wo.z > 0.0)
-                vals = self._rho_r(wi, wo, refl)  # reciprocal: either transport mode
+                # light arrives along wo in radiance mode (xu-sun's and smith's rho_r are
+                # reciprocal; full's multiply scattered series is so only in the mean)
+                src, dst = (wo, wi) if ctx.mode == mi.TransportMode.Radiance else (wi, wo)
+                vals = self._rho_r(src, dst, refl)
                 value = dr.select(refl, self._spectrum(vals) * dr.abs(wo.z), value)
             return value
 
