@@ -915,7 +915,11 @@ def furnace_checks(res, spp):
 def series_energy(full, deg, side, nmu=256, nphi=512):
     """The hemispherical integral of full's multiply scattered part as libbtdf evaluates
     it, max(0, series) (btdf/btdf.h, btdf_full_get_series), at ti = deg: a midpoint rule
-    on nmu x nphi cells in (mu, phi), with the weight mu of the cosine."""
+    on nmu x nphi cells in (mu, phi), with the weight mu of the cosine. At ti = 0 the
+    incident direction has no azimuth and the plugin, as the checks' reference, takes
+    phi = 0 for every outgoing direction (plugin.py, _angles): so does this integral
+    there. (The tally's m > 0 terms at ti = 0 are noise, not 0, so the choice shows:
+    3.5e-3 of R + T at n = 1.5, s = 1, 20,000 walks: 1.007978 against 1.004508.)"""
     import numpy as np
     sr = full.series()
     nodes, poly, coef = sr["node_deg"], sr["poly"], sr["coef"]
@@ -930,8 +934,8 @@ def series_energy(full, deg, side, nmu=256, nphi=512):
     for j in range(poly.shape[1]):
         for m in range(poly.shape[0]):
             cf = (1 - w) * coef[k, side, j, m] + w * coef[k + 1, side, j, m]
-            v += (cf * np.polyval(poly[m, j][::-1], mu) * st ** m)[:, None] * \
-                np.cos(m * ph)[None, :]
+            cph = np.ones_like(ph) if deg == 0.0 else np.cos(m * ph)
+            v += (cf * np.polyval(poly[m, j][::-1], mu) * st ** m)[:, None] * cph[None, :]
     v = np.maximum(v, 0.0)
     return float((v * mu[:, None]).sum() * (1.0 / nmu) * (2.0 * math.pi / nphi))
 
