@@ -21,13 +21,15 @@ for f in include/btdf/btdf.h include/btdf/btdf_config.h include/btdf/btdf_previe
     [ -e "$W/stage/$f" ] || missing="$missing $f"
 done
 [ -z "$missing" ] && ok "headers, libraries, btdf.pc and btdftab installed" || no "missing:$missing"
-# The Mitsuba plugin beside the library, pointing at the installed library.
-PYD=$W/stage/lib/btdftab/python/btdftab_mitsuba
-if [ -e "$PYD/plugin.py" ] && [ -e "$PYD/libbtdf.py" ] &&
-   lib=$(python3 -c "exec(open('$PYD/_installed.py').read()); print(LIBRARY)") &&
+# The Python package beside the library, pointing at the installed library, and the
+# Mitsuba plugin beside it (it reaches the library through the package).
+PYD=$W/stage/lib/btdftab/python
+if [ -e "$PYD/btdftab_mitsuba/plugin.py" ] && [ -e "$PYD/btdftab/__init__.py" ] &&
+   [ ! -e "$PYD/btdftab_mitsuba/libbtdf.py" ] &&
+   lib=$(python3 -c "exec(open('$PYD/btdftab/_installed.py').read()); print(LIBRARY)") &&
    [ "$lib" = "$W/stage/lib/libbtdf.so.0" ] && [ -e "$lib" ]; then
-    ok "Mitsuba plugin installed in lib/btdftab/python, loading $lib"
-else no "Mitsuba plugin in lib/btdftab/python (library: ${lib:-none})"; fi
+    ok "btdftab and the Mitsuba plugin installed in lib/btdftab/python, loading $lib"
+else no "btdftab and the Mitsuba plugin in lib/btdftab/python (library: ${lib:-none})"; fi
 others=$(nm -D --defined-only "$W/stage/lib/libbtdf.so" | awk '{print $3}' | grep -v '^btdf_' | grep -v '^_' || true)
 [ -z "$others" ] && ok "only btdf_ symbols are exported" || { no "exported non-API symbols"; echo "$others"; }
 export PKG_CONFIG_PATH="$W/stage/lib/pkgconfig"

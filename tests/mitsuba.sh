@@ -53,6 +53,8 @@ g15.exr --ior 1.5 -s 3 --grid 30,46,37
 f3.exr --ior 1.51,1.52,1.53 -s 3
 f15back.exr --ior 1.5 -s 3 --side leave
 face.csv --ior 0.7142857 -s 3
+fsm15.exr --model smith --ior 1.5 -s 3
+rsm066s6.exr --model smith --ior 0.6666667 -s 6
 TABLES
 [ "$tabs_ok" -eq 1 ] && ok "tables written by btdftab" || no "tables"
 

@@ -149,6 +149,93 @@ for n, s in mats:
     check(same(btdftab.R(n, s, a), w[:, 3]), "R n = %g, s = %g equals albedo's" % (n, s))
     check(same(btdftab.albedo(n, s, a), w[:, 4]), "albedo n = %g, s = %g equals R + T" % (n, s))
 
+def series_at(sr, a, b, c, side=0):
+    """rho_ms of a Full.series() at (ti, to or tr, phi) degrees, summed as btdf/btdf.h
+    writes it, and the sum of the magnitudes its rounding acts on (each coefficient times
+    its basis function evaluated with |poly| in place of poly): with polynomials of
+    degree 7 orthonormal on [0, 1] the terms cancel, so the rounding of the sum is
+    relative to that magnitude, not to rho_ms."""
+    nodes, poly, coef = sr["node_deg"], sr["poly"], sr["coef"]
+    k = 0
+    while k < len(nodes) - 2 and a > nodes[k + 1]:
+        k += 1
+    w = min(1.0, max(0.0, (a - nodes[k]) / (nodes[k + 1] - nodes[k])))
+    mu = abs(math.cos(math.radians(b)))
+    st = math.sqrt(max(0.0, 1.0 - mu * mu))
+    total = mag = 0.0
+    for j in range(btdftab.SERIES_K):
+        for m in range(btdftab.SERIES_M):
+            cf = (1 - w) * coef[k, side, j, m] + w * coef[k + 1, side, j, m]
+            bas = st ** m * math.cos(m * math.radians(c))
+            total += cf * bas * np.polyval(poly[m, j][::-1], mu)
+            mag += abs(cf * bas) * np.polyval(np.abs(poly[m, j][::-1]), mu)
+    return max(0.0, total), mag
+
+
+# The models smith and full (model=...), against btdftab eval|albedo --model, bit for
+# bit. full's tally is deterministic (btdf/btdf.h: fixed streams, fixed order), and the
+# package makes it with the tool's defaults (200000 paths, seed 1), so the same doubles.
+for model, ms in (("smith", mats), ("full", [(1.5, 1), (0.6666667, 3)])):
+    for n, s in ms:
+        want = rows_of(tool("eval", "--model", model, "--ior", n, "-s", s, stdin=stdin))
+        check(same(btdftab.rho_deg(n, s, ti, to, phi, model=model), want[:, 0]),
+              "rho_deg model %s n = %g, s = %g: %d values equal btdftab eval --model %s's"
+              % (model, n, s, len(ti), model))
+        got = btdftab.rho(n, s, rad(ti), rad(to), rad(phi), model=model)
+        f_deg = lambda n_, s_, a, b, c: btdftab.rho_deg(n_, s_, a, b, c, model=model)  # noqa
+        bound = rounding_bound(f_deg, n, s, ti, to, phi, DOM_T)
+        if model == "full":
+            # btdf_full_rho turns its radians back into degrees (x * 180/pi, a few ulps
+            # of each angle), and the series' cancelling terms (series_at) amplify such
+            # a change of mu beyond what its smooth slope shows: 16 ulps of the summed
+            # magnitudes on top (40 terms of 8-term Horner sums, a margin of 2 over the
+            # 8 ulps of their worst rounding).
+            sr = btdftab.Full(n, s).series()
+            mag = np.array([series_at(sr, *v)[1] for v in zip(ti, to, phi)])
+            bound = bound + 16 * np.finfo(np.float64).eps * mag
+        err = np.abs(got - want[:, 0])
+        check(bool(np.all(err <= bound)),
+              "rho (radians) model %s n = %g, s = %g: within the angles' rounding of "
+              "btdftab eval (worst error / bound %.2g)"
+              % (model, n, s, (err / np.maximum(bound, 1e-300)).max()))
+        want = rows_of(tool("eval", "--model", model, "--ior", n, "-s", s, "--part",
+                            "reflection", stdin=stdin_r))
+        check(same(btdftab.rho_r_deg(n, s, ti, tr, phi, model=model), want[:, 0]),
+              "rho_r_deg model %s n = %g, s = %g: equal btdftab eval --part reflection's"
+              % (model, n, s))
+        w = rows_of("\n".join(tool("albedo", "--model", model, "--digits", 17, "--ior", n,
+                                   "-s", s, *ang).splitlines()[1:]))
+        a = rad(ang)
+        check(same(btdftab.T(n, s, a, model=model), w[:, 1]) and
+              same(btdftab.R(n, s, a, model=model), w[:, 3]) and
+              same(btdftab.albedo(n, s, a, model=model), w[:, 4]),
+              "T, R, R + T model %s n = %g, s = %g equal btdftab albedo --model %s's"
+              % (model, n, s, model))
+# xu-sun named is the default, bit for bit
+check(same(btdftab.rho(1.5, 3, rad(ti), rad(to), rad(phi), model="xu-sun"),
+           btdftab.rho(1.5, 3, rad(ti), rad(to), rad(phi))),
+      "model='xu-sun' is the default")
+# Full.series rebuilds btdf_full_rho_deg and _rho_r_deg by the formula btdf/btdf.h states
+# for them: summed here in another order than the library's, so equal to 16 ulps of the
+# magnitudes summed (series_at), plus 16 ulps of rho itself (smith's part).
+f = btdftab.Full(1.5, 1)
+sr = f.series()
+worst = 0.0
+for side, fn, fs, outs in ((0, f.rho_deg, btdftab.rho_deg, to), (1, f.rho_r_deg,
+                                                                  btdftab.rho_r_deg, tr)):
+    for a_, b_, c_ in list(zip(ti, outs, phi))[6:86]:
+        ms, mag = series_at(sr, a_, b_, c_, side)
+        want1 = fn(a_, b_, c_)
+        got = fs(1.5, 1, a_, b_, c_, model="smith") + ms
+        worst = max(worst, abs(got - want1) / (16 * np.finfo(np.float64).eps *
+                                                (mag + abs(want1)) + 1e-300))
+check(worst <= 1.0, "Full.series: smith + the series as btdf/btdf.h writes it equals "
+      "btdf_full_rho_deg and btdf_full_rho_r_deg (worst error / bound %.2g)" % worst)
+st = f.info()
+check(st["nodes"] == len(sr["node_deg"]) and st["paths"] == 200000,
+      "Full.info: %d ladder nodes, %d paths, %.2f s" % (st["nodes"], st["paths"],
+                                                        st["seconds"]))
+
 W = tempfile.mkdtemp()
 # tables: one written by the tool, read by the package; one built by the package
 q = rng.uniform(0, 1, (60, 3)) * [80, 89, 180] + [0, 90.5, 0]
@@ -186,6 +273,17 @@ want = rows_of(tool("eval", "--table", os.path.join(W, "t.csv"), stdin=qin))[:, 
 check(len(tb) == len(btdftab.open(os.path.join(W, "t.csv"))) and
       same(btdftab.open(mine).eval(rad(q[:, 0]), rad(q[:, 1]), rad(q[:, 2])), want),
       "build(1.5, 3, tolerance=1e-2): the nodes and values of btdftab tabulate's table")
+# a smith table: the model read from the file's metadata
+sm = os.path.join(W, "smith.csv")
+tool("tabulate", "-q", "--model", "smith", "--ior", 1.5, "-s", 3, "--tolerance", "1e-2",
+     "-o", sm)
+want = rows_of(tool("eval", "--table", sm, stdin=qin))[:, 0]
+t = btdftab.open(sm)
+check(t.model == "smith" and same(t.eval(rad(q[:, 0]), rad(q[:, 1]), rad(q[:, 2])), want),
+      "a smith table: Table.model 'smith', Table.eval equals btdftab eval --table")
+tb = btdftab.build(1.5, 3, tolerance=1e-2, model="smith")
+check(tb.model == "smith" and len(tb) == len(t),
+      "build(model='smith'): the nodes of btdftab tabulate --model smith (%d)" % len(tb))
 # a .bsdf written by the tool
 bsdf = os.path.join(W, "t.bsdf")
 tool("tabulate", "-q", "--ior", 1.5, "-s", 3, "--tolerance", "5e-2", "-o", bsdf)
@@ -199,7 +297,11 @@ check(isinstance(f, btdftab.Bsdf) and f.eta == 1.5 and f.channels == 1 and
 for call, word in ((lambda: btdftab.rho(1.5, 3, 2.0, 2.5, 0), "2.0"),
                    (lambda: btdftab.rho(1, 3, 0, 3, 0), "n = 1"),
                    (lambda: btdftab.T(1.5, -1, 0), "-1"),
-                   (lambda: btdftab.rho_deg(1.5, 3, 30, 60, 0), "60")):
+                   (lambda: btdftab.rho_deg(1.5, 3, 30, 60, 0), "60"),
+                   (lambda: btdftab.rho(1.5, 3, 0, 3, 0, model="walter"), "walter"),
+                   (lambda: btdftab.T(1.5, 3, 0, model="smth"), "smth"),
+                   (lambda: btdftab.rho_deg(1.5, 3, 30, 60, 0, model="full"), "60"),
+                   (lambda: btdftab.build(1.5, 3, model="full"), "full")):
     try:
         call()
         check(False, "bad input raises ValueError (%s)" % word)

@@ -290,6 +290,27 @@ typedef struct btdf_full_stats {
 } btdf_full_stats;
 BTDF_API void btdf_full_info(const btdf_full *f, btdf_full_stats *st);
 
+/* The multiply scattered part as f holds it, for a renderer that evaluates it itself
+   (the Mitsuba 3 plugin does, on its device). With mu = |cos t| of the outgoing
+   direction (to or tr) and w the weight of ti (degrees) between the nodes a and a + 1
+   that bracket it (the first a with ti <= node_deg[a + 1], a + 1 < nodes; w clamped to
+   [0, 1], so the end nodes hold beyond them), side h = 0 for transmission, 1 for
+   reflection:
+     rho_ms = max(0, sum_{j<K, m<M} ((1 - w) coef[a][h][j][m] + w coef[a + 1][h][j][m])
+                     sin^m t cos(m phi) sum_{i<K} poly[m][j][i] mu^i),
+   and btdf_full_rho_deg = btdf_rho_smith_deg + rho_ms (0 at grazing ti or to). */
+#define BTDF_FULL_SERIES_K 8      /* polynomials in mu of degree 0..7 */
+#define BTDF_FULL_SERIES_M 5      /* cos(m phi), m = 0..4 */
+#define BTDF_FULL_SERIES_NODES 33 /* at most this many incidence angles */
+typedef struct btdf_full_series {
+    int nodes;
+    double node_deg[BTDF_FULL_SERIES_NODES]; /* increasing */
+    double poly[BTDF_FULL_SERIES_M][BTDF_FULL_SERIES_K][BTDF_FULL_SERIES_K];
+    double coef[BTDF_FULL_SERIES_NODES][2][BTDF_FULL_SERIES_K][BTDF_FULL_SERIES_M];
+} btdf_full_series;
+/* BTDF_EINVAL for a NULL argument. */
+BTDF_API btdf_status btdf_full_get_series(const btdf_full *f, btdf_full_series *out);
+
 /* One evaluation entry for every model: an object made once from a btdf_params (any
    model; for full it holds one btdf_full per channel, made with opts or the defaults),
    evaluated per channel. xu-sun and smith give exactly btdf_rho_model_deg and

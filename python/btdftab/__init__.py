@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""btdftab: Eq. 25 of Xu & Sun (2008), its reflection and its tables, from Python.
+"""btdftab: Eq. 25 of Xu & Sun (2008), its reflection, the models smith and full, and
+their tables, from Python.
 
 A thin layer over libbtdf (ctypes): every number comes from the C library, bit for bit.
 The functions are spelled as the C API and take numpy arrays (or numbers), which
@@ -10,9 +11,15 @@ btdftab tool does), conventions of btdf/btdf.h: theta_i in [0, pi/2], theta_o in
     import numpy as np, btdftab
     ti = np.radians([0, 30, 60])
     btdftab.rho(1.5, 3, ti, np.radians(150), np.pi)   # Eq. 25 at three angles
+    btdftab.rho(1.5, 3, ti, np.radians(150), np.pi, model="full")
     btdftab.T(1.5, 3, ti), btdftab.R(1.5, 3, ti)        # hemispherical integrals
     t = btdftab.build(1.5, 3, tolerance=1e-2)         # a table; t.write("glass.csv")
     btdftab.open("glass.bsdf").eval(ti, np.radians(150), np.pi)
+
+model: "xu-sun" (Eq. 25, the default), "smith" (the height-correlated Smith term of
+the same facets) or "full" (smith plus the light scattered two or more times, from a
+tally made once per material: paths and seed as btdf_full_opts, the defaults those
+of `btdftab eval --model full`; see Full). Tables hold xu-sun or smith.
 
 Bad parameters or angles raise ValueError naming the value and what is allowed; a
 failed library call raises BtdfError with the library's message.
@@ -23,13 +30,18 @@ import os
 
 import numpy as np
 
-__all__ = ["rho", "rho_deg", "rho_r", "rho_r_deg", "T", "R", "albedo", "fresnel_t",
-           "fresnel_r", "Table", "Bsdf", "open", "build", "version", "BtdfError",
-           "library_path"]
+__all__ = ["params_check", "rho", "rho_deg", "rho_r", "rho_r_deg", "T", "R", "albedo", "fresnel_t",
+           "fresnel_r", "Table", "Bsdf", "Full", "open", "build", "version", "BtdfError",
+           "library_path", "MODELS"]
 
 MAX_CHANNELS = 3
 _KINDS = {0: "facet", 1: "grid", 2: "facet-reciprocal", 3: "facet-reflection"}
 _PARTS = {"transmission": 1, "reflection": 2, "both": 3}
+_RULES = {0: "plain", 1: "chi", 2: "fresnel"}
+MODELS = ("xu-sun", "smith", "full")  # btdf_model: 0, 1, 2
+_MODEL_IDS = {name: k for k, name in enumerate(MODELS)}
+FULL_PATHS_DEFAULT = 200000  # BTDF_FULL_PATHS_DEFAULT
+SERIES_K, SERIES_M, SERIES_NODES = 8, 5, 33  # btdf_full_series of btdf/btdf.h
 _STATUS_EDOMAIN = None  # set from the library (btdf_strerror) on load
 
 
@@ -54,6 +66,29 @@ class _Slice(ctypes.Structure):
 
 _PROGRESS = ctypes.CFUNCTYPE(None, ctypes.c_void_p, ctypes.c_char_p, ctypes.c_size_t,
                              ctypes.c_size_t)
+
+
+class _FullOpts(ctypes.Structure):
+    _fields_ = [("paths", ctypes.c_uint64), ("seed", ctypes.c_uint64),
+                ("threads", ctypes.c_int)]
+
+
+class _FullAlbedos(ctypes.Structure):
+    _fields_ = [(k, ctypes.c_double) for k in ("T", "R", "T1", "R1", "Tms", "Rms",
+                                               "Tms_se", "Rms_se")]
+
+
+class _FullStats(ctypes.Structure):
+    _fields_ = [("nodes", ctypes.c_int), ("paths", ctypes.c_uint64),
+                ("seconds", ctypes.c_double), ("lost", ctypes.c_double),
+                ("order1_gap", ctypes.c_double)]
+
+
+class _FullSeries(ctypes.Structure):
+    _fields_ = [("nodes", ctypes.c_int),
+                ("node_deg", ctypes.c_double * SERIES_NODES),
+                ("poly", ctypes.c_double * (SERIES_M * SERIES_K * SERIES_K)),
+                ("coef", ctypes.c_double * (SERIES_NODES * 2 * SERIES_K * SERIES_M))]
 
 
 class _TableOpts(ctypes.Structure):
@@ -142,6 +177,7 @@ def _declare(lib):
     f("btdf_table_write", i, vp, cp, vp, cp, sz)
     f("btdf_table_free", None, vp)
     f("btdf_table_get_kind", i, vp)
+    f("btdf_table_get_rule", i, vp)
     f("btdf_table_get_params", pp, vp)
     f("btdf_table_slice_count", sz, vp)
     f("btdf_table_node_count", sz, vp)
@@ -159,6 +195,19 @@ def _declare(lib):
     f("btdf_scatfun_sides", i, vp)
     f("btdf_scatfun_build", i, pp, d, i, i, ctypes.POINTER(vp), cp, sz)
     f("btdf_scatfun_write", i, vp, cp, cp, cp, sz)
+    for name in ("btdf_rho_model_deg", "btdf_rho_r_model_deg"):
+        f(name, d, i, d, d, d, d, d, d)
+    fo = ctypes.POINTER(_FullOpts)
+    f("btdf_full_opts_default", None, fo)
+    f("btdf_full_new", i, d, d, fo, ctypes.POINTER(vp), cp, sz)
+    f("btdf_full_free", None, vp)
+    for name in ("btdf_full_rho", "btdf_full_rho_deg", "btdf_full_rho_r",
+                 "btdf_full_rho_r_deg"):
+        f(name, d, vp, d, d, d)
+    f("btdf_full_albedo", i, vp, d, ctypes.POINTER(_FullAlbedos))
+    f("btdf_full_info", None, vp, ctypes.POINTER(_FullStats))
+    if hasattr(lib, "btdf_full_get_series"):  # libbtdf 0.4 from this release on
+        f("btdf_full_get_series", i, vp, ctypes.POINTER(_FullSeries))
 
 
 def _check(status, what, msg=None):
@@ -179,15 +228,25 @@ def library_path():
     return _lib_path
 
 
-def _params(n, s, k0):
+def _model_id(model):
+    if model not in _MODEL_IDS:
+        raise ValueError("model %r: one of %s" % (model, ", ".join(MODELS)))
+    return _MODEL_IDS[model]
+
+
+def _params(n, s, k0, model=0):
+    """A checked single-channel btdf_params; model full is checked as smith (it has
+    smith's parameters; its tally is made by Full)."""
     p = _Params()
     p.channels = 1
     p.ior[0] = float(n)
     p.smoothness = float(s)
     p.k0 = float(k0)
+    p.model = 1 if model == 2 else model
     msg = ctypes.create_string_buffer(256)
     if _library().btdf_params_check(ctypes.byref(p), msg, 256) != 0:
         raise ValueError("model parameters: " + msg.value.decode("utf-8", "replace"))
+    p.model = model
     return p
 
 
@@ -197,12 +256,13 @@ def _f64(*xs):
     return [np.array(a, dtype=np.float64, order="C") for a in arrs]  # 0-d stays 0-d
 
 
-def _groups(n, s, k0):
+def _groups(n, s, k0, model=0):
     """(params, index array) for each distinct (n, s, k0) of the flat arrays."""
     key = np.stack([n, s, k0], axis=-1)
     uniq, inv = np.unique(key, axis=0, return_inverse=True)
     inv = inv.reshape(-1)
-    return [(_params(*uniq[g]), np.nonzero(inv == g)[0]) for g in range(len(uniq))]
+    return [(_params(*uniq[g], model=model), np.nonzero(inv == g)[0])
+            for g in range(len(uniq))]
 
 
 def _out(arr, shape):
@@ -214,14 +274,25 @@ def _dp(a):
     return a.ctypes.data_as(ctypes.POINTER(ctypes.c_double))
 
 
-def rho(ior, smoothness, ti, to, phi, k0=0.7):
-    """Eq. 25 (btdf_eval, 1/sr), radians: ti in [0, pi/2], to in [pi/2, pi], finite phi."""
+def params_check(ior, smoothness, k0=0.7, model="xu-sun"):
+    """Checks a material as btdf_params_check does (ior: one index or three); raises
+    ValueError naming the value and what is allowed."""
+    _ior_params(ior, smoothness, k0, 1 if _model_id(model) == 2 else _model_id(model))
+
+
+def rho(ior, smoothness, ti, to, phi, k0=0.7, model="xu-sun", paths=None, seed=None):
+    """rho of the model (btdf_eval; btdf_full_rho for full), 1/sr, radians: ti in
+    [0, pi/2], to in [pi/2, pi], finite phi. Eq. 25 by default."""
+    m = _model_id(model)
     n, s, k, a, b, c = _f64(ior, smoothness, k0, ti, to, phi)
     shape = a.shape
     n, s, k, a, b, c = (x.reshape(-1) for x in (n, s, k, a, b, c))
+    if m == 2:
+        return _full_each("rho", "btdf_full_rho", (n, s, k, a, b, c), shape, paths, seed,
+                          _angles_t_rad)
     out = np.empty(a.size)
     lib = _library()
-    for p, idx in _groups(n, s, k):
+    for p, idx in _groups(n, s, k, m):
         ta, tb, tc = (np.ascontiguousarray(x[idx]) for x in (a, b, c))
         o = np.empty(idx.size)
         bad = ctypes.c_size_t(0)
@@ -229,14 +300,35 @@ def rho(ior, smoothness, ti, to, phi, k0=0.7):
                                  _dp(o), ctypes.byref(bad))
         if st != 0:
             j = bad.value
-            if j < idx.size and not (0 <= ta[j] <= np.pi / 2 and np.pi / 2 <= tb[j] <= np.pi
-                                     and np.isfinite(tc[j])):
-                raise ValueError("rho: angles (%r, %r, %r) at flat index %d: need ti in "
-                                 "[0, pi/2], to in [pi/2, pi], finite phi (radians)"
-                                 % (ta[j], tb[j], tc[j], int(idx[j])))
+            if j < idx.size and _angles_t_rad(ta[j], tb[j], tc[j]):
+                raise ValueError("rho: %s at flat index %d"
+                                 % (_angles_t_rad(ta[j], tb[j], tc[j]), int(idx[j])))
             _check(st, "btdf_eval_batch")
         out[idx] = o
     return _out(out, shape)
+
+
+def _angles_t_rad(a, b, c):
+    return (None if 0 <= a <= np.pi / 2 and np.pi / 2 <= b <= np.pi and np.isfinite(c) else
+            "angles (%r, %r, %r): need ti in [0, pi/2], to in [pi/2, pi], finite phi "
+            "(radians)" % (a, b, c))
+
+
+def _angles_t_deg(a, b, c):
+    return (None if 0 <= a <= 90 and 90 <= b <= 180 and np.isfinite(c) else
+            "angles (%r, %r, %r): need ti in [0, 90], to in [90, 180] degrees, finite phi"
+            % (a, b, c))
+
+
+def _angles_r_rad(a, b, c):
+    return (None if 0 <= a <= np.pi / 2 and 0 <= b <= np.pi / 2 and np.isfinite(c) else
+            "angles (%r, %r, %r): need ti, tr in [0, pi/2], finite phi (radians)"
+            % (a, b, c))
+
+
+def _angles_r_deg(a, b, c):
+    return (None if 0 <= a <= 90 and 0 <= b <= 90 and np.isfinite(c) else
+            "angles (%r, %r, %r): need ti, tr in [0, 90] degrees, finite phi" % (a, b, c))
 
 
 def _scalar(fn, args, check, what):
@@ -254,9 +346,9 @@ def _scalar(fn, args, check, what):
     return _out(out, shape)
 
 
-def _param_why(n, s, k0):
+def _param_why(n, s, k0, model=0):
     try:
-        _params(n, s, k0)
+        _params(n, s, k0, model)
     except ValueError as e:
         return str(e)
     return None
@@ -265,84 +357,216 @@ def _param_why(n, s, k0):
 _pcache = {}
 
 
-def _pc(n, s, k0):
-    """_params, remembered (the per-element paths call it once per element)."""
-    key = (n, s, k0)
+def _pc(n, s, k0, model=0):
+    """_params' verdict, remembered (the per-element paths call it once per element)."""
+    key = (n, s, k0, model)
     if key not in _pcache:
         if len(_pcache) > 4096:
             _pcache.clear()
-        _pcache[key] = _param_why(n, s, k0)
+        _pcache[key] = _param_why(n, s, k0, model)
     return _pcache[key]
 
 
-def rho_deg(ior, smoothness, ti, to, phi, k0=0.7):
-    """Eq. 25 with the angles in degrees (btdf_rho_deg, what `btdftab eval` prints)."""
+_fcache = {}
+
+
+def _full_of(n, s, paths, seed):
+    """The Full object of (n, s, paths, seed), made once (its tally is the cost)."""
+    key = (float(n), float(s), int(paths or FULL_PATHS_DEFAULT), int(1 if seed is None
+                                                                      else seed))
+    f = _fcache.get(key)
+    if f is None:
+        if len(_fcache) >= 16:
+            _fcache.clear()
+        f = _fcache[key] = Full(*key)
+    return f
+
+
+def _full_each(what, cname, flat, shape, paths, seed, angle_why):
+    """A btdf_full_* evaluation over flat (n, s, k0, a, b, c), element by element."""
+    n, s, k, a, b, c = flat
+    out = np.empty(a.size)
+    for j in range(a.size):
+        why = _pc(float(n[j]), float(s[j]), float(k[j]), 2) or angle_why(a[j], b[j], c[j])
+        if why:
+            raise ValueError("%s: %s at flat index %d" % (what, why, j))
+        f = _full_of(n[j], s[j], paths, seed)
+        out[j] = getattr(_library(), cname)(f._h, a[j], b[j], c[j])
+    return _out(out, shape)
+
+
+def _model_form(what, cname_full, model_fn, ior, smoothness, k0, ti, to, phi, model, paths,
+                seed, angle_why):
+    """The degree forms and rho_r: the model's scalar entry, full through Full."""
+    m = _model_id(model)
+    arrs = _f64(ior, smoothness, k0, ti, to, phi)
+    shape = arrs[0].shape
+    flat = [x.reshape(-1) for x in arrs]
+    if m == 2:
+        return _full_each(what, cname_full, flat, shape, paths, seed, angle_why)
+
     def check(n, s, k0_, a, b, c):
-        return _pc(n, s, k0_) or (None if 0 <= a <= 90 and 90 <= b <= 180 and np.isfinite(c)
-                                  else "angles (%r, %r, %r): need ti in [0, 90], to in "
-                                  "[90, 180] degrees, finite phi" % (a, b, c))
-    return _scalar(_library().btdf_rho_deg, (ior, smoothness, k0, ti, to, phi), check,
-                   "rho_deg")
+        return _pc(n, s, k0_, m) or angle_why(a, b, c)
+    return _scalar(lambda n, s, k0_, a, b, c: model_fn(m, n, s, k0_, a, b, c), arrs, check,
+                   what)
 
 
-def rho_r(ior, smoothness, ti, tr, phi, k0=0.7):
-    """The same facets' reflection rho_r (btdf_eval_r, 1/sr), radians: ti, tr in
-    [0, pi/2], phi = pi the specular plane."""
-    lib = _library()
+def rho_deg(ior, smoothness, ti, to, phi, k0=0.7, model="xu-sun", paths=None, seed=None):
+    """rho with the angles in degrees (btdf_rho_model_deg, btdf_full_rho_deg for full):
+    what `btdftab eval --model MODEL` prints."""
+    return _model_form("rho_deg", "btdf_full_rho_deg", _library().btdf_rho_model_deg, ior,
+                       smoothness, k0, ti, to, phi, model, paths, seed, _angles_t_deg)
+
+
+def _rho_r_rad(m, n, s, k0, a, b, c):
     out1 = (ctypes.c_double * MAX_CHANNELS)()
-
-    def one(n, s, k0_, a, b, c):
-        _check(lib.btdf_eval_r(ctypes.byref(_params(n, s, k0_)), a, b, c, out1),
-               "btdf_eval_r")
-        return out1[0]
-
-    def check(n, s, k0_, a, b, c):
-        return _pc(n, s, k0_) or (None if 0 <= a <= np.pi / 2 and 0 <= b <= np.pi / 2
-                                  and np.isfinite(c) else
-                                  "angles (%r, %r, %r): need ti, tr in [0, pi/2], finite "
-                                  "phi (radians)" % (a, b, c))
-    return _scalar(one, (ior, smoothness, k0, ti, tr, phi), check, "rho_r")
+    _check(_library().btdf_eval_r(ctypes.byref(_params(n, s, k0, m)), a, b, c, out1),
+           "btdf_eval_r")
+    return out1[0]
 
 
-def rho_r_deg(ior, smoothness, ti, tr, phi, k0=0.7):
-    """rho_r with the angles in degrees (btdf_rho_r_deg, `btdftab eval --part reflection`)."""
-    def check(n, s, k0_, a, b, c):
-        return _pc(n, s, k0_) or (None if 0 <= a <= 90 and 0 <= b <= 90 and np.isfinite(c)
-                                  else "angles (%r, %r, %r): need ti, tr in [0, 90] "
-                                  "degrees, finite phi" % (a, b, c))
-    return _scalar(_library().btdf_rho_r_deg, (ior, smoothness, k0, ti, tr, phi), check,
-                   "rho_r_deg")
+def rho_r(ior, smoothness, ti, tr, phi, k0=0.7, model="xu-sun", paths=None, seed=None):
+    """The same facets' reflection rho_r (btdf_eval_r, btdf_full_rho_r for full), 1/sr,
+    radians: ti, tr in [0, pi/2], phi = pi the specular plane."""
+    return _model_form("rho_r", "btdf_full_rho_r", _rho_r_rad, ior, smoothness, k0, ti, tr,
+                       phi, model, paths, seed, _angles_r_rad)
 
 
-def _integral(cname, ior, smoothness, ti, k0):
+def rho_r_deg(ior, smoothness, ti, tr, phi, k0=0.7, model="xu-sun", paths=None, seed=None):
+    """rho_r with the angles in degrees (btdf_rho_r_model_deg, btdf_full_rho_r_deg):
+    `btdftab eval --part reflection --model MODEL`."""
+    return _model_form("rho_r_deg", "btdf_full_rho_r_deg", _library().btdf_rho_r_model_deg,
+                       ior, smoothness, k0, ti, tr, phi, model, paths, seed, _angles_r_deg)
+
+
+def _integral(cname, ior, smoothness, ti, k0, model, paths, seed):
     lib = _library()
+    m = _model_id(model)
     fn = getattr(lib, cname)
     out1 = (ctypes.c_double * MAX_CHANNELS)()
+    side = "T" if cname == "btdf_transmittance" else "R"
 
     def one(n, s, k0_, a):
-        _check(fn(ctypes.byref(_params(n, s, k0_)), a, out1), cname)
+        if m == 2:
+            return getattr(_full_of(n, s, paths, seed).albedos(a), side)
+        _check(fn(ctypes.byref(_params(n, s, k0_, m)), a, out1), cname)
         return out1[0]
 
     def check(n, s, k0_, a):
-        return _pc(n, s, k0_) or (None if 0 <= a <= np.pi / 2 else
-                                  "ti %r: need [0, pi/2] (radians)" % a)
+        return _pc(n, s, k0_, m) or (None if 0 <= a <= np.pi / 2 else
+                                     "ti %r: need [0, pi/2] (radians)" % a)
     return _scalar(one, (ior, smoothness, k0, ti), check, cname)
 
 
-def T(ior, smoothness, ti, k0=0.7):
-    """Hemispherical transmittance T(ti) (btdf_transmittance), ti in radians."""
-    return _integral("btdf_transmittance", ior, smoothness, ti, k0)
+def T(ior, smoothness, ti, k0=0.7, model="xu-sun", paths=None, seed=None):
+    """Hemispherical transmittance T(ti) (btdf_transmittance; btdf_full_albedo's T for
+    full), ti in radians."""
+    return _integral("btdf_transmittance", ior, smoothness, ti, k0, model, paths, seed)
 
 
-def R(ior, smoothness, ti, k0=0.7):
-    """Hemispherical reflectance R(ti) of the same facets (btdf_reflectance)."""
-    return _integral("btdf_reflectance", ior, smoothness, ti, k0)
+def R(ior, smoothness, ti, k0=0.7, model="xu-sun", paths=None, seed=None):
+    """Hemispherical reflectance R(ti) of the same facets (btdf_reflectance; full:
+    btdf_full_albedo's R)."""
+    return _integral("btdf_reflectance", ior, smoothness, ti, k0, model, paths, seed)
 
 
-def albedo(ior, smoothness, ti, k0=0.7):
-    """R(ti) + T(ti): what the surface scatters at all (the rest is lost to the
-    shadowing term; `btdftab albedo` prints it as R+T)."""
-    return np.add(R(ior, smoothness, ti, k0), T(ior, smoothness, ti, k0))
+def albedo(ior, smoothness, ti, k0=0.7, model="xu-sun", paths=None, seed=None):
+    """R(ti) + T(ti): what the surface scatters at all (xu-sun and smith lose the rest to
+    the shadowing term; full keeps it, to its tally's noise; `btdftab albedo` prints it
+    as R+T)."""
+    kw = dict(k0=k0, model=model, paths=paths, seed=seed)
+    return np.add(R(ior, smoothness, ti, **kw), T(ior, smoothness, ti, **kw))
+
+
+class Full:
+    """The model full of one material (btdf_full_new): smith's single scattering plus the
+    light scattered two or more times, tallied once by a random walk on the Smith
+    microsurface (deterministic: the same bits whatever the thread count). Make one per
+    material and reuse it; rho etc. with model="full" keep one per material for you."""
+
+    def __init__(self, ior, smoothness, paths=FULL_PATHS_DEFAULT, seed=1, threads=0):
+        lib = _library()
+        _params(ior, smoothness, 0.7, 2)  # the ranges, with a clear error
+        o = _FullOpts()
+        lib.btdf_full_opts_default(ctypes.byref(o))
+        o.paths, o.seed, o.threads = int(paths), int(seed), int(threads)
+        h = ctypes.c_void_p()
+        msg = ctypes.create_string_buffer(512)
+        st = lib.btdf_full_new(float(ior), float(smoothness), ctypes.byref(o),
+                               ctypes.byref(h), msg, 512)
+        if st == 1:  # BTDF_EINVAL: a bad value, named in the message
+            raise ValueError("Full: " + msg.value.decode("utf-8", "replace"))
+        _check(st, "btdf_full_new", msg)
+        self._h = h
+        self.ior, self.smoothness = float(ior), float(smoothness)
+        self.paths, self.seed = int(paths), int(seed)
+
+    def _each(self, cname, ti, to, phi, why):
+        a, b, c = _f64(ti, to, phi)
+        shape = a.shape
+        a, b, c = (x.reshape(-1) for x in (a, b, c))
+        fn = getattr(_library(), cname)
+        out = np.empty(a.size)
+        for j in range(a.size):
+            w = why(a[j], b[j], c[j])
+            if w:
+                raise ValueError("Full: %s at flat index %d" % (w, j))
+            out[j] = fn(self._h, a[j], b[j], c[j])
+        return _out(out, shape)
+
+    def rho(self, ti, to, phi):
+        """rho_full (btdf_full_rho), radians."""
+        return self._each("btdf_full_rho", ti, to, phi, _angles_t_rad)
+
+    def rho_deg(self, ti, to, phi):
+        return self._each("btdf_full_rho_deg", ti, to, phi, _angles_t_deg)
+
+    def rho_r(self, ti, tr, phi):
+        """The reflection of full (btdf_full_rho_r), radians."""
+        return self._each("btdf_full_rho_r", ti, tr, phi, _angles_r_rad)
+
+    def rho_r_deg(self, ti, tr, phi):
+        return self._each("btdf_full_rho_r_deg", ti, tr, phi, _angles_r_deg)
+
+    def albedos(self, ti):
+        """btdf_full_albedo at one ti (radians): an object with T, R (full), T1, R1
+        (single scattering), Tms, Rms and their standard errors Tms_se, Rms_se."""
+        a = _FullAlbedos()
+        if not 0 <= float(ti) <= np.pi / 2:
+            raise ValueError("Full.albedos: ti %r: need [0, pi/2] (radians)" % (ti,))
+        _check(_library().btdf_full_albedo(self._h, float(ti), ctypes.byref(a)),
+               "btdf_full_albedo")
+        return a
+
+    def info(self):
+        """btdf_full_info: dict of nodes, paths, seconds, lost, order1_gap."""
+        st = _FullStats()
+        _library().btdf_full_info(self._h, ctypes.byref(st))
+        return {k: getattr(st, k) for k, _ in _FullStats._fields_}
+
+    def series(self):
+        """btdf_full_get_series: dict of node_deg (nodes,), poly (M, K, K) and coef
+        (nodes, 2, K, M), the multiply scattered part as btdf/btdf.h spells it."""
+        lib = _library()
+        if not hasattr(lib, "btdf_full_get_series"):
+            raise BtdfError("this libbtdf (%s) has no btdf_full_get_series" % version())
+        sr = _FullSeries()
+        _check(lib.btdf_full_get_series(self._h, ctypes.byref(sr)), "btdf_full_get_series")
+        k, m, nn = SERIES_K, SERIES_M, sr.nodes
+        return {"node_deg": np.array(sr.node_deg[:nn]),
+                "poly": np.array(sr.poly[:]).reshape(m, k, k),
+                "coef": np.array(sr.coef[:]).reshape(SERIES_NODES, 2, k, m)[:nn].copy()}
+
+    def close(self):
+        if getattr(self, "_h", None):
+            _library().btdf_full_free(self._h)
+            self._h = None
+
+    def __del__(self):
+        try:
+            self.close()
+        except Exception:  # interpreter shutdown: the process frees it anyway
+            pass
 
 
 def fresnel_t(ior, ti):
@@ -373,7 +597,10 @@ class Table:
         self.ior = [p.ior[c] for c in range(p.channels)]
         self.smoothness = p.smoothness
         self.k0 = p.k0
+        self.model = MODELS[p.model] if 0 <= p.model < len(MODELS) else str(p.model)
         self.kind = _KINDS.get(lib.btdf_table_get_kind(self._h), "unknown")
+        # how facet slices interpolate (btdf_table_rule): rho itself, rho / K or rho / Fr
+        self.rule = _RULES.get(lib.btdf_table_get_rule(self._h), "unknown")
         self.parts = {1: "transmission", 2: "reflection", 3: "both"}.get(
             lib.btdf_table_parts(self._h), "unknown")
 
@@ -498,7 +725,7 @@ def open(path):  # noqa: A001  (the module's reader, as btdftab's --table)
     return Bsdf(path) if str(path).lower().endswith(".bsdf") else Table(path)
 
 
-def _ior_params(ior, smoothness, k0):
+def _ior_params(ior, smoothness, k0, model=0):
     iors = list(np.ravel(np.asarray(ior, dtype=np.float64)))
     if len(iors) not in (1, 3):
         raise ValueError("ior: one value or three (R, G, B), not %d" % len(iors))
@@ -507,6 +734,10 @@ def _ior_params(ior, smoothness, k0):
     for c, v in enumerate(iors):
         p.ior[c] = v
     p.smoothness, p.k0 = float(smoothness), float(k0)
+    if model == 2:
+        raise ValueError("model 'full': tables and .bsdf files hold xu-sun or smith (full "
+                         "is evaluated by rho, rho_r, T, R and Full)")
+    p.model = model
     msg = ctypes.create_string_buffer(256)
     if _library().btdf_params_check(ctypes.byref(p), msg, 256) != 0:
         raise ValueError("model parameters: " + msg.value.decode("utf-8", "replace"))
@@ -514,13 +745,14 @@ def _ior_params(ior, smoothness, k0):
 
 
 def build(ior, smoothness, k0=0.7, tolerance=1e-3, part="transmission", threads=0,
-          ti_range=None, format="table"):  # noqa: A002
+          ti_range=None, format="table", model="xu-sun"):  # noqa: A002
     """Builds an adaptive table (btdf_table_build, the default of `btdftab tabulate`)
     or, with format="bsdf", a .bsdf file's contents (btdf_scatfun_build, all four
-    blocks). ior: one index or three; ti_range: (min, max) radians. Returns a Table
+    blocks). ior: one index or three; ti_range: (min, max) radians; model xu-sun or
+    smith (as `btdftab tabulate --model`). Returns a Table
     or a Bsdf; a budget that stops refinement first raises BtdfError."""
     lib = _library()
-    p = _ior_params(ior, smoothness, k0)
+    p = _ior_params(ior, smoothness, k0, _model_id(model))
     msg = ctypes.create_string_buffer(1024)
     h = ctypes.c_void_p()
     if format == "bsdf":

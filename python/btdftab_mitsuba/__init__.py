@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""btdftab for Mitsuba 3: the BSDF plugin `btdftab` (docs/mitsuba3.md).
+"""btdftab for Mitsuba 3: the BSDF plugin `btdftab` (docs/mitsuba3.md), over the Python
+package btdftab (python/btdftab), which binds libbtdf.
 
     import mitsuba as mi
     mi.set_variant("llvm_ad_rgb")
@@ -7,8 +8,8 @@
     btdftab_mitsuba.register()      # again after switching variants
 """
 import mitsuba as _mi
+from btdftab import BtdfError
 
-from .libbtdf import BtdfError
 from .plugin import register
 
 __all__ = ["register", "BtdfError"]

@@ -1,7 +1,9 @@
 # SPDX-License-Identifier: MIT
 """The `btdftab` BSDF of Mitsuba 3: a rough dielectric interface that transmits by
-Eq. 25 of Xu & Sun (2008), from a btdftab table or from the formula itself, and
-reflects by the companion term of the same facets (MODEL.md section 8).
+Eq. 25 of Xu & Sun (2008) or the models smith and full (btdf/btdf.h), from a btdftab
+table or from the formulas themselves, and reflects by the companion term of the same
+facets (MODEL.md section 8). Everything it takes from libbtdf comes through the
+Python package btdftab (tables, parameter checks, full's tally).
 
 Frame: Mitsuba's local z is the shape normal, the "front" side. A table describes light
 arriving on the front side, with its index n = (index behind) / (index in front), as
@@ -15,17 +17,26 @@ rho(wo -> wi) |cos wo|; in importance mode rho(wi -> wo) |cos wo|.
 
 Reflection: rho_r = Fr D V(ti) V(tr) / (4 cos ti cos tr), evaluated from the model
 (index n for light arriving in front, 1/n from behind, with total internal reflection
-on the facets), in both modes: the tables hold transmission only. It is reciprocal, so
-both transport modes give rho_r |cos wo|. `part` = both (default), transmission (the
+on the facets), in both modes: the tables hold transmission only. It is reciprocal for
+xu-sun and smith; it is evaluated for light arriving along wo in radiance mode, along wi
+in importance mode, which matters for full. `part` = both (default), transmission (the
 transmission-only surface of earlier releases) or reflection.
+
+Models: `model` (mode analytic) is xu-sun (default), smith or full; a table's model is
+its own (the file's metadata), and the reflection beside it is of the same model. full
+is smith plus the multiply scattered series of a tally made once per index when the
+plugin loads (btdftab.Full: `paths`, default 200000, and `seed`, default 1, as
+`btdftab eval --model full`; light from behind is the material of index 1/n, a tally of
+its own). Sampling then mixes in cosine-distributed directions on the two sides in
+proportion to the multiply scattered energy, so the broad lobe is sampled everywhere.
 """
 import math
 
+import btdftab
 import drjit as dr
 import mitsuba as mi
 
-from . import libbtdf
-from .model import TableRule, rho_any, rho_eq25, rho_r
+from .model import FullSeries, TableRule, rho_any, rho_eq25, rho_r
 
 _classes = {}
 
@@ -107,11 +118,13 @@ def _make_class():
             bname = props.get("filename_back", "")
             self.front = self.back = None
             self.files = []
+            self.model = "xu-sun"
             if fname:
-                t = libbtdf.Table(_resolve(fname))
-                self.files.append("%s (%s)" % (fname, t.kind_name))
+                t = btdftab.Table(_resolve(fname))
+                self.files.append("%s (%s, %s)" % (fname, t.kind, t.model))
                 self.ior, self.s, self.k0 = list(t.ior), t.smoothness, t.k0
-                for key in ("ior", "smoothness", "k0"):
+                self.model = t.model
+                for key in ("ior", "smoothness", "k0", "model"):
                     if key in props:
                         raise ValueError("btdftab: '%s' is given by the table '%s'; drop "
                                          "the parameter" % (key, fname))
@@ -124,23 +137,40 @@ def _make_class():
                 self.ior = _parse_ior(props.get("ior", "1.5"))
                 self.s = float(props.get("smoothness", 3.0))
                 self.k0 = float(props.get("k0", 0.7))
-                libbtdf.make_params(self.ior, self.s, self.k0)  # range checks, clear errors
+                self.model = props.get("model", "xu-sun")
+                if self.model not in btdftab.MODELS:
+                    raise ValueError("btdftab: model '%s': must be %s" % (
+                        self.model, ", ".join(btdftab.MODELS)))
+                # range checks, clear errors
+                btdftab.params_check(self.ior, self.s, self.k0, self.model)
             if bname:
                 if mode != "table":
                     raise ValueError("btdftab: filename_back is for mode 'table'")
-                tb = libbtdf.Table(_resolve(bname))
+                tb = btdftab.Table(_resolve(bname))
                 want = [1.0 / n for n in self.ior]
-                if (tb.channels != len(self.ior)
+                if (tb.channels != len(self.ior) or tb.model != self.model
                         or any(abs(a - b) > 1e-6 * b for a, b in zip(tb.ior, want))
                         or abs(tb.smoothness - self.s) > 1e-9 * self.s
                         or abs(tb.k0 - self.k0) > 1e-9):
                     raise ValueError(
-                        "btdftab: filename_back '%s' has n = %s, s = %g, k0 = %g; the back "
-                        "of a front table with n = %s needs n = %s and the same s, k0"
-                        % (bname, tb.ior, tb.smoothness, tb.k0, self.ior, want))
+                        "btdftab: filename_back '%s' has n = %s, s = %g, k0 = %g, model %s; "
+                        "the back of a front table with n = %s needs n = %s and the same "
+                        "s, k0 and model (%s)" % (bname, tb.ior, tb.smoothness, tb.k0,
+                                                  tb.model, self.ior, want, self.model))
                 self.back = TableRule(tb)
-                self.files.append("%s (%s, back)" % (bname, tb.kind_name))
+                self.files.append("%s (%s, back)" % (bname, tb.kind))
             self.channels = len(self.ior)
+            # full: the multiply scattered series of each index, front (n) and back (1/n)
+            self.ms_front = self.ms_back = None
+            if self.model == "full":
+                paths = int(props.get("paths", btdftab.FULL_PATHS_DEFAULT))
+                seed = int(props.get("seed", 1))
+                self.ms_front = [FullSeries(btdftab.Full(n, self.s, paths, seed))
+                                 for n in self.ior]
+                self.ms_back = [FullSeries(btdftab.Full(1.0 / n, self.s, paths, seed))
+                                for n in self.ior]
+            elif "paths" in props or "seed" in props:
+                raise ValueError("btdftab: 'paths' and 'seed' are for model 'full'")
             if self.channels == 3 and not mi.is_rgb:
                 raise RuntimeError("btdftab: a three-channel table needs an RGB variant "
                                    "(variant %s)" % mi.variant())
@@ -173,6 +203,29 @@ def _make_class():
             self.m_flags = flags
 
         # --- the physical BTDF ------------------------------------------------------
+        @property
+        def _ss(self):
+            """The single-scattering model: full's is smith's."""
+            return "smith" if self.model == "full" else self.model
+
+        def _ms(self, c, h, front, ang, active):
+            """full's multiply scattered rho of channel c (0 for the other models), side h
+            (0 transmission, 1 reflection; int or mask), from the front (index n) or the
+            back (1/n) series; 0 at grazing incidence or exit, as libbtdf."""
+            if self.ms_front is None:
+                return 0.0
+            sti, cti, sto, cto, cph, _ = ang
+            ti_deg = dr.atan2(sti, cti) * (180.0 / math.pi)
+            mu = dr.abs(cto)
+            ok = active & (cti > 0.0) & (mu > 0.0)
+            if not _jit():  # one lane: the side's series alone
+                if not ok:
+                    return 0.0
+                return (self.ms_front if front else self.ms_back)[c].eval(h, ti_deg, mu, cph)
+            vf = self.ms_front[c].eval(h, ti_deg, mu, cph, ok & front)
+            vb = self.ms_back[c].eval(h, ti_deg, mu, cph, ok & _not(front))
+            return dr.select(ok, dr.select(front, vf, vb), 0.0)
+
         def _rho(self, src, dst, active):
             """rho(light arriving along src, leaving along dst) per channel (double)."""
             front = src.z > 0.0
@@ -181,9 +234,11 @@ def _make_class():
                 b = dr.select(front, dst, _flip(dst))
                 ang = _angles(a, b)
                 out = []
-                for n in self.ior:
+                for c, n in enumerate(self.ior):
                     ns = dr.select(front, _f64(n), _f64(1.0 / n))  # double, not float
-                    out.append(dr.select(active, rho_eq25(ns, self.s, self.k0, *ang), 0.0))
+                    v = (rho_eq25(ns, self.s, self.k0, *ang, model=self._ss) +
+                         self._ms(c, 0, front, ang, active))
+                    out.append(dr.select(active, v, 0.0))
                 return out
             if self.back is not None:
                 vf = self.front.eval(*_angles(src, dst), active=active & front)
@@ -201,9 +256,11 @@ def _make_class():
             front = a.z > 0.0
             ang = _angles(dr.select(front, a, _flip(a)), dr.select(front, b, _flip(b)))
             out = []
-            for n in self.ior:
+            for c, n in enumerate(self.ior):
                 ns = dr.select(front, _f64(n), _f64(1.0 / n))  # double, not float
-                out.append(dr.select(active, rho_r(ns, self.s, self.k0, *ang), 0.0))
+                v = (rho_r(ns, self.s, self.k0, *ang, model=self._ss) +
+                     self._ms(c, 1, front, ang, active))
+                out.append(dr.select(active, v, 0.0))
             return out
 
         def _enabled(self, ctx):
@@ -233,9 +290,14 @@ def _make_class():
                 ang = _angles(dr.select(front, src, _flip(src)),
                               dr.select(front, dst, _flip(dst)))
                 vals = []
-                for n in self.ior:
+                h = dr.select(ang[3] > 0.0, 1, 0)  # full: the side's series
+                if _jit():
+                    h = mi.UInt32(h)
+                for c, n in enumerate(self.ior):
                     ns = dr.select(front, _f64(n), _f64(1.0 / n))  # double, not float
-                    vals.append(dr.select(active, rho_any(ns, self.s, self.k0, *ang), 0.0))
+                    v = (rho_any(ns, self.s, self.k0, *ang, model=self._ss) +
+                         self._ms(c, h, front, ang, active))
+                    vals.append(dr.select(active, v, 0.0))
                 return dr.select(active, self._spectrum(vals) * dr.abs(wo.z), value)
             if en_t:
                 trans = active & (wi.z * wo.z < 0.0)
@@ -246,7 +308,10 @@ def _make_class():
                 value = dr.select(trans, self._spectrum(vals) * dr.abs(wo.z), value)
             if en_r:
                 refl = active & (wi.z * wo.z > 0.0)
-                vals = self._rho_r(wi, wo, refl)  # reciprocal: either transport mode
+                # light arrives along wo in radiance mode (xu-sun's and smith's rho_r are
+                # reciprocal; full's multiply scattered series is so only in the mean)
+                src, dst = (wo, wi) if ctx.mode == mi.TransportMode.Radiance else (wi, wo)
+                vals = self._rho_r(src, dst, refl)
                 value = dr.select(refl, self._spectrum(vals) * dr.abs(wo.z), value)
             return value
 
@@ -288,6 +353,25 @@ def _make_class():
             front = wi.z > 0.0
             return sg, front
 
+        def _ms_mix(self, wi_, front, en_r, en_t):
+            """full: (P, pT), the probability of drawing a cosine-distributed direction
+            for the multiply scattered lobe and, then, of drawing it through the surface:
+            the lobe's energies at ti (channel 0's series), with floors so that both
+            stay sampled (P in [0.02, 0.9]; pT in [0.1, 0.9] when both sides are on)."""
+            ti_deg = dr.atan2(dr.sqrt(wi_.x * wi_.x + wi_.y * wi_.y), wi_.z) * (180.0 / math.pi)
+            ef = self.ms_front[0].energies(ti_deg)
+            eb = self.ms_back[0].energies(ti_deg)
+            e_t = dr.select(front, ef[0], eb[0]) if en_t else 0.0
+            e_r = dr.select(front, ef[1], eb[1]) if en_r else 0.0
+            e = e_t + e_r
+            big_p = _to_float(dr.clip(e, 0.02, 0.9))
+            if en_t and en_r:
+                p_t = dr.clip(e_t / dr.select(e > 0.0, e, 1.0), 0.1, 0.9)  # e = 0: 1/2
+                p_t = dr.select(e > 0.0, p_t, 0.5)
+            else:
+                p_t = 1.0 if en_t else 0.0
+            return big_p, _to_float(p_t)
+
         def pdf(self, ctx, si, wo, active=True):
             en_r, en_t = self._enabled(ctx)
             zero = mi.Float(0.0) if _jit() else 0.0
@@ -317,6 +401,11 @@ def _make_class():
                         f = f + self._fresnel(cim, dr.select(front, n, 1.0 / n))
                     p = p * (f / self.channels)
                 out = dr.select(active & (wi.z * wo.z > 0.0), p, out)
+            if self.ms_front is not None:  # the cosine-distributed part of the mixture
+                big_p, p_t = self._ms_mix(wi_, front, en_r, en_t)
+                side_p = dr.select(wo_.z < 0.0, p_t, 1.0 - p_t)
+                pc = dr.select(active & (wi.z != 0.0), side_p * dr.abs(wo_.z) / math.pi, 0.0)
+                out = (1.0 - big_p) * out + big_p * pc
             return out
 
         def eval_pdf(self, ctx, si, wo, active=True):
@@ -331,11 +420,19 @@ def _make_class():
             sg, front = self._side(wi)
             wi_ = mi.Vector3f(wi.x, wi.y, wi.z * sg)
             n = self.ior[0]
-            u = sample1
+            u1 = sample1
+            ms = False
+            if self.ms_front is not None:  # full: the cosine part of the mixture first
+                big_p, p_t = self._ms_mix(wi_, front, en_r, en_t)
+                ms = sample1 < big_p
+                # what is left of sample1, uniform again (P in [0.02, 0.9]: no 1/0)
+                u1 = dr.select(ms, sample1 / big_p, (sample1 - big_p) / (1.0 - big_p))
+                u1 = dr.minimum(u1, 0.99999994)  # the rounding must not reach 1
+            u = u1
             if self.channels == 3:  # draw the channel whose facets refract the ray
-                c = dr.minimum(mi.UInt32(sample1 * 3.0), 2) if _jit() else min(int(sample1 * 3), 2)
+                c = dr.minimum(mi.UInt32(u1 * 3.0), 2) if _jit() else min(int(u1 * 3), 2)
                 n = dr.select(c == 0, self.ior[0], dr.select(c == 1, self.ior[1], self.ior[2]))
-                u = sample1 * 3.0 - c  # what is left of sample1 chooses the lobe
+                u = u1 * 3.0 - c  # what is left of sample1 chooses the lobe
             n = dr.select(front, n, 1.0 / n)
             m, _ = self.distr.sample(wi_, sample2)
             cim = dr.dot(wi_, m)
@@ -355,6 +452,13 @@ def _make_class():
             wr_ = 2.0 * cim * m - wi_
             wo_ = dr.select(reflect, wr_, wt_)
             ok &= dr.select(reflect, wr_.z > 0.0, (s2 < 1.0) & (wt_.z < 0.0))
+            if self.ms_front is not None:
+                d = mi.warp.square_to_cosine_hemisphere(sample2)
+                through = u1 < p_t
+                wm_ = mi.Vector3f(d.x, d.y, dr.select(through, -d.z, d.z))
+                wo_ = dr.select(ms, wm_, wo_)
+                reflect = dr.select(ms, _not(through), reflect)
+                ok = dr.select(ms, active & (wi.z != 0.0) & (d.z > 0.0), ok)
             wo = dr.normalize(mi.Vector3f(wo_.x, wo_.y, wo_.z * sg))
             bs.wo = dr.select(ok, wo, mi.Vector3f(0.0, 0.0, -1.0) * sg)
             bs.pdf = dr.select(ok, self.pdf(ctx, si, bs.wo, ok), 0.0)
@@ -374,8 +478,8 @@ def _make_class():
             pass
 
         def to_string(self):
-            return ("btdftab[mode=%s, part=%s, n=%s, s=%g, k0=%g, files=%s]"
-                    % (self.mode, self.part, self.ior, self.s, self.k0,
+            return ("btdftab[mode=%s, model=%s, part=%s, n=%s, s=%g, k0=%g, files=%s]"
+                    % (self.mode, self.model, self.part, self.ior, self.s, self.k0,
                        self.files or "none"))
 
     return BtdftabBSDF

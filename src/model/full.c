@@ -29,6 +29,10 @@ static const double full_crit_off[] = {-6, -3, -1.5, -0.5, 0.5, 1.5, 3, 6};
 #define FULL_CRIT ((int)(sizeof full_crit_off / sizeof full_crit_off[0]))
 /* full.h sizes the object for this ladder */
 typedef char full_ladder_fits[FULL_BASE + FULL_CRIT == FULL_NODES_MAX ? 1 : -1];
+/* the public view of the series (btdf_full_get_series) has these sizes */
+typedef char full_series_k_check[FULL_K == BTDF_FULL_SERIES_K ? 1 : -1];
+typedef char full_series_m_check[FULL_M == BTDF_FULL_SERIES_M ? 1 : -1];
+typedef char full_series_n_check[FULL_NODES_MAX == BTDF_FULL_SERIES_NODES ? 1 : -1];
 /* ------------------------------------------------------------------------- */
 /* The Smith microsurface (uniform heights in [-1, 1]; the walk's result does not
    depend on the height distribution, Heitz et al. 2016 sec. 3)                */
@@ -556,6 +560,18 @@ BTDF_API void btdf_full_info(const btdf_full *f, btdf_full_stats *st)
         double d = fabs(T1 + R1 - f->e1[k][0] - f->e1[k][1]);
         st->order1_gap = fmax(st->order1_gap, d);
     }
+}
+
+BTDF_API btdf_status btdf_full_get_series(const btdf_full *f, btdf_full_series *out)
+{
+    if (!f || !out)
+        return BTDF_EINVAL;
+    memset(out, 0, sizeof *out);
+    out->nodes = f->nodes;
+    memcpy(out->node_deg, f->node_deg, sizeof f->node_deg);
+    memcpy(out->poly, f->poly, sizeof f->poly);
+    memcpy(out->coef, f->coef, sizeof f->coef);
+    return BTDF_OK;
 }
 
 /* ------------------------------------------------------------------------- */
