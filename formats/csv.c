@@ -137,8 +137,6 @@ static void comment_text(FILE *f, const char *s)
 
 static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
 {
-    (void)msg;
-    (void)msglen;
     const btdf_table *t = c->table;
     const btdf_table *tr = t->refl; /* a table holding both parts: its reflection */
     const btdf_params *p = &t->p;
@@ -177,7 +175,11 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
     fprintf(f, "# rule: %s\n", rule_text(t));
     if (tr)
         fprintf(f, "# rule reflection: %s\n", rule_text(tr));
-    if (p->model == BTDF_MODEL_SMITH)
+    if (p->model == BTDF_MODEL_FULL)
+        fprintf(f, "# model-rule full: rho is the slices' value (smith's, by the rule "
+                   "below) plus the multiply scattered part of the tally in the '# ms' lines "
+                   "(docs/model.md section 12)\n");
+    if (p->model != BTDF_MODEL_XU_SUN)
         fprintf(f, "# model-rule: smith: the incident factor is 1/((1 + Lambda(theta_i)) "
                    "cos(theta_i)) in place of V(theta_i)/cos(theta_i), and facet slices divide "
                    "each node by (1 + Lambda(theta_i)) G2 beside K, G2 the Smith term of its "
@@ -199,6 +201,22 @@ static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_
         csv_error_line(f, "error", c->opts->report);
     if (tr && c->opts->report_reflection)
         csv_error_line(f, "error reflection", c->opts->report_reflection);
+    if (p->model == BTDF_MODEL_FULL && c->opts->report)
+        fprintf(f, "# error against: full, whose tally has the noise floor %.4g (the largest "
+                   "standard error of its multiply scattered energy over the range)\n",
+                c->opts->report->ms_noise);
+    /* Model full: each channel's tally, which the table adds to its slices. */
+    for (int ch = 0; p->model == BTDF_MODEL_FULL && ch < nch; ch++) {
+        char *txt = table_ms_write(t, ch);
+        if (!txt)
+            return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
+        for (char *q = txt; *q;) {
+            size_t n = strcspn(q, "\n");
+            fprintf(f, "# ms %d: %.*s\n", ch, (int)n, q);
+            q += n + (q[n] == '\n');
+        }
+        free(txt);
+    }
     /* The row count here and the end line make a cut or a lost row detectable. */
     size_t nrows = btdf_table_node_count(t) + (tr ? btdf_table_node_count(tr) : 0);
     fprintf(f, "# rows: %zu\n", nrows);
@@ -325,6 +343,7 @@ typedef struct csv_state {
     dvec rr, cc, vv;
     double cur_ti;
     long ln;
+    table_ms_text mst; /* model full: the tally's lines, per channel */
 } csv_state;
 
 static void csv_state_init(csv_state *s)
@@ -345,6 +364,7 @@ static btdf_status csv_comment(csv_state *s, const char *line, const char *path,
 {
     btdf_status st = BTDF_OK;
     char word[64];
+    int ms_ch = 0, ms_at = 0; /* "# ms C:" lines of model full */
     if (s->header && !strncmp(line, "# end:", 6)) {
         char tail;
         if (!s->have_rows)
@@ -383,6 +403,11 @@ static btdf_status csv_comment(csv_state *s, const char *line, const char *path,
         s->have_s = 1;
     } else if (sscanf(line, "# k0: %lf", &s->p.k0) == 1) {
         s->have_k0 = 1;
+    } else if (sscanf(line, "# ms %d:%n", &ms_ch, &ms_at) == 1 && ms_at > 0) {
+        char why[200];
+        const char *txt = line + ms_at + (line[ms_at] == ' ');
+        if (table_ms_text_add(&s->mst, ms_ch, txt, why, sizeof why) != BTDF_OK)
+            st = ferr(msg, msglen, path, s->ln, why);
     } else if (sscanf(line, "# model: %63s", word) == 1) {
         if (!btdf_model_parse(word, &s->p.model)) {
             char why[160];
@@ -427,7 +452,8 @@ static btdf_status csv_begin(csv_state *s, const char *path, char *msg, size_t m
         return ferr(msg, msglen, path, s->ln,
                     "a part column needs the '# rows' line before the node rows");
     char why[200];
-    if (btdf_table_new(s->kind, &s->p, &s->t, why, sizeof why) != BTDF_OK ||
+    btdf_params single = table_single_params(&s->p); /* full: smith's slices */
+    if (btdf_table_new(s->kind, &single, &s->t, why, sizeof why) != BTDF_OK ||
         btdf_table_set_rule(s->t, s->rule, why, sizeof why) != BTDF_OK) {
         return ferr(msg, msglen, path, s->ln, why);
     }
@@ -460,8 +486,8 @@ static btdf_status csv_row(csv_state *s, char *line, const char *path, char *msg
             st = flush_slice(s->t, s->cur_ti, &s->rr, &s->cc, &s->vv, path, s->ln, msg, msglen);
             char why[200];
             if (st == BTDF_OK &&
-                (btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &s->p, &s->tr, why, sizeof why) !=
-                     BTDF_OK ||
+                (btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &s->t->p, &s->tr, why,
+                                sizeof why) != BTDF_OK ||
                  btdf_table_set_rule(s->tr, s->rule_r, why, sizeof why) != BTDF_OK))
                 st = ferr(msg, msglen, path, s->ln, why);
             if (st != BTDF_OK)
@@ -529,6 +555,11 @@ static btdf_status csv_finish(csv_state *s, btdf_status st, const char *path, ch
         else
             s->tr = NULL; /* owned by t */
     }
+    if (st == BTDF_OK) { /* model full: its tally (after the reflection, which gets it too) */
+        char why[200];
+        if (table_full_from_text(s->t, s->p.model, &s->mst, why, sizeof why) != BTDF_OK)
+            st = ferr(msg, msglen, path, s->ln, why);
+    }
     return st;
 }
 
@@ -578,6 +609,7 @@ static btdf_status csv_read(const char *path, btdf_table **out, char *msg, size_
     if (st == BTDF_OK && ferror(f))
         st = ferr(msg, msglen, path, s.ln, "read error");
     st = csv_finish(&s, st, path, msg, msglen);
+    table_ms_text_free(&s.mst);
     btdf_table_free(s.tr);
     fclose(f);
     free(s.rr.v);
@@ -606,7 +638,7 @@ static btdf_status csv_stored(const char *path, FILE *out)
             continue;
         }
         if (!strncmp(line, "# provenance: ", 14) || !strncmp(line, "# error: ", 9) ||
-            !strncmp(line, "# error reflection: ", 20))
+            !strncmp(line, "# error reflection: ", 20) || !strncmp(line, "# error against: ", 17))
             fputs(line + 2, out);
     }
     fclose(f);

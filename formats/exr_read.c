@@ -454,16 +454,17 @@ btdf_status bexr_read(const char *path, btdf_table **out, char *msg, size_t msgl
         st = say(BTDF_EFORMAT, msg, msglen, ATTR_PREFIX "slices does not match the %d parts",
                  nparts);
     btdf_table *tr = NULL;
+    btdf_params single = table_single_params(&p); /* full: smith's slices, then its tally */
     if (st == BTDF_OK && both) {
         char why[200] = "";
-        st = btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &p, &tr, why, sizeof why);
+        st = btdf_table_new(BTDF_TABLE_FACET_REFLECTION, &single, &tr, why, sizeof why);
         if (st != BTDF_OK)
             st = say(st == BTDF_EINVAL ? BTDF_EFORMAT : st, msg, msglen,
                      "bad parameters in the file: %s", why);
     }
     if (st == BTDF_OK) {
         char why[200] = "";
-        st = btdf_table_new(kind, &p, &t, why, sizeof why);
+        st = btdf_table_new(kind, &single, &t, why, sizeof why);
         if (st != BTDF_OK)
             st = say(st == BTDF_EINVAL ? BTDF_EFORMAT : st, msg, msglen,
                      "bad parameters in the file: %s", why);
@@ -474,6 +475,25 @@ btdf_status bexr_read(const char *path, btdf_table **out, char *msg, size_t msgl
         st = read_rule(&r, ATTR_PREFIX "refl.rule", tr);
     for (int k = 0; k < nparts && st == BTDF_OK; k++)
         st = read_slice(&r, k < nslices ? t : tr, k, p.channels);
+    table_ms_text mst; /* model full: each channel's tally */
+    memset(&mst, 0, sizeof mst);
+    for (int ch = 0; st == BTDF_OK && ch < p.channels; ch++) {
+        const char *txt = NULL, *const *names = bexr_chan_names(p.channels);
+        int32_t len = 0;
+        char an[32];
+        snprintf(an, sizeof an, ATTR_PREFIX "ms.%s", names[ch]);
+        if (exr_attr_get_string(r.ctx, 0, an, &len, &txt) != EXR_ERR_SUCCESS || !txt ||
+            len <= 0)
+            continue;
+        mst.text[ch] = malloc((size_t)len + 1); /* EXR strings need not end in NUL */
+        if (!mst.text[ch]) {
+            st = say(BTDF_ENOMEM, msg, msglen, "out of memory");
+            break;
+        }
+        memcpy(mst.text[ch], txt, (size_t)len);
+        mst.text[ch][len] = '\0';
+        mst.len[ch] = (size_t)len;
+    }
     exr_finish(&r.ctx);
     if (st == BTDF_OK && tr) {
         char why[200] = "";
@@ -483,6 +503,12 @@ btdf_status bexr_read(const char *path, btdf_table **out, char *msg, size_t msgl
         else
             st = say(BTDF_EFORMAT, msg, msglen, "%s", why);
     }
+    if (st == BTDF_OK) {
+        char why[200] = "";
+        if (table_full_from_text(t, p.model, &mst, why, sizeof why) != BTDF_OK)
+            st = say(BTDF_EFORMAT, msg, msglen, "%s", why);
+    }
+    table_ms_text_free(&mst);
     btdf_table_free(tr);
     if (st != BTDF_OK) {
         btdf_table_free(t);
@@ -523,6 +549,11 @@ btdf_status bexr_stored(const char *path, FILE *out)
                          "mean %.4g; %.0f test angles, %.0f test points\n",
                     key[q], v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]);
     }
+    double noise;
+    if (exr_attr_get_double(ctx, 0, ATTR_PREFIX "report.msNoise", &noise) == EXR_ERR_SUCCESS)
+        fprintf(out, "error against: full, whose tally has the noise floor %.4g (the largest "
+                     "standard error of its multiply scattered energy over the range)\n",
+                noise);
     exr_finish(&ctx);
     return ferror(out) ? BTDF_EIO : BTDF_OK;
 }

@@ -174,6 +174,11 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
                                       : p->model == BTDF_MODEL_SMITH
                                       ? "rho, the BTDF of the facets of Xu & Sun 2008 with the "
                                         "height-correlated Smith term, no cosine factor"
+                                      : p->model == BTDF_MODEL_FULL
+                                      ? "rho of the model full: the slices' value (the smith "
+                                        "model's single scattering) plus the multiply scattered "
+                                        "part of the tally in " ATTR_PREFIX "ms.*, no cosine "
+                                        "factor"
                                       : "rho, the BTDF of Xu & Sun 2008 Eq. 25, no cosine factor");
     const btdf_table *tr = t->refl;
     if (rc == EXR_ERR_SUCCESS && tr)
@@ -194,6 +199,16 @@ static exr_result_t set_table_attrs(exr_context_t ctx, const btdf_table *t,
         rc = set_report(ctx, w->report, ATTR_PREFIX "report.");
     if (rc == EXR_ERR_SUCCESS && tr && w->report_reflection)
         rc = set_report(ctx, w->report_reflection, ATTR_PREFIX "refl.report.");
+    /* model full: what the errors are measured against, and each channel's tally */
+    if (rc == EXR_ERR_SUCCESS && p->model == BTDF_MODEL_FULL && w->report)
+        rc = exr_attr_set_double(ctx, 0, ATTR_PREFIX "report.msNoise", w->report->ms_noise);
+    for (int ch = 0; ch < p->channels && rc == EXR_ERR_SUCCESS && p->model == BTDF_MODEL_FULL;
+         ch++) {
+        char name[32], *txt = table_ms_write(t, ch);
+        snprintf(name, sizeof name, ATTR_PREFIX "ms.%s", names[ch]);
+        rc = txt ? exr_attr_set_string(ctx, 0, name, txt) : EXR_ERR_OUT_OF_MEMORY;
+        free(txt);
+    }
     return rc;
 }
 

@@ -940,8 +940,8 @@ static void check_screen(const btdf_scatfun *f, const btdf_params *p, btdf_side 
                          double tol)
 {
     double accept = 0.75 * tol, at = 0.15 * accept;
-    est_opts full = {1, 1, DBL_MIN, 0, 0, 0.0};
-    est_opts scr = {1, 1, DBL_MIN, 512, 32, at};
+    est_opts full = {1, 1, DBL_MIN, 0, 0, 0.0, NULL};
+    est_opts scr = {1, 1, DBL_MIN, 512, 32, at, NULL};
     btdf_report a, b;
     memset(&a, 0, sizeof a);
     memset(&b, 0, sizeof b);

@@ -350,6 +350,10 @@ int apply(cli *c, const opt_hit *h)
     case OPT_BINS:
     case OPT_MERGE:
     case OPT_PROFILE:
+    case OPT_BACK: /* the pane of simulate: tools/cmd_simulate_pane.c */
+    case OPT_THICKNESS:
+    case OPT_ABSORPTION:
+    case OPT_LIGHT:
     case OPT_HELP:
     case OPT_END: break;
     }
@@ -386,8 +390,8 @@ int check_params(const btdf_params *p)
 {
     char msg[256];
     if (p->model == BTDF_MODEL_FULL) { /* eval, albedo and polar check it themselves */
-        fail(EXIT_USAGE, "--model full: eval, albedo and polar take it; tables and files do "
-                         "not yet (give --model xu-sun or smith)");
+        fail(EXIT_USAGE, "--model full: eval, albedo, polar and the .csv and .exr tables take "
+                         "it; this output does not yet (give --model xu-sun or smith)");
         return 0;
     }
     if (btdf_params_check(p, msg, sizeof msg) != BTDF_OK) {

@@ -17,6 +17,7 @@
 #include <btdf/btdf_preview.h>
 #include <btdf/btdf_sim.h>
 
+#include "cmd_simulate_pane.h"
 #include "numparse.h"
 #include "options.h"
 #include "run.h"
@@ -151,6 +152,7 @@ static void fingerprint(const btdf_sim_opts *o, char *out, size_t len)
     PUT(" rays=%llu seed=%llu cells=%d tile=%d bins=%d,%d", (unsigned long long)o->rays,
         (unsigned long long)o->seed, o->cells_per_tau, o->tile_tau, o->theta_bins,
         o->theta_bins ? o->phi_bins : 0);
+    at += (size_t)simpane_fingerprint(o, out + at, at < len ? len - at : 0);
 #undef PUT
 }
 
@@ -241,6 +243,7 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
     jfield(f, "R_se", r, offsetof(btdf_sim_tally, R), 1);
     jfield(f, "T_se", r, offsetof(btdf_sim_tally, T), 1);
     jfield(f, "mean_hits", r, offsetof(btdf_sim_tally, mean_hits), 0);
+    simpane_json(f, o, r);
     fprintf(f, "  \"orders\": {");
     const char *keys[4] = {"T", "T_se", "R", "R_se"};
     for (int q = 0; q < 4; q++) {
@@ -265,8 +268,9 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
         jnum(f, eqR[k]);
     }
     fprintf(f, "%s},\n", r->count > 1 ? "]" : "");
-    if (o->profile) {
-        fputs("  \"profile\": \"1d\",\n  \"compare\": null,\n", f);
+    if (o->profile || o->pane) {
+        fputs(o->profile ? "  \"profile\": \"1d\",\n  \"compare\": null,\n"
+                         : "  \"compare\": null,\n", f);
         goto surface;
     }
     fputs("  \"compare\": {", f);
@@ -576,6 +580,13 @@ static int parse(const cmd_def *cmd, int argc, char **argv, btdf_sim_opts *o, do
             if ((code = parse_shard(s)) >= 0)
                 return code;
             break;
+        case OPT_BACK:
+        case OPT_THICKNESS:
+        case OPT_ABSORPTION:
+        case OPT_LIGHT:
+            if ((code = simpane_option(prog_name, hits[k].id, s, o)) >= 0)
+                return code;
+            break;
         default: break;
         }
     }
@@ -620,7 +631,9 @@ static void print_summary(const btdf_sim_opts *o, const btdf_sim_result *r, cons
                 t->T_order[0].mean, t->T_order[1].mean, t->T_order[2].mean, t->R.mean,
                 t->R.se, eqT[k], eqR[k], t->mean_hits.mean);
         const btdf_sim_cmp *a = &cmp[k * NCMP], *b = a + 1, *c = a + 2;
-        if (!o->profile)
+        if (o->pane)
+            simpane_summary(stderr, o, t);
+        else if (!o->profile)
             fprintf(stderr,
                 "  T against Eq. 25: e_T %.3g (noise %.2g), e_L1 %.3g (noise %.2g +- %.2g); "
                 "one hit (noise %.2g +- %.2g): Eq. 25 e_L1 %.3g chi2/dof %.3g, Smith e_L1 "
@@ -631,7 +644,8 @@ static void print_summary(const btdf_sim_opts *o, const btdf_sim_result *r, cons
     }
     fprintf(stderr, "surface: %d x %d points, rms height %.4f, rms slope %.4f (target %.4f), "
                     "correlation length %.4f; %llu rays in %.2f s\n",
-            r->surface.n, r->surface.n, r->surface.rms_height, r->surface.rms_slope,
+            r->surface.n, o->profile ? 1 : r->surface.n, r->surface.rms_height,
+            r->surface.rms_slope,
             (o->profile ? 1.4142135623730951 : 2.0) / o->smoothness, r->surface.corr_length,
             (unsigned long long)r->rays_traced, r->seconds);
 }
@@ -651,7 +665,7 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
     const char *report = NULL, *dist = NULL;
     int quiet = 0, nt = 45, np = 18; /* 2 degrees in theta_o, 10 in |phi| */
     int code = parse(cmd, argc, argv, &o, ti, &report, &quiet, &dist, &nt, &np);
-    if (code >= 0)
+    if (code >= 0 || (code = simpane_finish(prog_name, &o, dist, preview_path)) >= 0)
         return code;
     /* the histograms always: the comparison with the models (e_L1, chi2) needs them;
        a profile's directions are in the plane: |phi| 0 (backward) or 180 (forward) */
@@ -728,7 +742,7 @@ int cmd_simulate(const char *prog, int argc, char **argv, const char *prov)
             eqT[k] = 0.0;
         if (btdf_reflectance(&p, r->tally[k].theta_i, &eqR[k]) != BTDF_OK)
             eqR[k] = 0.0;
-        for (int q = 0; q < NCMP && !o.profile; q++)
+        for (int q = 0; q < NCMP && !o.profile && !o.pane; q++)
             if (btdf_sim_compare(r, k, cmp_def[q].part, cmp_def[q].one_hit, cmp_def[q].model,
                                  p.k0, &cmp[k * NCMP + (size_t)q], msg, sizeof msg) != BTDF_OK) {
                 free(eqT);

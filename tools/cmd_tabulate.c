@@ -101,6 +101,29 @@ static int tabulate_radiance(const cli *c, const char *prov)
                         c->best_effort, prov, &pr);
 }
 
+/* A table's parameters and model before the work: full has smith's parameters (the
+   builder makes its tally); the builder refuses smith's and full's reflection and
+   full's grid (ENOTSUP), and the analytic panels of a render take a btdf_params, which
+   full's tally is not. 0, or the exit status after the message. */
+static int check_table_model(const cli *c, const btdf_table_opts *o)
+{
+    btdf_params single = o->params;
+    if (single.model == BTDF_MODEL_FULL)
+        single.model = BTDF_MODEL_SMITH;
+    if (!check_params(&single))
+        return EXIT_USAGE;
+    char why[256];
+    if (btdf_table_opts_check(o, why, sizeof why) == BTDF_ENOTSUP)
+        return fail(EXIT_USAGE, "%s%s: %s", o->kind == BTDF_TABLE_GRID ? "--grid" : "--part ",
+                    o->kind == BTDF_TABLE_GRID ? "" : btdf_part_name(c->part), why);
+    for (int k = 0; k < c->npreview; k++)
+        if (o->params.model == BTDF_MODEL_FULL && c->previews[k].analytic)
+            return fail(EXIT_USAGE, "--preview render-analytic=%s: --model full: not "
+                        "available yet (render= and montage pictures of the table are)",
+                        c->previews[k].path);
+    return 0;
+}
+
 int cmd_tabulate(cli *c, const char *prov)
 {
     if (c->npos)
@@ -133,8 +156,9 @@ int cmd_tabulate(cli *c, const char *prov)
            n = 1.5, s = 3); the samplers and metadata carry the model already. */
         if (c->p.model != BTDF_MODEL_XU_SUN && fi.needs == BTDF_NEEDS_SERIES)
             return fail(EXIT_USAGE, "%s: --model %s: not available for this format yet "
-                        "(.csv, .exr and .xml take it; xu-sun is the model of every format)",
-                        out, btdf_model_name(c->p.model));
+                        "(%s take it; xu-sun is the model of every format)",
+                        out, btdf_model_name(c->p.model),
+                        c->p.model == BTDF_MODEL_FULL ? ".csv and .exr" : ".csv, .exr and .xml");
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)
@@ -161,13 +185,11 @@ int cmd_tabulate(cli *c, const char *prov)
     }
     if (!out && c->npreview == 0)
         return fail(EXIT_USAGE, "tabulate: no output: give -o FILE (or -o - for CSV on stdout)");
-    if (!check_params(&p))
-        return EXIT_USAGE;
-    char why[256];
     o.params = p;
     o.part = c->part;
-    if (btdf_table_opts_check(&o, why, sizeof why) == BTDF_ENOTSUP) /* smith's reflection */
-        return fail(EXIT_USAGE, "--part %s: %s", btdf_part_name(c->part), why);
+    int bad = check_table_model(c, &o);
+    if (bad)
+        return bad;
     if (out && strcmp(out, "-") && !fi.available)
         return fail(1, "%s: %s support was switched off at build time (-D%s=disabled)", out,
                     fi.name, fi.feature);

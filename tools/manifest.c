@@ -29,7 +29,7 @@
  *   ior = 1.5                  ; n, or R,G,B
  *   smoothness = 3
  *   k0 = 0.7                   ; optional
- *   model = smith              ; optional: xu-sun (the default) or smith, as --model
+ *   model = smith              ; optional: xu-sun (the default), smith or full, as --model
  *   theta_i = 0:90             ; optional incidence range, degrees
  *   tolerance = 1e-3           ; optional
  *   metric = l1                ; optional, l1 or max
@@ -237,10 +237,7 @@ static int on_entry(void *user, const char *section, const char *key, const char
             return 0;
     } else if (ki == K_MODEL) {
         if (!btdf_model_parse(value, &m->p.model))
-            return set_why(mf, "model '%.100s': must be xu-sun or smith%s", value, "");
-        if (m->p.model == BTDF_MODEL_FULL)
-            return set_why(mf, "model '%.100s': not available in this build (xu-sun or "
-                               "smith)%s", value, "");
+            return set_why(mf, "model '%.100s': must be xu-sun, smith or full%s", value, "");
     } else if (ki == K_TOL) {
         if (!num(mf, key, value, &m->tol))
             return 0;
@@ -607,7 +604,10 @@ int manifest_run(const manifest_opts *mo)
             free(mf);
             return 2;
         }
-        if (btdf_params_check(&m->p, why, sizeof why) != BTDF_OK) {
+        btdf_params single = m->p; /* full has smith's parameters (its tally is made */
+        if (single.model == BTDF_MODEL_FULL) /* by the table builder) */
+            single.model = BTDF_MODEL_SMITH;
+        if (btdf_params_check(&single, why, sizeof why) != BTDF_OK) {
             fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path, m->line,
                     m->name, why);
             free_manifest(mf);

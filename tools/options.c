@@ -24,7 +24,7 @@ const opt_def opt_table[] = {
      "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused;\n"
      "tabulate writes it to .csv and .exr, the files record it) or full (smith plus the\n"
      "light scattered two or more times, tallied once per material by a random walk:\n"
-     "R + T = 1; eval, albedo and polar only)"},
+     "R + T = 1; eval, albedo, polar and tabulate to .csv and .exr, which keep the tally)"},
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
      "evaluate a written table (.csv, .exr, .bsdf) instead of Eq. 25; the file gives\n"
      "the material, so --ior, --smoothness and --k0 do not apply"},
@@ -120,6 +120,16 @@ const opt_def opt_table[] = {
      "2d (default): the surface; 1d: the paper's setting, a profile z = h(x) and\n"
      "rays in its plane of incidence (distribution per radian of theta_o, no\n"
      "comparison with Eq. 25's 2D BTDF)"},
+    {OPT_BACK, "back", 0, "smooth|S", 0, SIM,
+     "simulate a pane instead of one interface: the surface above is its front face,\n"
+     "this its back face, flat (smooth) or rough with smoothness S (an independent\n"
+     "surface); R is on the lit side, T through, A absorbed (docs/simulation.md)"},
+    {OPT_THICKNESS, "thickness", 0, "MM", 0, SIM, "the pane's thickness in mm (default 4)"},
+    {OPT_ABSORPTION, "absorption", 0, "PER_MM", 0, SIM,
+     "the pane's absorption coefficient per mm, Beer-Lambert along each path inside\n"
+     "(default 0)"},
+    {OPT_LIGHT, "light", 0, "front|back", 0, SIM,
+     "the face of the pane the light arrives on (default front)"},
     {OPT_RAYS, "rays", 0, "K", 0, SIM, "rays per angle and channel (default 1000000)"},
     {OPT_SEED, "seed", 0, "X", 0, SIM, "seed of the surfaces and rays (default 1)"},
     {OPT_CELLS, "cells-per-tau", 0, "C", 0, SIM,
@@ -647,7 +657,8 @@ void opt_bash(FILE *f)
         {"estimate", "full fast none"},
         {"side", "enter leave both"},
         {"metric", "l1 max"},
-        {"model", "xu-sun smith"}};
+        {"model", "xu-sun smith full"},
+        {"light", "front back"}};
     fprintf(f, "    case $prev in\n");
     for (size_t k = 0; k < sizeof words / sizeof words[0]; k++)
         fprintf(f, "        --%s) COMPREPLY=($(compgen -W \"%s\" -- \"$cur\")); return ;;\n",
@@ -665,7 +676,7 @@ void opt_bash(FILE *f)
         }
     fprintf(f, ")\n            COMPREPLY=($(compgen -f -- \"$cur\")); return ;;\n");
     /* the models this build evaluates (btdf_params_check) */
-    fprintf(f, "        --model)\n            COMPREPLY=($(compgen -W \"xu-sun smith\" -- \"$cur\")); "
+    fprintf(f, "        --model)\n            COMPREPLY=($(compgen -W \"xu-sun smith full\" -- \"$cur\")); "
                "return ;;\n    esac\n");
     fprintf(f, "    local opts\n    case ${COMP_WORDS[1]} in\n");
     for (const cmd_def *c = cmd_table; c->name; c++) {

@@ -59,6 +59,10 @@ typedef enum {
     OPT_BINS,
     OPT_MERGE,
     OPT_PROFILE,
+    OPT_BACK,
+    OPT_THICKNESS,
+    OPT_ABSORPTION,
+    OPT_LIGHT,
     OPT_END
 } opt_id;
 

@@ -86,6 +86,9 @@ static void json_request(FILE *f, const btdf_table_opts *o, const btdf_report *r
             num(o->params.k0));
     /* the model the errors are measured against */
     fprintf(f, "  \"model\": \"%s\",\n", btdf_model_name(o->params.model));
+    /* full: the noise floor of the tally it is measured against (btdf_report) */
+    if (o->params.model == BTDF_MODEL_FULL)
+        fprintf(f, "  \"ms_noise\": %s,\n", num(r->ms_noise));
     fprintf(f, "  \"theta_i_deg\": [%s, %s],\n", num(o->ti_min * 180 / M_PI),
             num(o->ti_max * 180 / M_PI));
     fprintf(f, "  \"tolerance\": %s,\n  \"metric\": \"%s\",\n  \"met\": %s,\n",

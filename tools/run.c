@@ -634,6 +634,10 @@ static void table_line(char *line, size_t len, const run_table_req *rq, const bt
     else
         snprintf(emax, sizeof emax, "e_max n/a (%s < 0.01 at every test angle)",
                  refl ? "R" : "T");
+    char against[96]; /* full: and the noise floor of its tally */
+    snprintf(against, sizeof against, "%s", btdf_model_name(o->params.model));
+    if (o->params.model == BTDF_MODEL_FULL)
+        snprintf(against, sizeof against, "full (its tally's noise floor %.2g)", rk->ms_noise);
     snprintf(line, len,
              "%s: %s: %zu slices, %zu samples; tabulation %.3f s, estimate %.3f s "
              "(%s, %zu angles, %zu points%s); error against %s: e_L1 max %.3g mean %.3g; %s; "
@@ -642,7 +646,7 @@ static void table_line(char *line, size_t len, const run_table_req *rq, const bt
              o->estimate == BTDF_ESTIMATE_FAST ? "fast" : "full", rk->test_angles,
              rk->test_points,
              rk->estimate_in_build ? "; the builder's last check, inside the tabulation" : "",
-             btdf_model_name(o->params.model), rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max,
+             against, rk->e_l1_max, rk->e_l1_mean, emax, rk->e_t_max,
              rk->e_t_mean,
              (double)rk->peak_bytes / 1048576.0,
              o->kind == BTDF_TABLE_GRID ? ""

@@ -6,7 +6,10 @@
                    Eq. 25 and Smith over the same bins;
      fig9 F.png    the same for n = 1.4 (the paper's Fig. 9);
      orders F.png  T by order of scattering (1, 2, 3+) and in all, with errors, and
-                   Eq. 25's T, against s from 0.5 to 30, ti = 30, n = 1.5 and 1/1.5.
+                   Eq. 25's T, against s from 0.5 to 30, ti = 30, n = 1.5 and 1/1.5;
+     models F.png  T(ti) of n = 1.5 under xu-sun, smith and full (1 degree steps) beside
+                   the simulation (every 5 degrees, 0 to 85, with errors) for s = 0.5,
+                   1, 3, 10 (docs/model.md section 12).
    Options: --rays K (per case; default 400000 for the lobes, 100000 for the orders),
    --seed X (default 1), --threads T (default all). */
 #include <math.h>
@@ -24,7 +27,7 @@
 
 static int usage(void)
 {
-    fprintf(stderr, "usage: btdf-simfig fig8|fig9|orders OUT.png [--rays K] [--seed X] "
+    fprintf(stderr, "usage: btdf-simfig fig8|fig9|orders|models OUT.png [--rays K] [--seed X] "
                     "[--threads T]\n");
     return 2;
 }
@@ -148,6 +151,83 @@ static int orders(const char *path, unsigned long long rays, unsigned long long 
     return write(&ch, "Transmission by order of scattering against smoothness", path);
 }
 
+#define NM_SIM 18 /* simulated angles: 0 to 85 by 5 degrees */
+#define NM_CURVE 90 /* model curves: 0 to 89 by 1 degree */
+static int models(const char *path, unsigned long long rays, unsigned long long seed,
+                  int threads)
+{
+    const double ss[4] = {0.5, 1, 3, 10};
+    static double xs[NM_SIM], ys[4][NM_SIM], es[4][NM_SIM], xc[NM_CURVE], yc[4][3][NM_CURVE];
+    static btdf_chart_series se[4][4];
+    static char titles[4][64];
+    btdf_chart_panel cp[4];
+    static const char *labels[4] = {"simulation (all orders)", "xu-sun (Eq. 25)", "smith",
+                                    "full"};
+    double ti[NM_SIM];
+    for (int k = 0; k < NM_SIM; k++)
+        ti[k] = xs[k] = 5.0 * k;
+    for (int k = 0; k < NM_CURVE; k++)
+        xc[k] = k;
+    for (int q = 0; q < 4; q++) {
+        btdf_sim_opts o;
+        btdf_sim_opts_default(&o);
+        o.ior[0] = 1.5;
+        o.smoothness = ss[q];
+        double tr[NM_SIM];
+        for (int k = 0; k < NM_SIM; k++)
+            tr[k] = ti[k] * DEG;
+        o.theta_i = tr;
+        o.n_theta = NM_SIM;
+        o.rays = rays;
+        o.seed = seed;
+        o.threads = threads;
+        o.theta_bins = 0;
+        o.phi_bins = 1;
+        btdf_sim_result *r = NULL;
+        char msg[512];
+        if (btdf_sim_run(&o, &r, msg, sizeof msg) != BTDF_OK) {
+            fprintf(stderr, "btdf-simfig: s %g: %s\n", ss[q], msg);
+            return 1;
+        }
+        for (int k = 0; k < NM_SIM; k++) {
+            ys[q][k] = r->tally[k].T.mean;
+            es[q][k] = r->tally[k].T.se;
+        }
+        btdf_sim_result_free(r);
+        btdf_params p;
+        btdf_params_default(&p);
+        p.smoothness = ss[q];
+        btdf_full_opts fo;
+        btdf_full_opts_default(&fo);
+        fo.threads = threads;
+        btdf_full *f = NULL;
+        if (btdf_full_new(1.5, ss[q], &fo, &f, msg, sizeof msg) != BTDF_OK) {
+            fprintf(stderr, "btdf-simfig: s %g: %s\n", ss[q], msg);
+            return 1;
+        }
+        for (int k = 0; k < NM_CURVE; k++) {
+            btdf_full_albedos al;
+            p.model = BTDF_MODEL_XU_SUN;
+            if (btdf_transmittance(&p, xc[k] * DEG, &yc[q][0][k]) != BTDF_OK)
+                yc[q][0][k] = 0.0;
+            p.model = BTDF_MODEL_SMITH;
+            if (btdf_transmittance(&p, xc[k] * DEG, &yc[q][1][k]) != BTDF_OK)
+                yc[q][1][k] = 0.0;
+            yc[q][2][k] = btdf_full_albedo(f, xc[k] * DEG, &al) == BTDF_OK ? al.T : 0.0;
+        }
+        btdf_full_free(f);
+        se[q][0] = (btdf_chart_series){labels[0], NM_SIM, xs, ys[q], es[q], 1};
+        for (int m = 0; m < 3; m++)
+            se[q][m + 1] = (btdf_chart_series){labels[m + 1], NM_CURVE, xc, yc[q][m], NULL, 0};
+        snprintf(titles[q], sizeof titles[q], "(%c) s = %g", 'a' + q, ss[q]);
+        cp[q] = (btdf_chart_panel){titles[q], se[q], 4};
+    }
+    btdf_chart ch = {"\xce\xb8i (\xc2\xb0)", "T, fraction of the incident flux", 0, 0.0, 90.0,
+                     cp, 4, 2};
+    return write(&ch, "T(\xce\xb8i) of n = 1.5 under each model beside the simulated surface",
+                 path);
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 3)
@@ -186,5 +266,7 @@ int main(int argc, char **argv)
                      argv[2], rays ? rays : 400000, seed, threads);
     if (!strcmp(argv[1], "orders"))
         return orders(argv[2], rays ? rays : 100000, seed, threads);
+    if (!strcmp(argv[1], "models"))
+        return models(argv[2], rays ? rays : 200000, seed, threads);
     return usage();
 }

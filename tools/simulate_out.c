@@ -14,6 +14,7 @@
 #include <btdf/btdf_preview.h>
 #include <btdf/btdf_sim.h>
 
+#include "cmd_simulate_pane.h"
 #include "simchart.h"
 
 static int fail(int code, const char *fmt, ...)
@@ -68,6 +69,7 @@ int write_dist(const char *path, const char *prov, const btdf_sim_opts *o,
     }
     fputs("\n# smoothness: ", f);
     cnum(f, o->smoothness);
+    simpane_csv(f, o);
     if (profile_1d)
         fputs("\n# units: a 1D profile (rays in the plane of incidence): rho in 1/rad, no cosine "
               "factor, the fraction of the incident flux in the bin / cos_sr, cos_sr the "

@@ -536,6 +536,10 @@ typedef struct btdf_report {
                                     e_max_* are 0 when there are none */
     int estimate_in_build;       /* 1: this is the builder's own final check, whose time
                                     seconds_estimate is also inside seconds_build */
+    double ms_noise;             /* model full: the noise floor of the multiple-scattering
+                                    tally the errors are measured against, the largest
+                                    standard error of its energy (a fraction of the
+                                    incident flux) over the range; 0 for other models */
 } btdf_report;
 
 /* Estimates the errors of t over [ti_min, ti_max] at test_angles stratified incident

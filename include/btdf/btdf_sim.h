@@ -87,6 +87,22 @@ typedef struct btdf_sim_opts {
        thread, one call at a time; it must not call back into the simulator. */
     void (*progress)(void *ctx, uint64_t done, uint64_t total, double t_se);
     void *progress_ctx;
+    /* A pane (issue 33) instead of one interface: 0 (default) the interface above; 1
+       a slab of index ratio n = (pane index) / (outside index) between two faces a
+       thickness apart, air (index 1 relative) on both sides. The front face is the
+       rough surface of s above (or flat with front_flat); the back face is flat
+       (back_smoothness 0) or rough with its own s, an independent realisation. Light
+       arrives on the front (from_back 0) or on the back. Inside, a path between the
+       faces has length thickness_mm / |cos theta| and survives it with probability
+       exp(-absorption_per_mm * length) (Beer-Lambert); tallies: R on the lit side, T
+       on the other, A absorbed; orders count the hits on both faces. See
+       docs/simulation.md for the geometry (a fresh lateral offset at every face). */
+    int pane;
+    int front_flat;            /* pane only: a flat front face (the slab of the closed form) */
+    double back_smoothness;    /* pane only: 0 flat, else s of the back face */
+    double thickness_mm;       /* pane only: > 0 */
+    double absorption_per_mm;  /* pane only: >= 0 */
+    int from_back;             /* pane only: light arrives on the back face */
 } btdf_sim_opts;
 
 /* Defaults: n = 1.5, s = 3, one angle (none set: theta_i must be given), 1e6 rays,
@@ -115,6 +131,7 @@ typedef struct btdf_sim_tally {
     btdf_sim_est R_order[BTDF_SIM_ORDERS];   /* order 1, 2, 3+ */
     btdf_sim_est T_order[BTDF_SIM_ORDERS];
     btdf_sim_est mean_hits;                  /* surface hits per ray */
+    btdf_sim_est A;                          /* absorbed (a pane; 0 otherwise) */
     uint64_t rays;
     uint64_t lost;       /* rays stopped by the path limit (counted in neither R nor T) */
     uint64_t batches;
@@ -157,6 +174,7 @@ typedef struct btdf_sim_result {
     double *raw_stats;
     double smoothness; /* s of the run (for btdf_sim_compare) */
     int profile;       /* the run's opts.profile */
+    int pane;          /* the run's opts.pane */
 } btdf_sim_result;
 
 #define BTDF_SIM_RAW_Q 8
@@ -224,7 +242,7 @@ typedef struct btdf_sim_cmp {
 /* The comparison above of case k of r, part `part`, all orders (one_hit 0) or one hit
    (1), against model m (BTDF_MODEL_XU_SUN with k0, or BTDF_MODEL_SMITH) at the run's
    smoothness and the case's n. BTDF_EINVAL naming a bad case, part or model, or a
-   profile run (a 1D profile has no BTDF of a 2D surface to compare with). */
+   profile or pane run (neither has a BTDF of one 2D interface to compare with). */
 BTDF_API btdf_status btdf_sim_compare(const btdf_sim_result *r, size_t k, btdf_sim_part part,
                                       int one_hit, btdf_model m, double k0, btdf_sim_cmp *out,
                                       char *msg, size_t msglen);

@@ -8,6 +8,7 @@
 #include "core/core.h"
 #include "estimate/estimate.h"
 #include "model/facet.h"
+#include "model/full.h"
 #include "model/kernel.h"
 
 /* ------------------------------------------------------------------------- */
@@ -129,6 +130,7 @@ typedef struct est_job {
     int l1_only;          /* refinement follows e_L1 only */
     int nread;            /* readings fn returns per point (1 or 2; est_opts) */
     double stop_above;    /* est_opts */
+    btdf_full *const *ms; /* model full: each channel's tally (est_opts.full), or NULL */
 } est_job;
 
 /*
@@ -145,6 +147,17 @@ typedef struct est_job {
  * hemisphere, and R(ti) takes the place of T(ti).
  */
 #define U_EST 7.0 /* A's neglected tail holds exp(-49) of the facet distribution */
+
+/* Model full: the tally's multiply scattered part at the outgoing direction (|cos| mu,
+   cos phi), the same expression as the table's (table/full.c), so that where the two
+   agree it cancels to the bit; 0 for the other models and at grazing in or out (as
+   btdf_full_rho_deg). */
+static double est_ms(const est_job *j, int c, double ti, double cti, double mu, double cph)
+{
+    if (!j->ms || !(cti > 0.0) || !(fabs(mu) > 0.0))
+        return 0.0;
+    return full_ms(j->ms[c], j->refl, ti * (180.0 / M_PI), fabs(mu), cph);
+}
 
 void est_fold(btdf_ti_error *r, const est_acc *a, double T, int c)
 {
@@ -211,6 +224,8 @@ static void est_angle(void *arg, size_t k)
     memset(rr, 0, sizeof rr);
     for (int c = 0; c < p->channels; c++) {
         double n = p->ior[c], T = Tall[c];
+        if (j->ms) /* full's norm: smith's quadrature plus the tallied orders 2+ */
+            T += full_ms_energy(j->ms[c], refl, ti, NULL);
         est_acc acc[2] = {{0.0, 0.0, 0.0, 0.0}, {0.0, 0.0, 0.0, 0.0}};
         for (size_t iu = 0; iu < j->nu; iu++) {
             for (size_t ip = 0; ip < j->npsi; ip++) {
@@ -234,8 +249,9 @@ static void est_angle(void *arg, size_t k)
                 const double q[8] = {sti, cti, g.sin_to, g.cos_to, g.cos_phi, g.sin_phi, pf, to};
                 j->fn(obj, ti, q, tab);
                 /* g.rho is the model through the kernel, independent of the table */
+                double truth = g.rho + est_ms(j, c, ti, cti, g.cos_to, g.cos_phi);
                 for (int e = 0; e < nr; e++)
-                    est_add(&acc[e], tab[e * p->channels + c], g.rho,
+                    est_add(&acc[e], tab[e * p->channels + c], truth,
                             va > 0.0 ? va * vb / (va + vb) : 0.0);
             }
         }
@@ -274,6 +290,7 @@ static void est_angle(void *arg, size_t k)
                 const double q[8] = {sti, cti, sto, mu, cph, sph, ph,
                                      j->prep ? 0.0 : atan2(sto, mu)};
                 j->fn(obj, ti, q, tab);
+                rho += est_ms(j, c, ti, cti, mu, cph);
                 for (int e = 0; e < nr; e++)
                     est_add(&acc[e], tab[e * p->channels + c], rho, share);
             }
@@ -519,6 +536,13 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
     j.l1_only = opt ? opt->l1_only : 0;
     j.nread = opt && opt->nread == 2 ? 2 : 1;
     j.stop_above = opt ? opt->stop_above : 0.0;
+    j.ms = opt ? opt->full : NULL;
+    btdf_params single;
+    if (j.ms) { /* the kernel and the quadrature take full's single scattering, smith */
+        single = *p;
+        single.model = BTDF_MODEL_SMITH;
+        j.p = &single;
+    }
     j.ppa = points_per_angle;
     j.obj = obj;
     j.npsi = 32;
@@ -628,6 +652,16 @@ btdf_status btdf_estimate_knots_part(const btdf_params *p, int refl, double ti_m
 {
     return estimate_impl(p, refl, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
                          knots, nknots, fn, NULL, NULL, obj, NULL, NULL, r);
+}
+
+btdf_status btdf_estimate_knots_part_opt(const btdf_params *p, int refl, double ti_min,
+                                         double ti_max, size_t test_angles,
+                                         size_t points_per_angle, uint64_t seed, int threads,
+                                         const double *knots, size_t nknots, est_eval_fn fn,
+                                         const void *obj, const est_opts *opt, btdf_report *r)
+{
+    return estimate_impl(p, refl, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         knots, nknots, fn, NULL, NULL, obj, opt, NULL, r);
 }
 
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,

@@ -87,6 +87,10 @@ typedef struct est_opts {
        whose e_L1 reaches screen_at again with the full sets; 0: no screening. */
     size_t screen_ppa, screen_nuni;
     double screen_at;
+    /* Model full: each channel's tally; the truth is then smith's kernel plus the
+       tally's multiply scattered part at the same directions, and the norm T (or R) is
+       full's, smith's plus the tally's energy. NULL for the other models. */
+    btdf_full *const *full;
 } est_opts;
 
 /* btdf_estimate_knots with a per-angle context from prep (freed by done); fn then reads
@@ -119,5 +123,12 @@ btdf_status btdf_estimate_knots_part(const btdf_params *p, int refl, double ti_m
                                      size_t points_per_angle, uint64_t seed, int threads,
                                      const double *knots, size_t nknots, est_eval_fn fn,
                                      const void *obj, btdf_report *r);
+
+/* btdf_estimate_knots_part with options (NULL: as btdf_estimate_knots_part). */
+btdf_status btdf_estimate_knots_part_opt(const btdf_params *p, int refl, double ti_min,
+                                         double ti_max, size_t test_angles,
+                                         size_t points_per_angle, uint64_t seed, int threads,
+                                         const double *knots, size_t nknots, est_eval_fn fn,
+                                         const void *obj, const est_opts *opt, btdf_report *r);
 
 #endif

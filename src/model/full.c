@@ -12,6 +12,7 @@
 
 #include "btdf.h"
 #include "core/core.h"
+#include "model/full.h"
 #include "model/kernel.h"
 
 /* The ladder of incidence angles (degrees) the walk is tallied at; between two the
@@ -26,30 +27,8 @@ static const double full_base_deg[] = {0,  5,  10, 15, 20, 25, 30, 35, 40, 45, 5
    these offsets (degrees) about it, so the linear interpolation follows the bend. */
 static const double full_crit_off[] = {-6, -3, -1.5, -0.5, 0.5, 1.5, 3, 6};
 #define FULL_CRIT ((int)(sizeof full_crit_off / sizeof full_crit_off[0]))
-#define FULL_NODES_MAX (FULL_BASE + FULL_CRIT)
-#define FULL_K 8          /* polynomials in mu = |cos t| of degree 0..7 */
-#define FULL_M 5          /* cos(m phi), m = 0..4 */
-#define FULL_NB (FULL_K * FULL_M)
-#define FULL_CHUNK 8192u  /* paths per work item (its own random stream) */
-#define FULL_MAX_EVENTS 4096 /* a path longer than this is counted lost */
-
-struct btdf_full {
-    double n, s, alpha;
-    uint64_t paths, seed;
-    int nodes;
-    double node_deg[FULL_NODES_MAX]; /* increasing */
-    /* q_km(mu) = sum_j poly[m][k][j] mu^j: sin^m t q_km(mu), k < FULL_K, orthonormal for
-       the weight mu dmu on [0, 1] (so the series is smooth at the pole, where a term
-       cos(m phi) must vanish as sin^m t) */
-    double poly[FULL_M][FULL_K][FULL_K];
-    /* per node: the coefficients of the multiply scattered rho, [T/R][k][m] */
-    double coef[FULL_NODES_MAX][2][FULL_K][FULL_M];
-    /* per node: tallied energies, order 1 and 2+, T and R, and their standard errors */
-    double e1[FULL_NODES_MAX][2], ems[FULL_NODES_MAX][2], ems_se[FULL_NODES_MAX][2];
-    double lost[FULL_NODES_MAX];
-    double seconds;
-};
-
+/* full.h sizes the object for this ladder */
+typedef char full_ladder_fits[FULL_BASE + FULL_CRIT == FULL_NODES_MAX ? 1 : -1];
 /* ------------------------------------------------------------------------- */
 /* The Smith microsurface (uniform heights in [-1, 1]; the walk's result does not
    depend on the height distribution, Heitz et al. 2016 sec. 3)                */
@@ -315,7 +294,7 @@ static double full_moment(int e, int m)
 
 /* For each m, the polynomials q_km with sin^m t q_km orthonormal for mu dmu: Gram-
    Schmidt on the monomials with the exact inner products of full_moment. */
-static void full_make_poly(double poly[FULL_M][FULL_K][FULL_K])
+void full_make_poly(double poly[FULL_M][FULL_K][FULL_K])
 {
     for (int m = 0; m < FULL_M; m++)
         for (int k = 0; k < FULL_K; k++) {
@@ -455,7 +434,7 @@ BTDF_API void btdf_full_free(btdf_full *f)
 }
 
 /* The node interval of ti (degrees) and the weight of its upper end. */
-static int full_locate(const btdf_full *f, double ti_deg, double *w)
+int full_locate(const btdf_full *f, double ti_deg, double *w)
 {
     int k = 0;
     while (k < f->nodes - 2 && ti_deg > f->node_deg[k + 1])
@@ -467,7 +446,7 @@ static int full_locate(const btdf_full *f, double ti_deg, double *w)
 }
 
 /* The multiply scattered part alone, side h (0 T, 1 R), mu = |cos to|, in degrees. */
-static double full_ms(const btdf_full *f, int h, double ti_deg, double mu, double cphi)
+double full_ms(const btdf_full *f, int h, double ti_deg, double mu, double cphi)
 {
     double w;
     int k0 = full_locate(f, ti_deg, &w);

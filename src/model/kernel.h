@@ -72,10 +72,11 @@ static inline void rho_in_init_m(rho_in *a, double sin_ti, double cos_ti, double
 {
     switch (m) {
     case BTDF_MODEL_SMITH:
+    case BTDF_MODEL_FULL: /* its single scattering; tables add the rest (table.h) */
         a->sin_ti = sin_ti;
         a->cos_ti = cos_ti;
         a->pref = cos_ti > 0.0 ? s * s / (4.0 * M_PI) / cos_ti : 0.0; /* grazing: rho = 0 */
-        a->model = m;
+        a->model = BTDF_MODEL_SMITH;
         a->lam = bt_lambda_f(sin_ti, cos_ti > 0.0 ? cos_ti : 0.0, s);
         return;
     default: /* xu-sun (callers have refused the rest) */

@@ -48,7 +48,7 @@ static double quick_l1(const btdf_scatfun *f, const btdf_params *p, btdf_side si
        look for a larger worst, are left to the next measurement. stop_above is 0 for
        the last measurement (split NULL), which must be whole. */
     est_opts opt = {1, 1, split ? accept_at : 0.0, split ? QUICK_SCREEN_PPA : 0,
-                    split ? QUICK_SCREEN_NUNI : 0, SCREEN_SHARE * accept_at};
+                    split ? QUICK_SCREEN_NUNI : 0, SCREEN_SHARE * accept_at, NULL};
     if (sf_report_mis(f, p, side, 24, QUICK_PPA, seed, threads, &opt, memo, &r) !=
         BTDF_OK) {
         free(r.per_ti);

@@ -91,7 +91,7 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
                                   albedo_memo *memo, btdf_report *r)
 {
     mis_obj m = {f, (btdf_side)b, mode, both, NULL, NULL};
-    est_opts opt = {0, 1, 0.0, 0, 0, 0.0};
+    est_opts opt = {0, 1, 0.0, 0, 0, 0.0, NULL};
     if (o)
         opt = *o;
     opt.nread = both ? 2 : 1;

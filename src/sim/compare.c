@@ -68,6 +68,9 @@ BTDF_API btdf_status btdf_sim_compare(const btdf_sim_result *r, size_t k, btdf_s
     if (r->profile)
         return core_say(BTDF_EINVAL, msg, msglen,
                         "a 1D profile run: Eq. 25 and Smith describe 2D surfaces");
+    if (r->pane)
+        return core_say(BTDF_EINVAL, msg, msglen,
+                        "a pane run: Eq. 25 and Smith describe one interface");
     if (m != BTDF_MODEL_XU_SUN && m != BTDF_MODEL_SMITH)
         return core_say(BTDF_EINVAL, msg, msglen, "model %d: xu-sun (0) or smith (1)", (int)m);
     const btdf_sim_tally *t = &r->tally[k];
@@ -157,6 +160,9 @@ BTDF_API btdf_status btdf_sim_model_bins(const btdf_sim_result *r, size_t k, btd
     if (r->profile)
         return core_say(BTDF_EINVAL, msg, msglen,
                         "a 1D profile run: Eq. 25 and Smith describe 2D surfaces");
+    if (r->pane)
+        return core_say(BTDF_EINVAL, msg, msglen,
+                        "a pane run: Eq. 25 and Smith describe one interface");
     if (m != BTDF_MODEL_XU_SUN && m != BTDF_MODEL_SMITH)
         return core_say(BTDF_EINVAL, msg, msglen, "model %d: xu-sun (0) or smith (1)", (int)m);
     const btdf_sim_tally *t = &r->tally[k];

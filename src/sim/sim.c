@@ -20,11 +20,12 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "sim/pane.h"
 #include "sim/rng.h"
 #include "sim/surface.h"
 #include "sim/trace.h"
 
-enum { PURPOSE_SURFACE = 1, PURPOSE_RAYS = 0x1000 };
+enum { PURPOSE_SURFACE = 1, PURPOSE_BACK = 2, PURPOSE_RAYS = 0x1000 };
 
 /* Counts of one batch of one job. */
 enum { Q_R1, Q_R2, Q_R3, Q_T1, Q_T2, Q_T3, Q_LOST, Q_HITS, Q_COUNT };
@@ -103,7 +104,11 @@ static size_t hist_bins(const btdf_sim_opts *o)
 static double memory_needed(const btdf_sim_opts *o, uint64_t nb)
 {
     double n = (double)grid_n(o), jobs = (double)o->channels * (double)o->n_theta;
-    double tile = (double)sim_surface_bytes((int)n) + (double)sim_scratch_bytes((int)n);
+    int rows = o->profile ? 1 : (int)n; /* a profile is a strip */
+    double tile =
+        (double)sim_surface_bytes((int)n, rows) + (double)sim_scratch_bytes((int)n, rows);
+    if (o->pane && o->back_smoothness > 0.0)
+        tile += (double)sim_surface_bytes((int)n, rows); /* the back face's tile */
     double hist = (double)hist_bins(o) * 4.0;
     return (double)threads_of(o) * (tile + hist * jobs * 3.0 * 8.0) +
            jobs * (double)nb * Q_COUNT * 8.0 + jobs * hist * sizeof(btdf_sim_est);
@@ -164,6 +169,9 @@ BTDF_API btdf_status btdf_sim_opts_check(const btdf_sim_opts *o, char *msg, size
     if (o->profile != 0 && o->profile != 1)
         return say(BTDF_EINVAL, msg, msglen, "profile %d: must be 0 (2D surface) or 1 (1D "
                    "profile)", o->profile);
+    st = sim_pane_check(o, msg, msglen);
+    if (st != BTDF_OK)
+        return st;
     uint64_t bs = batch_size(o), nb = (o->rays + bs - 1) / bs;
     double need = memory_needed(o, nb);
     if (o->max_memory && need > (double)o->max_memory)
@@ -189,6 +197,7 @@ BTDF_API double btdf_sim_bin_solid_angle(int theta_bins, int phi_bins, int theta
 typedef struct run_ctx {
     const btdf_sim_opts *o;
     const sim_gen *gen;
+    const sim_gen *gen_back; /* a pane's rough back face, else NULL */
     uint64_t bs, nb;  /* batch size, batches per job */
     uint64_t b0, b1;  /* the batches this run traces or reduces: [b0, b1) */
     size_t jobs, bins;
@@ -222,7 +231,8 @@ static void bin_of(const run_ctx *rc, const double dir[3], size_t *bin)
     *bin = (size_t)it * (size_t)np + (size_t)ip;
 }
 
-static void run_batch(worker *wk, const sim_surface *surf, size_t job, uint64_t b)
+static void run_batch(worker *wk, const sim_surface *surf, const sim_surface *back, size_t job,
+                      uint64_t b)
 {
     run_ctx *rc = wk->rc;
     const btdf_sim_opts *o = rc->o;
@@ -235,14 +245,22 @@ static void run_batch(worker *wk, const sim_surface *surf, size_t job, uint64_t 
     uint64_t q[Q_COUNT] = {0};
     if (rc->bins)
         memset(wk->hcount, 0, 4 * rc->bins * sizeof *wk->hcount);
+    const sim_surface *front = o->front_flat ? NULL : surf;
+    sim_pane pane = {{o->from_back ? back : front, o->from_back ? front : back}, o->ior[ch],
+                     o->thickness_mm, o->absorption_per_mm};
     for (uint64_t r = 0; r < n; r++) {
         sim_path p;
-        sim_path_run(surf, o->ior[ch], o->theta_i[k], o->accel, o->profile, &rng, &p);
+        if (o->pane)
+            sim_pane_path(&pane, o->theta_i[k], o->accel, &rng, &p);
+        else
+            sim_path_run(surf, o->ior[ch], o->theta_i[k], o->accel, o->profile, &rng, &p);
         q[Q_HITS] += (uint64_t)p.hits;
         if (p.end == SIM_END_LOST) {
             q[Q_LOST]++;
             continue;
         }
+        if (p.end == SIM_END_ABSORBED) /* counted as rays - R - T - lost */
+            continue;
         int ord = p.hits < 3 ? p.hits - 1 : 2;
         ord = ord < 0 ? 0 : ord; /* every path hits at least once; kept in range */
         q[(p.end == SIM_END_R ? Q_R1 : Q_T1) + ord]++;
@@ -274,8 +292,9 @@ static void *worker_main(void *arg)
     worker *wk = arg;
     run_ctx *rc = wk->rc;
     sim_scratch *scr = sim_scratch_new(rc->gen);
-    sim_surface surf;
+    sim_surface surf, back;
     memset(&surf, 0, sizeof surf);
+    memset(&back, 0, sizeof back);
     uint64_t have = UINT64_MAX;
     if (!scr) {
         pthread_mutex_lock(&rc->mu);
@@ -306,6 +325,16 @@ static void *worker_main(void *arg)
                 pthread_mutex_unlock(&rc->mu);
                 break;
             }
+            if (rc->gen_back) {
+                sim_surface_free(&back);
+                if (sim_gen_surface(rc->gen_back, scr, sim_stream(rc->o->seed, PURPOSE_BACK, b),
+                                    &back, NULL) != 0) {
+                    pthread_mutex_lock(&rc->mu);
+                    rc->failed = 1;
+                    pthread_mutex_unlock(&rc->mu);
+                    break;
+                }
+            }
             have = b;
             /* every thread that makes realisation b measures the same numbers */
             if (measured) {
@@ -313,7 +342,7 @@ static void *worker_main(void *arg)
                 rc->stats_done[b] = 1;
             }
         }
-        run_batch(wk, &surf, job, b);
+        run_batch(wk, &surf, rc->gen_back ? &back : NULL, job, b);
         pthread_mutex_lock(&rc->mu);
         const uint64_t *q = rc->counts + (job * rc->nb + b) * Q_COUNT;
         uint64_t n = b * rc->bs + rc->bs > rc->o->rays ? rc->o->rays - b * rc->bs : rc->bs;
@@ -336,6 +365,7 @@ static void *worker_main(void *arg)
         pthread_mutex_unlock(&rc->mu);
     }
     sim_surface_free(&surf);
+    sim_surface_free(&back);
     sim_scratch_free(scr);
     return NULL;
 }
@@ -362,7 +392,7 @@ static btdf_sim_est ratio_est(double sc, double sc2, double scn, double sn, doub
 static void reduce_job(const run_ctx *rc, size_t job, btdf_sim_tally *t)
 {
     double s[Q_COUNT] = {0}, s2[Q_COUNT] = {0}, sn_[Q_COUNT] = {0}, sn = 0.0, sn2 = 0.0;
-    double sR = 0, sR2 = 0, sRn = 0, sT = 0, sT2 = 0, sTn = 0;
+    double sR = 0, sR2 = 0, sRn = 0, sT = 0, sT2 = 0, sTn = 0, sA = 0, sA2 = 0, sAn = 0;
     for (uint64_t b = rc->b0; b < rc->b1; b++) {
         const uint64_t *q = rc->counts + (job * rc->nb + b) * Q_COUNT;
         double n = (double)(b * rc->bs + rc->bs > rc->o->rays ? rc->o->rays - b * rc->bs
@@ -382,10 +412,15 @@ static void reduce_job(const run_ctx *rc, size_t job, btdf_sim_tally *t)
         sT += T;
         sT2 += T * T;
         sTn += T * n;
+        double A = n - R - T - (double)q[Q_LOST]; /* absorbed: exact in doubles below 2^53 */
+        sA += A;
+        sA2 += A * A;
+        sAn += A * n;
     }
     double B = (double)(rc->b1 - rc->b0);
     t->R = ratio_est(sR, sR2, sRn, sn, sn2, B);
     t->T = ratio_est(sT, sT2, sTn, sn, sn2, B);
+    t->A = ratio_est(sA, sA2, sAn, sn, sn2, B);
     for (int i = 0; i < BTDF_SIM_ORDERS; i++) {
         t->R_order[i] = ratio_est(s[Q_R1 + i], s2[Q_R1 + i], sn_[Q_R1 + i], sn, sn2, B);
         t->T_order[i] = ratio_est(s[Q_T1 + i], s2[Q_T1 + i], sn_[Q_T1 + i], sn, sn2, B);
@@ -470,13 +505,14 @@ static btdf_status finish(const run_ctx *rc, const uint64_t *hraw, btdf_sim_resu
         return BTDF_ENOMEM;
     res->smoothness = o->smoothness;
     res->profile = o->profile;
+    res->pane = o->pane;
     res->theta_bins = rc->bins ? o->theta_bins : 0;
     res->phi_bins = rc->bins ? o->phi_bins : 0;
     btdf_sim_surface *sf = &res->surface;
     sf->n = n;
     sf->dx = tau / o->cells_per_tau;
     sf->tile = sf->dx * n;
-    sf->tile_bytes = sim_surface_bytes(n);
+    sf->tile_bytes = sim_surface_bytes(n, o->profile ? 1 : n);
     double a = 0, b = 0, c = 0;
     int made = 0;
     for (uint64_t i = rc->b0; i < rc->b1; i++)
@@ -559,15 +595,20 @@ BTDF_API btdf_status btdf_sim_run(const btdf_sim_opts *o, btdf_sim_result **out,
     btdf_sim_result *res = calloc(1, sizeof *res);
     worker *wk = calloc((size_t)nthreads, sizeof *wk);
     pthread_t *th = calloc((size_t)nthreads, sizeof *th);
-    sim_gen *gen = sim_gen_new(n, tau / o->cells_per_tau, tau);
+    sim_gen *gen = o->profile ? sim_gen_new_profile(n, tau / o->cells_per_tau, tau)
+                              : sim_gen_new(n, tau / o->cells_per_tau, tau);
+    double tb = o->back_smoothness; /* the back face's tau */
+    sim_gen *gen_back = o->pane && tb > 0.0 ? sim_gen_new(n, tb / o->cells_per_tau, tb) : NULL;
     rc.gen = gen;
+    rc.gen_back = gen_back;
     rc.counts = calloc(rc.jobs * rc.nb * Q_COUNT, sizeof *rc.counts);
     rc.stats = calloc(rc.nb, sizeof *rc.stats);
     rc.stats_done = calloc(rc.nb, 1);
     int started = 0;
     uint64_t *hraw = NULL;
     st = BTDF_ENOMEM;
-    if (!res || !wk || !th || !gen || !rc.counts || !rc.stats || !rc.stats_done)
+    if (!res || !wk || !th || !gen || !rc.counts || !rc.stats || !rc.stats_done ||
+        (o->pane && tb > 0.0 && !gen_back))
         goto done;
     res->tally = calloc(rc.jobs, sizeof *res->tally);
     if (!res->tally)
@@ -625,6 +666,7 @@ done:
     free(rc.stats_done);
     free(hraw);
     sim_gen_free(gen);
+    sim_gen_free(gen_back);
     btdf_sim_result_free(res);
     return st;
 }

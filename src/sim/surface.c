@@ -18,10 +18,11 @@
 
 struct sim_gen {
     int n;
+    int rows;           /* n for a square tile, 1 for a profile's strip */
     double dx, tau;
-    double scale;       /* 1 / (n^2 sqrt(sum g^2)): FFTW's round trip is n^2 times */
-    double *real;       /* n * n, for planning and the filter */
-    fftw_complex *spec; /* n * (n/2 + 1) */
+    double scale;       /* 1 / (rows n sqrt(sum g^2)): FFTW's round trip is rows n times */
+    double *real;       /* rows * n, for planning and the filter */
+    fftw_complex *spec; /* rows * (n/2 + 1) */
     fftw_complex *kern; /* transform of g */
     fftw_plan fwd, inv;
 };
@@ -32,10 +33,10 @@ struct sim_scratch {
     fftw_complex *spec;
 };
 
-size_t sim_scratch_bytes(int n)
+size_t sim_scratch_bytes(int n, int rows)
 {
-    return (size_t)n * (size_t)n * sizeof(double) +
-           (size_t)n * (size_t)(n / 2 + 1) * sizeof(fftw_complex) + 64;
+    return (size_t)rows * (size_t)n * sizeof(double) +
+           (size_t)rows * (size_t)(n / 2 + 1) * sizeof(fftw_complex) + 64;
 }
 
 sim_scratch *sim_scratch_new(const sim_gen *g)
@@ -46,8 +47,8 @@ sim_scratch *sim_scratch_new(const sim_gen *g)
     int n = g->n;
     w->n = n;
     /* fftw_malloc: the alignment the plans were made for */
-    w->real = fftw_malloc((size_t)n * (size_t)n * sizeof *w->real);
-    w->spec = fftw_malloc((size_t)n * (size_t)(n / 2 + 1) * sizeof *w->spec);
+    w->real = fftw_malloc((size_t)g->rows * (size_t)n * sizeof *w->real);
+    w->spec = fftw_malloc((size_t)g->rows * (size_t)(n / 2 + 1) * sizeof *w->spec);
     if (!w->real || !w->spec) {
         sim_scratch_free(w);
         return NULL;
@@ -78,13 +79,14 @@ void sim_gen_free(sim_gen *g)
     free(g);
 }
 
-sim_gen *sim_gen_new(int n, double dx, double tau)
+static sim_gen *gen_new(int n, int rows, double dx, double tau)
 {
     sim_gen *g = calloc(1, sizeof *g);
     if (!g)
         return NULL;
-    size_t nr = (size_t)n * (size_t)n, nc = (size_t)n * (size_t)(n / 2 + 1);
+    size_t nr = (size_t)rows * (size_t)n, nc = (size_t)rows * (size_t)(n / 2 + 1);
     g->n = n;
+    g->rows = rows;
     g->dx = dx;
     g->tau = tau;
     g->real = fftw_malloc(nr * sizeof *g->real);
@@ -96,15 +98,20 @@ sim_gen *sim_gen_new(int n, double dx, double tau)
     }
     /* FFTW_ESTIMATE: the plan, and so every bit of the result, does not depend on
        timings of this machine. */
-    g->fwd = fftw_plan_dft_r2c_2d(n, n, g->real, g->spec, FFTW_ESTIMATE);
-    g->inv = fftw_plan_dft_c2r_2d(n, n, g->spec, g->real, FFTW_ESTIMATE);
+    if (rows == 1) {
+        g->fwd = fftw_plan_dft_r2c_1d(n, g->real, g->spec, FFTW_ESTIMATE);
+        g->inv = fftw_plan_dft_c2r_1d(n, g->spec, g->real, FFTW_ESTIMATE);
+    } else {
+        g->fwd = fftw_plan_dft_r2c_2d(n, n, g->real, g->spec, FFTW_ESTIMATE);
+        g->inv = fftw_plan_dft_c2r_2d(n, n, g->spec, g->real, FFTW_ESTIMATE);
+    }
     if (!g->fwd || !g->inv) {
         sim_gen_free(g);
         return NULL;
     }
     double sum2 = 0.0, a = 2.0 * dx * dx / (tau * tau);
-    for (int j = 0; j < n; j++) {
-        int dj = j < n - j ? j : n - j; /* periodic distance */
+    for (int j = 0; j < rows; j++) {
+        int dj = j < n - j ? j : n - j; /* periodic distance (0 for a strip) */
         for (int i = 0; i < n; i++) {
             int di = i < n - i ? i : n - i;
             double v = exp(-a * (double)(di * di + dj * dj));
@@ -119,9 +126,19 @@ sim_gen *sim_gen_new(int n, double dx, double tau)
     return g;
 }
 
-size_t sim_surface_bytes(int n)
+sim_gen *sim_gen_new(int n, double dx, double tau)
 {
-    size_t nn = (size_t)n * (size_t)n;
+    return gen_new(n, n, dx, tau);
+}
+
+sim_gen *sim_gen_new_profile(int n, double dx, double tau)
+{
+    return gen_new(n, 1, dx, tau);
+}
+
+size_t sim_surface_bytes(int n, int rows)
+{
+    size_t nn = (size_t)rows * (size_t)n;
     /* heights, cell bounds (two arrays), upper levels (at most a third more) */
     return nn * sizeof(double) * 3 + nn * sizeof(double) * 2 / 3 + 256;
 }
@@ -138,28 +155,30 @@ void sim_surface_free(sim_surface *s)
     memset(s, 0, sizeof *s);
 }
 
-/* Level 0 from the heights, level k from 4 x 4 units of level k - 1. */
+/* Level 0 from the heights, level k from 4 x 4 units of level k - 1; a strip has
+   level 0 only. */
 static int build_bounds(sim_surface *s)
 {
-    int n = s->n;
+    int n = s->n, rows = (int)s->ymask + 1;
     s->levels = 0;
     for (int k = 0; k < SIM_MAX_LEVELS; k++) {
         int sh = 2 * k, side = n >> sh;
-        if (k > 0 && side < 2)
+        if (k > 0 && (side < 2 || rows == 1))
             break;
-        size_t m = (size_t)side * (size_t)side;
+        int side_y = rows == 1 ? 1 : side;
+        size_t m = (size_t)side * (size_t)side_y;
         s->lo[k] = malloc(m * sizeof(double));
         s->hi[k] = malloc(m * sizeof(double));
         if (!s->lo[k] || !s->hi[k])
             return -1;
         s->shift[k] = sh;
         s->levels = k + 1;
-        for (int j = 0; j < side; j++)
+        for (int j = 0; j < side_y; j++)
             for (int i = 0; i < side; i++) {
                 double lo = INFINITY, hi = -INFINITY;
                 if (k == 0) {
                     for (int c = 0; c < 4; c++) {
-                        int ii = (i + (c & 1)) & (n - 1), jj = (j + (c >> 1)) & (n - 1);
+                        int ii = (i + (c & 1)) & (n - 1), jj = (j + (c >> 1)) & (rows - 1);
                         double v = s->h[(size_t)jj * (size_t)n + (size_t)ii];
                         lo = v < lo ? v : lo;
                         hi = v > hi ? v : hi;
@@ -182,15 +201,15 @@ static int build_bounds(sim_surface *s)
 
 static void measure(const sim_surface *s, int profile, sim_surface_stats *st)
 {
-    int n = s->n;
-    size_t nn = (size_t)n * (size_t)n;
+    int n = s->n, rows = (int)s->ymask + 1;
+    size_t nn = (size_t)rows * (size_t)n;
     double mean = 0.0, var = 0.0, sl = 0.0;
     for (size_t q = 0; q < nn; q++)
         mean += s->h[q];
     mean /= (double)nn;
-    for (int j = 0; j < n; j++)
+    for (int j = 0; j < rows; j++)
         for (int i = 0; i < n; i++) {
-            int i1 = (i + 1) & (n - 1), j1 = (j + 1) & (n - 1);
+            int i1 = (i + 1) & (n - 1), j1 = (j + 1) & (rows - 1);
             double h00 = s->h[(size_t)j * n + i], h10 = s->h[(size_t)j * n + i1];
             double h01 = s->h[(size_t)j1 * n + i], h11 = s->h[(size_t)j1 * n + i1];
             double d = h00 - mean;
@@ -205,7 +224,7 @@ static void measure(const sim_surface *s, int profile, sim_surface_stats *st)
     double c0 = var / (double)nn, prev = 1.0, len = NAN;
     for (int k = 1; k < n / 2; k++) {
         double acc = 0.0;
-        for (int j = 0; j < n; j++)
+        for (int j = 0; j < rows; j++)
             for (int i = 0; i < n; i++) {
                 double d = s->h[(size_t)j * n + i] - mean;
                 acc += d * (s->h[(size_t)j * n + ((i + k) & (n - 1))] - mean);
@@ -229,9 +248,10 @@ int sim_gen_surface(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surfa
                     sim_surface_stats *st)
 {
     int n = g->n;
-    size_t nn = (size_t)n * (size_t)n, nc = (size_t)n * (size_t)(n / 2 + 1);
+    size_t nn = (size_t)g->rows * (size_t)n, nc = (size_t)g->rows * (size_t)(n / 2 + 1);
     memset(s, 0, sizeof *s);
     s->n = n;
+    s->ymask = (uint64_t)g->rows - 1u;
     s->dx = g->dx;
     for (s->log2n = 0; (1 << s->log2n) < n; s->log2n++)
         ;
@@ -269,29 +289,11 @@ int sim_gen_surface(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surfa
 int sim_gen_profile(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surface *s,
                     sim_surface_stats *st)
 {
+    /* g is a strip's generator: the profile z = h(x), one row of cells whose row
+       j + 1 is row j itself (ymask 0), so the triangles slope along x only and a ray
+       in an x-z plane stays in it */
     if (sim_gen_surface(g, w, stream, s, NULL) != 0)
         return -1;
-    /* Row 0 of the field: along x its autocorrelation is C(x, 0) = exp(-x^2 / tau^2),
-       a Gaussian profile of the same sigma and tau. Every row becomes it, so the
-       triangles slope along x only and a ray in an x-z plane stays in it. */
-    int n = s->n;
-    s->hmin = INFINITY;
-    s->hmax = -INFINITY;
-    for (int i = 0; i < n; i++) {
-        s->hmin = s->h[i] < s->hmin ? s->h[i] : s->hmin;
-        s->hmax = s->h[i] > s->hmax ? s->h[i] : s->hmax;
-    }
-    for (int j = 1; j < n; j++)
-        memcpy(s->h + (size_t)j * (size_t)n, s->h, (size_t)n * sizeof *s->h);
-    for (int k = 0; k < SIM_MAX_LEVELS; k++) {
-        free(s->lo[k]);
-        free(s->hi[k]);
-        s->lo[k] = s->hi[k] = NULL;
-    }
-    if (build_bounds(s) != 0) {
-        sim_surface_free(s);
-        return -1;
-    }
     if (st)
         measure(s, 1, st);
     return 0;

@@ -35,7 +35,7 @@ typedef struct walk_ctx {
 static inline double hgt(const sim_surface *s, int64_t i, int64_t j)
 {
     uint64_t m = (uint64_t)s->n - 1u;
-    return s->h[(((uint64_t)j & m) << s->log2n) + ((uint64_t)i & m)];
+    return s->h[(((uint64_t)j & s->ymask) << s->log2n) + ((uint64_t)i & m)];
 }
 
 /* The part [a, b] of the ray over the plane z = z0 + pb u + pc v (local origin lu, lv). */
@@ -94,6 +94,7 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
     int sh = s->shift[k];
     double S = (double)((int64_t)1 << sh), invS = 1.0 / S; /* powers of two: exact */
     uint64_t side_m = ((uint64_t)s->n >> sh) - 1u;
+    uint64_t side_my = s->ymask >> sh; /* rows per unit - 1: side_m, or 0 on a strip */
     int sideshift = s->log2n - sh;
     int64_t i = (int64_t)floor((o[0] + ta * d[0]) * invS);
     int64_t j = (int64_t)floor((o[1] + ta * d[1]) * invS);
@@ -110,7 +111,7 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
         t1 = t1 < tb ? t1 : tb;
         t1 = t1 > t0 ? t1 : t0;
         double za = o[2] + t0 * d[2], zb = o[2] + t1 * d[2];
-        size_t q = (size_t)((((uint64_t)j & side_m) << sideshift) + ((uint64_t)i & side_m));
+        size_t q = (size_t)((((uint64_t)j & side_my) << sideshift) + ((uint64_t)i & side_m));
         /* Above, a hit needs the ray below the unit's highest point somewhere over it;
            below, above its lowest. */
         int near = w->sgn > 0.0 ? (za < zb ? za : zb) <= hi[q] : (za > zb ? za : zb) >= lo[q];
@@ -160,17 +161,44 @@ int sim_first_hit(const sim_surface *s, const double o[3], const double d[3], in
 /* Horizontal travel (in cells) after which a ray still inside the slab is stopped. */
 #define SIM_MAX_TRAVEL_TILES 64.0
 
-void sim_path_run(const sim_surface *s, double n, double ti, int accel, int in_plane,
-                  uint64_t *rng, sim_path *out)
+int sim_turn(double dp[3], const double nf[3], double eta, uint64_t *rng)
 {
-    double pin = 6.283185307179586 * sim_uniform(rng);
-    /* in the plane: azimuth 0 or pi exactly (sin pi is 1e-16, not 0) */
-    double cp = in_plane ? (pin < 3.141592653589793 ? 1.0 : -1.0) : cos(pin);
-    double sp = in_plane ? 0.0 : sin(pin), st = sin(ti), ct = cos(ti);
-    double dp[3] = {-st * cp, -st * sp, -ct};
-    double o[3] = {sim_uniform(rng) * s->n, sim_uniform(rng) * s->n, s->hmax};
+    double ci = -(dp[0] * nf[0] + dp[1] * nf[1] + dp[2] * nf[2]);
+    /* A crossing implies ci > 0; rounding of a grazing touch can give <= 0, which
+       is the grazing limit, total reflection. */
+    ci = ci > 0.0 ? (ci < 1.0 ? ci : 1.0) : 0.0;
+    double s2t = (1.0 - ci * ci) / (eta * eta); /* eta >= BTDF_IOR_MIN > 0 */
+    double R = 1.0, ctt = 0.0;
+    if (s2t < 1.0) {
+        ctt = sqrt(1.0 - s2t);
+        /* both denominators > 0: ci, ctt >= 0 and not both 0 (ci = 0 gives ctt > 0
+           only when eta > 1, and then eta ctt > 0) */
+        double rs = (ci - eta * ctt) / (ci + eta * ctt);
+        double rp = (eta * ci - ctt) / (eta * ci + ctt);
+        R = 0.5 * (rs * rs + rp * rp);
+    }
+    int crossed = 0;
+    if (sim_uniform(rng) < R) {
+        for (int a = 0; a < 3; a++)
+            dp[a] += 2.0 * ci * nf[a];
+    } else {
+        for (int a = 0; a < 3; a++)
+            dp[a] = dp[a] / eta + (ci / eta - ctt) * nf[a];
+        crossed = 1;
+    }
+    /* unit length again (it is 1 to rounding; the norm is near 1, never 0) */
+    double len = 1.0 / sqrt(dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]);
+    for (int a = 0; a < 3; a++)
+        dp[a] *= len;
+    return crossed;
+}
+
+int sim_walk(const sim_surface *s, double n, int above, int accel, uint64_t *rng, double dp[3],
+             int *hits_out)
+{
+    double o[3] = {sim_uniform(rng) * s->n, sim_uniform(rng) * s->n, above ? s->hmax : s->hmin};
     double N = (double)s->n, cap = SIM_MAX_TRAVEL_TILES * N;
-    int above = 1, hits = 0, end = SIM_END_LOST;
+    int hits = 0, end = SIM_END_LOST;
     for (;;) {
         double dg[3] = {dp[0] / s->dx, dp[1] / s->dx, dp[2]};
         double hl = sqrt(dg[0] * dg[0] + dg[1] * dg[1]);
@@ -198,36 +226,22 @@ void sim_path_run(const sim_surface *s, double n, double ti, int accel, int in_p
         /* The normal on the side the light comes from, and the index ratio it meets. */
         double sg = above ? 1.0 : -1.0;
         double nf[3] = {sg * nrm[0], sg * nrm[1], sg * nrm[2]};
-        double eta = above ? n : 1.0 / n;
-        double ci = -(dp[0] * nf[0] + dp[1] * nf[1] + dp[2] * nf[2]);
-        /* A crossing implies ci > 0; rounding of a grazing touch can give <= 0, which
-           is the grazing limit, total reflection. */
-        ci = ci > 0.0 ? (ci < 1.0 ? ci : 1.0) : 0.0;
-        double s2t = (1.0 - ci * ci) / (eta * eta); /* eta >= BTDF_IOR_MIN > 0 */
-        double R = 1.0, ctt = 0.0;
-        if (s2t < 1.0) {
-            ctt = sqrt(1.0 - s2t);
-            /* both denominators > 0: ci, ctt >= 0 and not both 0 (ci = 0 gives ctt > 0
-               only when eta > 1, and then eta ctt > 0) */
-            double rs = (ci - eta * ctt) / (ci + eta * ctt);
-            double rp = (eta * ci - ctt) / (eta * ci + ctt);
-            R = 0.5 * (rs * rs + rp * rp);
-        }
-        if (sim_uniform(rng) < R) {
-            for (int a = 0; a < 3; a++)
-                dp[a] += 2.0 * ci * nf[a];
-        } else {
-            for (int a = 0; a < 3; a++)
-                dp[a] = dp[a] / eta + (ci / eta - ctt) * nf[a];
+        if (sim_turn(dp, nf, above ? n : 1.0 / n, rng))
             above = !above;
-        }
-        /* unit length again (it is 1 to rounding; the norm is near 1, never 0) */
-        double len = 1.0 / sqrt(dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]);
-        for (int a = 0; a < 3; a++)
-            dp[a] *= len;
     }
-    out->end = end;
-    out->hits = hits;
+    *hits_out = hits;
+    return end;
+}
+
+void sim_path_run(const sim_surface *s, double n, double ti, int accel, int in_plane,
+                  uint64_t *rng, sim_path *out)
+{
+    double pin = 6.283185307179586 * sim_uniform(rng);
+    /* in the plane: azimuth 0 or pi exactly (sin pi is 1e-16, not 0) */
+    double cp = in_plane ? (pin < 3.141592653589793 ? 1.0 : -1.0) : cos(pin);
+    double sp = in_plane ? 0.0 : sin(pin), st = sin(ti), ct = cos(ti);
+    double dp[3] = {-st * cp, -st * sp, -ct};
+    out->end = sim_walk(s, n, 1, accel, rng, dp, &out->hits);
     /* Back to the frame whose incident azimuth is 0. */
     out->dir[0] = dp[0] * cp + dp[1] * sp;
     out->dir[1] = -dp[0] * sp + dp[1] * cp;

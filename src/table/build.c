@@ -34,7 +34,8 @@ BTDF_API void btdf_table_opts_default(btdf_table_opts *o)
 
 static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen)
 {
-    btdf_status st = btdf_params_check(&o->params, msg, msglen);
+    btdf_params single = table_single_params(&o->params); /* full: smith's parameters */
+    btdf_status st = btdf_params_check(&single, msg, msglen);
     if (st != BTDF_OK)
         return st;
     if (!(o->ti_min >= 0.0 && o->ti_min <= M_PI / 2))
@@ -89,10 +90,16 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
     /* Smith's reflection keeps a finite value up to the horizon (G2 ~ cos tr there) where
        the builder's nodes stop: measured at n = 1.5, s = 3, a 5e-2 table misses 8 % of
        R with e_max 1, so it is refused rather than written short */
-    if (o->params.model == BTDF_MODEL_SMITH && o->part != 0 && o->part != BTDF_PART_TRANSMISSION)
-        return core_say(BTDF_ENOTSUP, msg, msglen, "part %s with model smith: reflection tables "
+    if (o->params.model != BTDF_MODEL_XU_SUN && o->part != 0 &&
+        o->part != BTDF_PART_TRANSMISSION)
+        return core_say(BTDF_ENOTSUP, msg, msglen, "part %s with model %s: reflection tables "
                         "of this model are not available in this build (the transmission is)",
-                        btdf_part_name(o->part));
+                        btdf_part_name(o->part), btdf_model_name(o->params.model));
+    /* full's tally is added to facet slices at the query (table/full.c); a grid of
+       full would need the tally in its nodes and its own estimate */
+    if (o->params.model == BTDF_MODEL_FULL && o->kind == BTDF_TABLE_GRID)
+        return core_say(BTDF_ENOTSUP, msg, msglen, "kind grid with model full: not available "
+                        "in this build (facet tables take full)");
     return BTDF_OK;
 }
 
@@ -145,14 +152,25 @@ static void budget_text(char *msg, size_t msglen, int which, const btdf_table_op
                  e, e / tol, tol);
 }
 
-/* One part: the transmission, or the reflection when o->part is REFLECTION. */
-static btdf_status build_part(const btdf_table_opts *o, btdf_table **out, char *msg,
-                              size_t msglen)
+/* A table of the part's kind and o's parameters (for model full smith's: the passes
+   build smith's slices, and each is given the tally only to be checked, since the
+   builder's own measures compare the table with smith's kernel). */
+static btdf_status part_table_new(btdf_table_kind kind, const btdf_table_opts *o,
+                                  btdf_table **out, char *msg, size_t msglen)
+{
+    btdf_params single = table_single_params(&o->params);
+    return btdf_table_new(kind, &single, out, msg, msglen);
+}
+
+/* One part: the transmission, or the reflection when o->part is REFLECTION; ms: model
+   full's tally of each channel, else NULL. */
+static btdf_status build_part(const btdf_table_opts *o, const btdf_full *const *ms,
+                              btdf_table **out, char *msg, size_t msglen)
 {
     int refl = tb_opts_refl(o);
     btdf_table_kind kind = refl ? BTDF_TABLE_FACET_REFLECTION : o->kind;
     btdf_table *t;
-    btdf_status st = btdf_table_new(kind, &o->params, &t, msg, msglen);
+    btdf_status st = part_table_new(kind, o, &t, msg, msglen);
     if (st != BTDF_OK)
         return st;
     if (o->kind != BTDF_TABLE_GRID)
@@ -170,6 +188,8 @@ static btdf_status build_part(const btdf_table_opts *o, btdf_table **out, char *
        the table of 1/n over all incident angles, whose facet space is well conditioned
        (btdf.h, BTDF_TABLE_FACET_RECIPROCAL). Errors are still measured for n. */
     btdf_table_opts ob = *o;
+    ob.params = table_single_params(&o->params); /* full: the passes are smith's */
+    btdf_params pmat = ob.params; /* the material's, as the table keeps them */
     int recip = !refl; /* the reflection's facet space is well conditioned for every n */
     for (int c = 0; c < o->params.channels; c++)
         recip = recip && o->params.ior[c] < 1.0;
@@ -203,12 +223,15 @@ static btdf_status build_part(const btdf_table_opts *o, btdf_table **out, char *
         if (pass > 0 && o->progress) /* the check fell short: a tighter pass, at most 6 */
             o->progress(o->progress_user, "tighter pass", (size_t)pass, (size_t)(6 - pass));
         table_clear(t);
+        table_strip_full(t);
         t->kind = BTDF_TABLE_FACET;
         t->p = ob.params;
         budget_hit = 0;
         st = tb_facet_pass(&ob, fs, ft, t, &budget_hit, &evals);
         t->kind = recip ? BTDF_TABLE_FACET_RECIPROCAL : kind;
-        t->p = o->params;
+        t->p = pmat;
+        if (st == BTDF_OK && ms) /* full: checked, and kept, with its tally */
+            st = table_make_full(t, ms, msg, msglen);
         if (st != BTDF_OK)
             break;
         if (o->estimate == BTDF_ESTIMATE_NONE) { /* one pass, unchecked */
@@ -237,7 +260,7 @@ static btdf_status build_part(const btdf_table_opts *o, btdf_table **out, char *
         t->check_seed = BUILD_CHECK_SEED;
         if (e < best_e) {
             btdf_table *fresh = NULL;
-            st = btdf_table_new(kind, &o->params, &fresh, msg, msglen);
+            st = part_table_new(kind, o, &fresh, msg, msglen);
             if (st != BTDF_OK)
                 break;
             fresh->rule = refl ? BTDF_RULE_FRESNEL : BTDF_RULE_CHI;
@@ -284,6 +307,9 @@ static btdf_status build_part(const btdf_table_opts *o, btdf_table **out, char *
     return BTDF_OK;
 }
 
+static btdf_status build_parts(const btdf_table_opts *o, const btdf_full *const *ms,
+                               btdf_table **out, char *msg, size_t msglen);
+
 BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out, char *msg,
                                       size_t msglen)
 {
@@ -296,8 +322,34 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     btdf_status st = check_opts(o, msg, msglen);
     if (st != BTDF_OK)
         return st;
+    /* Model full: its tally, once for the material (each channel's), on o's threads;
+       the slices then follow smith and the table adds the tally (table/full.c). */
+    btdf_model_ctx *ctx = NULL;
+    const btdf_full *ms[BTDF_MAX_CHANNELS] = {NULL, NULL, NULL};
+    if (o->params.model == BTDF_MODEL_FULL) {
+        if (o->progress)
+            o->progress(o->progress_user, "multiple scattering tally", 0, 1);
+        btdf_full_opts fo;
+        btdf_full_opts_default(&fo);
+        fo.threads = o->threads;
+        st = btdf_model_ctx_new(&o->params, &fo, &ctx, msg, msglen);
+        if (st != BTDF_OK)
+            return st;
+        for (int c = 0; c < o->params.channels; c++)
+            ms[c] = btdf_model_ctx_full(ctx, c);
+    }
+    st = build_parts(o, ctx ? ms : NULL, out, msg, msglen);
+    btdf_model_ctx_free(ctx); /* the tables keep copies */
+    return st;
+}
+
+/* btdf_table_build after its checks and model full's tally. */
+static btdf_status build_parts(const btdf_table_opts *o, const btdf_full *const *ms,
+                               btdf_table **out, char *msg, size_t msglen)
+{
+    btdf_status st;
     if (o->part != BTDF_PART_BOTH)
-        return build_part(o, out, msg, msglen);
+        return build_part(o, ms, out, msg, msglen);
     /* Both parts: each its own table, refined to the tolerance with the whole budget;
        the reflection is attached to the transmission. A part the budget stopped makes
        the whole BTDF_EBUDGET, with that part's message. */
@@ -306,13 +358,13 @@ BTDF_API btdf_status btdf_table_build(const btdf_table_opts *o, btdf_table **out
     orr.part = BTDF_PART_REFLECTION;
     char mt[512] = "", mr[512] = "";
     btdf_table *t = NULL, *r = NULL;
-    btdf_status st_t = build_part(&ot, &t, mt, sizeof mt);
+    btdf_status st_t = build_part(&ot, ms, &t, mt, sizeof mt);
     if (st_t != BTDF_OK && st_t != BTDF_EBUDGET) {
         if (msg && msglen)
             snprintf(msg, msglen, "transmission: %s", mt);
         return st_t;
     }
-    btdf_status st_r = build_part(&orr, &r, mr, sizeof mr);
+    btdf_status st_r = build_part(&orr, ms, &r, mr, sizeof mr);
     if (st_r != BTDF_OK && st_r != BTDF_EBUDGET) {
         btdf_table_free(t);
         if (msg && msglen)

@@ -37,7 +37,8 @@ double model_dir_factor(const btdf_params *p, int refl, double sti, double cti, 
                         double cto)
 {
     switch (p->model) {
-    case BTDF_MODEL_SMITH: {
+    case BTDF_MODEL_SMITH:
+    case BTDF_MODEL_FULL: { /* its slices hold the single scattering, smith's */
         double s = p->smoothness, li = bt_lambda(sti, cti > 0.0 ? cti : 0.0, s);
         double lo = bt_lambda(sto, cto > 0.0 ? cto : 0.0, s);
         /* (1 + li) G2 = e^(ln(1 + li) - (-ln G2)): the exponent is <= 0 since
@@ -180,6 +181,7 @@ double incident_factor(const btdf_params *p, double ti)
         return 0.0; /* grazing incidence: the factor -> 0 faster than cos ti, rho is 0 */
     switch (p->model) {
     case BTDF_MODEL_SMITH:
+    case BTDF_MODEL_FULL: /* the slices are smith's */
         /* G2 does not factor; its incident part is close to Smith's G1(ti) =
            1/(1 + Lambda(ti)) (exact where Lambda(to) = 0), which carries the same fast
            fall near grazing as V(ti) does in Eq. 25 */
@@ -334,6 +336,8 @@ BTDF_API void btdf_table_free(btdf_table *t)
     free(t->s);
     btdf_report_clear(&t->check);
     btdf_table_free(t->refl);
+    for (int c = 0; c < BTDF_MAX_CHANNELS; c++)
+        btdf_full_free(t->ms[c]);
     free(t);
 }
 
@@ -520,6 +524,7 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
     int recip = t->kind == BTDF_TABLE_FACET_RECIPROCAL;
     for (int c = 0; c < nch; c++)
         out[c] = 0.0;
+    table_add_ms(t, ti, cti, cto, cph, out); /* model full: the tally's orders 2+ */
     if (recip) {
         /* rho(n; ti, to) = n^2 rho(1/n; pi - to, pi - ti): swap the two directions. */
         double a = sti, b = cti;
@@ -578,7 +583,7 @@ void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, doubl
             v = blend_ti(v, slice_interp_red(t, k + 1, x, y, c), w, g, g0, g1);
         v *= kq;
         /* reciprocity factor (1/n')^2 = n^2 with n' = 1/n the table's own index */
-        out[c] = recip ? t->p.ior[c] * t->p.ior[c] * v : v;
+        out[c] += recip ? t->p.ior[c] * t->p.ior[c] * v : v;
     }
 }
 
@@ -638,9 +643,13 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
             knots[k] = t->s[k].ti;
         nk = t->ns;
     }
-    btdf_status st = btdf_estimate_knots_part(&t->p, kind_is_reflection(t->kind), ti_min,
-                                              ti_max, test_angles, points_per_angle, seed,
-                                              threads, knots, nk, table_fn, t, r);
+    btdf_status st =
+        t->p.model == BTDF_MODEL_FULL
+            ? table_estimate_full(t, ti_min, ti_max, test_angles, points_per_angle, seed,
+                                  threads, knots, nk, table_fn, r)
+            : btdf_estimate_knots_part(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
+                                       test_angles, points_per_angle, seed, threads, knots,
+                                       nk, table_fn, t, r);
     free(knots);
     if (st == BTDF_OK) {
         r->slices = t->ns;

@@ -11,6 +11,7 @@
 #include "core/core.h"
 #include "estimate/estimate.h"
 #include "model/facet.h"
+#include "model/full.h"
 #include "model/kernel.h"
 
 typedef struct tslice {
@@ -40,6 +41,10 @@ struct btdf_table {
     struct btdf_table *refl;
     int attached; /* this reflection table is owned by a transmission table */
     size_t build_evals; /* points where the builder evaluated Eq. 25, over all its passes */
+    /* Model full: each channel's tally (owned). The slices hold the single scattering
+       (smith's, with its rules); evaluation adds the multiply scattered part of the
+       tally at the query's own directions (table/full.c). NULL for the other models. */
+    btdf_full *ms[BTDF_MAX_CHANNELS];
 };
 
 /* 1 for the kinds that hold rho_r (MODEL.md section 8). */
@@ -110,5 +115,47 @@ btdf_status table_push_slice(btdf_table *t, tslice *s);
 void table_eval_sc(const btdf_table *t, double ti, double sti, double cti, double sto,
                    double cto, double cph, double sph, double phi_fold, double to,
                    double *out);
+
+/* Model full (table/full.c). The params of a full table with model smith, for the
+   checks and objects that take a btdf_params (btdf_params_check refuses full). */
+btdf_params table_single_params(const btdf_params *p);
+/* Makes t, built or read with model smith, a table of model full: t->p.model becomes
+   full and t (and its reflection, if attached) keeps copies of ms[0..channels). Each
+   ms must be of t's index and smoothness: BTDF_EINVAL naming the difference;
+   BTDF_ENOMEM. */
+btdf_status table_make_full(btdf_table *t, const btdf_full *const *ms, char *msg,
+                            size_t msglen);
+/* Back to smith's slices alone: frees t's tally (the builder's passes compare the
+   table with smith's kernel). */
+void table_strip_full(btdf_table *t);
+/* Adds the multiply scattered part to out[] for a query of a full table (no-op for
+   other models): refl for a reflection table (to is then tr); the angles as
+   table_eval_sc takes them, before any swap. */
+void table_add_ms(const btdf_table *t, double ti, double cti, double cto, double cph,
+                  double *out);
+/* The estimate of a full table: against full (smith's kernel plus the same tally), T
+   of full in the norm, and the tally's noise floor in r->ms_noise. */
+btdf_status table_estimate_full(const btdf_table *t, double ti_min, double ti_max,
+                                size_t test_angles, size_t points_per_angle, uint64_t seed,
+                                int threads, const double *knots, size_t nk, est_eval_fn fn,
+                                btdf_report *r);
+
+/* The tally of channel c of a full table as text, as files keep it: "paths P seed S
+   nodes N" and one line per ladder node (full_node_text), each ending in a newline;
+   malloc'd, NULL for another model or out of memory. */
+char *table_ms_write(const btdf_table *t, int c);
+/* A reader's gathering of that text, line by line per channel. Zero it first. */
+typedef struct table_ms_text {
+    char *text[BTDF_MAX_CHANNELS];
+    size_t len[BTDF_MAX_CHANNELS];
+} table_ms_text;
+btdf_status table_ms_text_add(table_ms_text *m, int c, const char *line, char *msg,
+                              size_t msglen);
+void table_ms_text_free(table_ms_text *m);
+/* A table read (made with table_single_params) whose file says `model`: for full,
+   makes it full from m's text (BTDF_EFORMAT naming what is missing or wrong); for
+   another model m must be empty. */
+btdf_status table_full_from_text(btdf_table *t, btdf_model model, const table_ms_text *m,
+                                 char *msg, size_t msglen);
 
 #endif
