@@ -118,9 +118,8 @@ typedef struct est_job {
     est_eval_fn fn;       /* the evaluation under test */
     const void *obj;
     const double *ti;     /* the test angles */
-    est_angle_fn custom;  /* a whole per-angle estimate instead of est_angle's, or NULL */
-    size_t ppa;           /* points per angle of this pass (for custom) */
-    size_t nu, npsi, nmu, nphi; /* this pass's sets (custom: nmu = nphi) */
+    size_t ppa;           /* points per angle of this pass */
+    size_t nu, npsi, nmu, nphi; /* this pass's sets */
     uint64_t seed;
     btdf_ti_error *res;
     size_t *points;
@@ -201,12 +200,6 @@ static void est_angle(void *arg, size_t k)
     uint64_t bits;
     memcpy(&bits, &ti, sizeof bits);
     uint64_t rng = j->seed ^ (0xa0761d6478bd642full * (bits | 1u));
-    if (j->custom) {
-        memset(&j->res[k], 0, sizeof j->res[k]);
-        j->res[k].ti = ti;
-        j->points[k] = j->custom(j->obj, p, ti, rng, j->ppa, j->nmu, &j->res[k]);
-        return;
-    }
     double sti = sin(ti), cti = cos(ti), s = p->smoothness;
     rho_in a;
     rho_in_init_m(&a, sti, cti, s, p->k0, p->model); /* the truth is the table's model */
@@ -270,15 +263,18 @@ static void est_angle(void *arg, size_t k)
                 double sto = sqrt(fmax(0.0, 1.0 - mu * mu)), cph = cos(ph), sph = sin(ph);
                 double vb = fabs(mu) * dmu * dphi * 2.0, share = vb, tn, ps, ca_r;
                 pts++;
-                if (refl ? facet_of_r(sti, cti, sto, mu, cph, sph, &tn, &ps, &ca_r)
-                         : facet_of(n, sti, cti, sto, mu, cph, sph, &tn, &ps)) {
+                if (refl && facet_of_r(sti, cti, sto, mu, cph, sph, &tn, &ps, &ca_r)) {
+                    /* V_A of the mirroring facet from its own e_i.h (ca_r > 0 where
+                       e_i + e_r points up, mu > 0 here): cos tr 4 (e_i.h) d(omega_h) */
+                    double u = 0.5 * s * tan(tn); /* tn < pi/2: facet_of_r needs h_z > 0 */
+                    double va = u < U_EST ? mu * 4.0 * ca_r * a_measure(u, s, dw, dpsi) : 0.0;
+                    if (va > 0.0)
+                        share = va * vb / (va + vb);
+                } else if (!refl && facet_of(n, sti, cti, sto, mu, cph, sph, &tn, &ps)) {
                     double u = 0.5 * s * tan(tn);
                     facet_geo g;
                     if (u < U_EST &&
-                        (refl ? facet_eval_r(n, s, p->k0, &a, sin(tn), cos(tn), cos(ps),
-                                             sin(ps), &g)
-                              : facet_eval(n, s, p->k0, &a, sin(tn), cos(tn), cos(ps),
-                                           sin(ps), &g))) {
+                        facet_eval(n, s, p->k0, &a, sin(tn), cos(tn), cos(ps), sin(ps), &g)) {
                         double va = g.weight * a_measure(u, s, dw, dpsi);
                         share = va * vb / (va + vb);
                     }
@@ -518,11 +514,10 @@ static void est_summarise(btdf_ti_error *res, const size_t *points, size_t n, si
 static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
                                  double ti_max, size_t test_angles, size_t points_per_angle,
                                  uint64_t seed, int threads, const double *knots,
-                                 size_t nknots, est_eval_fn fn, est_angle_fn custom,
-                                 est_prep_fn prep, est_done_fn done, const void *obj,
+                                 size_t nknots, est_eval_fn fn, est_prep_fn prep, est_done_fn done, const void *obj,
                                  const est_opts *opt, albedo_memo *memo, btdf_report *r)
 {
-    if (!p || !(fn || custom) || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
+    if (!p || !fn || !r || !(ti_min >= 0.0 && ti_max <= M_PI / 2 && ti_min <= ti_max))
         return BTDF_EINVAL;
     if (test_angles == 0)
         test_angles = 48;
@@ -536,7 +531,6 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
     j.p = p;
     j.refl = refl;
     j.fn = fn;
-    j.custom = custom;
     j.prep = prep && done ? prep : NULL;
     j.done = done;
     j.l1_only = opt ? opt->l1_only : 0;
@@ -617,7 +611,7 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
                                 btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, fn, NULL, NULL, NULL, obj, NULL, memo, r);
+                         knots, nknots, fn, NULL, NULL, obj, NULL, memo, r);
 }
 
 btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double ti_max,
@@ -628,17 +622,18 @@ btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double
                                      albedo_memo *memo, btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, fn, NULL, prep, done, obj, opt, memo, r);
+                         knots, nknots, fn, prep, done, obj, opt, memo, r);
 }
 
-btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
-                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
-                                 int threads, const double *knots, size_t nknots,
-                                 est_angle_fn fn, const void *obj, const est_opts *opt,
-                                 albedo_memo *memo, btdf_report *r)
+btdf_status est_knots_prep_part(const btdf_params *p, int refl, double ti_min, double ti_max,
+                                size_t test_angles, size_t points_per_angle, uint64_t seed,
+                                int threads, const double *knots, size_t nknots,
+                                est_eval_fn fn, est_prep_fn prep, est_done_fn done,
+                                const void *obj, const est_opts *opt, albedo_memo *memo,
+                                btdf_report *r)
 {
-    return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, NULL, fn, NULL, NULL, obj, opt, memo, r);
+    return estimate_impl(p, refl, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
+                         knots, nknots, fn, prep, done, obj, opt, memo, r);
 }
 
 btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
@@ -646,7 +641,7 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
                              int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
     return estimate_impl(p, 0, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         NULL, 0, fn, NULL, NULL, NULL, obj, NULL, NULL, r);
+                         NULL, 0, fn, NULL, NULL, obj, NULL, NULL, r);
 }
 
 btdf_status btdf_estimate_knots_part(const btdf_params *p, int refl, double ti_min,
@@ -656,7 +651,7 @@ btdf_status btdf_estimate_knots_part(const btdf_params *p, int refl, double ti_m
                                      const void *obj, btdf_report *r)
 {
     return estimate_impl(p, refl, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, fn, NULL, NULL, NULL, obj, NULL, NULL, r);
+                         knots, nknots, fn, NULL, NULL, obj, NULL, NULL, r);
 }
 
 btdf_status btdf_estimate_knots_part_opt(const btdf_params *p, int refl, double ti_min,
@@ -666,7 +661,7 @@ btdf_status btdf_estimate_knots_part_opt(const btdf_params *p, int refl, double 
                                          const void *obj, const est_opts *opt, btdf_report *r)
 {
     return estimate_impl(p, refl, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         knots, nknots, fn, NULL, NULL, NULL, obj, opt, NULL, r);
+                         knots, nknots, fn, NULL, NULL, obj, opt, NULL, r);
 }
 
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
@@ -674,7 +669,7 @@ btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_ma
                                int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
     return estimate_impl(p, 1, ti_min, ti_max, test_angles, points_per_angle, seed, threads,
-                         NULL, 0, fn, NULL, NULL, NULL, obj, NULL, NULL, r);
+                         NULL, 0, fn, NULL, NULL, obj, NULL, NULL, r);
 }
 
 BTDF_API void btdf_report_clear(btdf_report *r)

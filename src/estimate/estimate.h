@@ -102,22 +102,14 @@ btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double
                                      est_done_fn done, const void *obj, const est_opts *opt,
                                      albedo_memo *memo, btdf_report *r);
 
-/* A whole per-angle estimate: fills res (zeroed, res->ti set) at incidence ti with p
-   the truth's parameters, from the generator state rng (fixed by ti and the seed),
-   with about points_per_angle lobe-following points and an nuni x nuni grid of
-   directions; res->T is the norm's quantity (T, or R for reflection). Returns the
-   points used. */
-typedef size_t (*est_angle_fn)(const void *obj, const btdf_params *p, double ti, uint64_t rng,
-                               size_t points_per_angle, size_t nuni, btdf_ti_error *res);
-
-/* The angle choice of btdf_estimate_knots (stratified, knot midpoints, refinement
-   rounds) around a per-angle estimate of the caller's (opt->nread is fn's business:
-   it fills res with the worse of its readings). */
-btdf_status btdf_estimate_angles(const btdf_params *p, double ti_min, double ti_max,
-                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
-                                 int threads, const double *knots, size_t nknots,
-                                 est_angle_fn fn, const void *obj, const est_opts *opt,
-                                 albedo_memo *memo, btdf_report *r);
+/* btdf_estimate_knots_prep for the transmission (refl = 0) or the reflection (refl = 1,
+   as btdf_estimate_fn_r: q holds tr for to). */
+btdf_status est_knots_prep_part(const btdf_params *p, int refl, double ti_min, double ti_max,
+                                size_t test_angles, size_t points_per_angle, uint64_t seed,
+                                int threads, const double *knots, size_t nknots,
+                                est_eval_fn fn, est_prep_fn prep, est_done_fn done,
+                                const void *obj, const est_opts *opt, albedo_memo *memo,
+                                btdf_report *r);
 /* The same for an evaluation of the reflection: against rho_r (MODEL.md section 8)
    over the upper hemisphere, relative to max(R(ti), 0.01); q holds tr for to. */
 btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
