@@ -32,18 +32,18 @@ int main(int argc, char **argv)
     char msg[300] = "";
     btdf_table *a = NULL, *b = NULL;
     double t0 = now();
-    btdf_status st = btdf_format_exr.read_path(argv[1], &a, msg, sizeof msg);
+    btdf_status st = fmt_exr.read_path(argv[1], &a, msg, sizeof msg);
     double t1 = now();
     if (st != BTDF_OK) {
         fprintf(stderr, "exr_check: %s\n", msg);
         return 1;
     }
     btdf_write_opts w = {NULL, NULL, NULL};
-    btdf_output_ctx c = {.table = a, .opts = &w};
-    st = btdf_format_exr.write_path(&c, argv[2], msg, sizeof msg);
+    fmt_output_ctx c = {.table = a, .opts = &w};
+    st = fmt_exr.write_path(&c, argv[2], msg, sizeof msg);
     double t2 = now();
     if (st == BTDF_OK)
-        st = btdf_format_exr.read_path(argv[2], &b, msg, sizeof msg);
+        st = fmt_exr.read_path(argv[2], &b, msg, sizeof msg);
     if (st != BTDF_OK) {
         fprintf(stderr, "exr_check: %s\n", msg);
         return 1;

@@ -454,7 +454,7 @@ BTDF_API btdf_status btdf_scatfun_info(const btdf_scatfun *f, FILE *out)
 /* The registry's entry                                                      */
 /* ------------------------------------------------------------------------- */
 
-static btdf_status bsdf_write(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
+static btdf_status bsdf_write(const fmt_output_ctx *c, FILE *f, const char *path, char *msg,
                               size_t msglen)
 {
     unsigned char *b = NULL;
@@ -462,8 +462,8 @@ static btdf_status bsdf_write(const btdf_output_ctx *c, FILE *f, const char *pat
     btdf_status st = btdf_scatfun_to_mem(c->scatfun, c->metadata_json, &b, &len, msg, msglen);
     if (st != BTDF_OK)
         return st;
-    btdf_bytes bytes = {b, len};
-    st = btdf_write_bytes(&bytes, f, path, msg, msglen);
+    io_bytes bytes = {b, len};
+    st = io_write_bytes(&bytes, f, path, msg, msglen);
     free(b);
     return st;
 }
@@ -473,7 +473,7 @@ static btdf_status bsdf_inspect(const btdf_input *in, FILE *out)
     return btdf_scatfun_info(in->scatfun, out);
 }
 
-const btdf_format_ops btdf_format_bsdf = {
+const fmt_ops fmt_bsdf = {
     .name = "SCATFUN",
     .ext = ".bsdf",
     .available = 1,

@@ -135,7 +135,7 @@ static void comment_text(FILE *f, const char *s)
     }
 }
 
-static btdf_status csv_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
+static btdf_status csv_write(const fmt_output_ctx *c, FILE *f, char *msg, size_t msglen)
 {
     const btdf_table *t = c->table;
     const btdf_table *tr = t->refl; /* a table holding both parts: its reflection */
@@ -703,7 +703,7 @@ static btdf_status csv_stored(const char *path, FILE *out)
     return ferror(out) ? BTDF_EIO : BTDF_OK;
 }
 
-const btdf_format_ops btdf_format_csv = {
+const fmt_ops fmt_csv = {
     .name = "CSV",
     .ext = ".csv",
     .available = 1,

@@ -37,7 +37,7 @@ const char *const *bexr_chan_names(int channels)
     return channels == 3 ? chan_rgb : chan_y;
 }
 
-const btdf_format_ops btdf_format_exr = {
+const fmt_ops fmt_exr = {
     .name = "OpenEXR",
     .ext = ".exr",
     .feature = "openexr",

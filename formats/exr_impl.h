@@ -40,7 +40,7 @@ const char *bexr_text(const exr_err *e, exr_result_t rc);
 const char *const *bexr_chan_names(int channels);
 
 /* exr_write.c */
-btdf_status bexr_write(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
+btdf_status bexr_write(const fmt_output_ctx *c, FILE *f, const char *path, char *msg,
                        size_t msglen);
 /* exr_read.c */
 btdf_status bexr_read(const char *path, btdf_table **out, char *msg, size_t msglen);

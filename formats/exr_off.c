@@ -2,5 +2,5 @@
 /* exr_off.c: the OpenEXR entry of a build without OpenEXR, so errors can name the switch. */
 #include "formats/formats.h"
 
-const btdf_format_ops btdf_format_exr = {
+const fmt_ops fmt_exr = {
     .name = "OpenEXR", .ext = ".exr", .feature = "openexr", .needs = BTDF_NEEDS_TABLE};

@@ -381,7 +381,7 @@ static int64_t exr_pwrite(exr_const_context_t ctx, void *user, const void *buf, 
     return (int64_t)done;
 }
 
-btdf_status bexr_write(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
+btdf_status bexr_write(const fmt_output_ctx *c, FILE *f, const char *path, char *msg,
                              size_t msglen)
 {
     int fd = fileno(f); /* nothing is buffered in f: OpenEXR writes through fd alone */

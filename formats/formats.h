@@ -8,7 +8,7 @@
 #include "btdf.h"
 
 /* What a writer gets: the object its format needs and what to record beside it. */
-typedef struct btdf_output_ctx {
+typedef struct fmt_output_ctx {
     const btdf_table *table;     /* BTDF_NEEDS_TABLE */
     const btdf_write_opts *opts; /* never NULL inside a writer */
     const btdf_scatfun *scatfun; /* BTDF_NEEDS_SERIES */
@@ -21,20 +21,20 @@ typedef struct btdf_output_ctx {
     const struct btdf_layer *layers; /* tables: more layers (btdf_output), may be NULL */
     size_t nlayers;
     const char *value;           /* tables: what the values are; NULL: Eq. 25's */
-} btdf_output_ctx;
+} fmt_output_ctx;
 
-typedef struct btdf_format_ops {
+typedef struct fmt_ops {
     const char *name;    /* "CSV" */
     const char *ext;     /* ".csv" */
     const char *feature; /* the Meson feature that provides it, NULL if always built */
     int available;       /* 0 when its feature was switched off at build time */
     btdf_needs needs;    /* what the writer is made from */
     /* Writes to a stream (formats that can go to standard output), or NULL. */
-    btdf_status (*write_stream)(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen);
+    btdf_status (*write_stream)(const fmt_output_ctx *c, FILE *f, char *msg, size_t msglen);
     /* Writes a file that cannot go to a pipe (it seeks, or is made whole in memory): f is
        a new empty file opened safely under a temporary name, path that name for
        messages; the caller closes f and renames. Never opens path itself. */
-    btdf_status (*write_path)(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
+    btdf_status (*write_path)(const fmt_output_ctx *c, FILE *f, const char *path, char *msg,
                               size_t msglen);
     /* Reads a table back (BTDF_NEEDS_TABLE), or NULL. */
     btdf_status (*read_path)(const char *path, btdf_table **out, char *msg, size_t msglen);
@@ -47,21 +47,21 @@ typedef struct btdf_format_ops {
     btdf_status (*stored)(const char *path, FILE *out);
     /* Prints what was read; NULL: the registry's table summary. */
     btdf_status (*inspect)(const btdf_input *in, FILE *out);
-} btdf_format_ops;
+} fmt_ops;
 
 /* The format a path's extension names (case-insensitive), or NULL if none. */
-const btdf_format_ops *btdf_format_for_path(const char *path);
+const fmt_ops *fmt_for_path(const char *path);
 
 /* Writes path through write_path/write_stream under a temporary name and renames
    (src/tmpfile.h); on failure nothing is left at path. */
-btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c,
+btdf_status fmt_write_atomic(const fmt_ops *f, const fmt_output_ctx *c,
                               const char *path, char *msg, size_t msglen);
 
 /* Format entries, each defined in its own file. */
-extern const btdf_format_ops btdf_format_csv;
-extern const btdf_format_ops btdf_format_exr;
-extern const btdf_format_ops btdf_format_bsdf;
-extern const btdf_format_ops btdf_format_png;
-extern const btdf_format_ops btdf_format_xml;
+extern const fmt_ops fmt_csv;
+extern const fmt_ops fmt_exr;
+extern const fmt_ops fmt_bsdf;
+extern const fmt_ops fmt_png;
+extern const fmt_ops fmt_xml;
 
 #endif

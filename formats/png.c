@@ -76,7 +76,7 @@ static int encode(FILE *f, const unsigned char *rgb, int width, int height,
 }
 
 /* Writes the picture of c (drawn by the registry) to path. */
-static btdf_status png_write(const btdf_output_ctx *c, FILE *f, const char *path, char *msg,
+static btdf_status png_write(const fmt_output_ctx *c, FILE *f, const char *path, char *msg,
                              size_t msglen)
 {
     const unsigned char *rgb = c->rgb;
@@ -103,7 +103,7 @@ static btdf_status png_write(const btdf_output_ctx *c, FILE *f, const char *path
     return BTDF_OK;
 }
 
-const btdf_format_ops btdf_format_png = {
+const fmt_ops fmt_png = {
     .name = "PNG",
     .ext = ".png",
     .feature = "png",

@@ -16,9 +16,9 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-static const btdf_format_ops *const all_formats[] = {&btdf_format_csv, &btdf_format_exr,
-                                                     &btdf_format_bsdf, &btdf_format_png,
-                                                     &btdf_format_xml};
+static const fmt_ops *const all_formats[] = {&fmt_csv, &fmt_exr,
+                                                     &fmt_bsdf, &fmt_png,
+                                                     &fmt_xml};
 #define NFORMATS (sizeof all_formats / sizeof all_formats[0])
 
 static int ext_is(const char *path, const char *ext)
@@ -32,7 +32,7 @@ static int ext_is(const char *path, const char *ext)
     return 1;
 }
 
-const btdf_format_ops *btdf_format_for_path(const char *path)
+const fmt_ops *fmt_for_path(const char *path)
 {
     if (!path)
         return NULL;
@@ -44,7 +44,7 @@ const btdf_format_ops *btdf_format_for_path(const char *path)
 
 BTDF_API int btdf_format_find(const char *path, btdf_format_info *info)
 {
-    const btdf_format_ops *f = btdf_format_for_path(path);
+    const fmt_ops *f = fmt_for_path(path);
     if (!f)
         return 0;
     if (info) {
@@ -70,11 +70,11 @@ BTDF_API int btdf_format_available(const char *ext)
         return 0;
     char buf[32];
     snprintf(buf, sizeof buf, "%s%s", ext[0] == '.' ? "" : ".", ext);
-    const btdf_format_ops *f = btdf_format_for_path(buf);
+    const fmt_ops *f = fmt_for_path(buf);
     return f && f->available;
 }
 
-static btdf_status switched_off(const btdf_format_ops *f, char *msg, size_t msglen)
+static btdf_status switched_off(const fmt_ops *f, char *msg, size_t msglen)
 {
     return core_say(BTDF_ENOTSUP, msg, msglen,
                "%s support was switched off at build time (-D%s=disabled)", f->name,
@@ -86,8 +86,8 @@ static btdf_status switched_off(const btdf_format_ops *f, char *msg, size_t msgl
 /* ------------------------------------------------------------------------- */
 
 typedef struct reg_ctx {
-    const btdf_format_ops *f;
-    const btdf_output_ctx *c;
+    const fmt_ops *f;
+    const fmt_output_ctx *c;
 } reg_ctx;
 
 static btdf_status reg_write(void *ctx, FILE *fp, const char *tmp, char *msg, size_t msglen)
@@ -98,13 +98,13 @@ static btdf_status reg_write(void *ctx, FILE *fp, const char *tmp, char *msg, si
     return r->f->write_stream(r->c, fp, msg, msglen);
 }
 
-btdf_status btdf_write_atomic(const btdf_format_ops *f, const btdf_output_ctx *c,
+btdf_status fmt_write_atomic(const fmt_ops *f, const fmt_output_ctx *c,
                               const char *path, char *msg, size_t msglen)
 {
     if (!f->available)
         return switched_off(f, msg, msglen);
     reg_ctx r = {f, c};
-    return btdf_write_file_atomic(path, f->ext, reg_write, &r, msg, msglen);
+    return io_write_file_atomic(path, f->ext, reg_write, &r, msg, msglen);
 }
 
 /* The text each picture kind stores in its PNG (indexed by btdf_preview_kind). */
@@ -117,7 +117,7 @@ static const char *picture_description(btdf_preview_kind kind)
 }
 
 /* Draws the picture, then writes it like any other output. */
-static btdf_status write_picture(const btdf_format_ops *f, btdf_output_ctx *c,
+static btdf_status write_picture(const fmt_ops *f, fmt_output_ctx *c,
                                  const btdf_preview_opts *po, const char *path, char *msg,
                                  size_t msglen)
 {
@@ -127,7 +127,7 @@ static btdf_status write_picture(const btdf_format_ops *f, btdf_output_ctx *c,
         return st;
     c->rgb = rgb;
     c->description = picture_description(po->kind);
-    st = btdf_write_atomic(f, c, path, msg, msglen);
+    st = fmt_write_atomic(f, c, path, msg, msglen);
     btdf_preview_free(rgb);
     return st;
 }
@@ -138,14 +138,14 @@ BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char 
     if (!what || !path || !*path)
         return core_say(BTDF_EINVAL, msg, msglen, "no object or no file name%s%s", "", "");
     int to_stdout = !strcmp(path, "-");
-    const btdf_format_ops *f = to_stdout ? &btdf_format_csv : btdf_format_for_path(path);
+    const fmt_ops *f = to_stdout ? &fmt_csv : fmt_for_path(path);
     if (!f)
         return core_say(BTDF_EINVAL, msg, msglen, "unknown format of '%s': use %s", path,
                    btdf_format_list());
     if (!f->available)
         return switched_off(f, msg, msglen);
     btdf_write_opts none = {NULL, NULL, NULL};
-    btdf_output_ctx c;
+    fmt_output_ctx c;
     memset(&c, 0, sizeof c);
     c.opts = what->opts ? what->opts : &none;
     switch (f->needs) {
@@ -169,7 +169,7 @@ BTDF_API btdf_status btdf_write(const btdf_output *what, const char *path, char 
             st = core_say(BTDF_EIO, msg, msglen, "standard output: %s%s", strerror(errno), "");
         return st;
     }
-    return btdf_write_atomic(f, &c, path, msg, msglen);
+    return fmt_write_atomic(f, &c, path, msg, msglen);
 }
 
 BTDF_API btdf_status btdf_write_table_layers(const btdf_table *t, const btdf_layer *layers,
@@ -179,23 +179,23 @@ BTDF_API btdf_status btdf_write_table_layers(const btdf_table *t, const btdf_lay
 {
     if (!t || !path)
         return core_say(BTDF_EINVAL, msg, msglen, "no table or no path");
-    const btdf_format_ops *f = btdf_format_for_path(path);
+    const fmt_ops *f = fmt_for_path(path);
     if (!f || f->needs != BTDF_NEEDS_TABLE)
         return core_say(BTDF_EINVAL, msg, msglen, "'%s': a table with layers is written as .exr",
                         path);
     if (!f->available)
         return switched_off(f, msg, msglen);
-    if (nlayers && f != &btdf_format_exr)
+    if (nlayers && f != &fmt_exr)
         return core_say(BTDF_EINVAL, msg, msglen, "'%s': only .exr holds more layers", path);
     btdf_write_opts none = {NULL, NULL, NULL};
-    btdf_output_ctx c;
+    fmt_output_ctx c;
     memset(&c, 0, sizeof c);
     c.opts = w ? w : &none;
     c.table = t;
     c.layers = layers;
     c.nlayers = layers ? nlayers : 0;
     c.value = value;
-    return btdf_write_atomic(f, &c, path, msg, msglen);
+    return fmt_write_atomic(f, &c, path, msg, msglen);
 }
 
 BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
@@ -203,7 +203,7 @@ BTDF_API btdf_status btdf_table_write(const btdf_table *t, const char *path,
 {
     if (!t || !path)
         return BTDF_EINVAL;
-    const btdf_format_ops *f = btdf_format_for_path(path);
+    const fmt_ops *f = fmt_for_path(path);
     if (!f || f->needs != BTDF_NEEDS_TABLE)
         return core_say(BTDF_EINVAL, msg, msglen, "unknown table format of '%s': use .csv or .exr%s",
                    path, "");
@@ -216,13 +216,13 @@ BTDF_API btdf_status btdf_preview_write(const btdf_preview_opts *o, const char *
 {
     if (!path || !*path)
         return core_say(BTDF_EINVAL, msg, msglen, "no file name%s%s", "", "");
-    if (!btdf_format_png.available)
-        return switched_off(&btdf_format_png, msg, msglen);
-    btdf_output_ctx c;
+    if (!fmt_png.available)
+        return switched_off(&fmt_png, msg, msglen);
+    fmt_output_ctx c;
     memset(&c, 0, sizeof c);
     btdf_write_opts none = {NULL, NULL, NULL};
     c.opts = &none;
-    return write_picture(&btdf_format_png, &c, o, path, msg, msglen);
+    return write_picture(&fmt_png, &c, o, path, msg, msglen);
 }
 
 BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
@@ -230,14 +230,14 @@ BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
 {
     if (!f || !path || !*path)
         return core_say(BTDF_EINVAL, msg, msglen, "file or path missing%s%s", "", "");
-    btdf_output_ctx c;
+    fmt_output_ctx c;
     memset(&c, 0, sizeof c);
     btdf_write_opts none = {NULL, NULL, NULL};
     c.opts = &none;
     c.scatfun = f;
     c.metadata_json = metadata_json;
     char why[256] = "";
-    btdf_status st = btdf_write_atomic(&btdf_format_bsdf, &c, path, why, sizeof why);
+    btdf_status st = fmt_write_atomic(&fmt_bsdf, &c, path, why, sizeof why);
     if (st != BTDF_OK)
         core_say(st, msg, msglen, "%s: %s", path, why);
     return st;
@@ -245,7 +245,7 @@ BTDF_API btdf_status btdf_scatfun_write(const btdf_scatfun *f, const char *path,
 
 static btdf_status buffer_writer(void *ctx, FILE *f, const char *tmp, char *msg, size_t msglen)
 {
-    return btdf_write_bytes(ctx, f, tmp, msg, msglen);
+    return io_write_bytes(ctx, f, tmp, msg, msglen);
 }
 
 BTDF_API btdf_status btdf_write_buffer(const char *path, const char *ext, const void *data,
@@ -253,13 +253,13 @@ BTDF_API btdf_status btdf_write_buffer(const char *path, const char *ext, const 
 {
     if (!path || !*path || (!data && len))
         return core_say(BTDF_EINVAL, msg, msglen, "no file name or no data%s%s", "", "");
-    btdf_bytes b = {data, len};
-    return btdf_write_file_atomic(path, ext, buffer_writer, &b, msg, msglen);
+    io_bytes b = {data, len};
+    return io_write_file_atomic(path, ext, buffer_writer, &b, msg, msglen);
 }
 
 BTDF_API void btdf_remove_partial_files(void)
 {
-    btdf_tmp_remove_all();
+    tmp_remove_all();
 }
 
 /* ------------------------------------------------------------------------- */
@@ -271,7 +271,7 @@ BTDF_API btdf_status btdf_read(const char *path, btdf_input *in, char *msg, size
     if (!path || !in)
         return BTDF_EINVAL;
     memset(in, 0, sizeof *in);
-    const btdf_format_ops *f = btdf_format_for_path(path);
+    const fmt_ops *f = fmt_for_path(path);
     if (!f || (!f->read_path && !f->read_series && !f->read_rad))
         return core_say(BTDF_EINVAL, msg, msglen, "not a file format btdf reads: use .csv, .exr, "
                    ".bsdf or .xml%s%s", "", "");
@@ -302,7 +302,7 @@ BTDF_API btdf_status btdf_table_read(const char *path, btdf_table **out, char *m
 {
     if (!path || !out)
         return BTDF_EINVAL;
-    const btdf_format_ops *f = btdf_format_for_path(path);
+    const fmt_ops *f = fmt_for_path(path);
     if (!f || !f->read_path)
         return core_say(BTDF_EINVAL, msg, msglen, "unknown table format of '%s': use .csv or .exr%s",
                    path, "");
@@ -397,7 +397,7 @@ BTDF_API btdf_status btdf_inspect(const char *path, FILE *out, char *msg, size_t
     btdf_status st = btdf_read(path, &in, msg, msglen);
     if (st != BTDF_OK)
         return st;
-    const btdf_format_ops *f = btdf_format_for_path(path);
+    const fmt_ops *f = fmt_for_path(path);
     struct stat sb;
     if (stat(path, &sb) == 0)
         fprintf(out, "file: %s, %s, %lld bytes\n", path, f->name, (long long)sb.st_size);

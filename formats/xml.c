@@ -143,7 +143,7 @@ static void put_klems_basis(FILE *f, const rad_klems_basis *kb)
     fprintf(f, "\t\t\t</AngleBasis>\n");
 }
 
-static btdf_status xml_write(const btdf_output_ctx *c, FILE *f, char *msg, size_t msglen)
+static btdf_status xml_write(const fmt_output_ctx *c, FILE *f, char *msg, size_t msglen)
 {
     const btdf_rad *r = c->rad;
     if (!r) {
@@ -325,7 +325,7 @@ static btdf_status xml_inspect(const btdf_input *in, FILE *out)
     return ferror(out) ? BTDF_EIO : BTDF_OK;
 }
 
-const btdf_format_ops btdf_format_xml = {
+const fmt_ops fmt_xml = {
     .name = "Radiance BSDF XML",
     .ext = ".xml",
     .available = 1,

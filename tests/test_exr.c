@@ -74,11 +74,11 @@ static btdf_status write_exr(const btdf_table *t, const char *path, const btdf_w
                              char *msg, size_t msglen)
 {
     btdf_write_opts none = {NULL, NULL, NULL};
-    btdf_output_ctx c = {.table = t, .opts = w ? w : &none};
+    fmt_output_ctx c = {.table = t, .opts = w ? w : &none};
     FILE *f = fopen(path, "wb");
     if (!f)
         return BTDF_EIO;
-    btdf_status st = btdf_format_exr.write_path(&c, f, path, msg, msglen);
+    btdf_status st = fmt_exr.write_path(&c, f, path, msg, msglen);
     if (fclose(f) != 0 && st == BTDF_OK)
         st = BTDF_EIO;
     return st;
@@ -132,7 +132,7 @@ static void test_round_trip(void **state)
     char msg[300] = "";
     assert_int_equal(write_exr(f->table, f->path, NULL, msg, sizeof msg), BTDF_OK);
     btdf_table *back = NULL;
-    btdf_status st = btdf_format_exr.read_path(f->path, &back, msg, sizeof msg);
+    btdf_status st = fmt_exr.read_path(f->path, &back, msg, sizeof msg);
     if (st != BTDF_OK)
         fail_msg("read: %s", msg);
     const btdf_params *a = btdf_table_get_params(f->table), *b = btdf_table_get_params(back);
@@ -258,7 +258,7 @@ static void expect_format_error(const char *path)
 {
     btdf_table *t = NULL;
     char msg[300] = "";
-    btdf_status st = btdf_format_exr.read_path(path, &t, msg, sizeof msg);
+    btdf_status st = fmt_exr.read_path(path, &t, msg, sizeof msg);
     if (st != BTDF_EFORMAT)
         fail_msg("%s: expected EFORMAT, got %s (%s)", path, btdf_strerror(st), msg);
     assert_null(t);
@@ -369,7 +369,7 @@ static size_t check_file_equals_float(const btdf_table *t, const char *path)
 {
     char msg[300] = "";
     btdf_table *back = NULL;
-    btdf_status st = btdf_format_exr.read_path(path, &back, msg, sizeof msg);
+    btdf_status st = fmt_exr.read_path(path, &back, msg, sizeof msg);
     if (st != BTDF_OK)
         fail_msg("read back %s: %s", path, msg);
     int nch = btdf_table_get_params(t)->channels;
@@ -501,7 +501,7 @@ static void test_built_sweep(void **state)
                 assert_int_equal(write_exr(t, path, NULL, msg, sizeof msg), BTDF_OK);
                 raw_chunks += check_file_equals_float(t, path);
                 btdf_table *back = NULL; /* the builder's rule comes back with the file */
-                assert_int_equal(btdf_format_exr.read_path(path, &back, msg, sizeof msg), BTDF_OK);
+                assert_int_equal(fmt_exr.read_path(path, &back, msg, sizeof msg), BTDF_OK);
                 assert_int_equal(btdf_table_get_rule(back), BTDF_RULE_CHI);
                 btdf_table_free(back);
                 files++;

@@ -51,9 +51,9 @@ static char *slurp(const char *path)
 
 static btdf_status put(const char *path, const char *text)
 {
-    btdf_bytes b = {text, strlen(text)};
+    io_bytes b = {text, strlen(text)};
     char msg[256];
-    return btdf_write_file_atomic(path, ".txt", btdf_write_bytes, &b, msg, sizeof msg);
+    return io_write_file_atomic(path, ".txt", io_write_bytes, &b, msg, sizeof msg);
 }
 
 static btdf_status failing_writer(void *ctx, FILE *f, const char *tmp, char *msg,
@@ -160,11 +160,11 @@ static void stale_temporaries_removed(void **state)
     at(u2, sizeof u2, ".backup.tmp3999999-12");
     at(u3, sizeof u3, ".x.csv.btdftmp0123.csv"); /* not sixteen digits */
     at(out, sizeof out, "x.csv");
-    assert_true(btdf_tmp_name_ours(strrchr(stale, '/') + 1));
-    assert_false(btdf_tmp_name_ours("x.csv"));
-    assert_false(btdf_tmp_name_ours(".mydata.tmp4000000-0.txt"));
-    assert_false(btdf_tmp_name_ours(".x.btdftmp0123456789abcdef.c-v"));
-    assert_false(btdf_tmp_name_ours(".btdftmp0123456789abcdef.csv"));
+    assert_true(tmp_name_ours(strrchr(stale, '/') + 1));
+    assert_false(tmp_name_ours("x.csv"));
+    assert_false(tmp_name_ours(".mydata.tmp4000000-0.txt"));
+    assert_false(tmp_name_ours(".x.btdftmp0123456789abcdef.c-v"));
+    assert_false(tmp_name_ours(".btdftmp0123456789abcdef.csv"));
     aged(stale, "s", 3600);
     aged(live, "l", 3600);
     aged(fresh, "f", 0);
@@ -232,13 +232,13 @@ static void planted_links_not_followed(void **state)
     assert_string_equal(slurp(out), "table");
     /* two names drawn for the same output differ in their sixteen random digits */
     char t1[600], t2[600];
-    int s1 = btdf_tmp_begin(out, ".csv", t1, sizeof t1);
-    int s2 = btdf_tmp_begin(out, ".csv", t2, sizeof t2);
+    int s1 = tmp_begin(out, ".csv", t1, sizeof t1);
+    int s2 = tmp_begin(out, ".csv", t2, sizeof t2);
     assert_true(s1 >= 0 && s2 >= 0);
-    btdf_tmp_end(s1);
-    btdf_tmp_end(s2);
+    tmp_end(s1);
+    tmp_end(s2);
     assert_string_not_equal(t1, t2);
-    assert_true(btdf_tmp_name_ours(strrchr(t1, '/') + 1));
+    assert_true(tmp_name_ours(strrchr(t1, '/') + 1));
     /* the mode is 0666 less the umask, as fopen gives */
     mode_t old = umask(027);
     assert_status(BTDF_OK, put(out, "masked"));
@@ -279,38 +279,38 @@ static void group_together_or_not_at_all(void **state)
     at(b, sizeof b, "b.png");
     at(c, sizeof c, "c.json");
     /* success: nothing appears before the commit, everything after */
-    btdf_tmp_group_begin();
+    tmp_group_begin();
     assert_status(BTDF_OK, put(a, "A1"));
     assert_status(BTDF_OK, put(b, "B1"));
     assert_int_equal(access(a, F_OK), -1);
     assert_int_equal(access(b, F_OK), -1);
-    assert_status(BTDF_OK, btdf_tmp_group_commit(msg, sizeof msg));
+    assert_status(BTDF_OK, tmp_group_commit(msg, sizeof msg));
     assert_string_equal(slurp(a), "A1");
     assert_string_equal(slurp(b), "B1");
     assert_int_equal(entries(), 2);
     /* one failing write: the earlier files stay as they were, nothing new appears */
-    btdf_tmp_group_begin();
+    tmp_group_begin();
     assert_status(BTDF_OK, put(a, "A2"));
-    assert_status(BTDF_EIO, btdf_write_file_atomic(c, ".json", failing_writer, NULL, msg,
+    assert_status(BTDF_EIO, io_write_file_atomic(c, ".json", failing_writer, NULL, msg,
                                                      sizeof msg));
     assert_status(BTDF_OK, put(b, "B2"));
-    assert_status(BTDF_EIO, btdf_tmp_group_commit(msg, sizeof msg));
+    assert_status(BTDF_EIO, tmp_group_commit(msg, sizeof msg));
     assert_string_equal(slurp(a), "A1");
     assert_string_equal(slurp(b), "B1");
     assert_int_equal(access(c, F_OK), -1);
     assert_int_equal(entries(), 2);
     /* an output that became a folder before the commit: none is renamed */
-    btdf_tmp_group_begin();
+    tmp_group_begin();
     assert_status(BTDF_OK, put(a, "A3"));
     assert_status(BTDF_OK, put(c, "C3"));
     assert_int_equal(mkdir(c, 0700), 0);
-    assert_status(BTDF_EINVAL, btdf_tmp_group_commit(msg, sizeof msg));
+    assert_status(BTDF_EINVAL, tmp_group_commit(msg, sizeof msg));
     assert_string_equal(slurp(a), "A1");
     rmdir(c);
     /* abort removes the finished temporaries */
-    btdf_tmp_group_begin();
+    tmp_group_begin();
     assert_status(BTDF_OK, put(c, "C4"));
-    btdf_tmp_group_abort();
+    tmp_group_abort();
     assert_int_equal(entries(), 2);
     /* outside a group, writes are immediate again */
     assert_status(BTDF_OK, put(c, "C5"));

@@ -508,7 +508,7 @@ static void check_layout(const btdf_preview_opts *o, const char *what)
 {
     plot_canvas c;
     char msg[300] = "";
-    int st = btdf_preview_draw(o, &c, msg, sizeof msg);
+    int st = pv_draw(o, &c, msg, sizeof msg);
     if (st != BTDF_OK)
         fail_msg("%s: %s", what, msg);
     assert_true(c.nboxes > 5 && c.nboxes < PLOT_MAX_BOXES);

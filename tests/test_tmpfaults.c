@@ -14,14 +14,14 @@
 #include "btdf_test.h"
 #include "io/tmpfile.h"
 
-int btdf_tmp_seam_link(const char *from, const char *to);
-int btdf_tmp_seam_rename(const char *from, const char *to);
+int tmp_seam_link(const char *from, const char *to);
+int tmp_seam_rename(const char *from, const char *to);
 
 static char dir[256];
 static int link_errno;            /* link fails with this errno when non-zero */
 static const char *rename_fails;  /* a rename onto a path ending so fails with EIO */
 static int signal_after = -1;     /* SIGINT raised after this many renames into place */
-static int call_handler_after = -1; /* btdf_tmp_remove_all called as from another thread */
+static int call_handler_after = -1; /* tmp_remove_all called as from another thread */
 static volatile sig_atomic_t renames, renames_seen_by_handler = -1;
 
 static int ends_with(const char *s, const char *tail)
@@ -30,7 +30,7 @@ static int ends_with(const char *s, const char *tail)
     return a >= b && !strcmp(s + a - b, tail);
 }
 
-int btdf_tmp_seam_link(const char *from, const char *to)
+int tmp_seam_link(const char *from, const char *to)
 {
     if (link_errno) {
         errno = link_errno;
@@ -39,7 +39,7 @@ int btdf_tmp_seam_link(const char *from, const char *to)
     return link(from, to);
 }
 
-int btdf_tmp_seam_rename(const char *from, const char *to)
+int tmp_seam_rename(const char *from, const char *to)
 {
     if (rename_fails && ends_with(to, rename_fails)) {
         errno = EIO;
@@ -52,7 +52,7 @@ int btdf_tmp_seam_rename(const char *from, const char *to)
             raise(SIGINT);
         if (renames == call_handler_after) {
             call_handler_after = -1;
-            btdf_tmp_remove_all();
+            tmp_remove_all();
         }
     }
     return r;
@@ -62,7 +62,7 @@ static void on_sigint(int sig)
 {
     (void)sig;
     renames_seen_by_handler = renames;
-    btdf_tmp_remove_all(); /* what btdftab's handler does before it dies */
+    tmp_remove_all(); /* what btdftab's handler does before it dies */
 }
 
 static int setup(void **state)
@@ -101,9 +101,9 @@ static const char *slurp(const char *path)
 
 static btdf_status put(const char *path, const char *text)
 {
-    btdf_bytes b = {text, strlen(text)};
+    io_bytes b = {text, strlen(text)};
     char msg[256];
-    return btdf_write_file_atomic(path, ".txt", btdf_write_bytes, &b, msg, sizeof msg);
+    return io_write_file_atomic(path, ".txt", io_write_bytes, &b, msg, sizeof msg);
 }
 
 static int entries(void)
@@ -124,11 +124,11 @@ static void first_run(char *a, char *j)
     at(a, 512, "a.csv");
     at(j, 512, "a.json");
     char msg[256];
-    btdf_tmp_group_begin();
+    tmp_group_begin();
     assert_int_equal(put(a, "A1"), BTDF_OK);
     assert_int_equal(put(j, "J1"), BTDF_OK);
-    assert_int_equal(btdf_tmp_group_commit(msg, sizeof msg), BTDF_OK);
-    btdf_tmp_group_begin();
+    assert_int_equal(tmp_group_commit(msg, sizeof msg), BTDF_OK);
+    tmp_group_begin();
     assert_int_equal(put(a, "A2"), BTDF_OK);
     assert_int_equal(put(j, "J2"), BTDF_OK);
 }
@@ -141,7 +141,7 @@ static void rollback_without_links(void **state)
     first_run(a, j);
     link_errno = EPERM;
     rename_fails = "a.json";
-    assert_int_equal(btdf_tmp_group_commit(msg, sizeof msg), BTDF_EIO);
+    assert_int_equal(tmp_group_commit(msg, sizeof msg), BTDF_EIO);
     assert_non_null(strstr(msg, "a.json"));
     assert_string_equal(slurp(a), "A1");
     assert_string_equal(slurp(j), "J1");
@@ -155,7 +155,7 @@ static void rollback_with_links(void **state)
     char a[512], j[512], msg[256] = "";
     first_run(a, j);
     rename_fails = "a.json";
-    assert_int_equal(btdf_tmp_group_commit(msg, sizeof msg), BTDF_EIO);
+    assert_int_equal(tmp_group_commit(msg, sizeof msg), BTDF_EIO);
     assert_string_equal(slurp(a), "A1");
     assert_string_equal(slurp(j), "J1");
     assert_int_equal(entries(), 2);
@@ -174,7 +174,7 @@ static void sigint_during_commit(void **state)
     assert_int_equal(sigaction(SIGINT, &sa, &old), 0);
     first_run(a, j);
     signal_after = 3; /* the first run made two */
-    assert_int_equal(btdf_tmp_group_commit(msg, sizeof msg), BTDF_OK);
+    assert_int_equal(tmp_group_commit(msg, sizeof msg), BTDF_OK);
     sigaction(SIGINT, &old, NULL);
     assert_int_equal(renames_seen_by_handler, 4);
     assert_string_equal(slurp(a), "A2");
@@ -190,7 +190,7 @@ static void handler_elsewhere_completes_the_group(void **state)
     char a[512], j[512], msg[256] = "";
     first_run(a, j);
     call_handler_after = 3;
-    btdf_tmp_group_commit(msg, sizeof msg);
+    tmp_group_commit(msg, sizeof msg);
     assert_string_equal(slurp(a), "A2");
     assert_string_equal(slurp(j), "J2");
     assert_int_equal(entries(), 2);

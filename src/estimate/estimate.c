@@ -604,7 +604,7 @@ static btdf_status estimate_impl(const btdf_params *p, int refl, double ti_min,
     return BTDF_OK;
 }
 
-btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_max,
+btdf_status est_knots(const btdf_params *p, double ti_min, double ti_max,
                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
                                 int threads, const double *knots, size_t nknots,
                                 est_eval_fn fn, const void *obj, albedo_memo *memo,
@@ -614,7 +614,7 @@ btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_m
                          knots, nknots, fn, NULL, NULL, obj, NULL, memo, r);
 }
 
-btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double ti_max,
+btdf_status est_knots_prep(const btdf_params *p, double ti_min, double ti_max,
                                      size_t test_angles, size_t points_per_angle,
                                      uint64_t seed, int threads, const double *knots,
                                      size_t nknots, est_eval_fn fn, est_prep_fn prep,
@@ -636,7 +636,7 @@ btdf_status est_knots_prep_part(const btdf_params *p, int refl, double ti_min, d
                          knots, nknots, fn, prep, done, obj, opt, memo, r);
 }
 
-btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
+btdf_status est_fn(const btdf_params *p, double ti_min, double ti_max,
                              size_t test_angles, size_t points_per_angle, uint64_t seed,
                              int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {
@@ -644,7 +644,7 @@ btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
                          NULL, 0, fn, NULL, NULL, obj, NULL, NULL, r);
 }
 
-btdf_status btdf_estimate_knots_part(const btdf_params *p, int refl, double ti_min,
+btdf_status est_knots_part(const btdf_params *p, int refl, double ti_min,
                                      double ti_max, size_t test_angles,
                                      size_t points_per_angle, uint64_t seed, int threads,
                                      const double *knots, size_t nknots, est_eval_fn fn,
@@ -654,7 +654,7 @@ btdf_status btdf_estimate_knots_part(const btdf_params *p, int refl, double ti_m
                          knots, nknots, fn, NULL, NULL, obj, NULL, NULL, r);
 }
 
-btdf_status btdf_estimate_knots_part_opt(const btdf_params *p, int refl, double ti_min,
+btdf_status est_knots_part_opt(const btdf_params *p, int refl, double ti_min,
                                          double ti_max, size_t test_angles,
                                          size_t points_per_angle, uint64_t seed, int threads,
                                          const double *knots, size_t nknots, est_eval_fn fn,
@@ -664,7 +664,7 @@ btdf_status btdf_estimate_knots_part_opt(const btdf_params *p, int refl, double 
                          knots, nknots, fn, NULL, NULL, obj, opt, NULL, r);
 }
 
-btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
+btdf_status est_fn_r(const btdf_params *p, double ti_min, double ti_max,
                                size_t test_angles, size_t points_per_angle, uint64_t seed,
                                int threads, est_eval_fn fn, const void *obj, btdf_report *r)
 {

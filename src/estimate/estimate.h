@@ -29,12 +29,12 @@ typedef void (*est_eval_fn)(const void *obj, double ti, const double *q, double 
 
 /* The error of fn against Eq. 25 with parameters p (MODEL.md section 6), as
    btdf_table_estimate computes it for tables. */
-btdf_status btdf_estimate_fn(const btdf_params *p, double ti_min, double ti_max,
+btdf_status est_fn(const btdf_params *p, double ti_min, double ti_max,
                              size_t test_angles, size_t points_per_angle, uint64_t seed,
                              int threads, est_eval_fn fn, const void *obj, btdf_report *r);
 
 /* The same with knots (their interval midpoints are test angles too). */
-btdf_status btdf_estimate_knots(const btdf_params *p, double ti_min, double ti_max,
+btdf_status est_knots(const btdf_params *p, double ti_min, double ti_max,
                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
                                 int threads, const double *knots, size_t nknots,
                                 est_eval_fn fn, const void *obj, albedo_memo *memo,
@@ -93,17 +93,17 @@ typedef struct est_opts {
     btdf_full *const *full;
 } est_opts;
 
-/* btdf_estimate_knots with a per-angle context from prep (freed by done); fn then reads
+/* est_knots with a per-angle context from prep (freed by done); fn then reads
    q[0..5] only (q[6] and q[7], the angles, are left 0: no atan2 per point). */
-btdf_status btdf_estimate_knots_prep(const btdf_params *p, double ti_min, double ti_max,
+btdf_status est_knots_prep(const btdf_params *p, double ti_min, double ti_max,
                                      size_t test_angles, size_t points_per_angle,
                                      uint64_t seed, int threads, const double *knots,
                                      size_t nknots, est_eval_fn fn, est_prep_fn prep,
                                      est_done_fn done, const void *obj, const est_opts *opt,
                                      albedo_memo *memo, btdf_report *r);
 
-/* btdf_estimate_knots_prep for the transmission (refl = 0) or the reflection (refl = 1,
-   as btdf_estimate_fn_r: q holds tr for to). */
+/* est_knots_prep for the transmission (refl = 0) or the reflection (refl = 1,
+   as est_fn_r: q holds tr for to). */
 btdf_status est_knots_prep_part(const btdf_params *p, int refl, double ti_min, double ti_max,
                                 size_t test_angles, size_t points_per_angle, uint64_t seed,
                                 int threads, const double *knots, size_t nknots,
@@ -112,20 +112,20 @@ btdf_status est_knots_prep_part(const btdf_params *p, int refl, double ti_min, d
                                 btdf_report *r);
 /* The same for an evaluation of the reflection: against rho_r (MODEL.md section 8)
    over the upper hemisphere, relative to max(R(ti), 0.01); q holds tr for to. */
-btdf_status btdf_estimate_fn_r(const btdf_params *p, double ti_min, double ti_max,
+btdf_status est_fn_r(const btdf_params *p, double ti_min, double ti_max,
                                size_t test_angles, size_t points_per_angle, uint64_t seed,
                                int threads, est_eval_fn fn, const void *obj, btdf_report *r);
 
-/* btdf_estimate_knots for the transmission (refl = 0) or the reflection (refl = 1,
-   as btdf_estimate_fn_r), without a memo. */
-btdf_status btdf_estimate_knots_part(const btdf_params *p, int refl, double ti_min,
+/* est_knots for the transmission (refl = 0) or the reflection (refl = 1,
+   as est_fn_r), without a memo. */
+btdf_status est_knots_part(const btdf_params *p, int refl, double ti_min,
                                      double ti_max, size_t test_angles,
                                      size_t points_per_angle, uint64_t seed, int threads,
                                      const double *knots, size_t nknots, est_eval_fn fn,
                                      const void *obj, btdf_report *r);
 
-/* btdf_estimate_knots_part with options (NULL: as btdf_estimate_knots_part). */
-btdf_status btdf_estimate_knots_part_opt(const btdf_params *p, int refl, double ti_min,
+/* est_knots_part with options (NULL: as est_knots_part). */
+btdf_status est_knots_part_opt(const btdf_params *p, int refl, double ti_min,
                                          double ti_max, size_t test_angles,
                                          size_t points_per_angle, uint64_t seed, int threads,
                                          const double *knots, size_t nknots, est_eval_fn fn,

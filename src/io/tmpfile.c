@@ -25,7 +25,7 @@
  * Every writer of the library writes `path` under a temporary name beside it and
  * renames at the end. The names of the files being written are kept here, so that a
  * program (the btdftab tool does) can remove them from a SIGINT or SIGTERM handler
- * with btdf_tmp_remove_all, which only reads flags and calls unlink and rename: all
+ * with tmp_remove_all, which only reads flags and calls unlink and rename: all
  * are async-signal-safe. The library itself installs no signal handler.
  *
  * The temporary name is `.NAME.btdftmpR.EXT` beside the output: NAME is the output's
@@ -38,7 +38,7 @@
  *
  * While a file is being written, and until its group is committed, the writer holds an
  * flock on it. A process killed outright (SIGKILL, a power cut) leaves such a file with
- * no lock; the next write into the same folder removes it (btdf_tmp_sweep), and nothing
+ * no lock; the next write into the same folder removes it (tmp_sweep), and nothing
  * else: not a name of another shape, not a file of another user, not a locked one.
  */
 #define SLOTS 32
@@ -50,10 +50,10 @@
 
 #ifdef BTDF_TMP_SEAM
 /* A test build replaces these to inject faults (tests/test_tmpfaults.c). */
-int btdf_tmp_seam_link(const char *from, const char *to);
-int btdf_tmp_seam_rename(const char *from, const char *to);
-#define LINK btdf_tmp_seam_link
-#define RENAME btdf_tmp_seam_rename
+int tmp_seam_link(const char *from, const char *to);
+int tmp_seam_rename(const char *from, const char *to);
+#define LINK tmp_seam_link
+#define RENAME tmp_seam_rename
 #else
 #define LINK link
 #define RENAME rename
@@ -136,7 +136,7 @@ static int record(const char *tmp)
     return slot;
 }
 
-int btdf_tmp_begin(const char *path, const char *ext, char *tmp, size_t tmplen)
+int tmp_begin(const char *path, const char *ext, char *tmp, size_t tmplen)
 {
     if (make_name(path, MARK, ext, tmp, tmplen) != 0)
         return -2;
@@ -165,7 +165,7 @@ static int create_tmp(const char *path, const char *mark, const char *ext, char 
             return fd;
         }
         int e = errno;
-        btdf_tmp_end(s);
+        tmp_end(s);
         if (e != EEXIST) {
             errno = e;
             return -1;
@@ -175,7 +175,7 @@ static int create_tmp(const char *path, const char *mark, const char *ext, char 
     return -1;
 }
 
-void btdf_tmp_end(int slot)
+void tmp_end(int slot)
 {
     if (slot < 0 || slot >= SLOTS)
         return;
@@ -188,7 +188,7 @@ void btdf_tmp_end(int slot)
 /* Stale temporaries                                                         */
 /* ------------------------------------------------------------------------- */
 
-int btdf_tmp_name_ours(const char *name)
+int tmp_name_ours(const char *name)
 {
     if (!name || name[0] != '.')
         return 0;
@@ -220,7 +220,7 @@ int btdf_tmp_name_ours(const char *name)
    takes the lock right after creating it, and this covers that moment many times over. */
 #define STALE_SECONDS 60
 
-size_t btdf_tmp_sweep(const char *path)
+size_t tmp_sweep(const char *path)
 {
     const char *slash = strrchr(path, '/');
     char dir[NAME];
@@ -240,7 +240,7 @@ size_t btdf_tmp_sweep(const char *path)
     time_t now = time(NULL);
     struct dirent *e;
     while ((e = readdir(d)) != NULL) {
-        if (!btdf_tmp_name_ours(e->d_name))
+        if (!tmp_name_ours(e->d_name))
             continue;
         int fd = openat(dfd, e->d_name, O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_CLOEXEC);
         if (fd < 0)
@@ -390,7 +390,7 @@ static struct group {
    renames (rename is async-signal-safe) rather than leave half of a group new. */
 static volatile sig_atomic_t committing;
 
-void btdf_tmp_remove_all(void)
+void tmp_remove_all(void)
 {
     if (committing) {
         for (size_t i = 0; i < grp.n; i++)
@@ -410,16 +410,16 @@ static void pending_close(pending *p)
     if (p->fd >= 0)
         close(p->fd);
     p->fd = -1;
-    btdf_tmp_end(p->slot);
+    tmp_end(p->slot);
 }
 
-void btdf_tmp_group_begin(void)
+void tmp_group_begin(void)
 {
-    btdf_tmp_group_abort();
+    tmp_group_abort();
     grp.open = 1;
 }
 
-void btdf_tmp_group_abort(void)
+void tmp_group_abort(void)
 {
     for (size_t i = 0; i < grp.n; i++) {
         unlink(grp.p[i].tmp);
@@ -492,7 +492,7 @@ static int keep_backup(pending *p, char *msg, size_t msglen)
     return -1;
 }
 
-btdf_status btdf_tmp_group_commit(char *msg, size_t msglen)
+btdf_status tmp_group_commit(char *msg, size_t msglen)
 {
     if (!grp.open)
         return BTDF_OK;
@@ -557,20 +557,20 @@ btdf_status btdf_tmp_group_commit(char *msg, size_t msglen)
 
 BTDF_API void btdf_outputs_begin(void)
 {
-    btdf_tmp_group_begin();
+    tmp_group_begin();
 }
 
 BTDF_API btdf_status btdf_outputs_commit(char *msg, size_t msglen)
 {
-    return btdf_tmp_group_commit(msg, msglen);
+    return tmp_group_commit(msg, msglen);
 }
 
 BTDF_API void btdf_outputs_abort(void)
 {
-    btdf_tmp_group_abort();
+    tmp_group_abort();
 }
 
-btdf_status btdf_write_file_atomic(const char *path, const char *ext, btdf_file_writer writer,
+btdf_status io_write_file_atomic(const char *path, const char *ext, io_file_writer writer,
                                    void *ctx, char *msg, size_t msglen)
 {
     btdf_status st = replaceable(path, msg, msglen);
@@ -583,7 +583,7 @@ btdf_status btdf_write_file_atomic(const char *path, const char *ext, btdf_file_
         grp.failed = 1;
         return BTDF_EINVAL;
     }
-    btdf_tmp_sweep(path);
+    tmp_sweep(path);
     char tmp[NAME];
     int slot = -1;
     int fd = create_tmp(path, MARK, ext, tmp, sizeof tmp, &slot);
@@ -633,13 +633,13 @@ btdf_status btdf_write_file_atomic(const char *path, const char *ext, btdf_file_
         grp.failed |= grp.open;
     }
     close(fd);
-    btdf_tmp_end(slot);
+    tmp_end(slot);
     return st;
 }
 
-btdf_status btdf_write_bytes(void *ctx, FILE *f, const char *tmp, char *msg, size_t msglen)
+btdf_status io_write_bytes(void *ctx, FILE *f, const char *tmp, char *msg, size_t msglen)
 {
-    const btdf_bytes *b = ctx;
+    const io_bytes *b = ctx;
     if (b->len && fwrite(b->data, 1, b->len, f) != b->len) {
         say(msg, msglen, "writing %s failed: %s", tmp, strerror(errno));
         return BTDF_EIO;

@@ -174,7 +174,7 @@ BTDF_API btdf_status btdf_transmittance(const btdf_params *p, double ti, double 
     return BTDF_OK;
 }
 
-double btdf_transmittance_coarse(const btdf_params *p, double ti)
+double model_transmittance_coarse(const btdf_params *p, double ti)
 {
     /* 4 x 3 panels: for the max(T, 0.01) floor the tables' slices are refined
        against, not for a reported number (the tables' estimate uses the converged T).
@@ -316,9 +316,9 @@ void bt_albedo_panels(const btdf_params *p, int refl, double ti, int u_panels,
                                           psi_panels);
 }
 
-double btdf_reflectance_coarse(const btdf_params *p, double ti)
+double model_reflectance_coarse(const btdf_params *p, double ti)
 {
-    /* 4 x 3 panels, as btdf_transmittance_coarse: for the max(R, 0.01) floor */
+    /* 4 x 3 panels, as model_transmittance_coarse: for the max(R, 0.01) floor */
     double m = 1.0;
     for (int c = 0; c < p->channels; c++)
         m = fmin(m, reflectance_one(p->ior[c], p->smoothness, p->k0,

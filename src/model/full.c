@@ -259,7 +259,7 @@ static void full_run_item(void *arg, size_t idx)
                    (0xc2b2ae3d27d4eb4full * (chunk + 1));
     (void)core_mix(&rng);
     double sti, cti;
-    btdf_sincos_deg(f->node_deg[node], &sti, &cti);
+    model_sincos_deg(f->node_deg[node], &sti, &cti);
     double wi[3] = {sti, 0.0, cti};
     for (uint64_t p = 0; p < count; p++) {
         double wo[3];
@@ -476,8 +476,8 @@ BTDF_API double btdf_full_rho_deg(const btdf_full *f, double ti, double to, doub
     if (!f || !full_ok_t(ti, to, phi))
         return 0.0;
     double sto, cto, sp, cp;
-    btdf_sincos_deg(to, &sto, &cto);
-    btdf_sincos_deg(phi, &sp, &cp);
+    model_sincos_deg(to, &sto, &cto);
+    model_sincos_deg(phi, &sp, &cp);
     (void)sto;
     (void)sp;
     if (ti == 90.0 || cto == 0.0)
@@ -490,8 +490,8 @@ BTDF_API double btdf_full_rho_r_deg(const btdf_full *f, double ti, double tr, do
     if (!f || !(ti >= 0.0 && ti <= 90.0 && tr >= 0.0 && tr <= 90.0 && isfinite(phi)))
         return 0.0;
     double s_, ctr, sp, cp;
-    btdf_sincos_deg(tr, &s_, &ctr);
-    btdf_sincos_deg(phi, &sp, &cp);
+    model_sincos_deg(tr, &s_, &ctr);
+    model_sincos_deg(phi, &sp, &cp);
     (void)s_;
     (void)sp;
     if (ti == 90.0 || ctr == 0.0)

@@ -205,11 +205,11 @@ static inline int facet_refract(double n, double sti, double cti, double stn, do
     return r->oz < 0.0; /* refracted back into the upper hemisphere otherwise */
 }
 
-void btdf_sincos_deg(double deg, double *s, double *c);
+void model_sincos_deg(double deg, double *s, double *c);
 
 /* min over channels of T(ti) from a coarse quadrature (within 2.8e-3 absolute, worst
-   near the critical angle for n < 1: btdf_transmittance_coarse). */
-double btdf_transmittance_coarse(const btdf_params *p, double ti);
+   near the critical angle for n < 1: model_transmittance_coarse). */
+double model_transmittance_coarse(const btdf_params *p, double ti);
 
 /* T(ti) (refl = 0) or R(ti) (refl = 1) per channel, with the given panels of the
    facet-slope and azimuth quadratures (16 x 12 is btdf_transmittance's converged rule);
@@ -218,6 +218,6 @@ void bt_albedo_panels(const btdf_params *p, int refl, double ti, int u_panels,
                       int psi_panels, double *out);
 
 /* min over channels of R(ti) from the same coarse quadrature. */
-double btdf_reflectance_coarse(const btdf_params *p, double ti);
+double model_reflectance_coarse(const btdf_params *p, double ti);
 
 #endif

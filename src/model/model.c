@@ -100,7 +100,7 @@ BTDF_API btdf_status btdf_params_check(const btdf_params *p, char *msg, size_t m
     return BTDF_OK;
 }
 
-void btdf_sincos_deg(double deg, double *s, double *c)
+void model_sincos_deg(double deg, double *s, double *c)
 {
     /* Quadrant reduction in degrees is exact (Sterbenz) for |deg| < 2^40, so
        sin(180) = 0 and cos(90) = 0 come out exactly. */

@@ -101,7 +101,7 @@ void plot_tick_label(char *buf, size_t len, double v, double step);
 /* preview.c's drawing of a picture onto a new canvas (the caller frees it even on error),
    for the unit tests, which inspect the recorded text boxes. */
 struct btdf_preview_opts;
-int btdf_preview_draw(const struct btdf_preview_opts *o, plot_canvas *c, char *msg,
+int pv_draw(const struct btdf_preview_opts *o, plot_canvas *c, char *msg,
                       size_t msglen);
 
 #endif

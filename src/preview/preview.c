@@ -15,7 +15,7 @@
 
 #include "preview/style.h"
 
-int btdf_preview_draw(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen)
+int pv_draw(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t msglen)
 {
     memset(c, 0, sizeof *c);
     if (o->width < 0 || o->height < 0 || o->width > BTDF_PREVIEW_MAX_SIDE ||
@@ -50,7 +50,7 @@ BTDF_API btdf_status btdf_preview_render(const btdf_preview_opts *o, unsigned ch
         return say(BTDF_EINVAL, msg, msglen, "missing argument");
 #if BTDF_HAVE_PNG
     plot_canvas c;
-    btdf_status st = (btdf_status)btdf_preview_draw(o, &c, msg, msglen);
+    btdf_status st = (btdf_status)pv_draw(o, &c, msg, msglen);
     if (st != BTDF_OK) {
         plot_canvas_free(&c);
         return st;

@@ -102,7 +102,7 @@ btdf_status rad_report_ch(const btdf_rad *r, int k, int c, int chosen,
     q.channels = 1;
     q.ior[0] = rad_n_light(r, k, c);
     rad_est e = {r, r->b[k].light, r->channels == 3 ? c : -1, chosen};
-    btdf_status st = btdf_estimate_fn(&q, 0.0, M_PI / 2, test_angles, points_per_angle, seed,
+    btdf_status st = est_fn(&q, 0.0, M_PI / 2, test_angles, points_per_angle, seed,
                                       threads, rad_est_fn, &e, rep);
     if (st == BTDF_OK) {
         rep->seconds_build = r->seconds_build;

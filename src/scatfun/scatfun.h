@@ -79,7 +79,7 @@ void sf_fixed_eval_n(const sf_fixed_read *const *r, int nr, double co, double cp
 
 /* report.c: btdf_scatfun_report's work without its checks and summary fields, T and R taken from
    memo (NULL: computed); fills r's errors and per-angle rows. opt (NULL: none) as
-   btdf_estimate_knots_prep's, but for nread, which the reading sets. */
+   est_knots_prep's, but for nread, which the reading sets. */
 btdf_status sf_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side side,
                                size_t angles, size_t ppa, uint64_t seed, int threads,
                                const struct est_opts *opt, albedo_memo *memo,

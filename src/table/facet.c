@@ -28,8 +28,8 @@ int tb_opts_refl(const btdf_table_opts *o)
 /* T(ti), or R(ti) for the reflection, coarse. */
 static double part_coarse(const btdf_table_opts *o, double ti)
 {
-    return tb_opts_refl(o) ? btdf_reflectance_coarse(&o->params, ti)
-                        : btdf_transmittance_coarse(&o->params, ti);
+    return tb_opts_refl(o) ? model_reflectance_coarse(&o->params, ti)
+                        : model_transmittance_coarse(&o->params, ti);
 }
 
 static double t_floor(const btdf_table_opts *o, double ti)

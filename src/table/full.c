@@ -99,7 +99,7 @@ btdf_status table_estimate_full(const btdf_table *t, double ti_min, double ti_ma
     memset(&opt, 0, sizeof opt);
     opt.full = t->ms;
     int refl = kind_is_reflection(t->kind);
-    btdf_status st = btdf_estimate_knots_part_opt(&t->p, refl, ti_min, ti_max, test_angles,
+    btdf_status st = est_knots_part_opt(&t->p, refl, ti_min, ti_max, test_angles,
                                                   points_per_angle, seed, threads, knots, nk,
                                                   fn, t, &opt, r);
     if (st != BTDF_OK)

@@ -647,7 +647,7 @@ BTDF_API btdf_status btdf_table_estimate(const btdf_table *t, double ti_min, dou
         t->p.model == BTDF_MODEL_FULL
             ? table_estimate_full(t, ti_min, ti_max, test_angles, points_per_angle, seed,
                                   threads, knots, nk, table_fn, r)
-            : btdf_estimate_knots_part(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
+            : est_knots_part(&t->p, kind_is_reflection(t->kind), ti_min, ti_max,
                                        test_angles, points_per_angle, seed, threads, knots,
                                        nk, table_fn, t, r);
     free(knots);
