@@ -481,6 +481,40 @@ if "$B" --version | grep -q 'PNG on'; then
     "$B" polar -o "$W/p.png" --material 1.4:3 --material 0.714:3 --angles 0,30 && [ -s "$W/p.png" ] && \
         ok "polar picture" || no "polar"
     rm -f "$W"/*.png
+    # the polar picture of a written file, read back as eval --table reads it: a table
+    # (both parts), a .bsdf and a .xml by --preview (any size; polar's 960 x 720 by
+    # default), then polar --table of each; bad files are named, and leave no picture
+    png_wh() { od -An -j 16 -N 8 -tx1 "$1" | tr -d ' \n'; }
+    "$B" tabulate -q --theta-i 0:40 --tolerance 1e-2 --part both -o "$W/pb.csv" && \
+        "$B" polar --table "$W/pb.csv" --part both -o "$W/pc.png" && \
+        [ "$(png_wh "$W/pc.png")" = 000003c0000002d0 ] && ok "polar --table of a .csv, both parts" || \
+        no "polar --table .csv"
+    "$B" tabulate -q --tolerance 5e-2 -o "$W/pf.bsdf" --preview "$W/pf.png" --size 640x480 && \
+        [ "$(png_wh "$W/pf.png")" = 00000280000001e0 ] && ok "tabulate -o F.bsdf --preview: its polar, 640 x 480" || \
+        no "tabulate .bsdf --preview"
+    "$B" tabulate -q --tolerance 0.5 -o "$W/pv.xml" --preview polar="$W/pv.png" && \
+        [ "$(png_wh "$W/pv.png")" = 000003c0000002d0 ] && ok "tabulate -o F.xml --preview polar=: its polar" || \
+        no "tabulate .xml --preview"
+    rm -f "$W"/*.png
+    "$B" polar --table "$W/pf.bsdf" --part both --angles 20,50 -o "$W/pf.png" && \
+        "$B" polar --table "$W/pv.xml" -o "$W/pv.png" && [ -s "$W/pf.png" ] && [ -s "$W/pv.png" ] && \
+        ok "polar --table of a .bsdf (both parts) and a .xml" || no "polar --table .bsdf/.xml"
+    expect 1 "nothere.csv: cannot open" "polar --table of a missing file" -- \
+        "$B" polar --table "$W/nothere.csv" -o "$W/t.png"
+    echo junk > "$W/junk.csv"
+    expect 1 "junk.csv.*not a btdftab table" "polar --table of a file not ours" -- \
+        "$B" polar --table "$W/junk.csv" -o "$W/t.png"
+    expect 1 "pv.xml: --part both: a polar picture of a .xml draws its transmission" \
+        "polar --table .xml --part both" -- "$B" polar --table "$W/pv.xml" --part both -o "$W/t.png"
+    expect 2 "--angles 60: outside the incidence range of .*pb.csv, 0:40" \
+        "polar --table at an angle the table does not hold" -- "$B" polar --table "$W/pb.csv" --angles 60 -o "$W/t.png"
+    expect 2 "do not apply with --table" "polar --table with --ior" -- \
+        "$B" polar --table "$W/pb.csv" --ior 1.3 -o "$W/t.png"
+    expect 2 "a .bsdf has a polar picture of the file" ".bsdf --preview render= refused before the work" -- \
+        "$B" tabulate -o "$W/t.bsdf" --preview render="$W/t.png"
+    expect 2 "polar picture of a written file is for .bsdf and .xml" "a table's --preview polar= refused" -- \
+        "$B" tabulate -o "$W/t.csv" --preview polar="$W/t.png"
+    rm -f "$W"/*.png "$W/pb.csv" "$W/pf.bsdf" "$W/pv.xml" "$W/junk.csv"
     # a failing PNG write says why (libpng says only "Write Error"), and leaves no file
     expect 1 "PNG: Write Error: File too large" "PNG write error names its cause" -- \
         sh -c "trap '' XFSZ; ulimit -f 4; exec '$B' tabulate -q --grid 5,5,5 -o '$W/t.png'"

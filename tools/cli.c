@@ -123,19 +123,22 @@ int parse_preview(const char *s, preview_req *r)
     const char *eq = strchr(s, '=');
     r->kind = BTDF_PREVIEW_MONTAGE;
     r->analytic = 0;
+    r->named = eq != NULL;
     r->path = eq ? eq + 1 : s;
     if (eq) {
         size_t l = (size_t)(eq - s);
         if (l == 7 && !strncmp(s, "montage", 7)) {
             r->kind = BTDF_PREVIEW_MONTAGE;
+        } else if (l == 5 && !strncmp(s, "polar", 5)) {
+            r->kind = BTDF_PREVIEW_POLAR; /* .bsdf and .xml: their file read back */
         } else if (l == 6 && !strncmp(s, "render", 6)) {
             r->kind = BTDF_PREVIEW_RENDER;
         } else if (l == 15 && !strncmp(s, "render-analytic", 15)) {
             r->kind = BTDF_PREVIEW_RENDER;
             r->analytic = 1;
         } else {
-            fail(EXIT_USAGE, "--preview: '%.*s': kind must be montage, render or "
-                             "render-analytic", (int)l, s);
+            fail(EXIT_USAGE, "--preview: '%.*s': kind must be montage, render, "
+                             "render-analytic or polar", (int)l, s);
             return 0;
         }
     }

@@ -25,6 +25,7 @@ extern const char *prog;
 typedef struct preview_req {
     btdf_preview_kind kind;
     int analytic;
+    int named; /* KIND= was given */
     const char *path;
 } preview_req;
 
@@ -93,6 +94,11 @@ void warn_albedo(const btdf_params *p, double ti_deg, double rt, const char *wha
 double albedo_min(const btdf_params *p, double ti);
 int cmd_albedo(const cli *c);
 int cmd_polar(const cli *c);
+/* polar_file.c: the polar picture png of a written file read back (.csv, .exr, .bsdf,
+   .xml), one curve per channel and angle (degrees); 0 or the exit status after the
+   message. */
+int polar_of_file(const char *file, const char *png, btdf_part part, const double *angles,
+                  size_t na, int width, int height);
 
 /* cmd_pane.c: a pane's system (--back): its options, tabulate to .xml, albedo */
 int apply_pane(cli *c, int id, const char *v);

@@ -310,6 +310,15 @@ int cmd_polar(const cli *c)
     memcpy(angles, c->angles, sizeof angles);
     if (na == 0)
         angles[na++] = 30.0;
+    if (c->table) { /* the file gives the material and the values */
+        if (c->nm || GIVEN(c, OPT_IOR) || GIVEN(c, OPT_SMOOTHNESS) || GIVEN(c, OPT_K0) ||
+            GIVEN(c, OPT_MODEL))
+            return fail(EXIT_USAGE, "polar: --material, --ior, --smoothness, --k0 and --model "
+                                    "do not apply with --table (the file gives the material)");
+        if (!folder_writable(c->out))
+            return 1;
+        return polar_of_file(c->table, c->out, c->part, angles, na, c->pic_w, c->pic_h);
+    }
     if (nm * na > BTDF_PREVIEW_MAX_CURVES)
         return fail(EXIT_USAGE, "polar: %zu materials x %zu angles: at most %d curves", nm, na,
                     BTDF_PREVIEW_MAX_CURVES);

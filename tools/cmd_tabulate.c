@@ -44,20 +44,60 @@ static int distinct_outputs(const char *out, const cli *c)
     return 0;
 }
 
+/* --preview of a .bsdf or .xml (`what`): the polar picture of the written file, the
+   only kind it has (a montage or render shows a table's slices). Checked before the
+   work, with the pictures' folders. 0, or the exit status after the message. */
+static int series_previews_check(const cli *c, const char *what)
+{
+    for (int k = 0; k < c->npreview; k++)
+        if (c->previews[k].kind != BTDF_PREVIEW_POLAR && c->previews[k].named)
+            return fail(EXIT_USAGE, "--preview %s=%s: a %s has a polar picture of the file "
+                        "(--preview F.png or polar=F.png); montage and render show a "
+                        "table's slices", c->previews[k].analytic ? "render-analytic"
+                        : c->previews[k].kind == BTDF_PREVIEW_RENDER ? "render" : "montage",
+                        c->previews[k].path, what);
+    if (c->npreview > 0 && !btdf_format_available("png"))
+        return fail(1, "%s: PNG support was switched off at build time (-Dpng=disabled)",
+                    c->previews[0].path);
+    if (GIVEN(c, OPT_SIZE) && c->npreview == 0)
+        return fail(EXIT_USAGE, "--size applies to pictures: give --preview F.png");
+    if (c->npreview > 0 && c->sides == BTDF_SIDE_LEAVE)
+        return fail(EXIT_USAGE, "--preview: the picture draws light entering (index n), "
+                                "which --side leave does not write");
+    for (int k = 0; k < c->npreview; k++)
+        if (!folder_writable(c->previews[k].path))
+            return 1;
+    return distinct_outputs(c->out, c);
+}
+
+/* The pictures of a written .bsdf or .xml: its lobes at 30 degrees, read back. */
+static int series_previews_draw(const cli *c, btdf_part part)
+{
+    static const double ti = 30.0; /* degrees: polar's default angle */
+    for (int k = 0; k < c->npreview; k++) {
+        int rc = polar_of_file(c->out, c->previews[k].path, part, &ti, 1, c->pic_w, c->pic_h);
+        if (rc)
+            return rc;
+    }
+    return 0;
+}
+
 /* A .bsdf is built from Eq. 25 directly: the table's options do not apply. */
 static int tabulate_series(const cli *c, const char *prov)
 {
-    static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
-                                        OPT_PHI, OPT_METRIC, OPT_SIZE, OPT_LOG_DECADES,
-                                        OPT_ZOOM, OPT_ESTIMATE};
+    static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_THETA_O, OPT_PHI,
+                                        OPT_METRIC, OPT_LOG_DECADES, OPT_ZOOM, OPT_ESTIMATE};
     for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
         if (GIVEN(c, table_only[k]))
             return fail(EXIT_USAGE, "%s: --theta-i, --theta-o, --phi, --grid, --metric, "
-                                    "--preview, --size, --log-decades, --zoom and --estimate "
-                                    "do not apply to .bsdf (the file covers every direction of "
-                                    "both hemispheres, and its blocks are always checked in "
-                                    "full; --%s was given)",
+                                    "--log-decades, --zoom and --estimate do not apply to "
+                                    ".bsdf (the file covers every direction of both "
+                                    "hemispheres, and its blocks are always checked in full; "
+                                    "--%s was given)",
                         c->out, opt_find(table_only[k])->name);
+    int bad = series_previews_check(c, ".bsdf");
+    if (bad)
+        return bad;
     if (c->report && !folder_writable(c->report))
         return 1;
     if (!check_params(&c->p))
@@ -71,19 +111,21 @@ static int tabulate_series(const cli *c, const char *prov)
     /* --side picks the light's sides, --part the parts (run.h) */
     int part = GIVEN(c, OPT_PART) ? (int)c->part : 0, blocks = run_series_blocks(c->sides, part);
     double tol = run_series_tolerance(part, GIVEN(c, OPT_TOLERANCE), c->o.tolerance);
-    return run_series_ex(prog, c->out, &c->p, tol, blocks, c->threads, c->quiet,
-                         c->best_effort, prov, c->report,
-                         GIVEN(c, OPT_MAX_SAMPLES) ? c->o.max_samples : 0,
-                         GIVEN(c, OPT_MAX_MEMORY) ? c->mib << 20 : 0, &pr);
+    int rc = run_series_ex(prog, c->out, &c->p, tol, blocks, c->threads, c->quiet,
+                           c->best_effort, prov, c->report,
+                           GIVEN(c, OPT_MAX_SAMPLES) ? c->o.max_samples : 0,
+                           GIVEN(c, OPT_MAX_MEMORY) ? c->mib << 20 : 0, &pr);
+    /* the picture draws what the file holds of light entering: both parts unless
+       --part says one */
+    return rc ? rc : series_previews_draw(c, part ? (btdf_part)part : BTDF_PART_BOTH);
 }
 
 /* A Radiance .xml is built from Eq. 25 (and rho_r) directly: all its blocks. */
 static int tabulate_radiance(const cli *c, const char *prov)
 {
-    static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O,
-                                        OPT_PHI, OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY,
-                                        OPT_SIZE, OPT_SIDE, OPT_LOG_DECADES, OPT_ZOOM,
-                                        OPT_ESTIMATE};
+    static const opt_id table_only[] = {OPT_THETA_I, OPT_GRID, OPT_THETA_O, OPT_PHI,
+                                        OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY,
+                                        OPT_SIDE, OPT_LOG_DECADES, OPT_ZOOM, OPT_ESTIMATE};
     for (size_t k = 0; k < sizeof table_only / sizeof table_only[0]; k++)
         if (GIVEN(c, table_only[k]))
             return fail(EXIT_USAGE, "%s: --%s does not apply to .xml (it holds every "
@@ -95,13 +137,18 @@ static int tabulate_radiance(const cli *c, const char *prov)
                                 "error is set by the basis, not by a tolerance");
     if (!check_params(&c->p))
         return EXIT_USAGE;
+    int bad = series_previews_check(c, ".xml");
+    if (bad)
+        return bad;
     if (!folder_writable(c->out) || (c->report && !folder_writable(c->report)))
         return 1;
     run_progress pr;
     run_progress_start(&pr, !c->quiet && isatty(2), c->out);
-    return run_radiance(prog, c->out, c->report, &c->p, c->basis,
-                        GIVEN(c, OPT_TOLERANCE) ? c->o.tolerance : 0.2, c->threads, c->quiet,
-                        c->best_effort, prov, &pr);
+    int rc = run_radiance(prog, c->out, c->report, &c->p, c->basis,
+                          GIVEN(c, OPT_TOLERANCE) ? c->o.tolerance : 0.2, c->threads, c->quiet,
+                          c->best_effort, prov, &pr);
+    /* the transmission, as eval reads a .xml */
+    return rc ? rc : series_previews_draw(c, BTDF_PART_TRANSMISSION);
 }
 
 /* A table's parameters and model before the work: full has smith's parameters (the
@@ -213,6 +260,11 @@ int cmd_tabulate(cli *c, const char *prov)
         return fail(EXIT_USAGE, "--report with --estimate none: there is no error to report");
     if (GIVEN(c, OPT_SIZE) && c->npreview == 0)
         return fail(EXIT_USAGE, "--size applies to pictures: give --preview F.png or -o F.png");
+    for (int k = 0; k < c->npreview; k++)
+        if (c->previews[k].kind == BTDF_PREVIEW_POLAR)
+            return fail(EXIT_USAGE, "--preview polar=%s: the polar picture of a written "
+                        "file is for .bsdf and .xml; a table's lobes: btdftab polar --table "
+                        "FILE", c->previews[k].path);
     int renders = 0;
     for (int k = 0; k < c->npreview; k++)
         renders += c->previews[k].kind == BTDF_PREVIEW_RENDER;

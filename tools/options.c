@@ -38,6 +38,9 @@ const opt_def opt_table[] = {
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
      "evaluate a written table (.csv, .exr, .bsdf) instead of Eq. 25; the file gives\n"
      "the material, so --ior, --smoothness and --k0 do not apply"},
+    {OPT_TABLE, "table", 0, "FILE", 0, CMD_POLAR,
+     "draw the lobes of a written file (.csv, .exr, .bsdf, .xml) read back, as eval\n"
+     "--table reads it, instead of Eq. 25; the file gives the material"},
     {OPT_PART, "part", 0, "P", 0, CMD_EVAL,
      "transmission (default), or reflection: rows TI TR PHI with theta_r in [0, 90],\n"
      "phi = 180 the specular plane; of the model, or of a --table that holds it"},
@@ -94,7 +97,8 @@ const opt_def opt_table[] = {
     {OPT_PREVIEW, "preview", 0, "[KIND=]F.png", 1, CMD_TABULATE,
      "a picture of the table; KIND is montage (default), render (the paper's\n"
      "Figs. 10-11) or render-analytic (with Eq. 25 and the difference beside it);\n"
-     "repeatable; -o F.png is the same as --preview F.png"},
+     "repeatable; -o F.png is the same as --preview F.png. Of a .bsdf or .xml: its\n"
+     "lobes at theta_i = 30 read back from the file (KIND polar, the default there)"},
     {OPT_LOG_DECADES, "log-decades", 0, "D", 0, CMD_TABULATE,
      "render previews on a log scale over D decades below each row's maximum\n"
      "(1 to 12; default linear, as in the paper)"},
@@ -189,7 +193,7 @@ const cmd_def cmd_table[] = {
      "R + T at each incident angle TI in degrees (default 0, 10, ..., 80)."},
     {"polar", CMD_POLAR, "[options] -o FILE.png", "lobes in the plane of incidence",
      "Draws rho |cos to| in the plane of incidence, one curve per material and angle,\n"
-     "like Figs. 5 and 6 of Xu & Sun (2008)."},
+     "like Figs. 5 and 6 of Xu & Sun (2008); with --table, of a written file."},
     {"build", CMD_BUILD, "[options] SCENE.ini", "the outputs a scene manifest lists",
      "Builds every output of a scene manifest (docs/pipelines.md) that is missing or\n"
      "out of date; each table is built once and shared by its outputs. Output paths\n"

@@ -100,6 +100,13 @@ typedef struct btdf_preview_opts {
                                       facets (MODEL.md section 8) above it, mirrored like the
                                       paper's figures of both halves, on the same scale */
     const btdf_chart *chart;       /* CHART: what to draw (title: the picture's title) */
+    /* POLAR: when not NULL, the curves are eval's values instead of the model's (a file
+       read back, say): eval(user, reflection, ti, to, phi, out) writes the materials'
+       channels of rho (reflection 0) or rho_r (1) at those angles in radians into out.
+       The materials then only name the curves and draw the Snell directions; their
+       model is not evaluated (model full makes no tally). It must be finite and >= 0. */
+    void (*eval)(void *user, int reflection, double ti, double to, double phi, double *out);
+    void *eval_user;
 } btdf_preview_opts;
 
 /* Zeroes o and sets kind = POLAR. Defaults when width/height are 0: POLAR 960 x 720;

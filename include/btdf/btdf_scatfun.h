@@ -218,6 +218,9 @@ BTDF_API size_t btdf_scatfun_node_count(const btdf_scatfun *f);
 BTDF_API size_t btdf_scatfun_coeff_count(const btdf_scatfun *f);
 BTDF_API size_t btdf_scatfun_max_order(const btdf_scatfun *f);
 BTDF_API double btdf_scatfun_eta(const btdf_scatfun *f);
+/* The metadata text of a file read back (the JSON btdftab writes: ior, smoothness, k0,
+   ...), NUL-terminated; NULL for a built object or a file without metadata. */
+BTDF_API const char *btdf_scatfun_metadata(const btdf_scatfun *f);
 /* Size in bytes of the file btdf_scatfun_write makes with this metadata. */
 BTDF_API size_t btdf_scatfun_file_size(const btdf_scatfun *f, const char *metadata_json);
 /* Read-only views into f (live as long as f): nodes[node_count], and for pair

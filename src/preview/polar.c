@@ -30,6 +30,7 @@ static const char *channel_letter(int channels, int ch)
 typedef struct curve {
     const btdf_params *p;
     const btdf_full *full; /* model full: the material's tally, else NULL */
+    const btdf_preview_opts *o; /* o->eval, when set, gives the values */
     int ch;
     double ti; /* radians */
     double peak, peak_to;
@@ -37,8 +38,19 @@ typedef struct curve {
 } curve;
 
 /* rho |cos to| of channel ch in the plane of incidence; side +1 forward (phi = pi). */
+/* The caller's value of channel ch (o->eval); 0 for what is not a finite value >= 0. */
+static double polar_eval(const curve *cv, int reflection, double to, int side)
+{
+    double out[BTDF_MAX_CHANNELS] = {0};
+    cv->o->eval(cv->o->eval_user, reflection, cv->ti, to, side > 0 ? M_PI : 0.0, out);
+    double v = out[cv->ch];
+    return isfinite(v) && v > 0.0 ? v : 0.0;
+}
+
 static double polar_value(const curve *cv, double to, int side)
 {
+    if (cv->o->eval)
+        return polar_eval(cv, 0, to, side) * fabs(cos(to));
     double v = cv->full ? btdf_full_rho(cv->full, cv->ti, to, side > 0 ? M_PI : 0.0)
                         : btdf_rho_model(cv->p->model, cv->p->ior[cv->ch], cv->p->smoothness,
                                          cv->p->k0, cv->ti, to, side > 0 ? M_PI : 0.0);
@@ -49,6 +61,8 @@ static double polar_value(const curve *cv, double to, int side)
    (phi = pi). */
 static double polar_value_r(const curve *cv, double tr, int side)
 {
+    if (cv->o->eval)
+        return polar_eval(cv, 1, tr, side) * fabs(cos(tr));
     double v = cv->full ? btdf_full_rho_r(cv->full, cv->ti, tr, side > 0 ? M_PI : 0.0)
                         : btdf_rho_r_model(cv->p->model, cv->p->ior[cv->ch],
                                            cv->p->smoothness, cv->p->k0, cv->ti, tr,
@@ -159,7 +173,7 @@ static int polar_check(polar_plot *pp, char *msg, size_t msglen)
     pp->full = o->materials[0].model == BTDF_MODEL_FULL;
     /* the model objects of the materials: tallied here for model full, once per
        material; nothing is made for the others */
-    for (size_t m = 0; m < o->nmaterials; m++)
+    for (size_t m = 0; m < o->nmaterials && !o->eval; m++)
         if (o->materials[m].model == BTDF_MODEL_FULL) {
             btdf_status st = btdf_model_ctx_new(&o->materials[m], NULL, &pp->mx[m], msg, msglen);
             if (st != BTDF_OK)
@@ -181,6 +195,7 @@ static void polar_peaks(polar_plot *pp)
             for (size_t k = 0; k < o->nti; k++, i++) {
                 curve *cu = &cs[i];
                 cu->p = &o->materials[m];
+                cu->o = o;
                 cu->full = pp->mx[m] && btdf_model_ctx_params(pp->mx[m])->model == BTDF_MODEL_FULL
                                ? btdf_model_ctx_full(pp->mx[m], ch)
                                : NULL;

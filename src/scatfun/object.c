@@ -77,6 +77,7 @@ BTDF_API size_t btdf_scatfun_node_count(const btdf_scatfun *f) { return f ? f->n
 BTDF_API size_t btdf_scatfun_coeff_count(const btdf_scatfun *f) { return f ? f->ncoeffs : 0; }
 BTDF_API size_t btdf_scatfun_max_order(const btdf_scatfun *f) { return f ? f->mmax : 0; }
 BTDF_API double btdf_scatfun_eta(const btdf_scatfun *f) { return f ? (double)f->eta : 0.0; }
+BTDF_API const char *btdf_scatfun_metadata(const btdf_scatfun *f) { return f ? f->meta : NULL; }
 BTDF_API const float *btdf_scatfun_nodes(const btdf_scatfun *f) { return f ? f->nodes : NULL; }
 BTDF_API const float *btdf_scatfun_cdf(const btdf_scatfun *f) { return f ? f->cdf : NULL; }
 BTDF_API const float *btdf_scatfun_coeffs(const btdf_scatfun *f) { return f ? f->coeffs : NULL; }
