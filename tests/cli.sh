@@ -155,6 +155,23 @@ meta_at() { grep -abo '{"program": "btdftab' "$1" | tail -n 1 | cut -d: -f1; }
     [ "$(tail -c +"$off" "$W/m/g.bsdf" | sed 's/, "command": ".*"}$//')" = \
       "$(tail -c +"$off" "$W/m/t.bsdf" | sed 's/, "command": ".*"}$//')" ] && \
     ok "manifest .bsdf with part = both: tabulate's file (four blocks)" || no "manifest .bsdf differs from tabulate's"
+# A manifest's .xml and tabulate's for the same keys (basis, tolerance): the same bytes
+# but for the command in the comment; the file's name is its <Name>, so both are g.xml
+mkdir -p "$W/m/tab"
+printf '[g]\nior = 1.5\nsmoothness = 3\ntolerance = 0.5\nbasis = tree3\nxml = %s/m/g.xml\n' "$W" > "$W/m/x.ini"
+"$B" build -q "$W/m/x.ini" && "$B" tabulate -q --ior 1.5 -s 3 --tolerance 0.5 --basis tree3 -o "$W/m/tab/g.xml" && \
+    sed 's/; command: [^<]*</</' "$W/m/g.xml" > "$W/m/x1" && sed 's/; command: [^<]*</</' "$W/m/tab/g.xml" > "$W/m/x2" && \
+    cmp -s "$W/m/x1" "$W/m/x2" && grep -q '^xml tree3$' "$W/m/.g.xml.btdftab-stamp" && \
+    "$B" build "$W/m/x.ini" 2>&1 | grep -q "g.xml: up to date" && \
+    ok "manifest .xml: tabulate's file, stamped with its basis" || no "manifest .xml differs from tabulate's"
+printf '[g]\nior = 1.5\nsmoothness = 3\nxml = %s/m/t.csv\n' "$W" > "$W/m/bad.ini"
+expect 2 "bad.ini:4: output '.*t.csv': must end in .xml" "manifest: xml of a .csv" -- "$B" build "$W/m/bad.ini"
+printf '[g]\nior = 1.5\nsmoothness = 3\nbasis = klems\nxml = %s/m/t.xml\n' "$W" > "$W/m/bad.ini"
+expect 2 "bad.ini:4: basis 'klems': must be tree3, klems-full" "manifest: bad basis" -- "$B" build "$W/m/bad.ini"
+printf '[g]\nior = 1.5\nsmoothness = 3\ntolerance = 0.1\nbasis = klems-half\nxml = %s/m/t.xml\n' "$W" > "$W/m/bad.ini"
+expect 2 "bad.ini:4: material \[g\]: tolerance: a Klems matrix" "manifest: tolerance for Klems alone" -- "$B" build "$W/m/bad.ini"
+printf '[g]\nior = 1.5\nsmoothness = 3\nmodel = full\nxml = %s/m/t.xml\n' "$W" > "$W/m/bad.ini"
+expect 2 "bad.ini:5: material \[g\]: .*t.xml: model full: not available for .xml" "manifest: full .xml" -- "$B" build "$W/m/bad.ini"
 rm -rf "$W/m"
 
 # a --best-effort table above its tolerance (1e-7 at 80 degrees: the budget stops it short)

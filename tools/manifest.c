@@ -41,6 +41,9 @@
  *   leave = b.exr              ; tables for light leaving (index 1/n)
  *   bsdf = glass.bsdf          ; a renderer file (SCATFUN v1)
  *   sides = both               ; which sides the .bsdf holds: enter, leave or both
+ *   xml = glazing.xml          ; a Radiance BSDF XML (both parts, light from either side)
+ *   basis = tree3              ; its basis, as --basis: tree3 (the default), klems-full,
+ *                              ; klems-half or klems-quarter
  *
  * Only the tables an output needs are built, once per material and side, and shared
  * by its outputs. An output is skipped when it exists and its stamp (a hidden file
@@ -49,12 +52,13 @@
  * Output paths that are not absolute are relative to the manifest's folder, so a
  * manifest gives the same files from any working directory; missing folders are
  * created. The work comes in jobs, in manifest order: per material, its enter
- * tables, its leave tables, then each .bsdf. --shard K/N does jobs K-1, K-1+N, ...:
+ * tables, its leave tables, then each .bsdf, then each .xml. --shard K/N does jobs K-1, K-1+N, ...:
  * every output belongs to exactly one job, so N shards write disjoint files.
  */
 
 #define MAX_MATERIALS 64
 #define MAX_OUTPUTS 8
+#define NKEYS 14
 
 typedef struct material {
     char name[64];
@@ -64,18 +68,33 @@ typedef struct material {
     int sides; /* btdf_side */
     btdf_part part; /* of the enter and leave tables */
     int has_ior, has_s;
-    char *enter[MAX_OUTPUTS], *leave[MAX_OUTPUTS], *bsdf[MAX_OUTPUTS];
-    int nenter, nleave, nbsdf;
+    char *enter[MAX_OUTPUTS], *leave[MAX_OUTPUTS], *bsdf[MAX_OUTPUTS], *xml[MAX_OUTPUTS];
+    int nenter, nleave, nbsdf, nxml;
+    btdf_rad_basis basis; /* of the .xml outputs */
     int line;          /* of the [name] header */
-    int key_line[12];  /* of each key (KEYS order), 0 if not given */
+    int key_line[NKEYS];  /* of each key (KEYS order), 0 if not given */
 } material;
 
 /* The keys of a section, in the order of material.key_line. */
-static const char *const KEYS[12] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
-                                     "metric",  "sides",      "enter", "leave",   "bsdf",
-                                     "part",    "model"};
+static const char *const KEYS[NKEYS] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
+                                        "metric",  "sides",      "enter", "leave",   "bsdf",
+                                        "part",    "model",      "xml",   "basis"};
 enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF, K_PART,
-       K_MODEL };
+       K_MODEL, K_XML, K_BASIS };
+
+/* Output k of m in manifest order (enter, leave, bsdf, xml) and its key. */
+static const char *output_at(const material *m, int k, int *key)
+{
+    if (k < m->nenter)
+        return *key = K_ENTER, m->enter[k];
+    k -= m->nenter;
+    if (k < m->nleave)
+        return *key = K_LEAVE, m->leave[k];
+    k -= m->nleave;
+    if (k < m->nbsdf)
+        return *key = K_BSDF, m->bsdf[k];
+    return *key = K_XML, m->xml[k - m->nbsdf];
+}
 
 typedef struct manifest {
     material m[MAX_MATERIALS];
@@ -146,7 +165,7 @@ static int check_not_empty(manifest *mf)
     if (mf->n == 0)
         return 1;
     material *m = &mf->m[mf->n - 1];
-    for (int k = 0; k < 12; k++)
+    for (int k = 0; k < NKEYS; k++)
         if (m->key_line[k])
             return 1;
     snprintf(mf->why, sizeof mf->why, "material [%s] is empty (no keys)", m->name);
@@ -182,6 +201,7 @@ static int on_entry(void *user, const char *section, const char *key, const char
         m->metric = BTDF_METRIC_L1;
         m->sides = BTDF_SIDE_BOTH;
         m->part = BTDF_PART_TRANSMISSION;
+        m->basis = BTDF_RAD_TREE3;
         m->line = line;
         return 1;
     }
@@ -189,12 +209,12 @@ static int on_entry(void *user, const char *section, const char *key, const char
         return set_why(mf, "'%.100s' before any [material] section%s", key, "");
     material *m = &mf->m[mf->n - 1];
     int ki = -1;
-    for (int k = 0; k < 12; k++)
+    for (int k = 0; k < NKEYS; k++)
         if (!strcmp(key, KEYS[k]))
             ki = k;
     if (ki < 0)
         return set_why(mf, "unknown key '%.100s' (known: ior, smoothness, k0, model, theta_i, "
-                           "tolerance, metric, part, sides, enter, leave, bsdf)%s", key, "");
+                           "tolerance, metric, part, sides, enter, leave, bsdf, xml, basis)%s", key, "");
     if (m->key_line[ki]) {
         snprintf(mf->why, sizeof mf->why, "'%s' given twice in [%s] (first at line %d)", key,
                  m->name, m->key_line[ki]);
@@ -282,6 +302,16 @@ static int on_entry(void *user, const char *section, const char *key, const char
         for (int i = 0; i < m->nbsdf; i++)
             if (!ends_with(m->bsdf[i], ".bsdf"))
                 return set_why(mf, "output '%.200s': must end in .bsdf%s", m->bsdf[i], "");
+    } else if (ki == K_XML) {
+        if (!split_outputs(mf, key, value, m->xml, &m->nxml))
+            return 0;
+        for (int i = 0; i < m->nxml; i++)
+            if (!ends_with(m->xml[i], ".xml"))
+                return set_why(mf, "output '%.200s': must end in .xml%s", m->xml[i], "");
+    } else if (ki == K_BASIS) {
+        if (!btdf_rad_basis_parse(value, &m->basis))
+            return set_why(mf, "basis '%.100s': must be tree3, klems-full, klems-half or "
+                               "klems-quarter%s", value, "");
     }
     return 1;
 }
@@ -296,6 +326,8 @@ static void free_manifest(manifest *mf)
             free(m->leave[k]);
         for (int k = 0; k < m->nbsdf; k++)
             free(m->bsdf[k]);
+        for (int k = 0; k < m->nxml; k++)
+            free(m->xml[k]);
     }
 }
 
@@ -482,6 +514,58 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
     return 0;
 }
 
+/* Writes the stale .xml outputs of one material: every block in its basis, with the
+   tolerance tabulate -o F.xml takes (a tree's: the key's, or 0.2; a Klems matrix has
+   none). theta_i, metric, part and sides do not apply: the file holds both parts and
+   light from either side. */
+static int manifest_xml(const manifest_opts *mo, const material *mat, int *done, int total,
+                        int *job)
+{
+    double tol = mat->basis != BTDF_RAD_TREE3 ? 0.0 : mat->key_line[K_TOL] ? mat->tol : 0.2;
+    material m; /* the stamp's: only what the file depends on */
+    memset(&m, 0, sizeof m);
+    m.tol = tol;
+    char stamp[4096], what[64], prov[256];
+    snprintf(what, sizeof what, "xml %s", btdf_rad_basis_name(mat->basis));
+    stamp_text(stamp, sizeof stamp, &m, &mat->p, what);
+    snprintf(prov, sizeof prov, "btdftab build, material [%s]", mat->name);
+    for (int k = 0; k < mat->nxml; k++) {
+        const char *out = mat->xml[k];
+        (*done)++;
+        if (!mine(mo, (*job)++))
+            continue;
+        if (mo->dry_run) {
+            plan(mat->name, out, why_stale(out, stamp, mo->force));
+            continue;
+        }
+        if (!mo->force && up_to_date(out, stamp)) {
+            if (!mo->quiet)
+                fprintf(stderr, "%s: %s: up to date\n", mo->prog, out);
+            continue;
+        }
+        if (!make_parents(out)) {
+            fprintf(stderr, "%s: %s: cannot create its folder: %s\n", mo->prog, out,
+                    strerror(errno));
+            return 1;
+        }
+        char label[128];
+        snprintf(label, sizeof label, "[%d/%d] %s", *done, total, out);
+        run_progress pr;
+        run_progress_start(&pr, mo->progress, label);
+        int code = run_radiance(mo->prog, out, NULL, &mat->p, mat->basis,
+                                tol > 0.0 ? tol : 0.2, mo->threads, mo->quiet, mo->best_effort,
+                                prov, &pr);
+        if (code != 0)
+            return code;
+        char why[512] = "";
+        if (!write_stamp_for(out, stamp, why, sizeof why)) {
+            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, out, why);
+            return 1;
+        }
+    }
+    return 0;
+}
+
 /* A .bsdf's blocks and tolerance from the keys as tabulate takes them from its options
    (run.h): part and tolerance apply when given; without part, the file holds both
    parts, as tabulate -o F.bsdf without --part. */
@@ -542,11 +626,9 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
                    : !strncmp(msg, "side", 4)    ? line_of(m, K_SIDES)
                                                  : m->line;
         }
-        for (int k = 0; k < m->nenter + m->nleave + m->nbsdf; k++) {
-            int key = k < m->nenter ? K_ENTER : k < m->nenter + m->nleave ? K_LEAVE : K_BSDF;
-            const char *out = key == K_ENTER   ? m->enter[k]
-                              : key == K_LEAVE ? m->leave[k - m->nenter]
-                                               : m->bsdf[k - m->nenter - m->nleave];
+        for (int k = 0; k < m->nenter + m->nleave + m->nbsdf + m->nxml; k++) {
+            int key;
+            const char *out = output_at(m, k, &key);
             /* a missing folder is created at build time: what is above it must allow it */
             int dir_exists = 1, bad = !parents_creatable(out, &dir_exists, msg, sizeof msg);
             /* the name's own checks (its length, a folder or non-file there: EINVAL) hold
@@ -574,12 +656,10 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
             /* every earlier output, of this material and the ones before */
             for (int j = 0; j <= i; j++) {
                 const material *q = &mf->m[j];
-                int nq = j < i ? q->nenter + q->nleave + q->nbsdf : k;
+                int nq = j < i ? q->nenter + q->nleave + q->nbsdf + q->nxml : k;
                 for (int r = 0; r < nq; r++) {
-                    int qk = r < q->nenter ? K_ENTER : r < q->nenter + q->nleave ? K_LEAVE : K_BSDF;
-                    const char *o2 = qk == K_ENTER   ? q->enter[r]
-                                     : qk == K_LEAVE ? q->leave[r - q->nenter]
-                                                     : q->bsdf[r - q->nenter - q->nleave];
+                    int qk;
+                    const char *o2 = output_at(q, r, &qk);
                     if (path_same(out, o2)) {
                         snprintf(why, whylen, "output '%.300s' is also written by [%s] at line %d",
                                  out, q->name, q->key_line[qk]);
@@ -661,7 +741,21 @@ int manifest_run(const manifest_opts *mo)
                 return 1;
             }
         }
-        total += m->nenter + m->nleave + m->nbsdf;
+        /* as tabulate refuses them: full for .xml, a tolerance for Klems matrices alone */
+        int full_xml = m->p.model == BTDF_MODEL_FULL && m->nxml > 0;
+        if (full_xml || (m->key_line[K_TOL] && m->basis != BTDF_RAD_TREE3 && m->nxml > 0 &&
+                         m->nenter + m->nleave + m->nbsdf == 0)) {
+            fprintf(stderr, "%s: %s:%d: material [%s]: %s%s\n", mo->prog, mo->path,
+                    m->key_line[full_xml ? K_XML : K_TOL], m->name, full_xml ? m->xml[0] : "",
+                    full_xml ? ": model full: not available for .xml yet (enter and leave "
+                               "tables take it)"
+                             : "tolerance: a Klems matrix holds exact patch averages; its "
+                               "error is set by the basis, not by a tolerance");
+            free_manifest(mf);
+            free(mf);
+            return 2;
+        }
+        total += m->nenter + m->nleave + m->nbsdf + m->nxml;
     }
     if (mf->n == 0) {
         fprintf(stderr, "%s: %s: no [material] sections\n", mo->prog, mo->path);
@@ -694,6 +788,8 @@ int manifest_run(const manifest_opts *mo)
         if (code == 0 && m->nbsdf)
             code = manifest_bsdf(mo, m->name, &m->p, bsdf_tol(m), m->sides, bsdf_blocks(m),
                                  m->bsdf, m->nbsdf, &done, total, &job);
+        if (code == 0 && m->nxml)
+            code = manifest_xml(mo, m, &done, total, &job);
     }
     free_manifest(mf);
     free(mf);

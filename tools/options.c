@@ -644,7 +644,10 @@ void opt_man(FILE *f, const char *version)
         {"enter", "outputs for light entering (index n): .csv .exr .png"},
         {"leave", "outputs for light leaving (index 1/n)"},
         {"bsdf", "a .bsdf output, as \\fBtabulate \\-o F.bsdf\\fR"},
-        {"sides", "the sides the .bsdf holds: enter, leave or both"}};
+        {"sides", "the sides the .bsdf holds: enter, leave or both"},
+        {"xml", "a Radiance BSDF XML output, as \\fBtabulate \\-o F.xml\\fR"},
+        {"basis", "the .xml's basis, as \\fB\\-\\-basis\\fR: tree3 (default), klems-full, "
+                  "klems-half or klems-quarter"}};
     fprintf(f, ".SH MANIFEST\nA scene manifest (\\fBbtdftab build\\fR) is an INI file, one "
                "[section] per material, with the keys:\n");
     for (size_t k = 0; k < sizeof mkeys / sizeof mkeys[0]; k++)
