@@ -284,6 +284,22 @@ check(t.model == "smith" and same(t.eval(rad(q[:, 0]), rad(q[:, 1]), rad(q[:, 2]
 tb = btdftab.build(1.5, 3, tolerance=1e-2, model="smith")
 check(tb.model == "smith" and len(tb) == len(t),
       "build(model='smith'): the nodes of btdftab tabulate --model smith (%d)" % len(tb))
+# a table of full (smith's slices and the tally, which the reader rebuilds): built by
+# the package as the tool builds it (30 degrees: the tool's x * pi / 180), the same
+# values as btdftab eval --table on the tool's own table
+fu = os.path.join(W, "full.csv")
+tool("tabulate", "-q", "--model", "full", "--ior", 1.5, "-s", 3, "--tolerance", "1e-2",
+     "--theta-i", "0:30", "-o", fu)
+qf = q * [30 / 80, 1, 1]
+want = rows_of(tool("eval", "--table", fu,
+                    stdin="".join("%.17g %.17g %.17g\n" % tuple(v) for v in qf)))[:, 0]
+tb = btdftab.build(1.5, 3, tolerance=1e-2, model="full", ti_range=(0, 30 * math.pi / 180))
+mine = os.path.join(W, "mine_full.csv")
+tb.write(mine)
+t = btdftab.open(mine)
+check(tb.model == "full" and t.model == "full" and len(t) == len(btdftab.open(fu)) and
+      same(t.eval(rad(qf[:, 0]), rad(qf[:, 1]), rad(qf[:, 2])), want),
+      "build(model='full'): btdftab tabulate --model full's table, read back with its tally")
 # a .bsdf written by the tool
 bsdf = os.path.join(W, "t.bsdf")
 tool("tabulate", "-q", "--ior", 1.5, "-s", 3, "--tolerance", "5e-2", "-o", bsdf)
@@ -301,7 +317,7 @@ for call, word in ((lambda: btdftab.rho(1.5, 3, 2.0, 2.5, 0), "2.0"),
                    (lambda: btdftab.rho(1.5, 3, 0, 3, 0, model="walter"), "walter"),
                    (lambda: btdftab.T(1.5, 3, 0, model="smth"), "smth"),
                    (lambda: btdftab.rho_deg(1.5, 3, 30, 60, 0, model="full"), "60"),
-                   (lambda: btdftab.build(1.5, 3, model="full"), "full")):
+                   (lambda: btdftab.build(1.5, 3, model="full", format="bsdf"), "full")):
     try:
         call()
         check(False, "bad input raises ValueError (%s)" % word)

@@ -19,7 +19,8 @@ btdftab tool does), conventions of btdf/btdf.h: theta_i in [0, pi/2], theta_o in
 model: "xu-sun" (Eq. 25, the default), "smith" (the height-correlated Smith term of
 the same facets) or "full" (smith plus the light scattered two or more times, from a
 tally made once per material: paths and seed as btdf_full_opts, the defaults those
-of `btdftab eval --model full`; see Full). Tables hold xu-sun or smith.
+of `btdftab eval --model full`; see Full). Tables (.csv, .exr) hold any of the three
+(a table of full keeps its tally, which the reader rebuilds); a .bsdf xu-sun or smith.
 
 Bad parameters or angles raise ValueError naming the value and what is allowed; a
 failed library call raises BtdfError with the library's message.
@@ -734,12 +735,11 @@ def _ior_params(ior, smoothness, k0, model=0):
     for c, v in enumerate(iors):
         p.ior[c] = v
     p.smoothness, p.k0 = float(smoothness), float(k0)
-    if model == 2:
-        raise ValueError("model 'full': tables and .bsdf files hold xu-sun or smith (full "
-                         "is evaluated by rho, rho_r, T, R and Full)")
-    p.model = model
+    p.model = 1 if model == 2 else model  # full has smith's parameters (checked as such)
     msg = ctypes.create_string_buffer(256)
-    if _library().btdf_params_check(ctypes.byref(p), msg, 256) != 0:
+    rc = _library().btdf_params_check(ctypes.byref(p), msg, 256)
+    p.model = model  # the table builder makes full's tally itself
+    if rc != 0:
         raise ValueError("model parameters: " + msg.value.decode("utf-8", "replace"))
     return p
 
@@ -748,10 +748,15 @@ def build(ior, smoothness, k0=0.7, tolerance=1e-3, part="transmission", threads=
           ti_range=None, format="table", model="xu-sun"):  # noqa: A002
     """Builds an adaptive table (btdf_table_build, the default of `btdftab tabulate`)
     or, with format="bsdf", a .bsdf file's contents (btdf_scatfun_build, all four
-    blocks). ior: one index or three; ti_range: (min, max) radians; model xu-sun or
-    smith (as `btdftab tabulate --model`). Returns a Table
-    or a Bsdf; a budget that stops refinement first raises BtdfError."""
+    blocks). ior: one index or three; ti_range: (min, max) radians; model xu-sun,
+    smith or full for a table (as `btdftab tabulate --model`; full's tally is made with
+    the defaults of `btdftab tabulate --model full` and kept in the table); xu-sun or
+    smith for a .bsdf. Returns a Table or a Bsdf; a budget that stops refinement first raises
+    BtdfError."""
     lib = _library()
+    if format == "bsdf" and model == "full":
+        raise ValueError("model 'full': btdf_scatfun_build takes xu-sun or smith (btdftab "
+                         "tabulate -o F.bsdf xu-sun only); tables (format='table') take full")
     p = _ior_params(ior, smoothness, k0, _model_id(model))
     msg = ctypes.create_string_buffer(1024)
     h = ctypes.c_void_p()

@@ -420,14 +420,17 @@ def _node_factors(table, slices):
 
 class TableRule:
     """The slices of a table (a btdftab.Table, read by libbtdf) on the device, and the
-    rule of btdf/btdf.h, in the table's model (xu-sun or smith, from its metadata)."""
+    rule of btdf/btdf.h, in the table's model (from its metadata): xu-sun or smith; a
+    table of full (smith's slices plus a tally) is not read on the device yet."""
 
     def __init__(self, table):
         self.kind = table.kind
         self.model = table.model
         if self.model not in ("xu-sun", "smith"):
-            raise ValueError("btdftab: table '%s' holds model '%s', which this plugin does "
-                             "not read" % (table.path, self.model))
+            raise ValueError("btdftab: table '%s' holds model '%s': mode 'table' reads "
+                             "tables of xu-sun or smith; for %s give mode 'analytic' with "
+                             "model '%s' (the same tally, made by the plugin)"
+                             % (table.path, self.model, self.model, self.model))
         self.channels = table.channels
         self.ior = list(table.ior)
         self.s = table.smoothness
