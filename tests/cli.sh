@@ -540,6 +540,15 @@ if "$B" --version | grep -q 'PNG on'; then
         --log-decades 3 && [ -s "$W/z.png" ] && ok "render with --zoom and --log-decades" || \
         no "render with --zoom and --log-decades"
     rm -f "$W"/*.png
+    # without --zoom a render zooms to the lobe: s = 20's spot, under a tenth of the
+    # face, is zoomed in (not the --zoom 1 picture); s = 3's fills the face: zoom 1
+    for s in 20 3; do
+        "$B" tabulate -q --ior 1.31 -s $s --theta-i 0:45 --tolerance 1e-2 --preview render="$W/za$s.png" && \
+            "$B" tabulate -q --ior 1.31 -s $s --theta-i 0:45 --tolerance 1e-2 --preview render="$W/z1$s.png" --zoom 1
+    done
+    [ -s "$W/za20.png" ] && ! cmp -s "$W/za20.png" "$W/z120.png" && cmp -s "$W/za3.png" "$W/z13.png" && \
+        ok "render's default zoom: from the lobe at s = 20, the whole face at s = 3" || no "render default zoom"
+    rm -f "$W"/*.png
     expect 2 "applies to renders" "--log-decades without a render" -- "$B" tabulate \
         --theta-i 0:30 -o "$W/m.png" --log-decades 3
     expect 2 "must lie in \[1, 1000\]" "--zoom below 1" -- "$B" tabulate --zoom 0.5 \

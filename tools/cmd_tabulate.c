@@ -310,7 +310,9 @@ int cmd_tabulate(cli *c, const char *prov)
         po->kind = c->previews[k].kind;
         po->analytic = c->previews[k].analytic;
         po->log_decades = po->kind == BTDF_PREVIEW_RENDER ? c->log_decades : 0.0;
-        po->zoom = po->kind == BTDF_PREVIEW_RENDER ? c->zoom : 0.0;
+        /* without --zoom, a zoom chosen from the lobe's width (a narrow lobe is a dot
+           on the whole face) */
+        po->zoom = po->kind != BTDF_PREVIEW_RENDER ? 0.0 : GIVEN(c, OPT_ZOOM) ? c->zoom : -1.0;
         po->width = c->pic_w;
         po->height = c->pic_h;
         outs[nouts++] = (run_table_out){c->previews[k].path, po, 0};

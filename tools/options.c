@@ -103,8 +103,9 @@ const opt_def opt_table[] = {
      "render previews on a log scale over D decades below each row's maximum\n"
      "(1 to 12; default linear, as in the paper)"},
     {OPT_ZOOM, "zoom", 0, "Z", 0, CMD_TABULATE,
-     "render previews show the central 1/Z of the face (1 to 1000; default 1, the\n"
-     "whole face, as in the paper)"},
+     "render previews show the central 1/Z of the face (1 to 1000; default: from\n"
+     "the lobe, so that a narrow one fills the picture; 1, the whole face as in the\n"
+     "paper, when the lobe fills it already)"},
     {OPT_SIZE, "size", 0, "WxH", 0, CMD_TABULATE | CMD_POLAR,
      "picture size in pixels (default: per kind)"},
     {OPT_MATERIAL, "material", 0, "N:S", 1, CMD_POLAR,

@@ -94,7 +94,10 @@ typedef struct btdf_preview_opts {
     double log_decades;            /* RENDER: 0 linear (the paper's); 1 to 12: log10 scale
                                       over that many decades below each row's maximum */
     double zoom;                   /* RENDER: 0 or 1 the whole face (the paper's); Z in
-                                      (1, 1000]: the central 1/Z of it, for narrow lobes */
+                                      (1, 1000]: the central 1/Z of it, for narrow lobes;
+                                      < 0: Z from the lobe, so that the lit spot fills 90%
+                                      of the picture (1, 2 or 5 times a power of ten; 1
+                                      when the spot fills the face already) */
     btdf_part part;                /* POLAR: 0 or TRANSMISSION the lobe below the surface;
                                       REFLECTION or BOTH also rho_r |cos tr| of the same
                                       facets (MODEL.md section 8) above it, mirrored like the

@@ -37,6 +37,44 @@ static void face_radiance(const btdf_table *t, int analytic, double x, double y,
         out[ch] = st == BTDF_OK && isfinite(v[ch]) ? v[ch] * cti / (rl * rl) : 0.0;
 }
 
+/* The zoom of a render asked for with zoom < 0 (auto): the spot's extent x_e on the
+   face, the largest |x| on the y = 0 line where either row (far, near light) still
+   reaches a visible fraction of its maximum (one grey step, 1/255, linear; 10^-D on a
+   log scale), is made 90% of the shown half width: Z = 0.45 / x_e, rounded down to 1,
+   2 or 5 times a power of ten, and 1 (the paper's whole face) below 2. The spot of an
+   on-axis eye and light is round about the axis, so one line gives its extent. */
+#define ZOOM_STEPS 2000 /* per half width: 2.5e-4 face widths, under a pixel at zoom 1000 x 300 px */
+static double auto_zoom(const btdf_table *t, double decades)
+{
+    double frac = decades > 0.0 ? pow(10.0, -decades) : 1.0 / 255.0, xe = 0.0;
+    for (int row = 0; row < 2; row++) {
+        double depth = row == 0 ? LIGHT_FAR : LIGHT_NEAR, vmax = 0.0;
+        for (int pass = 0; pass < 2; pass++) /* the row's maximum, then from the edge in */
+            for (int j = 0; j <= ZOOM_STEPS; j++) {
+                int k = pass == 0 ? j : ZOOM_STEPS - j;
+                double v[BTDF_MAX_CHANNELS], u = 0.0;
+                face_radiance(t, 0, 0.5 * k / ZOOM_STEPS, 0.0, depth, v);
+                for (int ch = 0; ch < btdf_table_get_params(t)->channels; ch++)
+                    u = fmax(u, v[ch]);
+                if (pass == 0) {
+                    vmax = fmax(vmax, u);
+                } else if (vmax > 0.0 && u >= frac * vmax) { /* vmax 0: nothing lit */
+                    xe = fmax(xe, 0.5 * k / ZOOM_STEPS);
+                    break;
+                }
+            }
+    }
+    /* xe = 0: the spot is under one step; the finest step's zoom stands for it */
+    double z = 0.45 / fmax(xe, 0.5 / ZOOM_STEPS), nice = 1.0;
+    for (double d = 1.0; d <= 1000.0; d *= 10.0)
+        for (int k = 0; k < 3; k++) {
+            double c = d * (k == 0 ? 1.0 : k == 1 ? 2.0 : 5.0);
+            if (c <= z && c <= 1000.0)
+                nice = c;
+        }
+    return nice < 2.0 ? 1.0 : nice;
+}
+
 /* Grey level in [0, 1] of radiance u of a row whose maximum is umax: linear, or log10
    over `decades` below umax. */
 static double tone(double u, double umax, double decades)
@@ -95,11 +133,11 @@ static int render_texts(render_plot *rp, char *msg, size_t msglen)
     if (!(D == 0.0 || (D >= 1.0 && D <= 12.0)))
         return say(BTDF_EINVAL, msg, msglen,
                    "log_decades = %g: 0 for a linear scale, or 1 to 12 decades", D);
-    double Z = o->zoom == 0.0 ? 1.0 : o->zoom;
+    double Z = o->zoom == 0.0 ? 1.0 : o->zoom < 0.0 ? auto_zoom(t, D) : o->zoom;
     if (!(Z >= 1.0 && Z <= 1000.0))
         return say(BTDF_EINVAL, msg, msglen,
-                   "zoom = %g: 1 (or 0) for the whole face, up to 1000 for its central 1/1000",
-                   o->zoom);
+                   "zoom = %g: 1 (or 0) for the whole face, up to 1000 for its central "
+                   "1/1000, or < 0 for a zoom chosen from the lobe", o->zoom);
     const btdf_params *p = btdf_table_get_params(t);
     rp->t = t;
     rp->p = p;
@@ -119,8 +157,8 @@ static int render_texts(render_plot *rp, char *msg, size_t msglen)
     /* lengths in face widths ("W" read as watts) */
     char shown[120] = "a square face; lengths in face widths";
     if (Z > 1.0)
-        snprintf(shown, sizeof shown, "the central %.3g of a square face (zoom %g); lengths in "
-                 "face widths", 1.0 / Z, Z);
+        snprintf(shown, sizeof shown, "the central %.3g of a square face (zoom %g%s); lengths "
+                 "in face widths", 1.0 / Z, Z, o->zoom < 0.0 ? ", from the lobe's width" : "");
     snprintf(rp->sub, sizeof rp->sub,
              "%s; point light on its axis in the light's medium (%s the block); eye "
              "0.8 widths from the face on its axis, %s",
