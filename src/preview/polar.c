@@ -125,6 +125,8 @@ typedef struct polar_plot {
     double foot_h;
     double cx, cy, R, band; /* the centre, radius and upper band */
     double L;               /* the incident arrows' length */
+    double *pts;            /* every lobe's drawn points, x y pairs (tick labels avoid them) */
+    size_t npts;
 } polar_plot;
 
 static int polar_check(polar_plot *pp, char *msg, size_t msglen)
@@ -401,7 +403,7 @@ static int polar_layout(polar_plot *pp, plot_canvas *c, char *msg, size_t msglen
 static void polar_grid(const polar_plot *pp, plot_canvas *c)
 {
     int W = pp->W, refl = pp->refl, nt = pp->nt, nt_r = pp->nt_r;
-    double cx = pp->cx, cy = pp->cy, R = pp->R, fsS = pp->fsS, lineS = pp->lineS, m = pp->m;
+    double cx = pp->cx, cy = pp->cy, R = pp->R, fsS = pp->fsS, lineS = pp->lineS;
     plot_rect(c, 0, cy, W, cy + R + 1, (plot_rgb){246, 248, 252});
     for (int k = 1; k <= nt; k++) {
         double r = R * k / nt;
@@ -457,23 +459,59 @@ static void polar_grid(const polar_plot *pp, plot_canvas *c)
     plot_line(c, 0, cy, W, cy, 2.0, 0, pv_ink);
 
     /* Radial scale above the surface, right of the centre; with the reflection, its
-       scale there and the transmission's below the line. */
-    char tl[32];
+       scale there and the transmission's below the line (their labels: polar_ticks). */
     for (int half = 0; half <= refl; half++) {
         int below = half == 0 && refl; /* the transmission's ticks, under the line */
         int n_h = half ? nt_r : nt;
+        double vm_h = half ? pp->vmax_r : (pp->trans ? pp->vmax : 0.0);
+        for (int k = 1; k <= n_h && (vm_h > 0.0); k++) {
+            double x = cx + R * k / n_h;
+            plot_line(c, x, below ? cy : cy - 0.25 * fsS, x, below ? cy + 0.25 * fsS : cy, 1.2,
+                      0, pv_ink);
+        }
+    }
+}
+
+/* Whether box b (padded by pad) holds a point of a drawn lobe. */
+static int lobe_hits(const polar_plot *pp, plot_box b, double pad)
+{
+    for (size_t k = 0; k < pp->npts; k++) {
+        double x = pp->pts[2 * k], y = pp->pts[2 * k + 1];
+        if (x > b.x0 - pad && x < b.x1 + pad && y > b.y0 - pad && y < b.y1 + pad)
+            return 1;
+    }
+    return 0;
+}
+
+/* The radial ticks' labels, drawn after the lobes so that they go where no curve is:
+   right of the centre as the ticks, or else mirrored left of it (the same radius, with
+   its own tick mark), or not at all when both places hold a curve or a text. */
+static void polar_ticks(const polar_plot *pp, plot_canvas *c)
+{
+    double cx = pp->cx, cy = pp->cy, R = pp->R, fsS = pp->fsS, W = pp->W, m = pp->m;
+    char tl[32];
+    for (int half = 0; half <= pp->refl; half++) {
+        int below = half == 0 && pp->refl; /* the transmission's ticks, under the line */
+        int n_h = half ? pp->nt_r : pp->nt;
         double st_h = half ? pp->step_r : pp->step;
         double vm_h = half ? pp->vmax_r : (pp->trans ? pp->vmax : 0.0);
         double yl = below ? cy + 0.3 * fsS : cy - 0.3 * fsS, ay = below ? 0.0 : 1.0;
         for (int k = 1; k <= n_h && (vm_h > 0.0); k++) {
-            double x = cx + R * k / n_h;
             plot_tick_label(tl, sizeof tl, st_h * k, st_h);
-            double ax = x + plot_text_width(c, tl, fsS) / 2 > W - m ? 1.0 : 0.5;
-            plot_box b = plot_text_box(c, x, yl, ax, ay, tl, fsS);
-            plot_line(c, x, below ? cy : cy - 0.25 * fsS, x, below ? cy + 0.25 * fsS : cy, 1.2,
-                      0, pv_ink);
-            if (!plot_text_collides(c, b, 0.5 * fsS))
+            double tw = plot_text_width(c, tl, fsS);
+            for (int side = 1; side >= -1; side -= 2) {
+                double x = cx + side * R * k / n_h;
+                double ax = side > 0 ? (x + tw / 2 > W - m ? 1.0 : 0.5)
+                                     : (x - tw / 2 < m ? 0.0 : 0.5);
+                plot_box b = plot_text_box(c, x, yl, ax, ay, tl, fsS);
+                if (plot_text_collides(c, b, 0.5 * fsS) || lobe_hits(pp, b, 0.15 * fsS))
+                    continue;
+                if (side < 0)
+                    plot_line(c, x, below ? cy : cy - 0.25 * fsS, x,
+                              below ? cy + 0.25 * fsS : cy, 1.2, 0, pv_ink);
                 plot_text(c, x, yl, ax, ay, tl, fsS, pv_ink);
+                break;
+            }
         }
     }
 }
@@ -514,11 +552,13 @@ static void polar_snell(const polar_plot *pp, plot_canvas *c)
 
 /* The lobes: the transmission below the surface, then the reflection above it, each
    on its own scale. */
-static int polar_lobes(const polar_plot *pp, plot_canvas *c, char *msg, size_t msglen)
+static int polar_lobes(polar_plot *pp, plot_canvas *c, char *msg, size_t msglen)
 {
     double cx = pp->cx, cy = pp->cy, R = pp->R;
-    double *xy = malloc(sizeof *xy * 2 * (2 * (POLAR_STEPS + 1)));
-    if (!xy)
+    /* every curve's points, both halves, kept for the tick labels (polar_ticks) */
+    pp->pts = malloc(sizeof *pp->pts * 2 * (2 * (POLAR_STEPS + 1)) * 2 * pp->ncurves);
+    pp->npts = 0;
+    if (!pp->pts)
         return say(BTDF_ENOMEM, msg, msglen, "out of memory for the curves");
     for (size_t i = 0; i < pp->ncurves; i++) {
         const curve *cu = &pp->cs[i];
@@ -530,6 +570,7 @@ static int polar_lobes(const polar_plot *pp, plot_canvas *c, char *msg, size_t m
             if (!(scale > 0.0))
                 continue;
             size_t np = 0;
+            double *xy = pp->pts + 2 * pp->npts;
             for (int side = -1; side <= 1; side += 2)
                 for (int j = 0; j <= POLAR_STEPS; j++) {
                     int jj = side < 0 ? POLAR_STEPS - j : j; /* backward side in, forward out */
@@ -546,9 +587,9 @@ static int polar_lobes(const polar_plot *pp, plot_canvas *c, char *msg, size_t m
                     np++;
                 }
             plot_polyline(c, xy, np, 2.2, pp->colour[i]);
+            pp->npts += np;
         }
     }
-    free(xy);
     return BTDF_OK;
 }
 
@@ -657,6 +698,7 @@ int pv_draw_polar(const btdf_preview_opts *o, plot_canvas *c, char *msg, size_t 
     st = polar_lobes(pp, c, msg, msglen);
     if (st != BTDF_OK)
         goto fail;
+    polar_ticks(pp, c);
     polar_arrows(pp, c);
     polar_labels(pp, c);
     goto done;
@@ -665,6 +707,7 @@ fail:
 done:
     for (size_t m = 0; m < BTDF_PREVIEW_MAX_CURVES; m++)
         btdf_model_ctx_free(pp->mx[m]);
+    free(pp->pts);
     free(pp);
     return st;
 }
