@@ -16,6 +16,7 @@ typedef struct file_curves {
     btdf_input in;
     const btdf_table *part[2]; /* a table's transmission [0] and reflection [1] */
     int channels;
+    double fold[BTDF_MAX_CHANNELS]; /* a colour .bsdf's transmission: (n_c / n_G)^2 */
 } file_curves;
 
 /* The preview's evaluator (btdf_preview_opts.eval): the file's rho or rho_r. */
@@ -32,6 +33,9 @@ static void file_curves_eval(void *user, int reflection, double ti, double to, d
                                    phi, out) != BTDF_OK)
             for (int ch = 0; ch < f->channels; ch++)
                 out[ch] = 0.0; /* out of the file's range: nothing drawn there */
+        /* a colour file stores T_ENTER times (n_G / n_c)^2 (btdf_scatfun.h): undone */
+        for (int ch = 0; ch < f->channels && !reflection; ch++)
+            out[ch] *= f->fold[ch];
     } else {
         /* light entering the dense medium (index n), as Radiance reads the file */
         for (int ch = 0; ch < f->channels; ch++)
@@ -147,6 +151,9 @@ static int file_curves_open(const char *file, btdf_part part, const double *angl
             return 1;
     }
     f->channels = p->channels;
+    for (int ch = 0; ch < p->channels; ch++) /* ior[1] > 0: the file's own check */
+        f->fold[ch] = f->in.scatfun && p->channels == 3
+                          ? (p->ior[ch] / p->ior[1]) * (p->ior[ch] / p->ior[1]) : 1.0;
     return 0;
 }
 
