@@ -99,6 +99,10 @@ int cmd_polar(const cli *c);
    message. */
 int polar_of_file(const char *file, const char *png, btdf_part part, const double *angles,
                   size_t na, int width, int height);
+/* The factors (n_c / n_G)^2 that undo a colour .bsdf's stored transmission scaling
+   (btdf_scatfun.h), from its metadata; 1 each for one channel. 0 when a colour file's
+   metadata lacks its three indices (fold stays all 1). */
+int scatfun_fold(const btdf_scatfun *f, double fold[BTDF_MAX_CHANNELS]);
 
 /* cmd_pane.c: a pane's system (--back): its options, tabulate to .xml, albedo */
 int apply_pane(cli *c, int id, const char *v);

@@ -62,6 +62,7 @@ int cmd_eval(const cli *c)
         return fail(EXIT_USAGE, "--part both: eval reads one part at a time, transmission or "
                                 "reflection");
     btdf_input in = {NULL, NULL, NULL};
+    double fold[BTDF_MAX_CHANNELS] = {1.0, 1.0, 1.0}; /* a colour .bsdf's, divided out */
     const btdf_table *tpart = NULL; /* the part of in.table that is evaluated */
     double ti_range[2] = {0.0, 90.0}; /* degrees */
     if (c->table) {
@@ -94,6 +95,10 @@ int cmd_eval(const cli *c)
                            "reflection blocks are for renderers)", c->table);
         } else {
             p.channels = btdf_scatfun_channels(in.scatfun);
+            if (!scatfun_fold(in.scatfun, fold))
+                fprintf(stderr, "btdftab: %s: warning: its metadata gives no three indices, so "
+                                "the R and B values are printed as stored (times (n_G / n_c)^2)\n",
+                        c->table);
             if (!(btdf_scatfun_sides(in.scatfun) & BTDF_SIDE_ENTER)) {
                 btdf_scatfun_free(in.scatfun);
                 /* eval reads light entering through the top (index n); the file has no
@@ -168,8 +173,11 @@ int cmd_eval(const cli *c)
                 out[ch] = btdf_rho_r_model_deg(p.model, p.ior[ch], p.smoothness, p.k0, v[0],
                                                v[1], v[2]);
         } else if (in.scatfun) {
-            /* light entering through the top (index n), as pbrt-v3 would read it */
+            /* light entering through the top (index n), as pbrt-v3 would read it, with
+               a colour file's fold factors divided out: rho per channel */
             btdf_scatfun_eval(in.scatfun, ti, to, phi, out);
+            for (int ch = 0; ch < p.channels; ch++)
+                out[ch] *= fold[ch];
         } else if (in.radiance) {
             /* light entering the dense medium (index n), as Radiance reads the file */
             for (int ch = 0; ch < p.channels; ch++)

@@ -74,6 +74,26 @@ static int json_numbers(const char *json, const char *key, double *v, int max)
     return n;
 }
 
+/* The fold factors (n_c / n_G)^2 of a colour .bsdf's transmission blocks, from the
+   indices its metadata gives (btdf_scatfun.h: T_ENTER of channel c is stored times
+   (n_G / n_c)^2); 1 for a one-channel file. 0 when a colour file's metadata gives no
+   three positive indices (a file not written by btdftab): fold is then all 1. */
+int scatfun_fold(const btdf_scatfun *f, double fold[BTDF_MAX_CHANNELS])
+{
+    const char *meta = btdf_scatfun_metadata(f);
+    double ior[3];
+    for (int ch = 0; ch < BTDF_MAX_CHANNELS; ch++)
+        fold[ch] = 1.0;
+    if (btdf_scatfun_channels(f) != 3)
+        return 1;
+    if (!meta || json_numbers(meta, "ior", ior, 3) != 3 || !(ior[0] > 0.0) ||
+        !(ior[1] > 0.0) || !(ior[2] > 0.0))
+        return 0; /* ior[1] > 0 checked: it divides below */
+    for (int ch = 0; ch < 3; ch++)
+        fold[ch] = (ior[ch] / ior[1]) * (ior[ch] / ior[1]);
+    return 1;
+}
+
 /* The material of a .bsdf from its metadata (btdftab writes ior, smoothness and k0
    there); 0 and a message when it is not there. */
 static int scatfun_params(const char *file, const btdf_scatfun *f, btdf_params *p)
@@ -151,9 +171,10 @@ static int file_curves_open(const char *file, btdf_part part, const double *angl
             return 1;
     }
     f->channels = p->channels;
-    for (int ch = 0; ch < p->channels; ch++) /* ior[1] > 0: the file's own check */
-        f->fold[ch] = f->in.scatfun && p->channels == 3
-                          ? (p->ior[ch] / p->ior[1]) * (p->ior[ch] / p->ior[1]) : 1.0;
+    for (int ch = 0; ch < BTDF_MAX_CHANNELS; ch++)
+        f->fold[ch] = 1.0;
+    if (f->in.scatfun)
+        scatfun_fold(f->in.scatfun, f->fold); /* its indices were read just above */
     return 0;
 }
 
