@@ -45,6 +45,24 @@ static int make_ctx(const btdf_params *p, int threads, btdf_model_ctx **mx)
     return 1;
 }
 
+/* A .bsdf for eval: its fold factors (a warning when a colour file's metadata lacks its
+   indices); 0 after the message when it holds no block eval reads. */
+static int eval_scatfun_open(const char *file, const btdf_scatfun *f, double *fold)
+{
+    if (!scatfun_fold(f, fold))
+        fprintf(stderr, "btdftab: %s: warning: its metadata gives no three indices, so "
+                        "the R and B values are printed as stored (times (n_G / n_c)^2)\n",
+                file);
+    if (!(btdf_scatfun_sides(f) & BTDF_SIDE_ENTER)) {
+        /* eval reads light entering through the top (index n); the file has no
+           such block, and a 0 would read as a measured value */
+        fail(1, "%s: the file holds no 'enter' side (light entering, index n), "
+                "which eval reads; it was written with --side leave", file);
+        return 0;
+    }
+    return 1;
+}
+
 int cmd_eval(const cli *c)
 {
     btdf_params p = c->p;
@@ -95,16 +113,9 @@ int cmd_eval(const cli *c)
                            "reflection blocks are for renderers)", c->table);
         } else {
             p.channels = btdf_scatfun_channels(in.scatfun);
-            if (!scatfun_fold(in.scatfun, fold))
-                fprintf(stderr, "btdftab: %s: warning: its metadata gives no three indices, so "
-                                "the R and B values are printed as stored (times (n_G / n_c)^2)\n",
-                        c->table);
-            if (!(btdf_scatfun_sides(in.scatfun) & BTDF_SIDE_ENTER)) {
+            if (!eval_scatfun_open(c->table, in.scatfun, fold)) {
                 btdf_scatfun_free(in.scatfun);
-                /* eval reads light entering through the top (index n); the file has no
-                   such block, and a 0 would read as a measured value */
-                return fail(1, "%s: the file holds no 'enter' side (light entering, index n), "
-                               "which eval reads; it was written with --side leave", c->table);
+                return 1;
             }
         }
     } else if (!check_params_full(&p)) {
