@@ -82,6 +82,8 @@ if a.bsdf == "roughdielectric":
               'value="true"/></bsdf>' % (2.0 / t.smoothness, t.ior[0]))
     text, count = mine.subn(theirs, text)
     assert count == 1, "glass.xml holds one btdftab BSDF"
+    for k in ("filename", "mode", "part"):  # the plugin's own: Mitsuba refuses unused ones
+        params.pop(k, None)
     scene = mi.load_string(text, **params)
 else:
     scene = mi.load_file(scene_xml, **params)
