@@ -133,6 +133,25 @@ typedef struct tree_in {
     int depth;
 } tree_in;
 
+/* Room for node k's eight children at the end of the Y tree's nodes, and k pointing at
+   them (the caller fills them and adds 8 to nnodes); 0 at the node cap or out of memory. */
+static int tree_children(tree_in *t, size_t k)
+{
+    rad_block *b = t->b;
+    if (b->nnodes + 8 > RAD_READ_MAX_NODES)
+        return 0;
+    if (b->nnodes + 8 > t->cap) {
+        size_t nc = t->cap * 2 + 64;
+        rad_node *nn = realloc(b->nodes, nc * sizeof *nn);
+        if (!nn)
+            return 0;
+        b->nodes = nn;
+        t->cap = nc;
+    }
+    b->nodes[k].child = (int32_t)b->nnodes;
+    return 1;
+}
+
 /* Node k of the tree at *p: "{v}", "{v0 .. v7}" or "{child0 .. child7}" (put_node). */
 static int tree_node(tree_in *t, const char **p, const char *e, size_t k, int depth)
 {
@@ -143,17 +162,8 @@ static int tree_node(tree_in *t, const char **p, const char *e, size_t k, int de
     q = xml_skip(q + 1, e);
     if (q < e && *q == '{') { /* eight subtrees */
         if (t->what == 0) {
-            if (b->nnodes + 8 > RAD_READ_MAX_NODES)
+            if (!tree_children(t, k))
                 return 0;
-            if (b->nnodes + 8 > t->cap) {
-                size_t nc = t->cap * 2 + 64;
-                rad_node *nn = realloc(b->nodes, nc * sizeof *nn);
-                if (!nn)
-                    return 0;
-                b->nodes = nn;
-                t->cap = nc;
-            }
-            b->nodes[k].child = (int32_t)b->nnodes;
             for (int n = 0; n < 8; n++)
                 b->nodes[b->nnodes + (size_t)n] = (rad_node){-1, 0.0f};
             b->nnodes += 8;
@@ -191,17 +201,8 @@ static int tree_node(tree_in *t, const char **p, const char *e, size_t k, int de
     }
     /* a grid of eight leaves: grid index g = i0 i1 i2, child n = i0 + 2 i1 + 4 i2 */
     if (t->what == 0) {
-        if (b->nnodes + 8 > RAD_READ_MAX_NODES)
+        if (!tree_children(t, k))
             return 0;
-        if (b->nnodes + 8 > t->cap) {
-            size_t nc = t->cap * 2 + 64;
-            rad_node *nn = realloc(b->nodes, nc * sizeof *nn);
-            if (!nn)
-                return 0;
-            b->nodes = nn;
-            t->cap = nc;
-        }
-        b->nodes[k].child = (int32_t)b->nnodes;
         b->nnodes += 8;
         b->leaves += 8;
     } else if (b->nodes[k].child < 0) {
