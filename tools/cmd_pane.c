@@ -9,6 +9,8 @@
 #include "btdf.h"
 #include "btdf_pane.h"
 #include "cli.h"
+#include "numparse.h"
+#include "pane_write.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -19,54 +21,98 @@
    a cell (1/64 of the disk's side) is well inside them. */
 #define PANE_TREE_DEPTH 6
 
-int apply_pane(cli *c, int id, const char *v)
+void pane_spec_default(pane_spec *ps)
 {
-    switch (id) {
-    case OPT_BACK:
-        if (!strcmp(v, "smooth")) {
-            c->back_smooth = 1;
-            return 1;
-        }
-        c->back_smooth = 0;
-        if (!parse_double("--back", v, &c->back_s))
-            return 0;
-        if (!(c->back_s >= BTDF_S_MIN && c->back_s <= BTDF_S_MAX)) {
-            fail(EXIT_USAGE, "--back: %g: give smooth, or a smoothness in [%g, %g]", c->back_s,
-                 BTDF_S_MIN, BTDF_S_MAX);
-            return 0;
-        }
-        return 1;
-    case OPT_THICKNESS:
-        if (!parse_double("--thickness", v, &c->thickness))
-            return 0;
-        if (!(c->thickness >= 0.0 && c->thickness <= BTDF_PANE_THICKNESS_MAX)) {
-            fail(EXIT_USAGE, "--thickness: %g mm: must lie in [0, %g]", c->thickness,
-                 BTDF_PANE_THICKNESS_MAX);
-            return 0;
-        }
-        return 1;
-    default:
-        if (!parse_double("--absorption", v, &c->absorption))
-            return 0;
-        if (!(c->absorption >= 0.0 && c->absorption <= BTDF_PANE_ABSORPTION_MAX)) {
-            fail(EXIT_USAGE, "--absorption: %g per mm: must lie in [0, %g]", c->absorption,
-                 BTDF_PANE_ABSORPTION_MAX);
-            return 0;
-        }
-        return 1;
-    }
+    ps->back_smooth = 1;
+    ps->back_s = 0.0;
+    ps->thickness = 4.0; /* simulate's default too */
+    ps->absorption = 0.0;
 }
 
-static int make_pane(const cli *c, btdf_pane **out)
+/* key as the user wrote it ("--back" or "back"); the messages name it so. */
+int pane_spec_set(pane_spec *ps, const char *key, const char *value, char *why, size_t len)
+{
+    const char *k = key;
+    while (*k == '-')
+        k++;
+    double x = 0.0;
+    if (!strcmp(k, "back") && !strcmp(value, "smooth")) {
+        ps->back_smooth = 1;
+        return 1;
+    }
+    const char *bad = num_double(value, &x);
+    if (bad) {
+        snprintf(why, len, "%s: '%s' %s", key, value, bad);
+        return 0;
+    }
+    if (!strcmp(k, "back")) {
+        if (!(x >= BTDF_S_MIN && x <= BTDF_S_MAX)) {
+            snprintf(why, len, "%s: %g: give smooth, or a smoothness in [%g, %g]", key, x,
+                     BTDF_S_MIN, BTDF_S_MAX);
+            return 0;
+        }
+        ps->back_smooth = 0;
+        ps->back_s = x;
+    } else if (!strcmp(k, "thickness")) {
+        if (!(x >= 0.0 && x <= BTDF_PANE_THICKNESS_MAX)) {
+            snprintf(why, len, "%s: %g mm: must lie in [0, %g]", key, x, BTDF_PANE_THICKNESS_MAX);
+            return 0;
+        }
+        ps->thickness = x;
+    } else {
+        if (!(x >= 0.0 && x <= BTDF_PANE_ABSORPTION_MAX)) {
+            snprintf(why, len, "%s: %g per mm: must lie in [0, %g]", key, x,
+                     BTDF_PANE_ABSORPTION_MAX);
+            return 0;
+        }
+        ps->absorption = x;
+    }
+    return 1;
+}
+
+const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
+                              int table_keys, int channels)
+{
+    if (!back)
+        return thick_abs ? "thickness and absorption describe a pane: give back = smooth|S "
+                           "as well"
+                         : NULL;
+    if (interface_outputs > 0)
+        return "back: a pane's system is written to xml only (enter, leave and bsdf take the "
+               "interface)";
+    if (table_keys)
+        return "back: tolerance, theta_i, metric, part and sides do not apply to a pane's xml "
+               "(it holds the system, both parts, light from either side)";
+    return channels != 1 ? "back: a pane's xml has one channel: give one ior" : NULL;
+}
+
+int apply_pane(cli *c, int id, const char *v)
+{
+    pane_spec ps = {c->back_smooth, c->back_s, c->thickness, c->absorption};
+    char why[256];
+    const char *key = id == OPT_BACK ? "--back" : id == OPT_THICKNESS ? "--thickness"
+                                                                       : "--absorption";
+    if (!pane_spec_set(&ps, key, v, why, sizeof why)) {
+        fail(EXIT_USAGE, "%s", why);
+        return 0;
+    }
+    c->back_smooth = ps.back_smooth;
+    c->back_s = ps.back_s;
+    c->thickness = ps.thickness;
+    c->absorption = ps.absorption;
+    return 1;
+}
+
+static int make_pane(const btdf_params *p, const pane_spec *ps, int threads, btdf_pane **out)
 {
     btdf_pane_opts o;
     btdf_pane_opts_default(&o);
-    o.front = c->p;
-    o.back_smooth = c->back_smooth;
-    o.back_smoothness = c->back_smooth ? c->p.smoothness : c->back_s;
-    o.thickness_mm = GIVEN(c, OPT_THICKNESS) ? c->thickness : 4.0; /* simulate's default too */
-    o.absorption_per_mm = c->absorption;
-    o.threads = c->threads;
+    o.front = *p;
+    o.back_smooth = ps->back_smooth;
+    o.back_smoothness = ps->back_smooth ? p->smoothness : ps->back_s;
+    o.thickness_mm = ps->thickness;
+    o.absorption_per_mm = ps->absorption;
+    o.threads = threads;
     char msg[512] = "";
     btdf_status st = btdf_pane_opts_check(&o, msg, sizeof msg);
     if (st != BTDF_OK)
@@ -75,6 +121,19 @@ static int make_pane(const cli *c, btdf_pane **out)
     if (st != BTDF_OK)
         return fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
     return 0;
+}
+
+/* The options of c as a pane_spec (--thickness defaults to 4 mm). */
+static pane_spec cli_spec(const cli *c)
+{
+    pane_spec ps;
+    pane_spec_default(&ps);
+    ps.back_smooth = c->back_smooth;
+    ps.back_s = c->back_s;
+    if (GIVEN(c, OPT_THICKNESS))
+        ps.thickness = c->thickness;
+    ps.absorption = c->absorption;
+    return ps;
 }
 
 static int pane_albedo(const cli *c, const btdf_pane *P)
@@ -144,7 +203,7 @@ static double src_specular(void *user, int k, double ti)
                               k >= 2 ? BTDF_PART_REFLECTION : BTDF_PART_TRANSMISSION, 0, ti);
 }
 
-static int pane_xml(const cli *c, const btdf_pane *P, const char *prov)
+static int pane_xml_checks(const cli *c)
 {
     static const opt_id no[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O, OPT_PHI,
                                 OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY, OPT_SIZE,
@@ -156,8 +215,12 @@ static int pane_xml(const cli *c, const btdf_pane *P, const char *prov)
                         c->out, opt_find(no[k])->name);
     if (c->p.channels != 1)
         return fail(EXIT_USAGE, "--back: a pane's .xml has one channel: give one --ior");
-    if (!folder_writable(c->out))
-        return 1;
+    return folder_writable(c->out) ? 0 : 1;
+}
+
+static int write_system(const btdf_pane *P, const char *path, const btdf_params *p,
+                        btdf_rad_basis basis, int threads, int quiet, const char *prov)
+{
     char desc[400];
     const btdf_pane_opts *o = btdf_pane_get_opts(P);
     char back[64];
@@ -173,32 +236,45 @@ static int pane_xml(const cli *c, const btdf_pane *P, const char *prov)
     btdf_rad_source src = {(void *)P, src_eval, src_specular, src_eval_phis, desc};
     btdf_rad *x = NULL;
     char msg[512] = "";
-    btdf_status st = btdf_rad_build_source(&src, &c->p, c->basis, PANE_TREE_DEPTH, c->threads,
+    btdf_status st = btdf_rad_build_source(&src, p, basis, PANE_TREE_DEPTH, threads,
                                            &x, msg, sizeof msg);
     if (st != BTDF_OK)
-        return fail(1, "%s: %s", c->out, msg[0] ? msg : btdf_strerror(st));
+        return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
     /* the material's name: the file's base name without its extension */
-    const char *base = strrchr(c->out, '/');
-    base = base ? base + 1 : c->out;
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
     const char *dot = strrchr(base, '.');
     char name[128];
     snprintf(name, sizeof name, "%.*s", (int)(dot ? (size_t)(dot - base) : strlen(base)), base);
     btdf_rad_set_name(x, name);
     btdf_write_opts w = {NULL, prov, NULL};
     btdf_output what = {NULL, NULL, NULL, &w, NULL, x};
-    st = btdf_write(&what, c->out, msg, sizeof msg);
+    st = btdf_write(&what, path, msg, sizeof msg);
     double secs = btdf_rad_seconds_build(x);
     btdf_rad_free(x);
     if (st != BTDF_OK)
-        return fail(1, "%s: %s", c->out, msg[0] ? msg : btdf_strerror(st));
-    if (!c->quiet) {
+        return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
+    if (!quiet) {
         int n, m;
         btdf_pane_size(P, &n, &m);
         fprintf(stderr, "btdftab: %s: %s; system %d nodes x %d modes in %.3f s, %s in %.3f s\n",
-                c->out, desc, n, m, btdf_pane_seconds_build(P), btdf_rad_basis_name(c->basis),
+                path, desc, n, m, btdf_pane_seconds_build(P), btdf_rad_basis_name(basis),
                 secs);
     }
     return 0;
+}
+
+int pane_write_xml(const char *path, const btdf_params *p, const pane_spec *ps,
+                   btdf_rad_basis basis, int threads, int quiet, const char *prov)
+{
+    if (p->channels != 1)
+        return fail(EXIT_USAGE, "%s: a pane's .xml has one channel: give one ior", path);
+    btdf_pane *P = NULL;
+    int code = make_pane(p, ps, threads, &P);
+    if (!code)
+        code = write_system(P, path, p, basis, threads, quiet, prov);
+    btdf_pane_free(P);
+    return code;
 }
 
 int cmd_pane(const cli *c, unsigned cmd, const char *prov)
@@ -217,11 +293,16 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
     } else if (cmd != CMD_ALBEDO) {
         return fail(EXIT_USAGE, "--back applies to tabulate and albedo");
     }
+    pane_spec ps = cli_spec(c);
+    if (cmd == CMD_TABULATE) {
+        int code = pane_xml_checks(c);
+        return code ? code : pane_write_xml(c->out, &c->p, &ps, c->basis, c->threads, c->quiet,
+                                            prov);
+    }
     btdf_pane *P = NULL;
-    int code = make_pane(c, &P);
-    if (code)
-        return code;
-    code = cmd == CMD_ALBEDO ? pane_albedo(c, P) : pane_xml(c, P, prov);
+    int code = make_pane(&c->p, &ps, c->threads, &P);
+    if (!code)
+        code = pane_albedo(c, P);
     btdf_pane_free(P);
     return code;
 }

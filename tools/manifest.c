@@ -15,6 +15,7 @@
 #include <btdf/btdf.h>
 
 #include "manifest.h"
+#include "pane_write.h"
 #include "pathnorm.h"
 #include "run.h"
 #include "stamp.h"
@@ -44,6 +45,8 @@
  *   xml = glazing.xml          ; a Radiance BSDF XML (both parts, light from either side)
  *   basis = tree3              ; its basis, as --basis: tree3 (the default), klems-full,
  *                              ; klems-half or klems-quarter
+ *   back = smooth              ; a pane (xml only): its back face, smooth or S, as --back;
+ *   thickness = 4              ; with thickness (mm) and absorption (per mm) as the options
  *
  * Only the tables an output needs are built, once per material and side, and shared
  * by its outputs. An output is skipped when it exists and its stamp (a hidden file
@@ -58,7 +61,7 @@
 
 #define MAX_MATERIALS 64
 #define MAX_OUTPUTS 8
-#define NKEYS 14
+#define NKEYS 17
 
 typedef struct material {
     char name[64];
@@ -71,6 +74,7 @@ typedef struct material {
     char *enter[MAX_OUTPUTS], *leave[MAX_OUTPUTS], *bsdf[MAX_OUTPUTS], *xml[MAX_OUTPUTS];
     int nenter, nleave, nbsdf, nxml;
     btdf_rad_basis basis; /* of the .xml outputs */
+    pane_spec pane;       /* keys back, thickness, absorption (key_line[K_BACK]: a pane) */
     int line;          /* of the [name] header */
     int key_line[NKEYS];  /* of each key (KEYS order), 0 if not given */
 } material;
@@ -78,9 +82,10 @@ typedef struct material {
 /* The keys of a section, in the order of material.key_line. */
 static const char *const KEYS[NKEYS] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
                                         "metric",  "sides",      "enter", "leave",   "bsdf",
-                                        "part",    "model",      "xml",   "basis"};
+                                        "part",    "model",      "xml",   "basis", "back",
+                                        "thickness", "absorption"};
 enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF, K_PART,
-       K_MODEL, K_XML, K_BASIS };
+       K_MODEL, K_XML, K_BASIS, K_BACK, K_THICK, K_ABS };
 
 /* Output k of m in manifest order (enter, leave, bsdf, xml) and its key. */
 static const char *output_at(const material *m, int k, int *key)
@@ -202,6 +207,7 @@ static int on_entry(void *user, const char *section, const char *key, const char
         m->sides = BTDF_SIDE_BOTH;
         m->part = BTDF_PART_TRANSMISSION;
         m->basis = BTDF_RAD_TREE3;
+        pane_spec_default(&m->pane);
         m->line = line;
         return 1;
     }
@@ -214,7 +220,8 @@ static int on_entry(void *user, const char *section, const char *key, const char
             ki = k;
     if (ki < 0)
         return set_why(mf, "unknown key '%.100s' (known: ior, smoothness, k0, model, theta_i, "
-                           "tolerance, metric, part, sides, enter, leave, bsdf, xml, basis)%s", key, "");
+                           "tolerance, metric, part, sides, enter, leave, bsdf, xml, basis, back, "
+                           "thickness, absorption)%s", key, "");
     if (m->key_line[ki]) {
         snprintf(mf->why, sizeof mf->why, "'%s' given twice in [%s] (first at line %d)", key,
                  m->name, m->key_line[ki]);
@@ -222,31 +229,8 @@ static int on_entry(void *user, const char *section, const char *key, const char
     }
     m->key_line[ki] = line;
     if (ki == K_IOR) {
-        /* blanks around the commas go, as around every value; the numbers themselves
-           follow the tool's one rule */
-        char list[256];
-        size_t o = 0;
-        for (const char *c = value; *c && o + 1 < sizeof list;) {
-            const char *end = strchr(c, ',');
-            size_t n = end ? (size_t)(end - c) : strlen(c);
-            while (n > 0 && (*c == ' ' || *c == '\t'))
-                c++, n--;
-            while (n > 0 && (c[n - 1] == ' ' || c[n - 1] == '\t'))
-                n--;
-            if (o + n + 2 >= sizeof list)
-                break;
-            memcpy(list + o, c, n);
-            o += n;
-            if (end)
-                list[o++] = ',';
-            c = end ? end + 1 : c + n;
-            if (!end)
-                break;
-        }
-        list[o] = 0;
         int k = 0;
-        const char *r = strlen(value) >= sizeof list ? "is too long"
-                                                     : num_double_list(list, m->p.ior, 1, 3, &k);
+        const char *r = num_double_list_blanks(value, m->p.ior, 1, 3, &k);
         if (r || k == 2) {
             snprintf(mf->why, sizeof mf->why, "ior '%.200s': %s", value,
                      r ? r : "expected one number or three (R,G,B)");
@@ -308,6 +292,8 @@ static int on_entry(void *user, const char *section, const char *key, const char
         for (int i = 0; i < m->nxml; i++)
             if (!ends_with(m->xml[i], ".xml"))
                 return set_why(mf, "output '%.200s': must end in .xml%s", m->xml[i], "");
+    } else if (ki >= K_BACK) {
+        return pane_spec_set(&m->pane, key, value, mf->why, sizeof mf->why);
     } else if (ki == K_BASIS) {
         if (!btdf_rad_basis_parse(value, &m->basis))
             return set_why(mf, "basis '%.100s': must be tree3, klems-full, klems-half or "
@@ -319,15 +305,9 @@ static int on_entry(void *user, const char *section, const char *key, const char
 static void free_manifest(manifest *mf)
 {
     for (int i = 0; i < mf->n; i++) {
-        material *m = &mf->m[i];
-        for (int k = 0; k < m->nenter; k++)
-            free(m->enter[k]);
-        for (int k = 0; k < m->nleave; k++)
-            free(m->leave[k]);
-        for (int k = 0; k < m->nbsdf; k++)
-            free(m->bsdf[k]);
-        for (int k = 0; k < m->nxml; k++)
-            free(m->xml[k]);
+        material *m = &mf->m[i]; /* the lists are NULL past their count (memset) */
+        for (int k = 0; k < MAX_OUTPUTS; k++)
+            free(m->enter[k]), free(m->leave[k]), free(m->bsdf[k]), free(m->xml[k]);
     }
 }
 
@@ -528,6 +508,11 @@ static int manifest_xml(const manifest_opts *mo, const material *mat, int *done,
     char stamp[4096], what[64], prov[256];
     snprintf(what, sizeof what, "xml %s", btdf_rad_basis_name(mat->basis));
     stamp_text(stamp, sizeof stamp, &m, &mat->p, what);
+    int pane = mat->key_line[K_BACK] != 0, used = (int)strlen(stamp);
+    if (pane) /* only for a pane: the interface's stamps hold */
+        snprintf(stamp + used, sizeof stamp - (size_t)used, "pane %d %.17g %.17g %.17g\n",
+                 mat->pane.back_smooth, mat->pane.back_s, mat->pane.thickness,
+                 mat->pane.absorption);
     snprintf(prov, sizeof prov, "btdftab build, material [%s]", mat->name);
     for (int k = 0; k < mat->nxml; k++) {
         const char *out = mat->xml[k];
@@ -552,9 +537,11 @@ static int manifest_xml(const manifest_opts *mo, const material *mat, int *done,
         snprintf(label, sizeof label, "[%d/%d] %s", *done, total, out);
         run_progress pr;
         run_progress_start(&pr, mo->progress, label);
-        int code = run_radiance(mo->prog, out, NULL, &mat->p, mat->basis,
-                                tol > 0.0 ? tol : 0.2, mo->threads, mo->quiet, mo->best_effort,
-                                prov, &pr);
+        int code = pane ? pane_write_xml(out, &mat->p, &mat->pane, mat->basis, mo->threads,
+                                         mo->quiet, prov)
+                        : run_radiance(mo->prog, out, NULL, &mat->p, mat->basis,
+                                       tol > 0.0 ? tol : 0.2, mo->threads, mo->quiet,
+                                       mo->best_effort, prov, &pr);
         if (code != 0)
             return code;
         char why[512] = "";
@@ -741,8 +728,23 @@ int manifest_run(const manifest_opts *mo)
                 return 1;
             }
         }
+        const char *pw = pane_keys_refusal(
+            m->key_line[K_BACK] != 0, m->key_line[K_THICK] || m->key_line[K_ABS],
+            m->nenter + m->nleave + m->nbsdf,
+            m->key_line[K_TOL] || m->key_line[K_THETA] || m->key_line[K_METRIC] ||
+                m->key_line[K_PART] || m->key_line[K_SIDES],
+            m->p.channels);
+        if (pw) {
+            fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path,
+                    m->key_line[K_BACK] ? m->key_line[K_BACK]
+                    : m->key_line[K_THICK] ? m->key_line[K_THICK] : m->key_line[K_ABS],
+                    m->name, pw);
+            free_manifest(mf);
+            free(mf);
+            return 2;
+        }
         /* as tabulate refuses them: full for .xml, a tolerance for Klems matrices alone */
-        int full_xml = m->p.model == BTDF_MODEL_FULL && m->nxml > 0;
+        int full_xml = m->p.model == BTDF_MODEL_FULL && m->nxml > 0 && !m->key_line[K_BACK];
         if (full_xml || (m->key_line[K_TOL] && m->basis != BTDF_RAD_TREE3 && m->nxml > 0 &&
                          m->nenter + m->nleave + m->nbsdf == 0)) {
             fprintf(stderr, "%s: %s:%d: material [%s]: %s%s\n", mo->prog, mo->path,

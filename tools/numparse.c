@@ -150,3 +150,32 @@ const char *num_size_list(const char *s, size_t lo, size_t hi, size_t *out, int 
     }
     return NULL;
 }
+
+const char *num_double_list_blanks(const char *s, double *out, int min_n, int max_n, int *n)
+{
+    /* blanks around the commas go, as around every value; the numbers themselves follow
+       the tool's one rule */
+    char list[256];
+    size_t o = 0;
+    if (strlen(s) >= sizeof list)
+        return "is too long";
+    for (const char *c = s; *c && o + 1 < sizeof list;) {
+        const char *end = strchr(c, ',');
+        size_t k = end ? (size_t)(end - c) : strlen(c);
+        while (k > 0 && (*c == ' ' || *c == '\t'))
+            c++, k--;
+        while (k > 0 && (c[k - 1] == ' ' || c[k - 1] == '\t'))
+            k--;
+        if (o + k + 2 >= sizeof list)
+            break;
+        memcpy(list + o, c, k);
+        o += k;
+        if (end)
+            list[o++] = ',';
+        c = end ? end + 1 : c + k;
+        if (!end)
+            break;
+    }
+    list[o] = 0;
+    return num_double_list(list, out, min_n, max_n, n);
+}

@@ -22,6 +22,10 @@ const char *num_size(const char *s, size_t lo, size_t hi, size_t *out);
 /* n comma-separated numbers, min_n <= n <= max_n, each as num_double. */
 const char *num_double_list(const char *s, double *out, int min_n, int max_n, int *n);
 
+/* num_double_list with blanks (spaces, tabs) around the commas allowed, as around a
+   manifest's values; at most 255 bytes. */
+const char *num_double_list_blanks(const char *s, double *out, int min_n, int max_n, int *n);
+
 /* n comma-separated whole numbers, each in [lo, hi], exactly want of them. */
 const char *num_size_list(const char *s, size_t lo, size_t hi, size_t *out, int want);
 

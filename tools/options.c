@@ -648,7 +648,12 @@ void opt_man(FILE *f, const char *version)
         {"sides", "the sides the .bsdf holds: enter, leave or both"},
         {"xml", "a Radiance BSDF XML output, as \\fBtabulate \\-o F.xml\\fR"},
         {"basis", "the .xml's basis, as \\fB\\-\\-basis\\fR: tree3 (default), klems-full, "
-                  "klems-half or klems-quarter"}};
+                  "klems-half or klems-quarter"},
+        {"back", "a pane (its system, to the xml outputs only): the back face, smooth or a "
+                 "smoothness, as \\fB\\-\\-back\\fR"},
+        {"thickness", "the pane's thickness in mm (default 4), as \\fB\\-\\-thickness\\fR"},
+        {"absorption", "the pane's absorption per mm (default 0), as "
+                       "\\fB\\-\\-absorption\\fR"}};
     fprintf(f, ".SH MANIFEST\nA scene manifest (\\fBbtdftab build\\fR) is an INI file, one "
                "[section] per material, with the keys:\n");
     for (size_t k = 0; k < sizeof mkeys / sizeof mkeys[0]; k++)
@@ -682,7 +687,8 @@ void opt_bash(FILE *f)
         {"side", "enter leave both"},
         {"metric", "l1 max"},
         {"model", "xu-sun smith full"},
-        {"light", "front back"}};
+        {"light", "front back"},
+        {"back", "smooth"}};
     fprintf(f, "    case $prev in\n");
     for (size_t k = 0; k < sizeof words / sizeof words[0]; k++)
         fprintf(f, "        --%s) COMPREPLY=($(compgen -W \"%s\" -- \"$cur\")); return ;;\n",

@@ -1,0 +1,102 @@
+#!/bin/sh
+# SPDX-License-Identifier: MIT
+# pane_cli.sh: a pane's system from the command line and from a manifest (docs/pane.md):
+# the manifest keys back, thickness, absorption give the bytes of tabulate --back, and
+# their bad values fail as the options do, naming the value, exit 2, no file written.
+set -u
+B="$1"
+W=$(mktemp -d)
+trap 'rm -rf "$W"' EXIT
+pass=0
+failn=0
+ok() { pass=$((pass + 1)); echo "ok $pass - $1"; }
+no() { failn=$((failn + 1)); echo "not ok - $1"; }
+
+# build MANIFEST STATUS PATTERN DESCRIPTION: status, stderr pattern, no .xml written
+build_fails() {
+    "$B" build "$1" >"$W/out" 2>"$W/err"
+    rc=$?
+    if [ "$rc" -ne "$2" ]; then no "$4: status $rc, expected $2"; cat "$W/err"; return; fi
+    if ! grep -q -- "$3" "$W/err"; then no "$4: stderr lacks '$3'"; cat "$W/err"; return; fi
+    if ls "$W"/m/*.xml >/dev/null 2>&1; then no "$4: left a file"; ls -a "$W/m"; return; fi
+    ok "$4"
+}
+
+# The same pane both ways (s = 1 and a flat back keep it under a second); the files
+# differ only in the provenance comment (the command line, or the manifest's material).
+mkdir -p "$W/m" "$W/c"
+cat > "$W/m/scene.ini" <<'INI'
+[p]
+ior = 1.5
+smoothness = 1
+back = smooth
+thickness = 2
+absorption = 0.1
+xml = pane.xml
+basis = klems-quarter
+INI
+"$B" build -q "$W/m/scene.ini" 2>"$W/err" || { no "build of a pane"; cat "$W/err"; }
+"$B" tabulate -q --ior 1.5 -s 1 --back smooth --thickness 2 --absorption 0.1 \
+    --basis klems-quarter -o "$W/c/pane.xml" 2>"$W/err" || { no "tabulate of a pane"; cat "$W/err"; }
+grep -v 'btdftab' "$W/m/pane.xml" > "$W/m.txt"
+grep -v 'btdftab' "$W/c/pane.xml" > "$W/c.txt"
+[ "$(grep -c btdftab "$W/m/pane.xml")" -eq "$(grep -c btdftab "$W/c/pane.xml")" ] && \
+    [ -s "$W/m.txt" ] && cmp -s "$W/m.txt" "$W/c.txt" && \
+    grep -q 'thickness 2 mm, absorption 0.1 per mm' "$W/m/pane.xml" && \
+    ok "manifest keys back, thickness, absorption: the bytes of tabulate --back" || \
+    { no "manifest pane differs from tabulate's"; diff "$W/m.txt" "$W/c.txt" | head -5; }
+# not the interface's file: the keys are read
+"$B" tabulate -q --ior 1.5 -s 1 --basis klems-quarter -o "$W/c/iface.xml" 2>/dev/null
+cmp -s "$W/c/iface.xml" "$W/c/pane.xml" && no "the pane's .xml is the interface's" || \
+    ok "the pane's .xml is not the interface's"
+# a rough back by key: the bytes of --back 2
+sed 's/^back = smooth/back = 2/' "$W/m/scene.ini" > "$W/m/rough.ini"
+sed -i 's/^xml = pane.xml/xml = rough.xml/' "$W/m/rough.ini"
+"$B" build -q "$W/m/rough.ini" 2>"$W/err" || { no "build of a rough back"; cat "$W/err"; }
+"$B" tabulate -q --ior 1.5 -s 1 --back 2 --thickness 2 --absorption 0.1 \
+    --basis klems-quarter -o "$W/c/rough.xml" 2>/dev/null
+grep -v btdftab "$W/m/rough.xml" > "$W/m.txt"; grep -v btdftab "$W/c/rough.xml" > "$W/c.txt"
+[ -s "$W/m.txt" ] && cmp -s "$W/m.txt" "$W/c.txt" && \
+    ok "back = 2: the bytes of --back 2" || no "back = 2 differs from --back 2"
+# the stamp holds the pane: a changed thickness rebuilds, the same one does not
+"$B" build "$W/m/scene.ini" 2>&1 | grep -q 'up to date' && ok "a pane's .xml up to date" || \
+    no "a pane's .xml rebuilt without a change"
+sed -i 's/^thickness = 2/thickness = 3/' "$W/m/scene.ini"
+"$B" build --dry-run "$W/m/scene.ini" 2>&1 | grep -q 'up to date' && \
+    no "a changed thickness left the .xml up to date" || ok "a changed thickness makes it stale"
+rm -f "$W"/m/*.xml "$W"/m/.*.xml* 2>/dev/null
+
+# bad values: as the options' checks, naming the value
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = rough\nxml = x.xml\n' > "$W/m/b1.ini"
+build_fails "$W/m/b1.ini" 2 "back: 'rough'" "back = rough is refused"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = 1e9\nxml = x.xml\n' > "$W/m/b2.ini"
+build_fails "$W/m/b2.ini" 2 "back: 1e+09: give smooth, or a smoothness in" "back out of range"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\nthickness = -1\nxml = x.xml\n' > "$W/m/b3.ini"
+build_fails "$W/m/b3.ini" 2 "thickness: -1 mm: must lie in" "negative thickness"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\nabsorption = nan\nxml = x.xml\n' > "$W/m/b4.ini"
+build_fails "$W/m/b4.ini" 2 "absorption: 'nan'" "absorption nan"
+printf '[p]\nior = 1.5\nsmoothness = 1\nthickness = 2\nxml = x.xml\n' > "$W/m/b5.ini"
+build_fails "$W/m/b5.ini" 2 "b5.ini:4: .*give back = smooth|S as well" "thickness without back"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\nenter = x.csv\n' > "$W/m/b6.ini"
+build_fails "$W/m/b6.ini" 2 "written to xml only" "a pane with a table output"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\ntolerance = 1e-3\nxml = x.xml\n' > "$W/m/b7.ini"
+build_fails "$W/m/b7.ini" 2 "do not apply to a pane" "a pane with a tolerance"
+printf '[p]\nior = 1.5,1.6,1.7\nsmoothness = 1\nback = smooth\nxml = x.xml\n' > "$W/m/b8.ini"
+build_fails "$W/m/b8.ini" 2 "one channel" "a pane with three channels"
+# the command line's messages are the same checks
+"$B" tabulate --ior 1.5 -s 1 --back 1e9 -o "$W/c/x.xml" 2>"$W/err"
+[ $? -eq 2 ] && grep -q -- "--back: 1e+09: give smooth" "$W/err" && [ ! -e "$W/c/x.xml" ] && \
+    ok "--back out of range, as before" || { no "--back out of range"; cat "$W/err"; }
+
+# the manual and the completion know the keys and options
+"$B" --man > "$W/man.1"
+for k in back thickness absorption; do
+    grep -q "^\.B $k\$" "$W/man.1" || no "man page lacks manifest key $k"
+done
+grep -q '^\.B absorption$' "$W/man.1" && ok "the manual lists back, thickness, absorption"
+"$B" --completion bash > "$W/comp"
+grep -q -- '--back) COMPREPLY=($(compgen -W "smooth"' "$W/comp" && \
+    grep -q -- '--thickness' "$W/comp" && ok "bash completion: --back smooth" || no "completion"
+
+echo "# $pass passed, $failn failed"
+[ "$failn" -eq 0 ]

@@ -1,0 +1,37 @@
+/* SPDX-License-Identifier: MIT */
+/* pane_write.h: a pane's description (--back, --thickness, --absorption, or the manifest's
+   keys back, thickness, absorption) and its system written to a Radiance .xml, shared by
+   tabulate and build (tools/cmd_pane.c). */
+#ifndef PANE_WRITE_H
+#define PANE_WRITE_H
+
+#include <stddef.h>
+
+#include <btdf/btdf.h>
+
+typedef struct pane_spec {
+    int back_smooth;   /* 1: the back face is flat */
+    double back_s;     /* its smoothness when rough */
+    double thickness;  /* mm */
+    double absorption; /* per mm */
+} pane_spec;
+
+/* A flat back, 4 mm (simulate's default), no absorption. */
+void pane_spec_default(pane_spec *ps);
+
+/* Sets the value of key "back", "thickness" or "absorption" with the checks of the options
+   of the same names: 1, or 0 with why naming the value and what is allowed. */
+int pane_spec_set(pane_spec *ps, const char *key, const char *value, char *why, size_t len);
+
+/* Why a manifest section's pane keys are refused, as tabulate --back refuses the
+   options, or NULL: back given, thickness or absorption given, the number of enter, leave
+   and bsdf outputs, whether a key for tables is given, the channels of ior. */
+const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
+                              int table_keys, int channels);
+
+/* Writes the system of the pane whose front face is p to path in the basis; 0, or the
+   exit code after a message on stderr. */
+int pane_write_xml(const char *path, const btdf_params *p, const pane_spec *ps,
+                   btdf_rad_basis basis, int threads, int quiet, const char *prov);
+
+#endif
