@@ -144,7 +144,8 @@ int main(int argc, char **argv)
     int code = parse_command(cmd, argc - 1, argv + 1, &c);
     if (code >= 0)
         return code;
-    if (GIVEN(&c, OPT_BACK) || GIVEN(&c, OPT_THICKNESS) || GIVEN(&c, OPT_ABSORPTION))
+    if (GIVEN(&c, OPT_BACK) || GIVEN(&c, OPT_THICKNESS) || GIVEN(&c, OPT_ABSORPTION) ||
+        (cmd->bit == CMD_EVAL && GIVEN(&c, OPT_LIGHT)))
         return cmd_pane(&c, cmd->bit, prov); /* a pane's system (tools/cmd_pane.c) */
     switch (cmd->bit) {
     case CMD_EVAL: return cmd_eval(&c);

@@ -384,9 +384,9 @@ int apply(cli *c, const opt_hit *h)
     case OPT_BACK:
     case OPT_THICKNESS:
     case OPT_ABSORPTION: return apply_pane(c, h->id, v);
+    case OPT_LIGHT: c->light = v; break; /* simulate checks its own; eval's: cmd_pane.c */
     case OPT_MERGE:
     case OPT_PROFILE:
-    case OPT_LIGHT: /* the pane of simulate: tools/cmd_simulate_pane.c */
     case OPT_HELP:
     case OPT_END: break;
     }

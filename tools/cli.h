@@ -54,6 +54,7 @@ typedef struct cli {
     size_t nm, na;
     int back_smooth;      /* --back smooth */
     double back_s, thickness, absorption; /* --back S, --thickness, --absorption */
+    const char *light;    /* --light of eval --back (checked in cmd_pane.c) */
     const char *pos[512]; /* positional arguments */
     int npos;
 } cli;

@@ -174,6 +174,66 @@ static int pane_albedo(const cli *c, const btdf_pane *P)
     return stdout_done(0);
 }
 
+static int eval_row(const btdf_pane *P, btdf_pane_side sd, btdf_part part, int nch,
+                    const double a[3])
+{
+    int refl = part == BTDF_PART_REFLECTION;
+    if (!(a[0] >= 0.0 && a[0] <= 90.0) || !(refl ? a[1] >= 0.0 && a[1] <= 90.0
+                                                  : a[1] >= 90.0 && a[1] <= 180.0) ||
+        !(a[2] >= -360.0 && a[2] <= 360.0))
+        return fail(EXIT_USAGE, "eval: %g %g %g: need TI in [0, 90], %s and PHI in [-360, "
+                                "360] degrees", a[0], a[1], a[2],
+                    refl ? "TR in [0, 90]" : "TO in [90, 180]");
+    for (int ch = 0; ch < nch; ch++)
+        printf("%s%s", ch ? " " : "", num(btdf_pane_eval(P, sd, part, ch, a[0] * M_PI / 180.0,
+                                                         a[1] * M_PI / 180.0,
+                                                         a[2] * M_PI / 180.0)));
+    printf("\n");
+    return 0;
+}
+
+/* eval --back: the spread part of the system's BSDF (1/sr, no cosine), rows TI TO PHI
+   (or TI TR PHI with --part reflection) from the arguments or stdin. */
+static int pane_eval(const cli *c, const btdf_pane *P)
+{
+    if (c->light && strcmp(c->light, "front") && strcmp(c->light, "back"))
+        return fail(EXIT_USAGE, "--light: '%s': front or back (the face the light falls on)",
+                    c->light);
+    if (c->part == BTDF_PART_BOTH)
+        return fail(EXIT_USAGE, "--part both: eval reads one part at a time");
+    btdf_pane_side sd = c->light && !strcmp(c->light, "back") ? BTDF_PANE_BACK : BTDF_PANE_FRONT;
+    btdf_part part = c->reflection ? BTDF_PART_REFLECTION : BTDF_PART_TRANSMISSION;
+    double a[3];
+    if (c->npos != 0 && c->npos != 3)
+        return fail(EXIT_USAGE, "eval: give exactly three angles TI TO PHI, or none to read rows");
+    if (c->npos == 3) {
+        for (int k = 0; k < 3; k++)
+            if (!parse_double("angle", c->pos[k], &a[k]))
+                return EXIT_USAGE;
+        int code = eval_row(P, sd, part, c->p.channels, a);
+        return code ? code : stdout_done(0);
+    }
+    char line[1024];
+    while (fgets(line, sizeof line, stdin)) {
+        char *t[4] = {NULL}, *save = NULL;
+        int n = 0;
+        for (char *w = strtok_r(line, " \t,\r\n", &save); w && n < 4;
+             w = strtok_r(NULL, " \t,\r\n", &save))
+            t[n++] = w;
+        if (n == 0 || t[0][0] == '#')
+            continue;
+        if (n != 3)
+            return fail(EXIT_USAGE, "eval: a row needs three angles TI TO PHI");
+        for (int k = 0; k < 3; k++)
+            if (!parse_double("angle", t[k], &a[k]))
+                return EXIT_USAGE;
+        int code = eval_row(P, sd, part, c->p.channels, a);
+        if (code)
+            return code;
+    }
+    return stdout_done(0);
+}
+
 /* Radiance's blocks (btdf_radiance.h): 0 light from +Z through the back face, 1 from -Z
    through the front, 2 reflected on -Z (front), 3 on +Z (back). */
 static btdf_pane_side block_side(int k) { return k == 1 || k == 2 ? BTDF_PANE_FRONT : BTDF_PANE_BACK; }
@@ -281,7 +341,9 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
 {
     if (!GIVEN(c, OPT_BACK))
         return fail(EXIT_USAGE, "--%s describes a pane: give --back smooth|S as well",
-                    GIVEN(c, OPT_THICKNESS) ? "thickness" : "absorption");
+                    GIVEN(c, OPT_THICKNESS)   ? "thickness"
+                    : GIVEN(c, OPT_ABSORPTION) ? "absorption"
+                                               : "light");
     if (cmd == CMD_TABULATE) {
         if (c->npos)
             return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
@@ -290,8 +352,11 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
             return fail(EXIT_USAGE, "%s: --back: a pane's system is written to .xml (Klems or "
                                     "tree3, --basis); other formats take the interface only",
                         c->out ? c->out : "no -o");
-    } else if (cmd != CMD_ALBEDO) {
-        return fail(EXIT_USAGE, "--back applies to tabulate and albedo");
+    } else if (cmd != CMD_ALBEDO && cmd != CMD_EVAL) {
+        return fail(EXIT_USAGE, "--back applies to tabulate, albedo and eval");
+    } else if (cmd == CMD_EVAL && c->table) {
+        return fail(EXIT_USAGE, "--back: eval of a pane takes its faces from --ior and "
+                                "--smoothness, not --table");
     }
     pane_spec ps = cli_spec(c);
     if (cmd == CMD_TABULATE) {
@@ -302,7 +367,7 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
     btdf_pane *P = NULL;
     int code = make_pane(&c->p, &ps, c->threads, &P);
     if (!code)
-        code = pane_albedo(c, P);
+        code = cmd == CMD_ALBEDO ? pane_albedo(c, P) : pane_eval(c, P);
     btdf_pane_free(P);
     return code;
 }
