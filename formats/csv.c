@@ -36,6 +36,42 @@ static void put_num(FILE *f, const char *pre, double x, const char *post)
     fprintf(f, "%s%s%s", pre, b, post);
 }
 
+/* Writes to b the shortest decimal of the angle deg (degrees) that a reader converting
+   degrees as the command line does (d * M_PI / 180.0) turns into rad: "30", not
+   "29.999999999999996", and every digit a grid step of 90/89 deg needs; no exponent
+   above 1e-4 deg, where %g has a fixed form. Failing that, the shortest form of a
+   double within 8 ulps of deg that converts to rad; and where none does
+   (d * M_PI / 180.0 rounds twice and skips some doubles: 10,800 of the 72,900 angles
+   of --grid 90,90,3), the shortest form that reads back to deg. Readers take the *_rad columns,
+   which always read back exactly; the degrees are for people. */
+static void fmt_angle(char *b, size_t len, double deg, double rad)
+{
+    for (int prec = 1; prec <= 17; prec++) {
+        snprintf(b, len, "%.*g", prec, deg);
+        if (strchr(b, 'e') && fabs(deg) >= 1e-4) /* "9e+01": more digits give "90" */
+            continue;
+        if (strtod(b, NULL) * M_PI / 180.0 == rad)
+            return;
+    }
+    /* deg = rad * 180 / M_PI rounds twice: a neighbour a few ulps off may be the one */
+    double lo = deg, hi = deg;
+    for (int k = 0; k < 8; k++) {
+        lo = nextafter(lo, -HUGE_VAL);
+        hi = nextafter(hi, HUGE_VAL);
+        if (hi * M_PI / 180.0 == rad || lo * M_PI / 180.0 == rad) {
+            btdf_format_double(hi * M_PI / 180.0 == rad ? hi : lo, b, len);
+            return;
+        }
+    }
+    btdf_format_double(deg, b, len);
+}
+
+/* fmt_angle of an angle known in degrees only (the facet nodes' outgoing directions). */
+static void fmt_deg(char *b, size_t len, double deg)
+{
+    fmt_angle(b, len, deg, deg * M_PI / 180.0);
+}
+
 /* The node rows of one part's table; suffix ends each row (",reflection\n" in a file
    holding both parts, "\n" otherwise). */
 static void csv_rows(FILE *f, const btdf_table *t, const char *suffix)
@@ -53,10 +89,10 @@ static void csv_rows(FILE *f, const btdf_table *t, const char *suffix)
         for (size_t i = 0; i < s->nr; i++) {
             for (size_t j = 0; j < s->nc; j++) {
                 char ti_s[40], to_s[40] = "", ph_s[40] = "";
-                snprintf(ti_s, sizeof ti_s, "%.10g", ti * 180.0 / M_PI);
+                fmt_angle(ti_s, sizeof ti_s, ti * 180.0 / M_PI, ti);
                 if (t->kind == BTDF_TABLE_GRID) {
-                    snprintf(to_s, sizeof to_s, "%.10g", s->rows[i] * 180.0 / M_PI);
-                    snprintf(ph_s, sizeof ph_s, "%.10g", s->cols[j] * 180.0 / M_PI);
+                    fmt_angle(to_s, sizeof to_s, s->rows[i] * 180.0 / M_PI, s->rows[i]);
+                    fmt_angle(ph_s, sizeof ph_s, s->cols[j] * 180.0 / M_PI, s->cols[j]);
                 } else {
                     facet_geo g;
                     double stn = sin(s->rows[i]), ctn = cos(s->rows[i]);
@@ -65,12 +101,11 @@ static void csv_rows(FILE *f, const btdf_table *t, const char *suffix)
                              : facet_eval(n0, p->smoothness, p->k0, &a, stn, ctn, cps, sps, &g)) {
                         double to = atan2(g.sin_to, g.cos_to) * 180.0 / M_PI;
                         if (recip) { /* the node's directions for light leaving: swapped */
-                            snprintf(ti_s, sizeof ti_s, "%.10g", 180.0 - to);
+                            fmt_deg(ti_s, sizeof ti_s, 180.0 - to);
                             to = 180.0 - ti * 180.0 / M_PI;
                         }
-                        snprintf(to_s, sizeof to_s, "%.10g", to);
-                        snprintf(ph_s, sizeof ph_s, "%.10g",
-                                 fabs(atan2(g.sin_phi, g.cos_phi)) * 180.0 / M_PI);
+                        fmt_deg(to_s, sizeof to_s, to);
+                        fmt_deg(ph_s, sizeof ph_s, fabs(atan2(g.sin_phi, g.cos_phi)) * 180.0 / M_PI);
                     }
                 }
                 fprintf(f, "%s,%s,%s", recip && !to_s[0] ? "" : ti_s, to_s, ph_s);

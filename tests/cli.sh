@@ -50,6 +50,14 @@ expect 2 "must be transmission, reflection or both" "bad --part" -- "$B" eval --
 "$B" albedo --ior 1.5 -s 100 0 30 | grep -q '^30,0.958' && ok "albedo" || no "albedo"
 "$B" tabulate -q --grid 4,10,7 --theta-i 0:60 -o "$W/g.csv" && \
     [ "$(grep -vc '^#' "$W/g.csv")" -eq $((1 + 4 * 10 * 7)) ] && ok "tabulate grid CSV rows" || no "grid rows"
+# degree columns: shortest decimals that convert to the radians beside them (90/89-degree
+# steps need 17 digits; 30 stays 30), checked by tests/csv_angles.py
+"$B" tabulate -q --grid 90,90,3 -o "$W/ga.csv" && "$B" tabulate -q --grid 91,91,3 -o "$W/gb.csv" && \
+    python3 "$(dirname "$0")/csv_angles.py" "$W/ga.csv" 1.0112359550561798 90 >/dev/null && \
+    python3 "$(dirname "$0")/csv_angles.py" "$W/gb.csv" 30 90 180 >/dev/null && \
+    ok "CSV degree columns: the shortest decimals that convert to the stored radians" || \
+    no "CSV degree columns not the shortest that convert to the radians"
+rm -f "$W/ga.csv" "$W/gb.csv"
 "$B" tabulate -q --grid 2,5,3 -o - | grep -q '^theta_i_deg,theta_o_deg,phi_deg,rho' && ok "-o - writes stdout" || no "-o -"
 "$B" tabulate -q --theta-i 0:40 --tolerance 5e-3 -o "$W/a.csv" --report "$W/a.json" && \
     grep -q '"met": true' "$W/a.json" && ok "adaptive table and JSON report" || no "adaptive"

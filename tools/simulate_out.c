@@ -112,8 +112,12 @@ int write_dist(const char *path, const char *prov, const btdf_sim_opts *o,
                 for (int ip = 0; ip < np; ip++) {
                     size_t i = (size_t)it * (size_t)np + (size_t)ip;
                     double pc = (ip + 0.5) * wp;
-                    fprintf(f, "%.10g,%.10g,%.10g,%d,%s,", deg_given[k % o->n_theta], to, pc,
-                            t->channel, part ? "reflection" : "transmission");
+                    cnum(f, deg_given[k % o->n_theta]); /* the shortest decimals, as tables */
+                    fputc(',', f);
+                    cnum(f, to);
+                    fputc(',', f);
+                    cnum(f, pc);
+                    fprintf(f, ",%d,%s,", t->channel, part ? "reflection" : "transmission");
                     cnum(f, all[i].mean * inv);
                     fputc(',', f);
                     cnum(f, all[i].se * inv);
