@@ -86,13 +86,26 @@ static void csv_rows(FILE *f, const btdf_table *t, const char *suffix)
         double n0 = recip ? 1.0 / p->ior[0] : p->ior[0]; /* the slices' own index */
         rho_in a;
         rho_in_init(&a, sti, cti, p->smoothness, p->k0);
+        /* A grid's angles repeat along its rows and columns: each formatted once (the
+           search of fmt_angle costs up to 17 conversions). No memory: per node. */
+        char ti_k[40], to_i[40] = "";
+        fmt_angle(ti_k, sizeof ti_k, ti * 180.0 / M_PI, ti);
+        int grid = t->kind == BTDF_TABLE_GRID;
+        char (*ph_j)[40] = grid ? malloc(s->nc * sizeof *ph_j) : NULL;
+        for (size_t j = 0; ph_j && j < s->nc; j++)
+            fmt_angle(ph_j[j], sizeof ph_j[j], s->cols[j] * 180.0 / M_PI, s->cols[j]);
         for (size_t i = 0; i < s->nr; i++) {
+            if (grid)
+                fmt_angle(to_i, sizeof to_i, s->rows[i] * 180.0 / M_PI, s->rows[i]);
             for (size_t j = 0; j < s->nc; j++) {
                 char ti_s[40], to_s[40] = "", ph_s[40] = "";
-                fmt_angle(ti_s, sizeof ti_s, ti * 180.0 / M_PI, ti);
-                if (t->kind == BTDF_TABLE_GRID) {
-                    fmt_angle(to_s, sizeof to_s, s->rows[i] * 180.0 / M_PI, s->rows[i]);
-                    fmt_angle(ph_s, sizeof ph_s, s->cols[j] * 180.0 / M_PI, s->cols[j]);
+                memcpy(ti_s, ti_k, sizeof ti_s);
+                if (grid) {
+                    memcpy(to_s, to_i, sizeof to_s);
+                    if (ph_j)
+                        memcpy(ph_s, ph_j[j], sizeof ph_s);
+                    else
+                        fmt_angle(ph_s, sizeof ph_s, s->cols[j] * 180.0 / M_PI, s->cols[j]);
                 } else {
                     facet_geo g;
                     double stn = sin(s->rows[i]), ctn = cos(s->rows[i]);
@@ -116,6 +129,7 @@ static void csv_rows(FILE *f, const btdf_table *t, const char *suffix)
                 put_num(f, ",", s->cols[j], suffix);
             }
         }
+        free(ph_j);
     }
 }
 
