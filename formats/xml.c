@@ -171,6 +171,11 @@ static btdf_status xml_write(const fmt_output_ctx *c, FILE *f, char *msg, size_t
         fprintf(f, "     Model: smith: the facets of Eq. 25 with the height-correlated Smith "
                    "shadowing-masking of the same Gaussian surface in place of V(ti) V(to) "
                    "(k0 unused).\n");
+    if (r->p.model == BTDF_MODEL_FULL)
+        fprintf(f, "     Model: full: smith (the facets of Eq. 25 with the height-correlated "
+                   "Smith shadowing-masking, k0 unused) plus the light scattered two or more "
+                   "times,\n     from a random walk on the same microsurface tallied once "
+                   "per index (n and 1/n), so that R + T = 1.\n");
     if (r->channels == 3)
         fprintf(f, "     Colour: R, G, B in Radiance's RGB (its default primaries, equal-energy "
                    "white) for n = %.9g, %.9g, %.9g, written as CIE %s.\n",
@@ -191,9 +196,11 @@ static btdf_status xml_write(const fmt_output_ctx *c, FILE *f, char *msg, size_t
     fprintf(f, "</Name>\n\t\t<Manufacturer>btdftab %s</Manufacturer>\n", BTDF_VERSION_STRING);
     fprintf(f, "\t\t<Thickness unit=\"Millimeter\">0</Thickness>\n"
                "\t\t<DeviceType>Other</DeviceType>\n");
-    const char *what = r->p.model == BTDF_MODEL_SMITH
-                           ? "Xu and Sun 2008 facets with the Smith term (model smith)"
-                           : "Xu and Sun 2008 Eq. 25";
+    const char *what =
+        r->p.model == BTDF_MODEL_SMITH ? "Xu and Sun 2008 facets with the Smith term (model smith)"
+        : r->p.model == BTDF_MODEL_FULL ? "Xu and Sun 2008 facets with the Smith term and "
+                                          "multiple scattering (model full)"
+                                        : "Xu and Sun 2008 Eq. 25";
     if (sys)
         fprintf(f, "\t\t<Comments>%s: n = %.9g, s = %.9g, k0 = %.9g; basis %s", r->system,
                 r->p.ior[0], r->p.smoothness, r->p.k0, rad_basis_name(r->basis));

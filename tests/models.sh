@@ -149,7 +149,12 @@ if [ $exr = 1 ]; then
 fi
 expect 2 "--model full: not available for this format yet" "a full .bsdf is refused" \
     -- "$B" tabulate --model full -o "$W/f.bsdf"
-expect 2 "--model full:" "a full .xml is refused" -- "$B" tabulate --model full -o "$W/f.xml"
+# a full .xml names its model in the comment and the Comments, and its report measures
+# each block against full with the tally's noise floor (the Klems energy: radiance_full)
+"$B" tabulate --model full -s 3 --tolerance 0.5 --threads 2 -o "$W/f.xml" 2>"$W/f.err" &&
+    grep -q 'Model: full' "$W/f.xml" && grep -q '(model full) rough interface: n = 1.5' "$W/f.xml" &&
+    [ "$(grep -c "error against full (its tally's noise floor" "$W/f.err")" = 4 ] &&
+    ok "a full .xml says its model, its report the noise floor" || no "full .xml: $(cat "$W/f.err")"
 expect 2 "grid with model full" "a full grid table is refused" \
     -- "$B" tabulate --model full --grid 10,10,10 -o "$W/g.csv"
 expect 2 "part both with model full" "a full reflection table is refused" \

@@ -436,7 +436,7 @@ static void test_tree_cut(void **state)
     rad_block cut = direct;
     const double eps = 2e-3;
     assert_status(BTDF_OK, rad_tree_build(&p, eps, 0, (size_t)1 << 22, &direct, NULL, 0));
-    rad_tb *t = rad_tb_new(&p, &cut, 0);
+    rad_tb *t = rad_tb_new(&p, &cut, NULL, NULL, 0);
     assert_non_null(t);
     assert_status(BTDF_OK, rad_tb_grow(t, eps / 4, (size_t)1 << 22));
     assert_status(BTDF_OK, rad_tb_extract(t, eps / 4, &cut));
@@ -777,7 +777,7 @@ static void test_klems_colour_channels(void **state)
             rad_block one;
             memset(&one, 0, sizeof one);
             rad_block_of(k, n[c], &one);
-            assert_status(BTDF_OK, rad_klems_build(&p, one.n, one.scale, kb, 0, &one, NULL, 0));
+            assert_status(BTDF_OK, rad_klems_build(&p, one.n, one.scale, kb, NULL, 0, &one, NULL, 0));
             const rad_block *b = &r->b[k];
             for (size_t e = 0; e < nn; e++) {
                 double xyz[3] = {b->klems_x[e], b->klems[e], b->klems_z[e]};

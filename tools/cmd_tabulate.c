@@ -135,7 +135,10 @@ static int tabulate_radiance(const cli *c, const char *prov)
     if (GIVEN(c, OPT_TOLERANCE) && c->basis != BTDF_RAD_TREE3)
         return fail(EXIT_USAGE, "--tolerance: a Klems matrix holds exact patch averages; its "
                                 "error is set by the basis, not by a tolerance");
-    if (!check_params(&c->p))
+    btdf_params single = c->p; /* full has smith's parameters (the builder makes its tally) */
+    if (single.model == BTDF_MODEL_FULL)
+        single.model = BTDF_MODEL_SMITH;
+    if (!check_params(&single))
         return EXIT_USAGE;
     int bad = series_previews_check(c, ".xml");
     if (bad)
@@ -208,7 +211,7 @@ int cmd_tabulate(cli *c, const char *prov)
             return fail(EXIT_USAGE, "%s: --model %s: not available for this format yet "
                         "(%s take it; xu-sun is the model of every format)",
                         out, btdf_model_name(c->p.model),
-                        c->p.model == BTDF_MODEL_FULL ? ".csv and .exr" : ".csv, .exr and .xml");
+                        ".csv, .exr and .xml");
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)

@@ -743,16 +743,12 @@ int manifest_run(const manifest_opts *mo)
             free(mf);
             return 2;
         }
-        /* as tabulate refuses them: full for .xml, a tolerance for Klems matrices alone */
-        int full_xml = m->p.model == BTDF_MODEL_FULL && m->nxml > 0 && !m->key_line[K_BACK];
-        if (full_xml || (m->key_line[K_TOL] && m->basis != BTDF_RAD_TREE3 && m->nxml > 0 &&
-                         m->nenter + m->nleave + m->nbsdf == 0)) {
-            fprintf(stderr, "%s: %s:%d: material [%s]: %s%s\n", mo->prog, mo->path,
-                    m->key_line[full_xml ? K_XML : K_TOL], m->name, full_xml ? m->xml[0] : "",
-                    full_xml ? ": model full: not available for .xml yet (enter and leave "
-                               "tables take it)"
-                             : "tolerance: a Klems matrix holds exact patch averages; its "
-                               "error is set by the basis, not by a tolerance");
+        /* as tabulate refuses it: a tolerance for Klems matrices alone */
+        if (m->key_line[K_TOL] && m->basis != BTDF_RAD_TREE3 && m->nxml > 0 &&
+            m->nenter + m->nleave + m->nbsdf == 0) {
+            fprintf(stderr, "%s: %s:%d: material [%s]: tolerance: a Klems matrix holds exact "
+                            "patch averages; its error is set by the basis, not by a "
+                            "tolerance\n", mo->prog, mo->path, m->key_line[K_TOL], m->name);
             free_manifest(mf);
             free(mf);
             return 2;

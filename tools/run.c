@@ -540,6 +540,10 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
             else
                 snprintf(verdict, sizeof verdict, "; verdict: exact patch averages over "
                          "0-90 deg (no tolerance: the basis sets e_L1)");
+            char against[96] = ""; /* full: and the noise floor of its tally */
+            if (p->model == BTDF_MODEL_FULL)
+                snprintf(against, sizeof against, "; error against full (its tally's noise "
+                         "floor %.2g)", rk->ms_noise);
             char chn[48] = "";
             if (nch == 3)
                 snprintf(chn, sizeof chn, ", channel %s (n = %.6g)", report_rad_channel[c],
@@ -549,14 +553,14 @@ int run_radiance(const char *prog, const char *path, const char *report, const b
                         "%s: %s: %s (light %s, as Radiance reads it%s): %zu %s; build %.3f s "
                         "of all blocks, this block's estimate %.3f s (%zu angles, %zu points); "
                         "e_L1 max %.3g (%.3g up to "
-                        "%g deg) mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
+                        "%g deg) mean %.3g; e_max max %.3g; e_T max %.3g%s%s\n",
                         prog, path, b.label,
                         b.light == BTDF_SIDE_ENTER ? "entering, n" : "leaving, 1/n", chn,
                         b.values, basis == BTDF_RAD_TREE3 ? "leaves" : "entries",
                         btdf_rad_seconds_build(x), rk->seconds_estimate, rk->test_angles,
                         rk->test_points, rk->e_l1_max, btdf_rad_e_l1_checked(rk),
                         BTDF_RAD_TI_CHECKED_DEG, rk->e_l1_mean, rk->e_max_max, rk->e_t_max,
-                        verdict);
+                        against, verdict);
         }
         btdf_rad_set_errors(x, k, el1, et);
     }

@@ -108,6 +108,24 @@ void rad_block_of(int k, double nc, rad_block *b)
     b->n_light = b->light == BTDF_SIDE_ENTER ? nc : 1.0 / nc;
 }
 
+btdf_full *rad_ms(const btdf_rad *r, int c, double n)
+{
+    if (!r || r->p.model != BTDF_MODEL_FULL || c < 0 || c >= BTDF_MAX_CHANNELS)
+        return NULL;
+    for (int h = 0; h < 2; h++) /* the blocks' indices are ior[c] and 1.0 / ior[c] */
+        if (r->ms[c][h] && r->ms[c][h]->n == n)
+            return r->ms[c][h];
+    return NULL;
+}
+
+btdf_params rad_single(const btdf_params *p)
+{
+    btdf_params q = *p;
+    if (q.model == BTDF_MODEL_FULL)
+        q.model = BTDF_MODEL_SMITH;
+    return q;
+}
+
 /* The index of the light block k serves, in channel c. */
 double rad_n_light(const btdf_rad *r, int k, int c)
 {
@@ -178,6 +196,9 @@ BTDF_API void btdf_rad_free(btdf_rad *r)
         free(r->b[k].klems_x);
         free(r->b[k].klems_z);
     }
+    for (int c = 0; c < BTDF_MAX_CHANNELS; c++)
+        for (int h = 0; h < 2; h++)
+            btdf_full_free(r->ms[c][h]);
     free(r);
 }
 
@@ -268,12 +289,14 @@ static void probe_angle(void *arg, size_t i)
             double phi = 2.0 * M_PI * ((double)ph + core_unif(&z)) / (double)pr->nphi;
             double st = sqrt(u1), to = asin(st), f;
             if (b->reflect) {
-                f = btdf_rho_r_model(r->p.model, pr->n_light, r->p.smoothness, r->p.k0, ti,
-                                     to, phi);
+                f = pr->ms ? btdf_full_rho_r(pr->ms, ti, to, phi)
+                           : btdf_rho_r_model(r->p.model, pr->n_light, r->p.smoothness,
+                                              r->p.k0, ti, to, phi);
             } else {
                 to = M_PI - to;
-                f = btdf_rho_model(r->p.model, pr->n_light, r->p.smoothness, r->p.k0, ti, to,
-                                   phi);
+                f = pr->ms ? btdf_full_rho(pr->ms, ti, to, phi)
+                           : btdf_rho_model(r->p.model, pr->n_light, r->p.smoothness, r->p.k0,
+                                            ti, to, phi);
             }
             double pv[3], qv[3];
             rad_render_dirs(r, pr->k, ti, to, phi, pv, qv);
@@ -295,6 +318,7 @@ btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_max, size
     memset(pr, 0, sizeof *pr);
     pr->c = c;
     pr->n_light = rad_n_light(r, k, c);
+    pr->ms = rad_ms(r, c, pr->n_light);
     pr->ti_max = ti_max;
     /* e_L1 jumps where a light's ring passes from one cell to the next in r, at
        r = j / 2^(L-1) for a cell of level L; a stratified set misses narrow peaks
@@ -323,7 +347,7 @@ btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_max, size
     pr->a = pr->u0 + n;
     pr->b = pr->a + n;
     pr->f = pr->b + n;
-    btdf_params q = r->p;
+    btdf_params q = rad_single(&r->p);
     q.channels = 1;
     q.ior[0] = pr->n_light;
     uint64_t z = seed;
@@ -341,6 +365,8 @@ btdf_status rad_probes_make(const btdf_rad *r, int k, int c, double ti_max, size
             rad_probes_free(pr);
             return st;
         }
+        if (pr->ms) /* full's norm: smith's quadrature plus the tallied orders 2+ */
+            v += full_ms_energy(pr->ms, r->b[k].reflect, pr->ti[i], NULL);
         pr->T[i] = v;
         pr->fl[i] = fmax(v, 0.01); /* MODEL.md section 6 floor */
     }
@@ -492,7 +518,16 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
         return st;
     }
     btdf_ti_error *res = malloc(pr[0].m * sizeof *res);
-    rad_tb *t = res ? rad_tb_new(&r->p, b, threads) : NULL;
+    btdf_full *ms[3] = {NULL, NULL, NULL}, *msl[3] = {NULL, NULL, NULL};
+    for (int c = 0; c < 3 && c < r->channels && r->p.model == BTDF_MODEL_FULL; c++) {
+        rad_block bc;
+        rad_block_of(k, r->p.ior[c], &bc);
+        ms[c] = rad_ms(r, c, bc.n);
+        msl[c] = rad_ms(r, c, bc.n_light);
+    }
+    rad_tb *t = res ? rad_tb_new(&r->p, b, r->p.model == BTDF_MODEL_FULL ? ms : NULL,
+                                 r->p.model == BTDF_MODEL_FULL ? msl : NULL, threads)
+                    : NULL;
     if (!t) {
         free(res);
         for (int i = 0; i < npr; i++)
@@ -643,8 +678,8 @@ btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t 
         }
         rad_block bc;
         rad_block_of(k, r->p.ior[c], &bc);
-        st = rad_klems_acc(&r->p, bc.n, bc.scale, bc.reflect, r->kb, threads, &acc[c], msg,
-                           msglen);
+        st = rad_klems_acc(&r->p, bc.n, bc.scale, bc.reflect, r->kb, rad_ms(r, c, bc.n),
+                           threads, &acc[c], msg, msglen);
     }
     float *out[3] = {NULL, NULL, NULL};
     for (int i = 0; i < 3 && st == BTDF_OK; i++) {
@@ -676,6 +711,42 @@ btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t 
     return BTDF_OK;
 }
 
+/* Model full: each channel's tally at its index and at the inverse (the blocks serve
+   light from both sides), with the defaults of btdf_full_opts on the build's threads,
+   as a table of full makes its own (table/build.c). A channel whose index an earlier
+   one has shares its tallies' copies. */
+static btdf_status rad_make_ms(btdf_rad *r, int threads, btdf_progress_fn progress,
+                               void *user, char *msg, size_t msglen)
+{
+    if (r->p.model != BTDF_MODEL_FULL)
+        return BTDF_OK;
+    btdf_full_opts fo;
+    btdf_full_opts_default(&fo);
+    fo.threads = threads;
+    for (int c = 0; c < r->channels; c++) {
+        int same = -1;
+        for (int d = 0; d < c; d++)
+            if (r->p.ior[d] == r->p.ior[c])
+                same = d;
+        for (int h = 0; h < 2; h++) {
+            if (same >= 0) {
+                r->ms[c][h] = full_clone(r->ms[same][h]);
+                if (!r->ms[c][h])
+                    return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
+                continue;
+            }
+            if (progress)
+                progress(user, "multiple scattering tally", (size_t)(2 * c + h),
+                         (size_t)(2 * r->channels - 2 * c - h));
+            double n = h ? 1.0 / r->p.ior[c] : r->p.ior[c]; /* as rad_block_of forms it */
+            btdf_status st = btdf_full_new(n, r->p.smoothness, &fo, &r->ms[c][h], msg, msglen);
+            if (st != BTDF_OK)
+                return st;
+        }
+    }
+    return BTDF_OK;
+}
+
 BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basis basis,
                                              double tolerance, int threads,
                                              btdf_progress_fn progress, void *user,
@@ -686,7 +757,8 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
             snprintf(msg, msglen, "no place for the file's object (out is NULL)");
         return BTDF_EINVAL;
     }
-    btdf_status st = btdf_params_check(p, msg, msglen);
+    btdf_params single = rad_single(p); /* full: smith's parameters and a tally */
+    btdf_status st = btdf_params_check(&single, msg, msglen);
     if (st != BTDF_OK)
         return st;
     if ((unsigned)basis > RAD_BASIS_KLEMS_QUARTER) {
@@ -721,6 +793,11 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
     rad_xyz_to_rgb(r->to_rgb); /* once, not per lookup */
     for (int k = 0; k < r->nblocks; k++)
         rad_block_of(k, p->ior[0], &r->b[k]);
+    st = rad_make_ms(r, threads, progress, user, msg, msglen);
+    if (st != BTDF_OK) {
+        btdf_rad_free(r);
+        return st;
+    }
     for (int k = 0; k < r->nblocks && (st == BTDF_OK || st == BTDF_EBUDGET); k++) {
         rad_block *b = &r->b[k];
         if (basis != RAD_BASIS_TREE3) {
@@ -728,7 +805,8 @@ BTDF_API btdf_status btdf_rad_build_progress(const btdf_params *p, btdf_rad_basi
                 progress(user, "Klems patch averages, block", (size_t)k,
                          (size_t)(r->nblocks - k));
             st = r->channels == 3 ? rad_klems_colour(r, k, threads, msg, msglen)
-                                  : rad_klems_build(p, b->n, b->scale, r->kb, threads, b, msg,
+                                  : rad_klems_build(p, b->n, b->scale, r->kb,
+                                                    rad_ms(r, 0, b->n), threads, b, msg,
                                                     msglen);
             continue;
         }

@@ -100,6 +100,10 @@ struct btdf_rad {
                                      "" for Eq. 25's own files */
     int reported;                 /* 1 when e_l1, e_t below hold the blocks' reports */
     double e_l1[RAD_MAX_BLOCKS], e_t[RAD_MAX_BLOCKS];
+    /* Model full (p.model): channel c's tally at ior[c] ([c][0]) and at 1 / ior[c]
+       ([c][1]), the blocks' two indices; NULL for the other models (and a file read
+       back, whose values hold it already). */
+    btdf_full *ms[BTDF_MAX_CHANNELS][2];
 };
 
 const rad_klems_basis *rad_klems(rad_basis b);

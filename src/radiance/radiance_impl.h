@@ -8,6 +8,7 @@
 #include "core/core.h"
 #include "estimate/estimate.h"
 #include "model/facet.h"
+#include "model/full.h"
 
 /* Radiance's first tree coordinate from the sine of the incident polar angle. */
 double rad_u0_of_sin(double sin_ti);
@@ -25,7 +26,11 @@ size_t rad_tree_leaf(const rad_node *nodes, double u0, double a, double b);
    leaf each channel's own value and splits a cell while the worst channel's share is
    above eps; the tree then carries blk->cv (CIE Y in the nodes, u', v' beside). */
 typedef struct rad_tb rad_tb;
-rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, int threads);
+/* Model full: ms[ch] is channel ch's tally at the block's own index (its values add its
+   multiply scattered part), ms_light[ch] at the light's (its floor adds that part's
+   energy); both NULL for the other models. */
+rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, btdf_full *const *ms,
+                   btdf_full *const *ms_light, int threads);
 /* BTDF_EBUDGET when the builder would hold more than max_nodes nodes (it keeps what
    it has: extracting at the same eps gives a valid, coarser tree). */
 btdf_status rad_tb_grow(rad_tb *t, double eps, size_t max_nodes);
@@ -44,13 +49,15 @@ btdf_status rad_tree_build(const btdf_params *p, double eps, int threads, size_t
 /* One Klems matrix for index n, values times scale (klems.c): Eq. 25, or rho_r when
    blk->reflect is set. */
 btdf_status rad_klems_build(const btdf_params *p, double n, double scale,
-                            const rad_klems_basis *kb, int threads, rad_block *blk, char *msg,
-                            size_t msglen);
+                            const rad_klems_basis *kb, const btdf_full *ms, int threads,
+                            rad_block *blk, char *msg, size_t msglen);
 
 /* The same matrix in double, before it is rounded for the file (*out: malloc'd). */
+/* ms: model full, the tally at index n, whose multiply scattered part is added (patch
+   averages of its series); NULL for the other models. */
 btdf_status rad_klems_acc(const btdf_params *p, double n, double scale, int reflect,
-                          const rad_klems_basis *kb, int threads, double **out, char *msg,
-                          size_t msglen);
+                          const rad_klems_basis *kb, const btdf_full *ms, int threads,
+                          double **out, char *msg, size_t msglen);
 /* A Klems value exactly as the file holds it (6 significant digits, as a float). */
 float rad_klems_value(double v);
 
@@ -63,6 +70,11 @@ btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t 
 int rad_klems_patch(const rad_klems_basis *kb, double theta_deg, double phi_deg);
 
 /* ---- shared by radiance.c (build, probes), lookup.c and report.c ---- */
+
+/* Model full: channel c's tally at index n (ior[c] or its inverse), else NULL. */
+btdf_full *rad_ms(const btdf_rad *r, int c, double n);
+/* The parameters the kernels take: smith's for full (its single scattering). */
+btdf_params rad_single(const btdf_params *p);
 
 /* The index of the light block k serves, in channel c. */
 double rad_n_light(const btdf_rad *r, int k, int c);
@@ -87,6 +99,7 @@ typedef struct rad_probes {
     int k, c;       /* block, channel (0 for one channel) */
     int chosen;     /* a colour tree's channel as the builder chose it (rad_tree_value) */
     double n_light; /* the index of the light the block serves, in channel c */
+    btdf_full *ms;  /* model full: the tally at n_light, else NULL */
     const rad_block *tree; /* the tree under test; NULL for a Klems block, whose value
                               as Radiance reads it is stored in u0 (a, b unused) */
     btdf_ti_error *res;

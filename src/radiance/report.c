@@ -66,6 +66,8 @@ static btdf_status rad_reflect_report(const btdf_rad *r, int k, int c, int chose
     rep->seconds_build = r->seconds_build;
     rep->tolerance = r->tolerance;
     rep->metric = BTDF_METRIC_L1;
+    const btdf_full *ms = rad_ms(r, c, rad_n_light(r, k, c));
+    rep->ms_noise = ms ? full_ms_noise(ms, 1, 0.0, M_PI / 2) : 0.0;
     /* a Klems matrix has no tolerance: its entries are exact averages */
     rep->met = !tree || btdf_rad_e_l1_checked(rep) <= r->tolerance;
     rep->slices = tree ? (size_t)r->b[k].depth : (size_t)r->kb->npatch;
@@ -98,13 +100,22 @@ btdf_status rad_report_ch(const btdf_rad *r, int k, int c, int chosen,
     if (r->b[k].reflect)
         return rad_reflect_report(r, k, c, chosen, test_angles, points_per_angle, seed,
                                   threads, rep);
-    btdf_params q = r->p;
+    btdf_params q = rad_single(&r->p);
     q.channels = 1;
     q.ior[0] = rad_n_light(r, k, c);
     rad_est e = {r, r->b[k].light, r->channels == 3 ? c : -1, chosen};
-    btdf_status st = est_fn(&q, 0.0, M_PI / 2, test_angles, points_per_angle, seed,
-                                      threads, rad_est_fn, &e, rep);
+    /* full: measured against smith's kernel plus the tally at the light's index */
+    btdf_full *ms[1] = {rad_ms(r, c, q.ior[0])};
+    est_opts opt;
+    memset(&opt, 0, sizeof opt);
+    opt.full = ms;
+    btdf_status st =
+        ms[0] ? est_knots_part_opt(&q, 0, 0.0, M_PI / 2, test_angles, points_per_angle, seed,
+                                   threads, NULL, 0, rad_est_fn, &e, &opt, rep)
+              : est_fn(&q, 0.0, M_PI / 2, test_angles, points_per_angle, seed, threads,
+                       rad_est_fn, &e, rep);
     if (st == BTDF_OK) {
+        rep->ms_noise = ms[0] ? full_ms_noise(ms[0], 0, 0.0, M_PI / 2) : 0.0;
         rep->seconds_build = r->seconds_build;
         rep->tolerance = r->tolerance;
         rep->metric = BTDF_METRIC_L1;

@@ -133,7 +133,8 @@ typedef struct tt_ctx {
     int same[3];            /* the first channel of channel c's index (computed once) */
     double n[3], scale[3];  /* per channel: the block's index and scale */
     double s, k0;
-    btdf_model model;       /* the shadowing-masking (kernel.h) */
+    btdf_model model;       /* the shadowing-masking (kernel.h): full's is smith's */
+    const btdf_full *ms[3]; /* model full: each channel's tally at n[ch], else NULL */
     int reflect;            /* 1: rho_r(n) (reciprocal, no scale); 0: scale rho(n; p -> q) */
     double rfloor[3][NR_GRID]; /* max(T or R of the light, 0.01) at r = k / (NR_GRID - 1) */
     double m[3][3];         /* colour: R, G, B -> X, Y, Z */
@@ -365,6 +366,11 @@ static void tt_eval(const tt_ctx *c, tb_node *nd, float *cv, int level, uint32_t
                               rho_kernel(c->n[ch], c->s, &ri[i], &om, cph[m], sph[m]);
                 }
             }
+            if (c->ms[ch]) /* full: the tally's part at the same samples (mu = cos tq) */
+                for (int m = 0; m < NS * NS; m++)
+                    f[i][m] += c->scale[ch] *
+                               full_ms(c->ms[ch], c->reflect, asin(sp[i]) * (180.0 / M_PI),
+                                       sqrt(fmax(0.0, 1.0 - rr[m] * rr[m])), cph[m]);
             double row = 0.0;
             for (int m = 0; m < NS * NS; m++)
                 row += f[i][m];
@@ -490,7 +496,8 @@ struct rad_tb {
     int threads;
 };
 
-rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, int threads)
+rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, btdf_full *const *ms,
+                   btdf_full *const *ms_light, int threads)
 {
     rad_tb *t = calloc(1, sizeof *t);
     if (!t)
@@ -515,7 +522,9 @@ rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, int threads)
     rad_rgb_to_xyz(c->m);
     c->s = p->smoothness;
     c->k0 = p->k0;
-    c->model = p->model;
+    c->model = p->model == BTDF_MODEL_FULL ? BTDF_MODEL_SMITH : p->model;
+    for (int ch = 0; ch < c->nch; ch++)
+        c->ms[ch] = ms ? ms[ch] : NULL;
     c->reflect = blk->reflect;
     /* Start where a cell is no wider than the lobe (about 2/s rad in facet slope). */
     int lv = 3 + (int)ceil(log2(fmax(1.0, p->smoothness / 2.0)));
@@ -523,6 +532,7 @@ rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, int threads)
     c->max_level = 18;
     for (int ch = 0; ch < c->nch; ch++) {
         btdf_params q = *p;
+        q.model = c->model;
         q.channels = 1;
         q.ior[0] = bc[ch].n_light;
         for (int i = 0; i < NR_GRID; i++) {
@@ -535,6 +545,8 @@ rad_tb *rad_tb_new(const btdf_params *p, const rad_block *blk, int threads)
                 btdf_reflectance(&q, asin(r), &v);
             else
                 btdf_transmittance(&q, asin(r), &v);
+            if (ms_light && ms_light[ch]) /* full's norm: plus the tallied orders 2+ */
+                v += full_ms_energy(ms_light[ch], blk->reflect, asin(r), NULL);
             c->rfloor[ch][i] = fmax(v, 0.01); /* MODEL.md section 6 floor */
         }
     }
@@ -752,7 +764,7 @@ btdf_status rad_tb_extract3(const rad_tb *t, const double eps[3], rad_block *blk
 btdf_status rad_tree_build(const btdf_params *p, double eps, int threads, size_t max_nodes,
                            rad_block *blk, char *msg, size_t msglen)
 {
-    rad_tb *t = rad_tb_new(p, blk, threads);
+    rad_tb *t = rad_tb_new(p, blk, NULL, NULL, threads);
     if (!t)
         return core_say(BTDF_ENOMEM, msg, msglen, "out of memory building the tensor tree");
     btdf_status st = rad_tb_grow(t, eps, max_nodes);
