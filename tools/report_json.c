@@ -296,6 +296,10 @@ void report_json_radiance(FILE *f, const btdf_rad *x, const btdf_params *p,
         const btdf_report *r0 = &rep[k * 3];
         fprintf(f, "    \"values\": %zu, \"depth\": %d, \"tolerance\": %.9g, \"met\": %s,\n",
                 b.values, b.depth, r0->tolerance, r0->met ? "true" : "false");
+        if (p->model == BTDF_MODEL_FULL) /* the tally's noise floor, the worst channel's */
+            fprintf(f, "    \"ms_noise\": %s,\n",
+                    num(fmax(r0->ms_noise, fmax(nch == 3 ? rep[k * 3 + 1].ms_noise : 0.0,
+                                                nch == 3 ? rep[k * 3 + 2].ms_noise : 0.0))));
         if (nch == 1) {
             rad_json_report(f, r0, &coarse[k * 3], "    ");
             fprintf(f, ",\n");
@@ -350,11 +354,8 @@ void report_json_radiance(FILE *f, const btdf_rad *x, const btdf_params *p,
             /* the model for the light at q in its own frame (rho depends on cos phi only) */
             double truth = 0.0;
             for (int c = 0; c < nch; c++) {
-                double nl = b.light == BTDF_SIDE_ENTER ? p->ior[c] : 1.0 / p->ior[c];
-                double t = refl ? btdf_rho_r_model(p->model, nl, p->smoothness, p->k0,
-                                                   tq * d2r, tp * d2r, (pp - pq) * d2r)
-                                : btdf_rho_model(p->model, nl, p->smoothness, p->k0, tq * d2r,
-                                                 (180.0 - tp) * d2r, (pp - pq) * d2r);
+                double t = btdf_rad_model_rho(x, k, c, tq * d2r,
+                                              (refl ? tp : 180.0 - tp) * d2r, (pp - pq) * d2r);
                 truth += nch == 1 ? t : m[1][c] * t;
             }
             fprintf(f, "     [%.4f, %.4f, %.4f, %.4f, %.9g, %.9g", th_p, pp, th_q, pq, xyz[1],

@@ -99,6 +99,13 @@ BTDF_API double btdf_rad_lookup_channel(const btdf_rad *r, int k, int c, const d
 BTDF_API double btdf_rad_render(const btdf_rad *r, btdf_side light, int c, double ti,
                                 double to, double phi);
 
+/* The model's value that block k serves, for channel c (0 for one channel): what
+   btdf_rad_render (or the reflection block's lookup) is compared with. Transmission:
+   rho(n_light; ti, to, phi), to in [pi/2, pi]; reflection: rho_r(n_light; ti, tr, phi).
+   Model full: with the tallies the builder made (a file read back keeps none: 0). */
+BTDF_API double btdf_rad_model_rho(const btdf_rad *r, int k, int c, double ti, double to,
+                                   double phi);
+
 /* Reads a file btdf_write wrote as .xml (TensorTree3 or Klems, one channel or colour)
    from len bytes at data: the material's parameters from its Comments, each block's
    tree or matrix, the name and the stored errors. Anything else is refused

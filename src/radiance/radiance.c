@@ -118,6 +118,22 @@ btdf_full *rad_ms(const btdf_rad *r, int c, double n)
     return NULL;
 }
 
+BTDF_API double btdf_rad_model_rho(const btdf_rad *r, int k, int c, double ti, double to,
+                                   double phi)
+{
+    if (!r || k < 0 || k >= r->nblocks || c < 0 || c >= (r->channels == 3 ? 3 : 1))
+        return 0.0;
+    double nl = rad_n_light(r, k, c);
+    const btdf_full *ms = rad_ms(r, c, nl);
+    if (r->p.model == BTDF_MODEL_FULL && !ms)
+        return 0.0; /* a file read back: the tally is not kept */
+    if (r->b[k].reflect)
+        return ms ? btdf_full_rho_r(ms, ti, to, phi)
+                  : btdf_rho_r_model(r->p.model, nl, r->p.smoothness, r->p.k0, ti, to, phi);
+    return ms ? btdf_full_rho(ms, ti, to, phi)
+              : btdf_rho_model(r->p.model, nl, r->p.smoothness, r->p.k0, ti, to, phi);
+}
+
 btdf_params rad_single(const btdf_params *p)
 {
     btdf_params q = *p;
