@@ -420,6 +420,12 @@ BTDF_API btdf_status btdf_full_new(double n, double s, const btdf_full_opts *opt
                 for (int m = 0; m < FULL_M; m++) /* a_km = <f, p_k cos m phi> / N_m */
                     f->coef[node][h][k][m] =
                         sum.c[h][k * FULL_M + m] / np / (m == 0 ? 2.0 * M_PI : M_PI);
+            /* Normal incidence: the light has no azimuth, so the scattered light has
+               none; the tallied cos(m phi) modes, m >= 1, are the walks' noise alone */
+            if (f->node_deg[node] == 0.0)
+                for (int k = 0; k < FULL_K; k++)
+                    for (int m = 1; m < FULL_M; m++)
+                        f->coef[node][h][k][m] = 0.0;
             f->e1[node][h] = sum.e1[h] / np;
             f->ems[node][h] = sum.ems[h] / np;
             double q = f->ems[node][h]; /* binomial standard error of a fraction */
@@ -482,7 +488,10 @@ BTDF_API double btdf_full_rho_deg(const btdf_full *f, double ti, double to, doub
     (void)sp;
     if (ti == 90.0 || cto == 0.0)
         return 0.0; /* grazing in or out: no flux crosses (MODEL.md 3.5) */
-    return btdf_rho_smith_deg(f->n, f->s, ti, to, phi) + full_ms(f, 0, ti, -cto, cp);
+    /* normal incidence has no azimuth: smith's value there without the rounding of one
+       (its sin and cos of phi move the last bit) */
+    return btdf_rho_smith_deg(f->n, f->s, ti, to, ti == 0.0 ? 0.0 : phi) +
+           full_ms(f, 0, ti, -cto, cp);
 }
 
 BTDF_API double btdf_full_rho_r_deg(const btdf_full *f, double ti, double tr, double phi)
@@ -496,7 +505,8 @@ BTDF_API double btdf_full_rho_r_deg(const btdf_full *f, double ti, double tr, do
     (void)sp;
     if (ti == 90.0 || ctr == 0.0)
         return 0.0; /* grazing in or out */
-    return btdf_rho_r_smith_deg(f->n, f->s, ti, tr, phi) + full_ms(f, 1, ti, ctr, cp);
+    return btdf_rho_r_smith_deg(f->n, f->s, ti, tr, ti == 0.0 ? 0.0 : phi) +
+           full_ms(f, 1, ti, ctr, cp); /* ti = 0: as above */
 }
 
 BTDF_API double btdf_full_rho(const btdf_full *f, double ti, double to, double phi)
