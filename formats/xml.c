@@ -302,6 +302,8 @@ static btdf_status xml_inspect(const btdf_input *in, FILE *out)
     fprintf(out, "\nsmoothness: %s\n", b);
     btdf_format_double(r->p.k0, b, sizeof b);
     fprintf(out, "k0: %s\n", b);
+    if (r->p.model != BTDF_MODEL_XU_SUN) /* xu-sun files print what they always did */
+        fprintf(out, "model: %s\n", btdf_model_name(r->p.model));
     if (r->name[0])
         fprintf(out, "name: %s\n", r->name);
     if (r->basis == RAD_BASIS_TREE3)

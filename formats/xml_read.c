@@ -336,6 +336,16 @@ static btdf_status xml_parse(xml_in *x, btdf_rad *r)
     char pm[256];
     if (btdf_params_check(&r->p, pm, sizeof pm) != BTDF_OK)
         return bad(x, pm);
+    /* the model the writer named (xml.c: "(model smith)", "(model full)"; none: xu-sun) */
+    static const char *const models[2] = {"(model smith)", "(model full)"};
+    for (int m = 0; m < 2; m++) {
+        size_t lk = strlen(models[m]);
+        for (const char *q = b; q + lk <= be; q++)
+            if (memcmp(q, models[m], lk) == 0) {
+                r->p.model = m ? BTDF_MODEL_FULL : BTDF_MODEL_SMITH;
+                break;
+            }
+    }
     double tol;
     r->tolerance = after_key(b, be, ", tolerance ", &tol) ? tol : 0.0;
     r->channels = r->p.channels;

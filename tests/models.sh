@@ -96,7 +96,8 @@ if [ $exr = 1 ]; then
 fi
 # the .xml takes smith and says so; the .bsdf does not yet, and says which formats do
 "$B" tabulate --model smith -s 3 --tolerance 0.5 -o "$W/s.xml" -q &&
-    grep -q 'Model: smith' "$W/s.xml" && ok "a smith .xml says its model" || no "smith .xml"
+    grep -q 'Model: smith' "$W/s.xml" && "$B" inspect "$W/s.xml" | grep -qx 'model: smith' &&
+    ok "a smith .xml says its model" || no "smith .xml"
 expect 2 "--model smith: not available for this format yet" "a smith .bsdf is refused" \
     -- "$B" tabulate --model smith -o "$W/s.bsdf"
 expect 2 "reflection tables of this model are not available" "a smith reflection table is refused" \
@@ -154,6 +155,7 @@ expect 2 "--model full: not available for this format yet" "a full .bsdf is refu
 "$B" tabulate --model full -s 3 --tolerance 0.5 --threads 2 -o "$W/f.xml" 2>"$W/f.err" &&
     grep -q 'Model: full' "$W/f.xml" && grep -q '(model full) rough interface: n = 1.5' "$W/f.xml" &&
     [ "$(grep -c "error against full (its tally's noise floor" "$W/f.err")" = 4 ] &&
+    "$B" inspect "$W/f.xml" | grep -qx 'model: full' &&
     ok "a full .xml says its model, its report the noise floor" || no "full .xml: $(cat "$W/f.err")"
 expect 2 "grid with model full" "a full grid table is refused" \
     -- "$B" tabulate --model full --grid 10,10,10 -o "$W/g.csv"
