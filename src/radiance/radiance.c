@@ -108,40 +108,6 @@ void rad_block_of(int k, double nc, rad_block *b)
     b->n_light = b->light == BTDF_SIDE_ENTER ? nc : 1.0 / nc;
 }
 
-btdf_full *rad_ms(const btdf_rad *r, int c, double n)
-{
-    if (!r || r->p.model != BTDF_MODEL_FULL || c < 0 || c >= BTDF_MAX_CHANNELS)
-        return NULL;
-    for (int h = 0; h < 2; h++) /* the blocks' indices are ior[c] and 1.0 / ior[c] */
-        if (r->ms[c][h] && r->ms[c][h]->n == n)
-            return r->ms[c][h];
-    return NULL;
-}
-
-BTDF_API double btdf_rad_model_rho(const btdf_rad *r, int k, int c, double ti, double to,
-                                   double phi)
-{
-    if (!r || k < 0 || k >= r->nblocks || c < 0 || c >= (r->channels == 3 ? 3 : 1))
-        return 0.0;
-    double nl = rad_n_light(r, k, c);
-    const btdf_full *ms = rad_ms(r, c, nl);
-    if (r->p.model == BTDF_MODEL_FULL && !ms)
-        return 0.0; /* a file read back: the tally is not kept */
-    if (r->b[k].reflect)
-        return ms ? btdf_full_rho_r(ms, ti, to, phi)
-                  : btdf_rho_r_model(r->p.model, nl, r->p.smoothness, r->p.k0, ti, to, phi);
-    return ms ? btdf_full_rho(ms, ti, to, phi)
-              : btdf_rho_model(r->p.model, nl, r->p.smoothness, r->p.k0, ti, to, phi);
-}
-
-btdf_params rad_single(const btdf_params *p)
-{
-    btdf_params q = *p;
-    if (q.model == BTDF_MODEL_FULL)
-        q.model = BTDF_MODEL_SMITH;
-    return q;
-}
-
 /* The index of the light block k serves, in channel c. */
 double rad_n_light(const btdf_rad *r, int k, int c)
 {
@@ -534,16 +500,9 @@ static btdf_status rad_tree_block(btdf_rad *r, int k, int threads, btdf_progress
         return st;
     }
     btdf_ti_error *res = malloc(pr[0].m * sizeof *res);
-    btdf_full *ms[3] = {NULL, NULL, NULL}, *msl[3] = {NULL, NULL, NULL};
-    for (int c = 0; c < 3 && c < r->channels && r->p.model == BTDF_MODEL_FULL; c++) {
-        rad_block bc;
-        rad_block_of(k, r->p.ior[c], &bc);
-        ms[c] = rad_ms(r, c, bc.n);
-        msl[c] = rad_ms(r, c, bc.n_light);
-    }
-    rad_tb *t = res ? rad_tb_new(&r->p, b, r->p.model == BTDF_MODEL_FULL ? ms : NULL,
-                                 r->p.model == BTDF_MODEL_FULL ? msl : NULL, threads)
-                    : NULL;
+    btdf_full *ms[3], *msl[3];
+    int full = rad_block_ms(r, k, ms, msl);
+    rad_tb *t = res ? rad_tb_new(&r->p, b, full ? ms : NULL, full ? msl : NULL, threads) : NULL;
     if (!t) {
         free(res);
         for (int i = 0; i < npr; i++)
@@ -724,42 +683,6 @@ btdf_status rad_klems_colour(btdf_rad *r, int k, int threads, char *msg, size_t 
     b->klems_x = out[0];
     b->klems = out[1];
     b->klems_z = out[2];
-    return BTDF_OK;
-}
-
-/* Model full: each channel's tally at its index and at the inverse (the blocks serve
-   light from both sides), with the defaults of btdf_full_opts on the build's threads,
-   as a table of full makes its own (table/build.c). A channel whose index an earlier
-   one has shares its tallies' copies. */
-static btdf_status rad_make_ms(btdf_rad *r, int threads, btdf_progress_fn progress,
-                               void *user, char *msg, size_t msglen)
-{
-    if (r->p.model != BTDF_MODEL_FULL)
-        return BTDF_OK;
-    btdf_full_opts fo;
-    btdf_full_opts_default(&fo);
-    fo.threads = threads;
-    for (int c = 0; c < r->channels; c++) {
-        int same = -1;
-        for (int d = 0; d < c; d++)
-            if (r->p.ior[d] == r->p.ior[c])
-                same = d;
-        for (int h = 0; h < 2; h++) {
-            if (same >= 0) {
-                r->ms[c][h] = full_clone(r->ms[same][h]);
-                if (!r->ms[c][h])
-                    return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
-                continue;
-            }
-            if (progress)
-                progress(user, "multiple scattering tally", (size_t)(2 * c + h),
-                         (size_t)(2 * r->channels - 2 * c - h));
-            double n = h ? 1.0 / r->p.ior[c] : r->p.ior[c]; /* as rad_block_of forms it */
-            btdf_status st = btdf_full_new(n, r->p.smoothness, &fo, &r->ms[c][h], msg, msglen);
-            if (st != BTDF_OK)
-                return st;
-        }
-    }
     return BTDF_OK;
 }
 

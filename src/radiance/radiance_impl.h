@@ -75,6 +75,12 @@ int rad_klems_patch(const rad_klems_basis *kb, double theta_deg, double phi_deg)
 btdf_full *rad_ms(const btdf_rad *r, int c, double n);
 /* The parameters the kernels take: smith's for full (its single scattering). */
 btdf_params rad_single(const btdf_params *p);
+/* full.c: each channel's tallies of a file of full into r->ms (BTDF_OK at once for the
+   other models), with progress; and block k's tallies per channel at its own index
+   (ms) and at its light's (ms_light): 1 for full, else 0 with all NULL. */
+btdf_status rad_make_ms(btdf_rad *r, int threads, btdf_progress_fn progress, void *user,
+                        char *msg, size_t msglen);
+int rad_block_ms(const btdf_rad *r, int k, btdf_full *ms[3], btdf_full *ms_light[3]);
 
 /* The index of the light block k serves, in channel c. */
 double rad_n_light(const btdf_rad *r, int k, int c);
