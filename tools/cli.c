@@ -423,8 +423,8 @@ int check_params(const btdf_params *p)
 {
     char msg[256];
     if (p->model == BTDF_MODEL_FULL) { /* eval, albedo and polar check it themselves */
-        fail(EXIT_USAGE, "--model full: eval, albedo, polar and the .csv and .exr tables take "
-                         "it; this output does not yet (give --model xu-sun or smith)");
+        fail(EXIT_USAGE, "--model full: eval, albedo, polar and the .csv, .exr and .xml files "
+                         "take it; this output does not yet (give --model xu-sun or smith)");
         return 0;
     }
     if (btdf_params_check(p, msg, sizeof msg) != BTDF_OK) {
