@@ -23,6 +23,13 @@
 
 #include "sim/rng.h"
 
+/* The cell walk is written once and compiled per case (see walk_cells). */
+#if defined(__GNUC__)
+#define SIM_INLINE static inline __attribute__((always_inline))
+#else
+#define SIM_INLINE static inline
+#endif
+
 typedef struct walk_ctx {
     const sim_surface *s;
     const double *o, *d;
@@ -94,8 +101,8 @@ static int test_cell(walk_ctx *w, int64_t i, int64_t j, double ta, double tb)
    With clamp, the cells' indices are kept within [ilo, ihi] x [jlo, jhi] (a parent
    unit's children, where rounding of the parent's interval could step out); without,
    the interval alone ends the walk. 1 at the first hit. */
-static inline int walk_cells_in(walk_ctx *w, const int clamp, int64_t ilo, int64_t ihi,
-                                int64_t jlo, int64_t jhi, double ta, double tb)
+SIM_INLINE int walk_cells_in(walk_ctx *w, const int clamp, const int above, int64_t ilo,
+                             int64_t ihi, int64_t jlo, int64_t jhi, double ta, double tb)
 {
     const sim_surface *s = w->s;
     const double o0 = w->o[0], o1 = w->o[1], o2 = w->o[2];
@@ -115,7 +122,6 @@ static inline int walk_cells_in(walk_ctx *w, const int clamp, int64_t ilo, int64
     /* d = 0 along an axis: that axis is never crossed */
     double tx = d0 != 0.0 ? (bx - o0) * inv0 : INFINITY;
     double ty = d1 != 0.0 ? (by - o1) * inv1 : INFINITY;
-    const int above = w->sgn > 0.0;
     /* the end of [t0, t1] nearest the side: its exit when the ray heads towards it */
     const int at_exit = above ? d2 < 0.0 : d2 > 0.0;
     const double *bound = above ? s->hi[0] : s->lo[0];
@@ -154,15 +160,18 @@ static inline int walk_cells_in(walk_ctx *w, const int clamp, int64_t ilo, int64
     }
 }
 
+/* The walk compiled for each case, so that none tests a constant inside its loop. */
 static int walk_cells(walk_ctx *w, double ta, double tb)
 {
-    return walk_cells_in(w, 0, 0, 0, 0, 0, ta, tb);
+    return w->sgn > 0.0 ? walk_cells_in(w, 0, 1, 0, 0, 0, 0, ta, tb)
+                        : walk_cells_in(w, 0, 0, 0, 0, 0, 0, ta, tb);
 }
 
 static int walk_cells_clamped(walk_ctx *w, int64_t ilo, int64_t ihi, int64_t jlo, int64_t jhi,
                               double ta, double tb)
 {
-    return walk_cells_in(w, 1, ilo, ihi, jlo, jhi, ta, tb);
+    return w->sgn > 0.0 ? walk_cells_in(w, 1, 1, ilo, ihi, jlo, jhi, ta, tb)
+                        : walk_cells_in(w, 1, 0, ilo, ihi, jlo, jhi, ta, tb);
 }
 
 /* The units of level k >= 1 met by the ray over [ta, tb], their indices kept within
