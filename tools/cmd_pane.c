@@ -161,14 +161,16 @@ static int pane_albedo(const cli *c, const btdf_pane *P)
                x);
     }
     printf("\n");
+    /* the system's T and R hold to about 1e-3 (docs/pane.md): 6 digits unless --digits
+       asks for more (17: the doubles themselves) */
+    int d = GIVEN(c, OPT_DIGITS) ? c->digits : 6;
     for (int k = 0; k < na; k++) {
         printf("%s", num(angles[k]));
         for (int ch = 0; ch < nch; ch++)
             for (int sd = BTDF_PANE_FRONT; sd <= BTDF_PANE_BACK; sd++) {
                 double T, R;
                 btdf_pane_albedo(P, (btdf_pane_side)sd, ch, angles[k] * M_PI / 180.0, &T, &R);
-                /* the system's T and R hold to about 1e-3 (docs/pane.md): 6 digits */
-                printf(",%.6g,%.6g,%.6g", T, R, T + R);
+                printf(",%.*g,%.*g,%.*g", d, T, d, R, d, T + R);
             }
         printf("\n");
     }

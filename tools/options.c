@@ -125,7 +125,7 @@ const opt_def opt_table[] = {
      "one per task of a Slurm job array; shards write disjoint files"},
     {OPT_DIGITS, "digits", 0, "D", 0, CMD_ALBEDO,
      "significant digits of T, Ft, R and R + T, 1 to 17 (default 7: T and R are\n"
-     "accurate to 1e-7; 17 gives the double itself)"},
+     "accurate to 1e-7; 17 gives the double itself; a pane's, --back: default 6)"},
     {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD | CMD_ALBEDO,
      "no report lines or warnings on standard error"},
     {OPT_IOR, "ior", 'n', "N|R,G,B", 0, SIM,
