@@ -248,12 +248,13 @@ static void run_batch(worker *wk, const sim_surface *surf, const sim_surface *ba
     const sim_surface *front = o->front_flat ? NULL : surf;
     sim_pane pane = {{o->from_back ? back : front, o->from_back ? front : back}, o->ior[ch],
                      o->thickness_mm, o->absorption_per_mm};
+    double st = sin(o->theta_i[k]), ct = cos(o->theta_i[k]); /* the same for every ray */
     for (uint64_t r = 0; r < n; r++) {
         sim_path p;
         if (o->pane)
             sim_pane_path(&pane, o->theta_i[k], o->accel, &rng, &p);
         else
-            sim_path_run(surf, o->ior[ch], o->theta_i[k], o->accel, o->profile, &rng, &p);
+            sim_path_run(surf, o->ior[ch], st, ct, o->accel, o->profile, &rng, &p);
         q[Q_HITS] += (uint64_t)p.hits;
         if (p.end == SIM_END_LOST) {
             q[Q_LOST]++;

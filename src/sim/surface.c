@@ -199,7 +199,8 @@ static int build_bounds(sim_surface *s)
     return 0;
 }
 
-static void measure(const sim_surface *s, int profile, sim_surface_stats *st)
+/* The realisation's statistics; dd is scratch for rows * n doubles. */
+static void measure(const sim_surface *s, int profile, double *dd, sim_surface_stats *st)
 {
     int n = s->n, rows = (int)s->ymask + 1;
     size_t nn = (size_t)rows * (size_t)n;
@@ -207,12 +208,14 @@ static void measure(const sim_surface *s, int profile, sim_surface_stats *st)
     for (size_t q = 0; q < nn; q++)
         mean += s->h[q];
     mean /= (double)nn;
+    for (size_t q = 0; q < nn; q++)
+        dd[q] = s->h[q] - mean;
     for (int j = 0; j < rows; j++)
         for (int i = 0; i < n; i++) {
             int i1 = (i + 1) & (n - 1), j1 = (j + 1) & (rows - 1);
             double h00 = s->h[(size_t)j * n + i], h10 = s->h[(size_t)j * n + i1];
             double h01 = s->h[(size_t)j1 * n + i], h11 = s->h[(size_t)j1 * n + i1];
-            double d = h00 - mean;
+            double d = dd[(size_t)j * n + i];
             var += d * d;
             /* the two triangles' gradients (see trace.c), in height per grid unit */
             double b1 = h10 - h00, c1 = h11 - h10, b2 = h11 - h01, c2 = h01 - h00;
@@ -220,26 +223,37 @@ static void measure(const sim_surface *s, int profile, sim_surface_stats *st)
         }
     st->rms_height = sqrt(var / (double)nn);
     st->rms_slope = sqrt(sl / (double)nn) / s->dx;
-    /* Autocorrelation along x and y at integer lags, until it drops below 1/e. */
+    /* Autocorrelation along x and y at integer lags, until it drops below 1/e. Four
+       lags are summed at once, each over the points in the same order as alone (so
+       each sum is the same to the bit), which lets their four chains of additions run
+       side by side; the lags after the crossing are left unused. */
     double c0 = var / (double)nn, prev = 1.0, len = NAN;
-    for (int k = 1; k < n / 2; k++) {
-        double acc = 0.0;
-        for (int j = 0; j < rows; j++)
+    for (int k0 = 1; k0 < n / 2 && !isfinite(len); k0 += 4) {
+        double acc[4] = {0.0, 0.0, 0.0, 0.0};
+        for (int j = 0; j < rows; j++) {
+            const double *row = dd + (size_t)j * n;
             for (int i = 0; i < n; i++) {
-                double d = s->h[(size_t)j * n + i] - mean;
-                acc += d * (s->h[(size_t)j * n + ((i + k) & (n - 1))] - mean);
-                /* a profile is constant along y: only its x lags say anything */
-                acc += profile ? d * (s->h[(size_t)j * n + ((i + k) & (n - 1))] - mean)
-                               : d * (s->h[(size_t)((j + k) & (n - 1)) * n + i] - mean);
+                double d = row[i];
+                for (int c = 0; c < 4; c++) {
+                    int k = k0 + c;
+                    double ax = d * row[(i + k) & (n - 1)];
+                    acc[c] += ax;
+                    /* a profile is constant along y: only its x lags say anything */
+                    acc[c] += profile ? ax : d * dd[(size_t)((j + k) & (n - 1)) * n + i];
+                }
             }
-        /* c0 > 0 for any realisation of nonzero noise; the guard keeps 0 out */
-        double r = c0 > 0.0 ? acc / (2.0 * (double)nn * c0) : 0.0;
-        if (r < exp(-1.0)) {
-            /* linear between the lags; prev > 1/e > r, so prev - r > 0 */
-            len = ((double)(k - 1) + (prev - exp(-1.0)) / (prev - r)) * s->dx;
-            break;
         }
-        prev = r;
+        for (int c = 0; c < 4 && k0 + c < n / 2; c++) {
+            int k = k0 + c;
+            /* c0 > 0 for any realisation of nonzero noise; the guard keeps 0 out */
+            double r = c0 > 0.0 ? acc[c] / (2.0 * (double)nn * c0) : 0.0;
+            if (r < exp(-1.0)) {
+                /* linear between the lags; prev > 1/e > r, so prev - r > 0 */
+                len = ((double)(k - 1) + (prev - exp(-1.0)) / (prev - r)) * s->dx;
+                break;
+            }
+            prev = r;
+        }
     }
     st->corr_length = isfinite(len) ? len : 0.0;
 }
@@ -282,7 +296,7 @@ int sim_gen_surface(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surfa
         return -1;
     }
     if (st)
-        measure(s, 0, st);
+        measure(s, 0, w->real, st);
     return 0;
 }
 
@@ -295,6 +309,6 @@ int sim_gen_profile(const sim_gen *g, sim_scratch *w, uint64_t stream, sim_surfa
     if (sim_gen_surface(g, w, stream, s, NULL) != 0)
         return -1;
     if (st)
-        measure(s, 1, st);
+        measure(s, 1, w->real, st);
     return 0;
 }

@@ -84,7 +84,88 @@ static int test_cell(walk_ctx *w, int64_t i, int64_t j, double ta, double tb)
     return 0;
 }
 
-/* The units of level k met by the ray over [ta, tb], their indices kept within
+/* The cells met by the ray over [ta, tb]: the DDA of walk() below at its level 0
+   (unit side S = 1), in a loop of its own. It computes every crossing as walk() does,
+   ((boundary) - o) / d with the boundary an integer held exactly in a double, so both
+   find the same cells over the same intervals and the same hits. The bound test takes
+   the ray's height at one end of the cell's interval only, the end where the ray is
+   nearest the side it comes from: z(t) = o + t d is monotone in t after rounding too,
+   so that end's height is exactly the minimum (above) or maximum (below) of the two.
+   With clamp, the cells' indices are kept within [ilo, ihi] x [jlo, jhi] (a parent
+   unit's children, where rounding of the parent's interval could step out); without,
+   the interval alone ends the walk. 1 at the first hit. */
+static inline int walk_cells_in(walk_ctx *w, const int clamp, int64_t ilo, int64_t ihi,
+                                int64_t jlo, int64_t jhi, double ta, double tb)
+{
+    const sim_surface *s = w->s;
+    const double o0 = w->o[0], o1 = w->o[1], o2 = w->o[2];
+    const double d0 = w->d[0], d1 = w->d[1], d2 = w->d[2];
+    const double inv0 = w->inv[0], inv1 = w->inv[1];
+    int64_t i = (int64_t)floor(o0 + ta * d0);
+    int64_t j = (int64_t)floor(o1 + ta * d1);
+    if (clamp) {
+        i = i < ilo ? ilo : i > ihi ? ihi : i;
+        j = j < jlo ? jlo : j > jhi ? jhi : j;
+    }
+    int64_t si = d0 > 0.0 ? 1 : -1, sj = d1 > 0.0 ? 1 : -1;
+    /* the far boundaries of the cell along x and y, as doubles (integers below 2^53:
+       adding 1 is exact, so bx = (double)(i + (si > 0)) at every step) */
+    double bx = (double)(i + (si > 0)), by = (double)(j + (sj > 0));
+    double sx = (double)si, sy = (double)sj;
+    /* d = 0 along an axis: that axis is never crossed */
+    double tx = d0 != 0.0 ? (bx - o0) * inv0 : INFINITY;
+    double ty = d1 != 0.0 ? (by - o1) * inv1 : INFINITY;
+    const int above = w->sgn > 0.0;
+    /* the end of [t0, t1] nearest the side: its exit when the ray heads towards it */
+    const int at_exit = above ? d2 < 0.0 : d2 > 0.0;
+    const double *bound = above ? s->hi[0] : s->lo[0];
+    /* the bound's index, wrapped into the tile and stepped with the cell */
+    const uint64_t mx = (uint64_t)s->n - 1u, my = s->ymask << s->log2n;
+    const uint64_t stepy = (uint64_t)sj << s->log2n;
+    uint64_t qx = (uint64_t)i & mx, qy = ((uint64_t)j << s->log2n) & my;
+    double t0 = ta;
+    for (;;) {
+        double t1 = tx < ty ? tx : ty;
+        t1 = t1 < tb ? t1 : tb;
+        t1 = t1 > t0 ? t1 : t0;
+        double z = o2 + (at_exit ? t1 : t0) * d2;
+        double b = bound[qy + qx];
+        /* Above, a hit needs the ray below the cell's highest point somewhere over it;
+           below, above its lowest. */
+        if ((above ? z <= b : z >= b) && test_cell(w, i, j, t0, t1))
+            return 1;
+        if (t1 >= tb)
+            return 0;
+        /* the step, without a branch on the axis (which one comes next is as good as
+           random, a branch would miss often) */
+        int alx = tx <= ty;
+        i += alx ? si : 0;
+        j += alx ? 0 : sj;
+        qx = alx ? (qx + (uint64_t)si) & mx : qx;
+        qy = alx ? qy : (qy + stepy) & my;
+        bx += alx ? sx : 0.0;
+        by += alx ? 0.0 : sy;
+        if (clamp && (i < ilo || i > ihi || j < jlo || j > jhi))
+            return 0;
+        double nx = (bx - o0) * inv0, ny = (by - o1) * inv1;
+        tx = alx ? nx : tx;
+        ty = alx ? ty : ny;
+        t0 = t1;
+    }
+}
+
+static int walk_cells(walk_ctx *w, double ta, double tb)
+{
+    return walk_cells_in(w, 0, 0, 0, 0, 0, ta, tb);
+}
+
+static int walk_cells_clamped(walk_ctx *w, int64_t ilo, int64_t ihi, int64_t jlo, int64_t jhi,
+                              double ta, double tb)
+{
+    return walk_cells_in(w, 1, ilo, ihi, jlo, jhi, ta, tb);
+}
+
+/* The units of level k >= 1 met by the ray over [ta, tb], their indices kept within
    [ilo, ihi] x [jlo, jhi] (the parent's children). 1 at the first hit. */
 static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64_t jhi,
                 double ta, double tb)
@@ -112,16 +193,13 @@ static int walk(walk_ctx *w, int k, int64_t ilo, int64_t ihi, int64_t jlo, int64
         t1 = t1 > t0 ? t1 : t0;
         double za = o[2] + t0 * d[2], zb = o[2] + t1 * d[2];
         size_t q = (size_t)((((uint64_t)j & side_my) << sideshift) + ((uint64_t)i & side_m));
-        /* Above, a hit needs the ray below the unit's highest point somewhere over it;
-           below, above its lowest. */
+        /* as in walk_cells, for the unit's bounds */
         int near = w->sgn > 0.0 ? (za < zb ? za : zb) <= hi[q] : (za > zb ? za : zb) >= lo[q];
         if (near) {
-            if (k == 0) {
-                if (test_cell(w, i, j, t0, t1))
-                    return 1;
-            } else if (walk(w, k - 1, i * 4, i * 4 + 3, j * 4, j * 4 + 3, t0, t1)) {
+            int hit = k == 1 ? walk_cells_clamped(w, i * 4, i * 4 + 3, j * 4, j * 4 + 3, t0, t1)
+                             : walk(w, k - 1, i * 4, i * 4 + 3, j * 4, j * 4 + 3, t0, t1);
+            if (hit)
                 return 1;
-            }
         }
         if (t1 >= tb)
             return 0;
@@ -146,7 +224,12 @@ int sim_first_hit(const sim_surface *s, const double o[3], const double d[3], in
     /* a zero component gives inf, which walk never multiplies (it tests d first) */
     walk_ctx w = {s, o, d, {1.0 / d[0], 1.0 / d[1]}, above ? 1.0 : -1.0, 0.0, 0.0, 0.0};
     int top = accel ? s->levels - 1 : 0;
-    if (!walk(&w, top, INT64_MIN / 8, INT64_MAX / 8, INT64_MIN / 8, INT64_MAX / 8, 0.0, tmax))
+    { static int lim_top = -2; if (lim_top == -2) { const char *e = getenv("SIMTOP"); lim_top = e ? atoi(e) : -1; }
+      if (lim_top >= 0 && top > lim_top) top = lim_top; }
+    int hit = top > 0 ? walk(&w, top, INT64_MIN / 8, INT64_MAX / 8, INT64_MIN / 8,
+                             INT64_MAX / 8, 0.0, tmax)
+                      : walk_cells(&w, 0.0, tmax);
+    if (!hit)
         return 0;
     *t = w.t;
     /* Physical normal of z = b x/dx + c y/dx: (-b/dx, -c/dx, 1); its length >= 1. */
@@ -233,13 +316,13 @@ int sim_walk(const sim_surface *s, double n, int above, int accel, uint64_t *rng
     return end;
 }
 
-void sim_path_run(const sim_surface *s, double n, double ti, int accel, int in_plane,
+void sim_path_run(const sim_surface *s, double n, double st, double ct, int accel, int in_plane,
                   uint64_t *rng, sim_path *out)
 {
     double pin = 6.283185307179586 * sim_uniform(rng);
     /* in the plane: azimuth 0 or pi exactly (sin pi is 1e-16, not 0) */
     double cp = in_plane ? (pin < 3.141592653589793 ? 1.0 : -1.0) : cos(pin);
-    double sp = in_plane ? 0.0 : sin(pin), st = sin(ti), ct = cos(ti);
+    double sp = in_plane ? 0.0 : sin(pin);
     double dp[3] = {-st * cp, -st * sp, -ct};
     out->end = sim_walk(s, n, 1, accel, rng, dp, &out->hits);
     /* Back to the frame whose incident azimuth is 0. */

@@ -44,10 +44,11 @@ int sim_turn(double dp[3], const double nf[3], double eta, uint64_t *rng);
 int sim_walk(const sim_surface *s, double n, int above, int accel, uint64_t *rng, double dp[3],
              int *hits);
 
-/* One path of light arriving at polar angle ti (azimuth drawn uniformly, to average the
-   grid's axes out; with in_plane, +x or -x only, for a profile along x, so the path
-   stays in the x-z plane) on a uniformly drawn point of the tile, for index ratio n. */
-void sim_path_run(const sim_surface *s, double n, double ti, int accel, int in_plane,
+/* One path of light arriving at polar angle ti, given as st = sin(ti) and ct = cos(ti)
+   (a batch's rays share them), with its azimuth drawn uniformly, to average the grid's
+   axes out (with in_plane, +x or -x only, for a profile along x, so the path stays in
+   the x-z plane), on a uniformly drawn point of the tile, for index ratio n. */
+void sim_path_run(const sim_surface *s, double n, double st, double ct, int accel, int in_plane,
                   uint64_t *rng, sim_path *out);
 
 #endif
