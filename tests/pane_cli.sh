@@ -120,6 +120,43 @@ done
     ok "eval: bad --light, --part both, TR out of range, --light without --back: exit 2" || \
     no "--light without --back"
 
+# polar --back: the system's lobes as a PNG; not the interface's picture, the light's face
+# read (front and back differ), the usage errors of eval --back, exit 2 and no file
+# (a build without PNG support: the pictures are not made, the refusals still hold)
+if "$B" --version | grep -q 'PNG on'; then
+    png() { [ -s "$1" ] && [ "$(head -c 8 "$1" | od -An -tx1 | tr -d ' ')" = 89504e470d0a1a0a ]; }
+    "$B" polar --back smooth -s 1 -o "$W/c/pane.png" 2>"$W/err" && png "$W/c/pane.png" && \
+        ok "polar --back writes a PNG" || { no "polar --back"; cat "$W/err"; }
+    "$B" polar -s 1 -o "$W/c/iface.png" 2>/dev/null
+    "$B" polar --back smooth -s 1 --light back -o "$W/c/lback.png" 2>/dev/null
+    "$B" polar --back 2 -s 1 --part both --angles 20,60 -o "$W/c/both.png" 2>"$W/err" || \
+        { no "polar --back --part both --angles"; cat "$W/err"; }
+    png "$W/c/iface.png" && png "$W/c/lback.png" && png "$W/c/both.png" && \
+        ! cmp -s "$W/c/pane.png" "$W/c/iface.png" && ! cmp -s "$W/c/pane.png" "$W/c/lback.png" && \
+        ok "polar --back: not the interface's picture, --light back not --light front" || \
+        no "polar --back ignores the pane or --light"
+    # the lobes read back from the pictures: the pane's values, of the face lit
+    # (tests/pane_polar.py; the titles alone would make the files differ)
+    python3 "$(dirname "$0")/pane_polar.py" "$B" "$W/c" >"$W/pp" 2>&1 && \
+        ok "polar --back: the lobes read back are eval --back's, front and back" || \
+        { no "polar --back: the lobes read back"; cat "$W/pp"; }
+fi
+good=1
+for bad in "--back 1e9" "--back smooth --thickness -1" "--back smooth --absorption nan" \
+           "--back smooth --light side" "--back smooth --material 1.5:3" \
+           "--back smooth --table $W/c/pane.xml" "--back smooth extra" "--light back" \
+           "--thickness 2" "--back smooth --ior 0.5"; do
+    rm -f "$W/c/bad.png"
+    "$B" polar $bad -s 1 -o "$W/c/bad.png" >/dev/null 2>"$W/err"
+    rc=$?
+    if [ "$rc" -ne 2 ] || [ ! -s "$W/err" ] || [ -e "$W/c/bad.png" ]; then
+        good=0; no "polar $bad: status $rc, or no message, or a file"; cat "$W/err"
+    fi
+done
+"$B" polar --back smooth -s 1 -o "$W/c/bad.csv" >/dev/null 2>"$W/err"
+[ $? -eq 2 ] && grep -q "give -o FILE.png" "$W/err" || { good=0; no "polar --back -o .csv"; }
+[ "$good" -eq 1 ] && ok "polar --back: bad values refused as eval --back's, exit 2, no file"
+
 # the manual and the completion know the keys and options
 "$B" --man > "$W/man.1"
 for k in back thickness absorption; do
@@ -129,6 +166,10 @@ grep -q '^\.B absorption$' "$W/man.1" && ok "the manual lists back, thickness, a
 "$B" --completion bash > "$W/comp"
 grep -q -- '--back) COMPREPLY=($(compgen -W "smooth"' "$W/comp" && \
     grep -q -- '--thickness' "$W/comp" && ok "bash completion: --back smooth" || no "completion"
+grep -q -- '^ *polar) opts=".*--back --thickness --light --absorption' "$W/comp" && \
+    "$B" help polar | grep -q -- '--light front|back' && \
+    ok "help and completion of polar list --back, --thickness, --light, --absorption" || \
+    no "polar's help or completion lacks the pane's options"
 
 echo "# $pass passed, $failn failed"
 [ "$failn" -eq 0 ]

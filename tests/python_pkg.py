@@ -309,6 +309,69 @@ check(isinstance(f, btdftab.Bsdf) and f.eta == 1.5 and f.channels == 1 and
       same(f.eval(rad(q[:, 0]), rad(q[:, 1]), rad(q[:, 2])), want),
       "Bsdf.eval (light entering) equals btdftab eval --table on a .bsdf")
 
+# Panes (btdftab.Pane over btdf_pane.h) against btdftab eval --back and albedo --back
+# --digits 17, bit for bit: the same options make the same system (the build does not
+# depend on the thread count), the same degrees the same radians (x * pi / 180, as
+# eval_deg and rad() turn them).
+pq = slice(0, 60)  # 60 rows each: every pane is built once by the package, once per call
+ti_p, to_p, phi_p, tr_p = ti[pq], to[pq], phi[pq], tr[pq]
+st_p = "".join("%.17g %.17g %.17g\n" % v for v in zip(ti_p, to_p, phi_p))
+st_pr = "".join("%.17g %.17g %.17g\n" % v for v in zip(ti_p, tr_p, phi_p))
+panes = [(dict(ior=1.5, smoothness=1, back="smooth", thickness=2, absorption=0.1),
+          ["--ior", 1.5, "-s", 1, "--back", "smooth", "--thickness", 2, "--absorption", 0.1]),
+         (dict(ior=1.5, smoothness=1, back=2, thickness=2, absorption=0.1),
+          ["--ior", 1.5, "-s", 1, "--back", 2, "--thickness", 2, "--absorption", 0.1]),
+         (dict(ior=[1.4, 1.5, 1.6], smoothness=1, back="smooth"),
+          ["--ior", "1.4,1.5,1.6", "-s", 1, "--back", "smooth"])]
+for kw, args in panes:
+    pn = btdftab.Pane(**kw)
+    name = " ".join(map(str, args))
+    for light in ("front", "back"):
+        want = rows_of(tool("eval", *args, "--light", light, stdin=st_p))
+        got = pn.eval_deg(ti_p, to_p, phi_p, light=light)
+        got = got if got.ndim == 2 else got[:, None]
+        check(same(got, want) and same(pn.eval(rad(ti_p), rad(to_p), rad(phi_p), light=light),
+                                       pn.eval_deg(ti_p, to_p, phi_p, light=light)),
+              "Pane(%s).eval light %s: %d values equal btdftab eval %s --light %s's"
+              % (kw, light, want.size, name, light))
+        want = rows_of(tool("eval", *args, "--light", light, "--part", "reflection",
+                            stdin=st_pr))
+        got = pn.eval_deg(ti_p, tr_p, phi_p, light=light, part="reflection")
+        got = got if got.ndim == 2 else got[:, None]
+        check(same(got, want), "Pane(%s).eval light %s part reflection: equal btdftab eval "
+              "--back --part reflection's" % (kw, light))
+    w = rows_of("\n".join(tool("albedo", *args, "--digits", 17, *ang).splitlines()[1:]))
+    nch = pn.channels
+    cols = w[:, 1:].reshape(len(ang), nch, 2, 3)  # per channel: front T R R+T, back T R R+T
+    good = True
+    for k, light in enumerate(("front", "back")):
+        T_, R_ = pn.albedo(rad(ang), light=light)
+        T_, R_ = (T_, R_) if nch == 3 else (T_[:, None], R_[:, None])
+        good &= same(T_, cols[:, :, k, 0]) and same(R_, cols[:, :, k, 1]) and \
+            same(T_ + R_, cols[:, :, k, 2])
+    check(good, "Pane(%s).albedo front and back: T, R, R + T equal btdftab albedo %s "
+          "--digits 17" % (kw, name))
+# the delta of a flat back's mirror, light on the back: its Fresnel reflectance exactly
+# (btdf_pane.h: a flat face's own mirror); none from the rough front, none transmitted
+pn = btdftab.Pane(1.5, 3, back="smooth")
+a = rad(ang)
+check(same(pn.specular(a, light="back"), btdftab.fresnel_r(1.5, a)) and
+      not np.any(pn.specular(a, light="front")) and
+      not np.any(pn.specular(a, light="back", part="transmission")),
+      "Pane.specular: a flat back's mirror is Fresnel's R, the rough front has none")
+for call, word in ((lambda: btdftab.Pane(1.0, 3), "n = 1"),
+                   (lambda: btdftab.Pane(1.5, 3, back="rough"), "rough"),
+                   (lambda: btdftab.Pane(1.5, 3, back=1e9), "1e+09"),
+                   (lambda: btdftab.Pane(1.5, 3, thickness=-1), "-1"),
+                   (lambda: pn.eval_deg(30, 60, 0), "60"),
+                   (lambda: pn.eval(0.5, 0.5, 0, part="reflection", light="side"), "side"),
+                   (lambda: pn.albedo(2.0), "2.0")):
+    try:
+        call()
+        check(False, "bad pane input raises ValueError (%s)" % word)
+    except ValueError as e:
+        check(word in str(e), "bad pane input raises ValueError naming %s: %s" % (word, e))
+
 # bad input: ValueError naming the value
 for call, word in ((lambda: btdftab.rho(1.5, 3, 2.0, 2.5, 0), "2.0"),
                    (lambda: btdftab.rho(1, 3, 0, 3, 0), "n = 1"),

@@ -292,6 +292,49 @@ static void test_polar_rgb(void **state)
     free(p.px);
 }
 
+/* The caller's values of test_polar_pane: 1 on the backward side (phi = 0), 0 forward,
+   so that no lobe is drawn on the forward side where the guides are. */
+static void backward_only(void *user, int reflection, double ti, double to, double phi,
+                          double *out)
+{
+    (void)user, (void)reflection, (void)ti, (void)to;
+    out[0] = fabs(phi) < 1.0 ? 1.0 : 0.0;
+}
+
+/* POLAR of a pane (o.pane): air on both sides, so the dashed guide below the surface is
+   the straight-through direction, theta_o = 180 - ti, not the Snell direction of n; and
+   a pane's plot without its values (eval) is refused. */
+static void test_polar_pane(void **state)
+{
+    (void)state;
+    btdf_params m;
+    double ti;
+    btdf_preview_opts o;
+    polar_setup(&m, &ti, &o);
+    o.eval = backward_only;
+    o.pane = 1;
+    picture p = write_and_read(&o, "polar-pane");
+    double cx = p.w / 2.0, cy = surface_y(&p);
+    double straight = M_PI - ti * M_PI / 180; /* to of the straight-through direction */
+    double snell = M_PI - asin(sin(ti * M_PI / 180) / m.ior[0]); /* 20.9 deg off the normal */
+    /* the dashed guide runs to the plot's radius (over 150 pixels in the default picture)
+       along the straight-through ray; along the Snell ray, 9 degrees away, only the
+       pixels near the centre, where the two rays are within the 1.2-pixel band (about 8
+       pixels out) and the line's width: 20 pixels bound both */
+    double r_straight = ray_extent(&p, cx, cy, straight, curve0);
+    double r_snell = ray_extent(&p, cx, cy, snell, curve0);
+    if (!(r_straight > 150.0 && r_snell < 20.0))
+        fail_msg("guide along the straight-through ray %.1f px, along Snell's %.1f px: want "
+                 "> 150 and < 20", r_straight, r_snell);
+    free(p.px);
+    o.eval = NULL;
+    unsigned char *rgb = NULL;
+    int w = 0, h = 0;
+    char msg[256] = "";
+    assert_int_equal(btdf_preview_render(&o, &rgb, &w, &h, msg, sizeof msg), BTDF_EINVAL);
+    assert_non_null(strstr(msg, "pane"));
+}
+
 /* MONTAGE: a slice that is 0 on the left half and large on the right shows the
    below-range colour left and the top of the map right; the colour bar runs from the
    map's top to its bottom. */
@@ -754,7 +797,8 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_polar),         cmocka_unit_test(test_polar_reflection),
-        cmocka_unit_test(test_polar_rgb),     cmocka_unit_test(test_montage),
+        cmocka_unit_test(test_polar_rgb),     cmocka_unit_test(test_polar_pane),
+        cmocka_unit_test(test_montage),
         cmocka_unit_test(test_render),
         cmocka_unit_test(test_deterministic), cmocka_unit_test(test_layout),
         cmocka_unit_test(test_chart),

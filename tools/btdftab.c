@@ -145,7 +145,7 @@ int main(int argc, char **argv)
     if (code >= 0)
         return code;
     if (GIVEN(&c, OPT_BACK) || GIVEN(&c, OPT_THICKNESS) || GIVEN(&c, OPT_ABSORPTION) ||
-        (cmd->bit == CMD_EVAL && GIVEN(&c, OPT_LIGHT)))
+        ((cmd->bit == CMD_EVAL || cmd->bit == CMD_POLAR) && GIVEN(&c, OPT_LIGHT)))
         return cmd_pane(&c, cmd->bit, prov); /* a pane's system (tools/cmd_pane.c) */
     switch (cmd->bit) {
     case CMD_EVAL: return cmd_eval(&c);

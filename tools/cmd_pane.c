@@ -1,6 +1,7 @@
 /* SPDX-License-Identifier: MIT */
 /* cmd_pane.c: a pane's system BSDF (--back, --thickness, --absorption): tabulate writes it
-   to a Radiance/WINDOW .xml, albedo prints its T and R from either side (docs/pane.md). */
+   to a Radiance/WINDOW .xml, albedo prints its T and R from either side, eval its values,
+   polar its lobes (docs/pane.md). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -160,14 +161,16 @@ static int pane_albedo(const cli *c, const btdf_pane *P)
                x);
     }
     printf("\n");
+    /* the system's T and R hold to about 1e-3 (docs/pane.md): 6 digits unless --digits
+       asks for more (17: the doubles themselves) */
+    int d = GIVEN(c, OPT_DIGITS) ? c->digits : 6;
     for (int k = 0; k < na; k++) {
         printf("%s", num(angles[k]));
         for (int ch = 0; ch < nch; ch++)
             for (int sd = BTDF_PANE_FRONT; sd <= BTDF_PANE_BACK; sd++) {
                 double T, R;
                 btdf_pane_albedo(P, (btdf_pane_side)sd, ch, angles[k] * M_PI / 180.0, &T, &R);
-                /* the system's T and R hold to about 1e-3 (docs/pane.md): 6 digits */
-                printf(",%.6g,%.6g,%.6g", T, R, T + R);
+                printf(",%.*g,%.*g,%.*g", d, T, d, R, d, T + R);
             }
         printf("\n");
     }
@@ -192,16 +195,27 @@ static int eval_row(const btdf_pane *P, btdf_pane_side sd, btdf_part part, int n
     return 0;
 }
 
-/* eval --back: the spread part of the system's BSDF (1/sr, no cosine), rows TI TO PHI
-   (or TI TR PHI with --part reflection) from the arguments or stdin. */
-static int pane_eval(const cli *c, const btdf_pane *P)
+/* --light: 0 and the face the light falls on (front by default), or the exit status
+   after the message. */
+static int lit_side(const cli *c, btdf_pane_side *sd)
 {
     if (c->light && strcmp(c->light, "front") && strcmp(c->light, "back"))
         return fail(EXIT_USAGE, "--light: '%s': front or back (the face the light falls on)",
                     c->light);
+    *sd = c->light && !strcmp(c->light, "back") ? BTDF_PANE_BACK : BTDF_PANE_FRONT;
+    return 0;
+}
+
+/* eval --back: the spread part of the system's BSDF (1/sr, no cosine), rows TI TO PHI
+   (or TI TR PHI with --part reflection) from the arguments or stdin. */
+static int pane_eval(const cli *c, const btdf_pane *P)
+{
+    btdf_pane_side sd = BTDF_PANE_FRONT;
+    int lc = lit_side(c, &sd);
+    if (lc)
+        return lc;
     if (c->part == BTDF_PART_BOTH)
         return fail(EXIT_USAGE, "--part both: eval reads one part at a time");
-    btdf_pane_side sd = c->light && !strcmp(c->light, "back") ? BTDF_PANE_BACK : BTDF_PANE_FRONT;
     btdf_part part = c->reflection ? BTDF_PART_REFLECTION : BTDF_PART_TRANSMISSION;
     double a[3];
     if (c->npos != 0 && c->npos != 3)
@@ -232,6 +246,106 @@ static int pane_eval(const cli *c, const btdf_pane *P)
             return code;
     }
     return stdout_done(0);
+}
+
+/* polar --back: the system's lobes in the plane of incidence, light on the face --light
+   names; the preview draws them (btdf_preview_opts.pane: the guides of a pane in air). */
+typedef struct pane_curves {
+    const btdf_pane *P;
+    btdf_pane_side side;
+    int channels;
+} pane_curves;
+
+static void pane_curves_eval(void *user, int reflection, double ti, double to, double phi,
+                             double *out)
+{
+    const pane_curves *pc = user;
+    for (int ch = 0; ch < pc->channels; ch++)
+        out[ch] = btdf_pane_eval(pc->P, pc->side,
+                                 reflection ? BTDF_PART_REFLECTION : BTDF_PART_TRANSMISSION, ch,
+                                 ti, to, phi);
+}
+
+/* The checks of polar --back, before the system is built: 0 or the exit status. */
+static int pane_polar_checks(const cli *c)
+{
+    if (c->npos)
+        return fail(EXIT_USAGE, "polar: unexpected argument '%s' (the picture is -o FILE.png)",
+                    c->pos[0]);
+    if (!c->out || !ends_with(c->out, ".png"))
+        return fail(EXIT_USAGE, "polar: give -o FILE.png");
+    if (c->table || c->nm)
+        return fail(EXIT_USAGE, "--back: the polar picture of a pane takes its faces from "
+                                "--ior and --smoothness, not --%s", c->table ? "table" : "material");
+    btdf_pane_side sd;
+    int lc = lit_side(c, &sd);
+    if (lc)
+        return lc;
+    if ((size_t)c->p.channels * (c->na ? c->na : 1) > BTDF_PREVIEW_MAX_CURVES)
+        return fail(EXIT_USAGE, "polar: %d channels x %zu angles: at most %d curves",
+                    c->p.channels, c->na, BTDF_PREVIEW_MAX_CURVES);
+    return folder_writable(c->out) ? 0 : 1;
+}
+
+static int pane_polar(const cli *c, const btdf_pane *P)
+{
+    double angles[BTDF_PREVIEW_MAX_CURVES];
+    size_t na = c->na;
+    memcpy(angles, c->angles, sizeof angles);
+    if (na == 0)
+        angles[na++] = 30.0; /* polar's default */
+    pane_curves pc = {P, BTDF_PANE_FRONT, c->p.channels};
+    lit_side(c, &pc.side); /* checked in pane_polar_checks */
+    const btdf_pane_opts *o = btdf_pane_get_opts(P);
+    char back[64], title[600];
+    if (o->back_smooth)
+        snprintf(back, sizeof back, "flat");
+    else
+        snprintf(back, sizeof back, "rough, s = %.4g", o->back_smoothness);
+    int refl = c->part == BTDF_PART_REFLECTION || c->part == BTDF_PART_BOTH;
+    int n = snprintf(title, sizeof title,
+                     "A pane in air (front face: model %s, n = %.4g, s = %.4g; back face %s; "
+                     "%.4g mm, absorption %.4g per mm), light on its %s face: %s in the "
+                     "plane of incidence", btdf_model_name(o->front.model), o->front.ior[0],
+                     o->front.smoothness, back, o->thickness_mm, o->absorption_per_mm,
+                     pc.side == BTDF_PANE_BACK ? "back" : "front",
+                     !refl ? "\xcf\x81 |cos \xce\xb8o|"
+                     : c->part == BTDF_PART_REFLECTION ? "\xcf\x81r |cos \xce\xb8r|"
+                     : "\xcf\x81 |cos \xce\xb8o| below, \xcf\x81r |cos \xce\xb8r| above");
+    /* a flat face's delta parts are not curves: their weights are said (channel 0) */
+    for (size_t k = 0; k < na; k++)
+        for (int h = 0; h < 2; h++) {
+            if (h == 0 ? c->part == BTDF_PART_REFLECTION : !refl)
+                continue;
+            double w = btdf_pane_specular(P, pc.side, h ? BTDF_PART_REFLECTION
+                                                        : BTDF_PART_TRANSMISSION,
+                                          0, angles[k] * M_PI / 180.0);
+            if (w > 0.0 && n >= 0 && (size_t)n < sizeof title)
+                n += snprintf(title + n, sizeof title - (size_t)n, "; not drawn: a delta %s "
+                              "of weight %.3g at \xce\xb8i = %.4g\xc2\xb0",
+                              h ? "in the mirror direction" : "straight through", w, angles[k]);
+        }
+    btdf_preview_opts po;
+    btdf_preview_opts_default(&po);
+    po.kind = BTDF_PREVIEW_POLAR;
+    po.materials = &c->p;
+    po.nmaterials = 1;
+    po.ti_deg = angles;
+    po.nti = na;
+    po.width = c->pic_w;
+    po.height = c->pic_h;
+    po.part = c->part;
+    po.title = title;
+    po.eval = pane_curves_eval;
+    po.eval_user = &pc;
+    po.pane = 1;
+    char msg[512] = "";
+    btdf_output what = {NULL, NULL, &po, NULL, NULL, NULL};
+    btdf_status st = btdf_write(&what, c->out, msg, sizeof msg);
+    if (st != BTDF_OK)
+        return fail(st == BTDF_EINVAL ? EXIT_USAGE : 1, "%s: %s", c->out,
+                    msg[0] ? msg : btdf_strerror(st));
+    return 0;
 }
 
 /* Radiance's blocks (btdf_radiance.h): 0 light from +Z through the back face, 1 from -Z
@@ -352,8 +466,12 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
             return fail(EXIT_USAGE, "%s: --back: a pane's system is written to .xml (Klems or "
                                     "tree3, --basis); other formats take the interface only",
                         c->out ? c->out : "no -o");
+    } else if (cmd == CMD_POLAR) {
+        int code = pane_polar_checks(c);
+        if (code)
+            return code;
     } else if (cmd != CMD_ALBEDO && cmd != CMD_EVAL) {
-        return fail(EXIT_USAGE, "--back applies to tabulate, albedo and eval");
+        return fail(EXIT_USAGE, "--back applies to tabulate, albedo, eval and polar");
     } else if (cmd == CMD_EVAL && c->table) {
         return fail(EXIT_USAGE, "--back: eval of a pane takes its faces from --ior and "
                                 "--smoothness, not --table");
@@ -367,7 +485,9 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
     btdf_pane *P = NULL;
     int code = make_pane(&c->p, &ps, c->threads, &P);
     if (!code)
-        code = cmd == CMD_ALBEDO ? pane_albedo(c, P) : pane_eval(c, P);
+        code = cmd == CMD_ALBEDO ? pane_albedo(c, P)
+               : cmd == CMD_POLAR ? pane_polar(c, P)
+                                  : pane_eval(c, P);
     btdf_pane_free(P);
     return code;
 }

@@ -25,16 +25,17 @@ const opt_def opt_table[] = {
      "tabulate writes it to .csv and .exr, the files record it) or full (smith plus the\n"
      "light scattered two or more times, tallied once per material by a random walk:\n"
      "R + T = 1; eval, albedo, polar and tabulate to .csv and .exr, which keep the tally)"},
-    {OPT_BACK, "back", 0, "smooth|S", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL,
+    {OPT_BACK, "back", 0, "smooth|S", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL | CMD_POLAR,
      "a pane, not an interface: its back face is flat (smooth) or rough with\n"
      "smoothness S; the front face is --ior, --smoothness, --model; tabulate writes the\n"
      "system (air to air, light from either side) to .xml, albedo prints its T and R,\n"
-     "eval its BSDF, light on the face --light names (docs/pane.md)"},
-    {OPT_THICKNESS, "thickness", 0, "MM", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL,
+     "eval its BSDF and polar its lobes, light on the face --light names (docs/pane.md)"},
+    {OPT_THICKNESS, "thickness", 0, "MM", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL | CMD_POLAR,
      "with --back: the pane's thickness in mm (default 4)"},
-    {OPT_LIGHT, "light", 0, "front|back", 0, CMD_EVAL,
+    {OPT_LIGHT, "light", 0, "front|back", 0, CMD_EVAL | CMD_POLAR,
      "with --back: the face of the pane the light falls on (default front)"},
-    {OPT_ABSORPTION, "absorption", 0, "PER_MM", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL,
+    {OPT_ABSORPTION, "absorption", 0, "PER_MM", 0,
+     CMD_TABULATE | CMD_ALBEDO | CMD_EVAL | CMD_POLAR,
      "with --back: the glass's absorption coefficient per mm (default 0): light is\n"
      "attenuated by exp(-a d / cos theta) on each crossing"},
     {OPT_TABLE, "table", 0, "FILE", 0, CMD_EVAL,
@@ -124,7 +125,7 @@ const opt_def opt_table[] = {
      "one per task of a Slurm job array; shards write disjoint files"},
     {OPT_DIGITS, "digits", 0, "D", 0, CMD_ALBEDO,
      "significant digits of T, Ft, R and R + T, 1 to 17 (default 7: T and R are\n"
-     "accurate to 1e-7; 17 gives the double itself)"},
+     "accurate to 1e-7; 17 gives the double itself; a pane's, --back: default 6)"},
     {OPT_QUIET, "quiet", 'q', NULL, 0, CMD_TABULATE | CMD_POLAR | CMD_BUILD | CMD_ALBEDO,
      "no report lines or warnings on standard error"},
     {OPT_IOR, "ior", 'n', "N|R,G,B", 0, SIM,

@@ -21,7 +21,7 @@ extern "C" {
  *    direction drawn in the upper half, the lobe below it, one curve for every
  *    (material, channel, ti), at most BTDF_PREVIEW_MAX_CURVES (an R,G,B material
  *    gives three), with a legend above the surface, round radial ticks and one dashed
- *    Snell direction per distinct (n, ti).
+ *    Snell direction per distinct (n, ti) (for a pane, `pane`: the straight-through one).
  *  BTDF_PREVIEW_MONTAGE: every slice of a table in false colour on a log scale
  *    (six decades below the table's maximum), one tile per slice labelled with its
  *    ti, plus a colour bar. Channel 0. At most BTDF_PREVIEW_MAX_TILES tiles: larger
@@ -110,6 +110,12 @@ typedef struct btdf_preview_opts {
        model is not evaluated (model full makes no tally). It must be finite and >= 0. */
     void (*eval)(void *user, int reflection, double ti, double to, double phi, double *out);
     void *eval_user;
+    /* POLAR: 1 when eval gives the system of a pane in air (btdf_pane.h), not an interface:
+       air on both sides, so the dashed guide below the surface is the straight-through
+       direction (light leaves a pane parallel to how it came in: theta_o = pi - ti in the
+       forward plane), one per ti, not a Snell direction; the texts name the pane's media.
+       Needs eval (BTDF_EINVAL without it). */
+    int pane;
 } btdf_preview_opts;
 
 /* Zeroes o and sets kind = POLAR. Defaults when width/height are 0: POLAR 960 x 720;

@@ -15,6 +15,7 @@ btdftab tool does), conventions of btdf/btdf.h: theta_i in [0, pi/2], theta_o in
     btdftab.T(1.5, 3, ti), btdftab.R(1.5, 3, ti)        # hemispherical integrals
     t = btdftab.build(1.5, 3, tolerance=1e-2)         # a table; t.write("glass.csv")
     btdftab.open("glass.bsdf").eval(ti, np.radians(150), np.pi)
+    btdftab.Pane(1.5, 3, back="smooth", thickness=4).eval(ti, np.radians(150), np.pi)
 
 model: "xu-sun" (Eq. 25, the default), "smith" (the height-correlated Smith term of
 the same facets) or "full" (smith plus the light scattered two or more times, from a
@@ -33,7 +34,7 @@ import numpy as np
 
 __all__ = ["params_check", "rho", "rho_deg", "rho_r", "rho_r_deg", "T", "R", "albedo", "fresnel_t",
            "fresnel_r", "Table", "Bsdf", "Full", "open", "build", "version", "BtdfError",
-           "library_path", "MODELS"]
+           "library_path", "MODELS", "Pane"]
 
 MAX_CHANNELS = 3
 _KINDS = {0: "facet", 1: "grid", 2: "facet-reciprocal", 3: "facet-reflection"}
@@ -782,3 +783,6 @@ def build(ior, smoothness, k0=0.7, tolerance=1e-3, part="transmission", threads=
             lib.btdf_table_free(h)
         _check(st, "btdf_table_build", msg)
     return Table(_handle=h)
+
+
+from .pane import Pane  # noqa: E402  (it uses the helpers above)

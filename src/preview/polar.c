@@ -161,6 +161,9 @@ static int polar_check(polar_plot *pp, char *msg, size_t msglen)
         o->part != BTDF_PART_BOTH)
         return say(BTDF_EINVAL, msg, msglen, "part %d: must be transmission (1), reflection (2) "
                    "or both (3)", (int)o->part);
+    if (o->pane && !o->eval)
+        return say(BTDF_EINVAL, msg, msglen, "a polar plot of a pane needs its values (eval): "
+                   "the system's BSDF is the caller's");
     pp->ncurves = ncurves;
     /* the reflection above the surface (reflection alone: the transmission is not drawn) */
     pp->refl = o->part == BTDF_PART_REFLECTION || o->part == BTDF_PART_BOTH;
@@ -272,6 +275,12 @@ static void polar_texts(polar_plot *pp, plot_canvas *c)
     double fs = pp->fs, fsS = pp->fsS, m = pp->m;
     const char *title =
         o->title ? o->title
+        : o->pane ? (!trans ? PLOT_RHO "r |cos " PLOT_THETA "r| of a pane in air, in the plane "
+                              "of incidence"
+                     : refl ? PLOT_RHO " |cos " PLOT_THETA "o| below, " PLOT_RHO "r |cos "
+                              PLOT_THETA "r| above: a pane in air, in the plane of incidence"
+                            : PLOT_RHO " |cos " PLOT_THETA "o| of a pane in air, in the plane "
+                              "of incidence")
         : pp->full ? (!trans ? PLOT_RHO "r |cos " PLOT_THETA "r| in the plane of incidence: the "
                                "Smith facets with their multiple scattering (model full)"
                       : refl ? PLOT_RHO " |cos " PLOT_THETA "o| below, " PLOT_RHO "r |cos "
@@ -342,17 +351,27 @@ static void polar_texts(polar_plot *pp, plot_canvas *c)
         snprintf(k0s, sizeof k0s, "; model full");
     else if (same_k0)
         snprintf(k0s, sizeof k0s, "; k0 = %.3g", o->materials[0].k0);
-    snprintf(foot, footlen,
-             "radius: " PLOT_RHO " |cos " PLOT_THETA "o| (1/sr), linear%s; dashed: Snell direction "
-             "through the mean surface, per material%s; " PLOT_RHO ": the BTDF without cosine "
-             "factor; " PLOT_THETA "o from the upper normal; btdftab " BTDF_VERSION_STRING,
-             pp->own ? ", each curve divided by its own peak (peaks in the legend)" : "", k0s);
+    if (o->pane) /* air on both sides: what leaves the pane is parallel to what came in */
+        snprintf(foot, footlen,
+                 "radius: " PLOT_RHO " |cos " PLOT_THETA "o| (1/sr), linear%s; dashed: the "
+                 "straight-through direction (air on both sides)%s; " PLOT_RHO ": the spread "
+                 "part of the pane's system BSDF without cosine factor, delta parts not drawn; "
+                 PLOT_THETA "o from the normal of the lit face; btdftab " BTDF_VERSION_STRING,
+                 pp->own ? ", each curve divided by its own peak (peaks in the legend)" : "", k0s);
+    else
+        snprintf(foot, footlen,
+                 "radius: " PLOT_RHO " |cos " PLOT_THETA "o| (1/sr), linear%s; dashed: Snell "
+                 "direction through the mean surface, per material%s; " PLOT_RHO ": the BTDF "
+                 "without cosine factor; " PLOT_THETA "o from the upper normal; btdftab "
+                 BTDF_VERSION_STRING,
+                 pp->own ? ", each curve divided by its own peak (peaks in the legend)" : "", k0s);
     if (refl) { /* the upper half */
         size_t fl = strlen(foot);
         snprintf(foot + fl, footlen - fl,
-                 "; above the surface: " PLOT_RHO "r |cos " PLOT_THETA "r|, the reflection of the "
-                 "same facets (1/sr), on its own linear scale%s (ticks above the surface line%s), "
+                 "; above the surface: " PLOT_RHO "r |cos " PLOT_THETA "r|, the reflection of %s "
+                 "(1/sr), on its own linear scale%s (ticks above the surface line%s), "
                  PLOT_THETA "r from the upper normal, dashed: the mirror direction",
+                 o->pane ? "the pane" : "the same facets",
                  pp->own_r ? ", each curve divided by its own peak" : "",
                  trans ? "; the transmission's below it" : "");
     }
@@ -517,7 +536,9 @@ static void polar_ticks(const polar_plot *pp, plot_canvas *c)
 }
 
 /* Snell directions: one dashed line per distinct (n, ti), in the curve's colour, or
-   dark grey when several curves share it; with the reflection, the mirror directions. */
+   dark grey when several curves share it; with the reflection, the mirror directions.
+   A pane (o->pane) has air on both sides: its guide is the straight-through direction,
+   one per distinct ti, as if n were 1. */
 static void polar_snell(const polar_plot *pp, plot_canvas *c)
 {
     const curve *cs = pp->cs;
@@ -527,11 +548,13 @@ static void polar_snell(const polar_plot *pp, plot_canvas *c)
         const curve *cu = &cs[i];
         int seen = 0, shared = 0;
         for (size_t j = 0; j < ncurves; j++) {
-            int same = cs[j].p->ior[cs[j].ch] == cu->p->ior[cu->ch] && cs[j].ti == cu->ti;
+            int same = (pp->o->pane || cs[j].p->ior[cs[j].ch] == cu->p->ior[cu->ch]) &&
+                       cs[j].ti == cu->ti;
             seen |= same && j < i;
             shared |= same && j != i;
         }
-        double sn = sin(cu->ti) / cu->p->ior[cu->ch]; /* n > 0: btdf_params_check passed */
+        /* n > 0: btdf_params_check passed; a pane: air to air, sin to = sin ti */
+        double sn = pp->o->pane ? sin(cu->ti) : sin(cu->ti) / cu->p->ior[cu->ch];
         if (pp->refl) { /* the mirror direction: tr = ti on the specular side */
             int seen_r = 0, shared_r = 0;
             for (size_t j = 0; j < ncurves; j++) {
@@ -624,7 +647,9 @@ static void polar_labels(const polar_plot *pp, plot_canvas *c)
     int W = pp->W, H = pp->H;
     double cx = pp->cx, cy = pp->cy, R = pp->R, L = pp->L, m = pp->m;
     double fs = pp->fs, fsS = pp->fsS, lineS = pp->lineS;
-    const char *up = "upper medium: the light comes from here", *lo = "lower medium";
+    const char *up = pp->o->pane ? "air: the light comes from here"
+                                 : "upper medium: the light comes from here";
+    const char *lo = pp->o->pane ? "air beyond the pane" : "lower medium";
     plot_box ub = plot_text_box(c, m, cy - 0.3 * fsS, 0, 1, up, fsS);
     int hit = 0;
     for (size_t i = 0; i < pp->ncurves; i++)
