@@ -233,8 +233,6 @@ int sim_first_hit(const sim_surface *s, const double o[3], const double d[3], in
     /* a zero component gives inf, which walk never multiplies (it tests d first) */
     walk_ctx w = {s, o, d, {1.0 / d[0], 1.0 / d[1]}, above ? 1.0 : -1.0, 0.0, 0.0, 0.0};
     int top = accel ? s->levels - 1 : 0;
-    { static int lim_top = -2; if (lim_top == -2) { const char *e = getenv("SIMTOP"); lim_top = e ? atoi(e) : -1; }
-      if (lim_top >= 0 && top > lim_top) top = lim_top; }
     int hit = top > 0 ? walk(&w, top, INT64_MIN / 8, INT64_MAX / 8, INT64_MIN / 8,
                              INT64_MAX / 8, 0.0, tmax)
                       : walk_cells(&w, 0.0, tmax);
