@@ -90,6 +90,19 @@ BTDF_API double btdf_pane_eval(const btdf_pane *p, btdf_pane_side side, btdf_par
 BTDF_API void btdf_pane_eval_phis(const btdf_pane *p, btdf_pane_side side, btdf_part part,
                                   int ch, double ti, double to, size_t count, const double *phi,
                                   double *out);
+/* The series btdf_pane_eval sums, for a renderer that evaluates the pane itself (the
+   Mitsuba 3 plugin's thin-sheet mode): for light on `side`, part and channel ch,
+     f(mu_i, mu_o, phi) = max(0, sum_{m < modes} c_m(mu_i, mu_o) cos(m phi)),
+   mu_i = cos ti, mu_o = |cos to|, c_m interpolated from
+   coef[(m * nodes + j) * nodes + o] (incidence node j, outgoing node o) at the
+   ascending nodes mu[0 .. nodes) by 4-point Lagrange, first over j at mu_i, then over
+   o at mu_o; the stencil is the four nodes from k = (the last node <= x) - 1, clamped to
+   [0, nodes - 4]. 0 where mu_i or mu_o is not in (0, 1]. The pointers are the pane's,
+   valid until btdf_pane_free. BTDF_EINVAL for a NULL pointer, a side, part or channel
+   out of range. */
+BTDF_API btdf_status btdf_pane_get_series(const btdf_pane *p, btdf_pane_side side,
+                                          btdf_part part, int ch, const double **mu,
+                                          const double **coef, int *nodes, int *modes);
 /* The weight of the delta part at ti (0 when there is none). */
 BTDF_API double btdf_pane_specular(const btdf_pane *p, btdf_pane_side side, btdf_part part,
                                    int ch, double ti);

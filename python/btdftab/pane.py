@@ -62,6 +62,9 @@ def _lib():
     f("btdf_pane_eval", d, vp, i, i, i, d, d, d)
     f("btdf_pane_specular", d, vp, i, i, i, d)
     f("btdf_pane_albedo", None, vp, i, i, d, dp, dp)
+    if hasattr(lib, "btdf_pane_get_series"):  # from this release on
+        f("btdf_pane_get_series", i, vp, i, i, i, ctypes.POINTER(dp), ctypes.POINTER(dp),
+          ip, ip)
     _declared = lib
     return lib
 
@@ -231,6 +234,27 @@ class Pane:
 
     def R(self, ti, light="front"):
         return self.albedo(ti, light)[1]
+
+    def series(self, light="front", part="transmission", channel=0):
+        """The series btdf_pane_eval sums (btdf_pane_get_series): a dict of mu (nodes,),
+        the ascending cos theta nodes in air, and coef (modes, nodes, nodes), the cosine
+        coefficients per mode at (incidence node, outgoing node); both copies. The rule
+        (4-point Lagrange in mu_i, then mu_o; the stencil from the last node <= x, less
+        one, clamped; max(0, the cosine sum)) is btdf_pane.h's."""
+        sd, pt = _side(light), _part(part)
+        lib = _lib()
+        if not hasattr(lib, "btdf_pane_get_series"):
+            raise BtdfError("this libbtdf has no btdf_pane_get_series")
+        if not 0 <= int(channel) < self.channels:
+            raise ValueError("channel %r: 0 to %d" % (channel, self.channels - 1))
+        mu, coef = ctypes.POINTER(ctypes.c_double)(), ctypes.POINTER(ctypes.c_double)()
+        n, m = ctypes.c_int(), ctypes.c_int()
+        _check(lib.btdf_pane_get_series(self._h, sd, pt, int(channel), ctypes.byref(mu),
+                                        ctypes.byref(coef), ctypes.byref(n), ctypes.byref(m)),
+               "btdf_pane_get_series")
+        nn, mm = n.value, m.value
+        return {"mu": np.ctypeslib.as_array(mu, shape=(nn,)).copy(),
+                "coef": np.ctypeslib.as_array(coef, shape=(mm, nn, nn)).copy()}
 
     def close(self):
         if getattr(self, "_h", None):

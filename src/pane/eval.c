@@ -113,6 +113,20 @@ BTDF_API double btdf_pane_eval(const btdf_pane *P, btdf_pane_side side, btdf_par
     return v;
 }
 
+BTDF_API btdf_status btdf_pane_get_series(const btdf_pane *P, btdf_pane_side side,
+                                          btdf_part part, int ch, const double **mu,
+                                          const double **coef, int *nodes, int *modes)
+{
+    if (!P || !mu || !coef || !nodes || !modes || !ok_side(side) || !ok_part(part) || ch < 0 ||
+        ch >= P->o.front.channels)
+        return BTDF_EINVAL;
+    *mu = P->mu;
+    *coef = P->ch[ch].coef[pane_block(side, part)];
+    *nodes = P->n;
+    *modes = P->m;
+    return BTDF_OK;
+}
+
 BTDF_API double btdf_pane_specular(const btdf_pane *P, btdf_pane_side side, btdf_part part,
                                    int ch, double ti)
 {
