@@ -371,10 +371,13 @@ def pane_rule(sr, mui, muo, phi):
         k = min(max(int(np.searchsorted(mu, x, side="right")) - 2, 0), n - 4)
         w = [np.prod([(x - mu[k + b]) / (mu[k + a] - mu[k + b]) for b in range(4) if b != a])
              for a in range(4)]
-        return k, np.array(w)
-    ki, wi = stencil(mui)
-    ko, wo = stencil(muo)
-    cm = np.einsum("a,b,mab->m", wi, wo, c[:, ki:ki + 4, ko:ko + 4])
+        # past the last node the modes m >= 1 fall linearly to 0 at the pole
+        wp = [0, 0, 0, (1 - x) / (1 - mu[-1])] if x > mu[-1] else w
+        return k, np.array(w), np.array(wp)
+    ki, wi, wpi = stencil(mui)
+    ko, wo, wpo = stencil(muo)
+    cm = np.einsum("a,b,mab->m", wpi, wpo, c[:, ki:ki + 4, ko:ko + 4])
+    cm[0] = np.einsum("a,b,ab->", wi, wo, c[0, ki:ki + 4, ko:ko + 4])
     return max(0.0, float(np.sum(cm * np.cos(np.arange(len(cm)) * phi))))
 
 
@@ -384,7 +387,8 @@ for light in ("front", "back"):
     for part in ("transmission", "reflection"):
         sr = pr.series(light, part)
         cmax = float(np.max(np.abs(sr["coef"])))
-        for a, t, c in ((10, 40, 170), (35, 12, 90), (70, 60, 180), (0, 85, 0), (88, 3, 45)):
+        for a, t, c in ((10, 40, 170), (35, 12, 90), (70, 60, 180), (0, 85, 0), (88, 3, 45),
+                        (0.3, 50, 120), (40, 0.2, 30), (0, 0, 0)):
             to = 180 - t if part == "transmission" else t
             v = float(pr.eval(rad(a), rad(to), rad(c), light=light, part=part))
             r = pane_rule(sr, math.cos(rad(a)), math.cos(rad(t)), rad(c))

@@ -35,6 +35,28 @@ static void lagrange(const double *nodes, int n, double x, int *k0, double wt[4]
     }
 }
 
+/* The weights of the modes m >= 1 at x: the Lagrange weights, except past the last node,
+   where the series reaches the pole (theta = 0). There every mode but m = 0 vanishes (a
+   direction on the axis has no azimuth), which a cubic through the last four nodes
+   does not know: extrapolated, the modes made the value at the pole depend on phi by
+   10 % (n = 1.5, s = 3, ti = 30, to = 180). So they fall linearly from the last node's
+   value to 0 at x = 1; at the last node this equals the Lagrange weights. */
+static void pole_weights(const double *nodes, int n, double x, const double wt[4],
+                         double wp[4])
+{
+    double last = nodes[n - 1];
+    if (!(x > last)) {
+        for (int a = 0; a < 4; a++)
+            wp[a] = wt[a];
+        return;
+    }
+    /* x > last: the stencil is the last four nodes; Gauss nodes lie inside (0, 1), so
+       1 - last > 0 */
+    double t = (1.0 - x) / (1.0 - last);
+    wp[0] = wp[1] = wp[2] = 0.0;
+    wp[3] = t > 0.0 ? t : 0.0;
+}
+
 static int ok_side(btdf_pane_side s) { return s == BTDF_PANE_FRONT || s == BTDF_PANE_BACK; }
 static int ok_part(btdf_part p) { return p == BTDF_PART_TRANSMISSION || p == BTDF_PART_REFLECTION; }
 
@@ -75,12 +97,15 @@ BTDF_API void btdf_pane_eval_phis(const btdf_pane *P, btdf_pane_side side, btdf_
         return; /* grazing: the BSDF is 0 there, as in btdf.h */
     const double *c = P->ch[ch].coef[pane_block(side, part)];
     int ki, ko, n = P->n;
-    double wi[4], wo[4], bm[BTDF_PANE_MODES_MAX];
-    lagrange(P->mu, n, mui, &ki, wi);
-    lagrange(P->mu, n, muo, &ko, wo);
+    double wi0[4], wo0[4], wi1[4], wo1[4], bm[BTDF_PANE_MODES_MAX];
+    lagrange(P->mu, n, mui, &ki, wi0);
+    lagrange(P->mu, n, muo, &ko, wo0);
+    pole_weights(P->mu, n, mui, wi0, wi1);
+    pole_weights(P->mu, n, muo, wo0, wo1);
     size_t oo = (size_t)n * n;
     for (int m = 0; m < P->m; m++) {
         const double *cc = c + (size_t)m * oo;
+        const double *wi = m ? wi1 : wi0, *wo = m ? wo1 : wo0;
         double v = 0.0;
         for (int a = 0; a < 4; a++) {
             const double *row = cc + (size_t)(ki + a) * n + ko;
