@@ -4,7 +4,9 @@
 # mitsuba from PyPI: eval against btdf_table_eval (transmission) and btdf_eval_r
 # (reflection), chi-square tests of the sampling (each lobe and both together), the mean
 # sampled weight against T(ti) and R(ti) + T(ti) on both sides, a white-furnace render,
-# and a render of a rough face against the analytic mode. Runs scalar_rgb always,
+# and a render of a rough face against the analytic mode; then the thin sheet
+# btdftab_pane (tests/mitsuba_pane_checks.py: eval against btdf_pane_eval, chi-square,
+# mean weights against the BSDF's integral, a white furnace). Runs scalar_rgb always,
 # llvm_ad_rgb when an LLVM 16 or newer is installed (Debian 12: apt-get install
 # libllvm19; Dr.Jit's LLVM backend cannot compile its min/max with the LLVM 15 of
 # Debian 12's default llvm package).
@@ -58,12 +60,16 @@ rsm066s6.exr --model smith --ior 0.6666667 -s 6
 TABLES
 [ "$tabs_ok" -eq 1 ] && ok "tables written by btdftab" || no "tables"
 
-run() { # variant: the checks' own "N passed, N failed" line is added to the tally
-    "$VENV/bin/python" "$ROOT/tests/mitsuba_checks.py" "$1" "$T" >"$W/$1.log" 2>&1
-    cat "$W/$1.log"
-    line=$(grep -E '^[0-9]+ passed, [0-9]+ failed$' "$W/$1.log" | tail -n 1)
-    if [ -z "$line" ]; then no "$1 checks did not finish"; return; fi
-    pass=$((pass + ${line%% passed*})); b=${line#*passed, }; failn=$((failn + ${b%% failed}))
+run() { # variant: the checks' own "N passed, N failed" lines are added to the tally
+    # (the interface's, then the thin sheet's: tests/mitsuba_pane_checks.py)
+    for script in mitsuba_checks.py mitsuba_pane_checks.py; do
+        log=$W/$1-$script.log
+        "$VENV/bin/python" "$ROOT/tests/$script" "$1" "$T" >"$log" 2>&1
+        cat "$log"
+        line=$(grep -E '^[0-9]+ passed, [0-9]+ failed$' "$log" | tail -n 1)
+        if [ -z "$line" ]; then no "$1 $script did not finish"; continue; fi
+        pass=$((pass + ${line%% passed*})); b=${line#*passed, }; failn=$((failn + ${b%% failed}))
+    done
 }
 
 run scalar_rgb

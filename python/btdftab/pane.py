@@ -62,6 +62,7 @@ def _lib():
     f("btdf_pane_eval", d, vp, i, i, i, d, d, d)
     f("btdf_pane_specular", d, vp, i, i, i, d)
     f("btdf_pane_albedo", None, vp, i, i, d, dp, dp)
+    f("btdf_pane_eval_phis", None, vp, i, i, i, d, d, sz, dp, dp)
     if hasattr(lib, "btdf_pane_get_series"):  # from this release on
         f("btdf_pane_get_series", i, vp, i, i, i, ctypes.POINTER(dp), ctypes.POINTER(dp),
           ip, ip)
@@ -193,6 +194,20 @@ class Pane:
                                 "tr in [0, 90]" if refl else "to in [90, 180]", j))
         return self.eval(a * math.pi / 180.0, b * math.pi / 180.0, c * math.pi / 180.0,
                          light=light, part=part)
+
+    def eval_phis(self, ti, to, phi, light="front", part="transmission", channel=0):
+        """btdf_pane_eval_phis: eval of one channel at one (ti, to) (radians, as eval) for
+        a 1-D array of phi, the interpolation in cos theta done once; values outside the
+        domain are 0, as the library gives them."""
+        sd, pt = _side(light), _part(part)
+        if not 0 <= int(channel) < self.channels:
+            raise ValueError("channel %r: 0 to %d" % (channel, self.channels - 1))
+        ph = np.ascontiguousarray(np.asarray(phi, dtype=np.float64).reshape(-1))
+        out = np.zeros_like(ph)
+        dp = ctypes.POINTER(ctypes.c_double)
+        _lib().btdf_pane_eval_phis(self._h, sd, pt, int(channel), float(ti), float(to),
+                                   ph.size, ph.ctypes.data_as(dp), out.ctypes.data_as(dp))
+        return out
 
     def specular(self, ti, light="front", part="reflection"):
         """The weight of the delta part at ti (btdf_pane_specular): the share of the

@@ -486,8 +486,9 @@ def _make_class():
 
 
 def register():
-    """Registers the plugin `btdftab` for the current Mitsuba variant (call it again
-    after mi.set_variant switches to another one)."""
+    """Registers the plugins `btdftab` and `btdftab_pane` (the thin sheet, pane.py) for
+    the current Mitsuba variant (call it again after mi.set_variant switches to another
+    one)."""
     v = mi.variant()
     if v is None:
         raise RuntimeError("btdftab: call mi.set_variant(...) before register()")
@@ -495,4 +496,6 @@ def register():
         _classes[v] = _make_class()
     cls = _classes[v]
     mi.register_bsdf("btdftab", lambda props: cls(props))
+    from . import pane  # the thin sheet, btdftab_pane (pane.py imports model.py alone)
+    pane.register()
     return cls
