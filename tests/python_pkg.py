@@ -86,6 +86,18 @@ def rad(x):
 
 print("# package %s, library %s (%s)" % (btdftab.__file__, btdftab.library_path(),
                                          btdftab.version()))
+# Whatever way the packages were installed (a wheel lists its files one by one), every
+# module of the checkout is there: btdftab and the Mitsuba plugin beside it.
+import importlib.util  # noqa: E402
+_src = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "python")
+_gone = []
+for _pkg in ("btdftab", "btdftab_mitsuba"):
+    _spec = importlib.util.find_spec(_pkg)
+    _have = set(os.listdir(list(_spec.submodule_search_locations)[0])) if _spec else set()
+    _gone += ["%s/%s" % (_pkg, f) for f in sorted(os.listdir(os.path.join(_src, _pkg)))
+              if f.endswith(".py") and f not in _have]
+check(not _gone, "the installed packages hold every module of the checkout%s"
+      % (" (missing: %s)" % ", ".join(_gone) if _gone else ""))
 rng = np.random.default_rng(29)
 N = 200
 ti = np.concatenate([[0, 0, 30, 45, 89.9, 90], rng.uniform(0, 90, N)])
