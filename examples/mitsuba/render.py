@@ -4,12 +4,17 @@
     python examples/mitsuba/render.py face|glass TABLE OUT.png [--mode table|analytic]
         [--part both|transmission|reflection] [--variant llvm_ad_rgb] [--spp 64]
         [--res N] [--bsdf btdftab|roughdielectric]
+    python examples/mitsuba/render.py pane BACK OUT.png [--smoothness S]
+        [--model xu-sun|smith|full] [--variant ...] [--spp 64] [--res N]
 
 face: examples/mitsuba/face.xml, the rough face of a block lit from inside (the paper's
 Fig. 11), 256 x 256 by default; glass: examples/mitsuba/glass.xml, a rough glass sphere
 holding both lobes, 160 x 160 by default (--part applies to it only; --bsdf
 roughdielectric renders it with Mitsuba's own rough dielectric instead, Beckmann with
-alpha = 2/s and the table's n, for a picture beside the plugin's).
+alpha = 2/s and the table's n, for a picture beside the plugin's); pane:
+examples/mitsuba/pane.xml, a frosted pane drawn as one thin surface (btdftab_pane)
+before a checkered wall and two balls, 256 x 256 by default, its back face BACK
+(smooth, or the back face's smoothness) in place of a table.
 Writes OUT.png (sRGB) and OUT-linear.exr (linear), and prints the render time. An
 output that would replace an input (the table, the scene) or the other output is
 refused before any work (exit status 2).
@@ -24,10 +29,10 @@ sys.path.insert(0, os.path.join(HERE, "..", "..", "python"))  # the checkout's p
 
 import mitsuba as mi  # noqa: E402
 
-RES = {"face": 256, "glass": 160}
+RES = {"face": 256, "glass": 160, "pane": 256}
 ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 ap.add_argument("scene", choices=sorted(RES))
-ap.add_argument("table")
+ap.add_argument("table", help="the table (pane: the back face, smooth or S)")
 ap.add_argument("out")
 ap.add_argument("--mode", default="table", choices=["table", "analytic"])
 ap.add_argument("--part", default="both", choices=["both", "transmission", "reflection"])
@@ -36,6 +41,9 @@ ap.add_argument("--spp", type=int, default=64)
 ap.add_argument("--res", type=int, default=0, help="image side in pixels (0: the scene's)")
 ap.add_argument("--bsdf", default="btdftab", choices=["btdftab", "roughdielectric"],
                 help="glass: the sphere's BSDF (roughdielectric: Mitsuba's, same n and s)")
+ap.add_argument("--smoothness", type=float, default=3.0, help="pane: the front's s")
+ap.add_argument("--model", default="xu-sun", choices=["xu-sun", "smith", "full"],
+                help="pane: the faces' model")
 a = ap.parse_args()
 res = a.res or RES[a.scene]
 scene_xml = os.path.join(HERE, a.scene + ".xml")
@@ -50,7 +58,8 @@ def same_file(p, q):
 
 
 for o in (a.out, out_exr):
-    for name, i in (("the table", a.table), ("the scene", scene_xml)):
+    for name, i in ((("the table", a.table),) if a.scene != "pane" else ()) + (
+            ("the scene", scene_xml),):
         if same_file(o, i):
             ap.error("output %s would replace %s %s: choose another OUT" % (o, name, i))
 if same_file(a.out, out_exr):
@@ -62,9 +71,12 @@ except (ImportError, AttributeError) as e:
              "apt-get install libllvm19 and set DRJIT_LIBLLVM_PATH="
              "/usr/lib/x86_64-linux-gnu/libLLVM-19.so; or --variant scalar_rgb, slower)"
              % (a.variant, e))
-import btdftab_mitsuba  # noqa: E402,F401  (registers `btdftab`)
+import btdftab_mitsuba  # noqa: E402,F401  (registers `btdftab`, `btdftab_pane`)
 
 params = dict(filename=os.path.abspath(a.table), mode=a.mode, spp=str(a.spp), res=str(res))
+if a.scene == "pane":
+    params = dict(back=a.table, smoothness=repr(a.smoothness), model=a.model,
+                  spp=str(a.spp), res=str(res))
 if a.scene == "glass":
     params["part"] = a.part  # face.xml holds one part and has no $part
 if a.bsdf == "roughdielectric":
@@ -91,6 +103,9 @@ t = time.perf_counter()
 img = mi.render(scene)
 mi.util.write_bitmap(out_exr, img, write_async=False)
 mi.util.write_bitmap(a.out, img, write_async=False)
+what = a.mode if a.bsdf == "btdftab" else a.bsdf
+if a.scene == "pane":
+    what = "s %g, back %s, %s" % (a.smoothness, a.table, a.model)
 print("%s: %s, %dx%d, %d spp, %s%s, %s: %.2f s (including JIT compilation)"
-      % (a.out, a.scene, res, res, a.spp, a.mode if a.bsdf == "btdftab" else a.bsdf,
+      % (a.out, a.scene, res, res, a.spp, what,
          ", part " + a.part if a.scene == "glass" else "", a.variant, time.perf_counter() - t))
