@@ -57,6 +57,7 @@ f15back.exr --ior 1.5 -s 3 --side leave
 face.csv --ior 0.7142857 -s 3
 fsm15.exr --model smith --ior 1.5 -s 3
 rsm066s6.exr --model smith --ior 0.6666667 -s 6
+ffu1.exr --model full --ior 1.5 -s 1 --tolerance 1e-2
 TABLES
 [ "$tabs_ok" -eq 1 ] && ok "tables written by btdftab" || no "tables"
 

@@ -964,14 +964,19 @@ def full_albedo_checks(count):
               % (ns, s, deg, mean, err, want, tol))
 
 
-def slab_furnace(model, deg, res, spp, s=1.0, n=1.5):
+def slab_furnace(model, deg, res, spp, s=1.0, n=1.5, table=None):
     """A white furnace of a closed rough glass slab (a box 20 x 20 x 1, every face the
     btdftab interface of index n, normals out) in radiance 1, seen by an orthographic
     camera at deg from its normal: paths to any depth (Russian roulette past depth 8, so
     the light inside the slab is followed until it leaves). A surface that loses no
-    light returns 1 in every pixel. (mean, standard error of the mean over pixels)."""
+    light returns 1 in every pixel. (mean, standard error of the mean over pixels).
+    With a table, the slab's BSDF is that file (mode table; its model is the file's)."""
     t = math.radians(deg)
     kw = {"paths": FULL_PATHS} if model == "full" else {}
+    bsdf_d = dict({"type": "btdftab", "mode": "analytic", "ior": str(n), "smoothness": s,
+                   "model": model}, **kw)
+    if table:
+        bsdf_d = {"type": "btdftab", "filename": table}
     sc = {
         "type": "scene",
         "integrator": {"type": "path", "max_depth": -1, "rr_depth": 8,
@@ -985,8 +990,7 @@ def slab_furnace(model, deg, res, spp, s=1.0, n=1.5):
                    "sampler": {"type": "independent", "sample_count": spp}},
         "slab": {"type": "cube",
                  "to_world": mi.ScalarTransform4f().scale([10.0, 10.0, 0.5]),
-                 "bsdf": dict({"type": "btdftab", "mode": "analytic", "ior": str(n),
-                               "smoothness": s, "model": model}, **kw)},
+                 "bsdf": bsdf_d},
         "env": {"type": "constant", "radiance": {"type": "rgb", "value": 1.0}},
     }
     img = mi.render(mi.load_dict(sc), spp=spp, seed=3)
@@ -1015,6 +1019,17 @@ def slab_furnace_checks(res, spp):
         check(got["xu-sun"] < got["smith"] < got["full"],
               "slab furnace at %g deg: xu-sun %.4f < smith %.4f < full %.4f (each model "
               "keeps more of the light)" % (deg, got["xu-sun"], got["smith"], got["full"]))
+        # The table of full (tabulate --model full -s 1 at 1e-2): the model's tolerance
+        # plus the table's own e_T (its flux error per crossing, from its report) times
+        # 2, a path's crossings of a face at normal incidence (in and out; the light
+        # trapped inside makes more, each weighted less)
+        mean, err, fin = slab_furnace("full", deg, res, spp, table=tab("ffu1.exr"))
+        e_t = report_of("ffu1.exr")["e_t"]["max"]
+        tol = 1e-2 + 2.0 * e_t + 4.0 * err
+        check(fin and abs(mean - 1.0) <= tol,
+              "white furnace, rough glass slab, the full table ffu1.exr (n = 1.5, s = 1, "
+              "1e-2), camera at %g deg: %.4f +- %.1g, |1 - mean| %.2g <= %.2g"
+              % (deg, mean, err, abs(1.0 - mean), tol))
 
 
 def xml_check():
@@ -1057,6 +1072,7 @@ if __name__ == "__main__":
                back_name="f15back.exr")
     eval_check("facet smith n = 1.5 s = 3", "fsm15.exr")
     eval_check("facet-reciprocal smith n = 0.6667 s = 6", "rsm066s6.exr")
+    eval_check("facet full n = 1.5 s = 1 (the file's tally added)", "ffu1.exr")
     analytic_check()
     eval_r_check("analytic n = 1.5, s = 3", {"mode": "analytic", "ior": "1.5",
                                               "smoothness": 3.0})
@@ -1068,6 +1084,9 @@ if __name__ == "__main__":
                  {"mode": "analytic", "ior": "1.01", "smoothness": 3.0})
     eval_r_check("table f15.exr (reflection from the model)", {"filename": tab("f15.exr")})
     eval_r_check("table fsm15.exr (smith's reflection)", {"filename": tab("fsm15.exr")})
+    eval_r_check("table ffu1.exr (full's reflection: the file's tally in front, one of "
+                 "1/n made at load behind)", {"filename": tab("ffu1.exr")},
+                 pairs=10000 if JIT else 1000)
     eval_r_check("analytic smith n = 1.5, s = 1", {"mode": "analytic", "ior": "1.5",
                                                    "smoothness": 1.0, "model": "smith"})
     eval_r_check("analytic full n = 1.5, s = 1", {"mode": "analytic", "ior": "1.5",

@@ -312,6 +312,13 @@ t = btdftab.open(mine)
 check(tb.model == "full" and t.model == "full" and len(t) == len(btdftab.open(fu)) and
       same(t.eval(rad(qf[:, 0]), rad(qf[:, 1]), rad(qf[:, 2])), want),
       "build(model='full'): btdftab tabulate --model full's table, read back with its tally")
+# Table.full: the tally the file keeps, the one the tool made with its defaults
+fs_file = t.full(0).series()
+fs_own = btdftab.Full(1.5, 3).series()
+check(same(fs_file["coef"], fs_own["coef"]) and same(fs_file["node_deg"], fs_own["node_deg"])
+      and btdftab.open(os.path.join(W, "t.csv")).full(0) is None,
+      "Table.full: a full table's tally has the coefficients of Full(1.5, 3), the tool's "
+      "defaults; a xu-sun table has none")
 # a .bsdf written by the tool
 bsdf = os.path.join(W, "t.bsdf")
 tool("tabulate", "-q", "--ior", 1.5, "-s", 3, "--tolerance", "5e-2", "-o", bsdf)

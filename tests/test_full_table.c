@@ -159,6 +159,22 @@ static void files(void **state)
         btdf_table *u = NULL;
         assert_status(BTDF_OK, btdf_table_read(p1, &u, msg, sizeof msg));
         assert_int_equal(btdf_table_get_params(u)->model, BTDF_MODEL_FULL);
+        /* btdf_table_get_full: the tally the file kept, the builder's coefficients */
+        const btdf_full *fa = btdf_table_get_full(t, 0), *fb = btdf_table_get_full(u, 0);
+        assert_non_null(fa);
+        assert_non_null(fb);
+        assert_null(btdf_table_get_full(u, 1));
+        assert_null(btdf_table_get_full(u, -1));
+        assert_null(btdf_table_get_full(NULL, 0));
+        static btdf_full_series sa, sb;
+        assert_status(BTDF_OK, btdf_full_get_series(fa, &sa));
+        assert_status(BTDF_OK, btdf_full_get_series(fb, &sb));
+        assert_int_equal(sa.nodes, sb.nodes);
+        for (int a = 0; a < sa.nodes; a++)
+            for (int h = 0; h < 2; h++)
+                for (int j = 0; j < BTDF_FULL_SERIES_K; j++)
+                    for (int m = 0; m < BTDF_FULL_SERIES_M; m++)
+                        assert_close(sb.coef[a][h][j][m], sa.coef[a][h][j][m], 1e-15, 1e-300);
         srand(5);
         for (int k = 0; k < 400; k++) {
             double ti = rad(89.0) * rand() / RAND_MAX, to = M_PI - rad(89.0) * rand() / RAND_MAX;

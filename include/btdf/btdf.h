@@ -517,6 +517,11 @@ BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule);
 
 BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t);
 BTDF_API const btdf_params *btdf_table_get_params(const btdf_table *t);
+/* Model full: the tally of channel ch that the table adds to its slices (made for the
+   material's own index n, whatever the kind), for a renderer that evaluates a full
+   table itself (btdf_full_get_series); the table's, valid until btdf_table_free. NULL
+   for another model, a NULL table or a channel out of range. */
+BTDF_API const btdf_full *btdf_table_get_full(const btdf_table *t, int ch);
 BTDF_API size_t btdf_table_slice_count(const btdf_table *t);
 /* Total number of stored nodes (sum of rows * cols over the slices). */
 BTDF_API size_t btdf_table_node_count(const btdf_table *t);

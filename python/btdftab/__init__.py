@@ -210,6 +210,8 @@ def _declare(lib):
     f("btdf_full_info", None, vp, ctypes.POINTER(_FullStats))
     if hasattr(lib, "btdf_full_get_series"):  # libbtdf 0.4 from this release on
         f("btdf_full_get_series", i, vp, ctypes.POINTER(_FullSeries))
+    if hasattr(lib, "btdf_table_get_full"):  # from this release on
+        f("btdf_table_get_full", vp, vp, i)
 
 
 def _check(status, what, msg=None):
@@ -559,7 +561,20 @@ class Full:
                 "poly": np.array(sr.poly[:]).reshape(m, k, k),
                 "coef": np.array(sr.coef[:]).reshape(SERIES_NODES, 2, k, m)[:nn].copy()}
 
+    @classmethod
+    def _borrow(cls, handle, owner, ior, smoothness):
+        """A tally that another object owns (a full table's): kept alive by holding the
+        owner, never freed here."""
+        f = cls.__new__(cls)
+        f._h, f._owner = handle, owner
+        f.ior, f.smoothness = float(ior), float(smoothness)
+        f.paths, f.seed = None, None  # the file's tally: its options are not recorded
+        return f
+
     def close(self):
+        if getattr(self, "_owner", None) is not None:  # borrowed: the owner frees it
+            self._h = None
+            return
         if getattr(self, "_h", None):
             _library().btdf_full_free(self._h)
             self._h = None
@@ -609,6 +624,21 @@ class Table:
     def __len__(self):
         """The number of nodes."""
         return _library().btdf_table_node_count(self._h)
+
+    def full(self, channel=0):
+        """Model full: the tally of a channel that the table adds to its slices
+        (btdf_table_get_full), as a Full that keeps this table alive; None for the other
+        models."""
+        lib = _library()
+        if not hasattr(lib, "btdf_table_get_full"):
+            raise BtdfError("this libbtdf (%s) has no btdf_table_get_full" % version())
+        if not 0 <= int(channel) < self.channels:
+            raise ValueError("channel %r: 0 to %d" % (channel, self.channels - 1))
+        h = lib.btdf_table_get_full(self._h, int(channel))
+        if not h:
+            return None
+        return Full._borrow(ctypes.c_void_p(h), self, self.ior[int(channel)],
+                            self.smoothness)
 
     def slices(self):
         """[(ti, rows, cols, values)]: each slice's nodes (values rows x cols x channels)."""

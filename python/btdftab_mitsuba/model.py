@@ -388,7 +388,7 @@ def _node_factors(table, slices):
     """smith tables: each node's model factor per channel (src/table/table.c,
     model_node_factor: the facet's refracted direction, then (1 + Lambda_i) G2), in the
     order of the values; None for xu-sun (factor 1)."""
-    if table.model != "smith":
+    if table.model not in ("smith", "full"):  # full's slices are smith's
         return None
     recip = table.kind == "facet-reciprocal"
     s = table.smoothness
@@ -420,17 +420,20 @@ def _node_factors(table, slices):
 
 class TableRule:
     """The slices of a table (a btdftab.Table, read by libbtdf) on the device, and the
-    rule of btdf/btdf.h, in the table's model (from its metadata): xu-sun or smith; a
-    table of full (smith's slices plus a tally) is not read on the device yet."""
+    rule of btdf/btdf.h, in the table's model (from its metadata): xu-sun, smith, or
+    full (smith's slices plus the multiply scattered part of the tally the file keeps,
+    added at the query's own directions, as src/table/full.c adds it)."""
 
     def __init__(self, table):
         self.kind = table.kind
         self.model = table.model
-        if self.model not in ("xu-sun", "smith"):
-            raise ValueError("btdftab: table '%s' holds model '%s': mode 'table' reads "
-                             "tables of xu-sun or smith; for %s give mode 'analytic' with "
-                             "model '%s' (the same tally, made by the plugin)"
-                             % (table.path, self.model, self.model, self.model))
+        if self.model not in ("xu-sun", "smith", "full"):
+            raise ValueError("btdftab: table '%s' holds model '%s': must be xu-sun, smith "
+                             "or full" % (table.path, self.model))
+        self.single = "smith" if self.model == "full" else self.model  # the slices' rule
+        # full: each channel's tally, for the index n of the material whatever the kind
+        self.ms = ([FullSeries(table.full(c)) for c in range(table.channels)]
+                   if self.model == "full" else None)
         self.channels = table.channels
         self.ior = list(table.ior)
         self.s = table.smoothness
@@ -457,7 +460,7 @@ class TableRule:
         self.count = len(ti_l)
         self.ti_min = ti_l[0]
         self.ti_max = ti_l[-1]
-        g = [float(incident_factor(math.sin(t), math.cos(t), self.s, self.k0, self.model))
+        g = [float(incident_factor(math.sin(t), math.cos(t), self.s, self.k0, self.single))
              for t in ti_l]
         # g at ti = pi/2 exactly: cos(pi/2) = 6e-17 > 0 gives V = exp(-huge) = 0 as in C.
         if _jit():
@@ -559,6 +562,7 @@ class TableRule:
         """rho~ per channel (a list) for the query, by the rule of btdf/btdf.h."""
         recip = self.kind == "facet-reciprocal"
         grid = self.kind == "grid"
+        q_sti, q_cti, q_cto = sti, cti, cto  # the query's own, for full's tally
         if grid:
             x_grid = dr.atan2(sto, cto)  # to in [pi/2, pi]
             y_grid = dr.atan2(dr.abs(sph), cph)  # |phi| folded into [0, pi]
@@ -574,7 +578,7 @@ class TableRule:
             w = dr.select(inr, (ti - t0) / dr.select(inr, t1 - t0, 1.0), 0.0)
             g0 = _gather(self.g, k, inr)
             g1 = _gather(self.g, k + 1, inr)
-            g = incident_factor(sti, cti, self.s, self.k0, self.model)
+            g = incident_factor(sti, cti, self.s, self.k0, self.single)
         else:
             k = 0 if not _jit() else mi.UInt32(0)
         out = []
@@ -605,5 +609,19 @@ class TableRule:
                 v = v * kq
             if recip:
                 v = self.ior[c] * self.ior[c] * v
-            out.append(dr.select(valid, v, 0.0))
+            v = dr.select(valid, v, 0.0)
+            if self.ms is not None:
+                # full: the tally's orders 2+ at the query's directions, also where no
+                # facet connects them; 0 outside the slices' incidence range (a
+                # reciprocal table covers every ti) and at grazing, as table_add_ms
+                mu = dr.abs(q_cto)
+                ok = active & (q_cti > 0.0) & (mu > 0.0)
+                if not recip:
+                    ok = ok & inr
+                ti_deg = dr.atan2(q_sti, q_cti) * (180.0 / math.pi)
+                if _jit():
+                    v = v + dr.select(ok, self.ms[c].eval(0, ti_deg, mu, cph, ok), 0.0)
+                elif ok:
+                    v = v + self.ms[c].eval(0, ti_deg, mu, cph)
+            out.append(v)
         return out

@@ -165,10 +165,16 @@ def _make_class():
             if self.model == "full":
                 paths = int(props.get("paths", btdftab.FULL_PATHS_DEFAULT))
                 seed = int(props.get("seed", 1))
-                self.ms_front = [FullSeries(btdftab.Full(n, self.s, paths, seed))
-                                 for n in self.ior]
-                self.ms_back = [FullSeries(btdftab.Full(1.0 / n, self.s, paths, seed))
-                                for n in self.ior]
+                if self.front is not None:  # a full table: its own tally for light in front
+                    self.ms_front = self.front.ms
+                else:
+                    self.ms_front = [FullSeries(btdftab.Full(n, self.s, paths, seed))
+                                     for n in self.ior]
+                if self.back is not None:  # and the back table's for light from behind
+                    self.ms_back = self.back.ms
+                else:  # the material of index 1/n: a tally made here
+                    self.ms_back = [FullSeries(btdftab.Full(1.0 / n, self.s, paths, seed))
+                                    for n in self.ior]
             elif "paths" in props or "seed" in props:
                 raise ValueError("btdftab: 'paths' and 'seed' are for model 'full'")
             if self.channels == 3 and not mi.is_rgb:

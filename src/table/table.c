@@ -491,6 +491,13 @@ BTDF_API int btdf_table_rule_parse(const char *name, btdf_table_rule *rule)
 
 BTDF_API btdf_table_kind btdf_table_get_kind(const btdf_table *t) { return t->kind; }
 BTDF_API const btdf_params *btdf_table_get_params(const btdf_table *t) { return &t->p; }
+
+BTDF_API const btdf_full *btdf_table_get_full(const btdf_table *t, int ch)
+{
+    if (!t || t->p.model != BTDF_MODEL_FULL || ch < 0 || ch >= t->p.channels)
+        return NULL;
+    return t->ms[ch];
+}
 BTDF_API size_t btdf_table_slice_count(const btdf_table *t) { return t ? t->ns : 0; }
 
 BTDF_API size_t btdf_table_node_count(const btdf_table *t)
