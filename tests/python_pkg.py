@@ -390,12 +390,14 @@ def pane_rule(sr, mui, muo, phi):
         k = min(max(int(np.searchsorted(mu, x, side="right")) - 2, 0), n - 4)
         w = [np.prod([(x - mu[k + b]) / (mu[k + a] - mu[k + b]) for b in range(4) if b != a])
              for a in range(4)]
-        # past the last node the modes m >= 1 fall linearly to 0 at the pole
-        wp = [0, 0, 0, (1 - x) / (1 - mu[-1])] if x > mu[-1] else w
-        return k, np.array(w), np.array(wp)
-    ki, wi, wpi = stencil(mui)
-    ko, wo, wpo = stencil(muo)
+        # past the last node mode m is the last node's times r^m (sin theta over its)
+        wp = [0, 0, 0, 1] if x > mu[-1] else w
+        r = math.sqrt((1 - x * x) / (1 - mu[-1] ** 2)) if x > mu[-1] else 1.0
+        return k, np.array(w), np.array(wp), r
+    ki, wi, wpi, ri = stencil(mui)
+    ko, wo, wpo, ro = stencil(muo)
     cm = np.einsum("a,b,mab->m", wpi, wpo, c[:, ki:ki + 4, ko:ko + 4])
+    cm = cm * (ri * ro) ** np.arange(len(cm))
     cm[0] = np.einsum("a,b,ab->", wi, wo, c[0, ki:ki + 4, ko:ko + 4])
     return max(0.0, float(np.sum(cm * np.cos(np.arange(len(cm)) * phi))))
 

@@ -220,7 +220,7 @@ static double series_rule(const double *mu, const double *c, int n, int modes, d
                           double muo, double phi)
 {
     int k[2];
-    double w[2][4], wp[2][4], x[2] = {mui, muo};
+    double w[2][4], wp[2][4], r[2], x[2] = {mui, muo};
     for (int d = 0; d < 2; d++) {
         int last = -1;
         for (int j = 0; j < n; j++)
@@ -235,9 +235,10 @@ static double series_rule(const double *mu, const double *c, int n, int modes, d
                 if (b != a)
                     v *= (x[d] - mu[kk + b]) / (mu[kk + a] - mu[kk + b]);
             w[d][a] = v;
-            /* towards the pole, past the last node: modes >= 1 fall to 0 at x = 1 */
-            wp[d][a] = x[d] > mu[n - 1] ? (a == 3 ? (1.0 - x[d]) / (1.0 - mu[n - 1]) : 0.0) : v;
+            /* towards the pole, past the last node: mode m is the last node's times r^m */
+            wp[d][a] = x[d] > mu[n - 1] ? (a == 3 ? 1.0 : 0.0) : v;
         }
+        r[d] = x[d] > mu[n - 1] ? sqrt((1.0 - x[d] * x[d]) / (1.0 - mu[n - 1] * mu[n - 1])) : 1.0;
     }
     double sum = 0.0;
     for (int m = 0; m < modes; m++) {
@@ -246,7 +247,7 @@ static double series_rule(const double *mu, const double *c, int n, int modes, d
         for (int a = 0; a < 4; a++)
             for (int b = 0; b < 4; b++)
                 cm += u[0][a] * u[1][b] * c[((size_t)m * n + k[0] + a) * n + k[1] + b];
-        sum += cm * cos(m * phi);
+        sum += cm * pow(r[0] * r[1], m) * cos(m * phi);
     }
     return sum > 0.0 ? sum : 0.0;
 }

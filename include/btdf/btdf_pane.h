@@ -98,9 +98,10 @@ BTDF_API void btdf_pane_eval_phis(const btdf_pane *p, btdf_pane_side side, btdf_
    ascending nodes mu[0 .. nodes) by 4-point Lagrange, first over j at mu_i, then over
    o at mu_o; the stencil is the four nodes from k = (the last node <= x) - 1, clamped to
    [0, nodes - 4]. Past the last node (x > mu[nodes - 1], towards the pole) the modes
-   m >= 1 take instead the weights (0, 0, 0, (1 - x) / (1 - mu[nodes - 1])) on that
-   stencil: they vanish on the axis, where a direction has no azimuth; m = 0 keeps the
-   Lagrange weights. 0 where mu_i or mu_o is not in (0, 1]. The pointers are the pane's,
+   m >= 1 take instead the weights (0, 0, 0, r^m) on that stencil, r = sqrt((1 - x^2) /
+   (1 - mu[nodes - 1]^2)) (sin theta over the last node's): they vanish on the axis,
+   where a direction has no azimuth, as sin^m theta; m = 0 keeps the Lagrange weights.
+   0 where mu_i or mu_o is not in (0, 1]. The pointers are the pane's,
    valid until btdf_pane_free. BTDF_EINVAL for a NULL pointer, a side, part or channel
    out of range. */
 BTDF_API btdf_status btdf_pane_get_series(const btdf_pane *p, btdf_pane_side side,

@@ -122,20 +122,24 @@ class PaneSeries:
                 if b != a:  # distinct Gauss nodes: no zero denominator
                     v = v * (x - xs[b]) / (xs[a] - xs[b])
             w.append(v)
-        # the modes m >= 1 past the last node: linearly to 0 at the pole (1 - last > 0)
+        # the modes m >= 1 past the last node: the last node's times r^m, r = sin theta
+        # over the last node's (1 - last^2 > 0: Gauss nodes lie inside (0, 1))
         last = float(self.nodes[-1])
         past = x > last
-        t = dr.maximum((1.0 - x) / (1.0 - last), 0.0)
+        r = dr.select(past, dr.sqrt(dr.maximum((1.0 - x * x) / (1.0 - last * last), 0.0)),
+                      1.0)
         wp = [dr.select(past, 0.0, w[0]), dr.select(past, 0.0, w[1]),
-              dr.select(past, 0.0, w[2]), dr.select(past, t, w[3])]
-        return k, w, wp
+              dr.select(past, 0.0, w[2]), dr.select(past, 1.0, w[3])]
+        return k, w, wp, r
 
     def eval(self, ch, blk, mui, muo, cph, active):
         """max(0, the cosine sum) of channel ch, block blk (UInt32 per lane:
         2 * back + reflection) at (mui, muo, cos phi); 0 where not active."""
         n = self.n
-        ki, wi0, wi1 = self._stencil(mui, active)
-        ko, wo0, wo1 = self._stencil(muo, active)
+        ki, wi0, wi1, ri = self._stencil(mui, active)
+        ko, wo0, wo1, ro = self._stencil(muo, active)
+        rr = ri * ro
+        rm = mi.Float64(1.0)  # (ri ro)^m
         base = mi.UInt32(ki * n + ko) + (ch * 4 + blk) * self.block
         c1 = cph
         cm_1 = c1
@@ -149,6 +153,9 @@ class PaneSeries:
                 row = base + (m * nn + a * n)
                 g = [dr.gather(mi.Float64, self.coef, row + b, active) for b in range(4)]
                 v = v + wi[a] * (wo[0] * g[0] + wo[1] * g[1] + wo[2] * g[2] + wo[3] * g[3])
+            if m:
+                v = v * rm
+            rm = rm * rr
             total = total + v * cm
             nx = c1 if m == 0 else 2.0 * c1 * cm - cm_1
             cm_1 = cm

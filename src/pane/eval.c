@@ -39,22 +39,26 @@ static void lagrange(const double *nodes, int n, double x, int *k0, double wt[4]
    where the series reaches the pole (theta = 0). There every mode but m = 0 vanishes (a
    direction on the axis has no azimuth), which a cubic through the last four nodes
    does not know: extrapolated, the modes made the value at the pole depend on phi by
-   10 % (n = 1.5, s = 3, ti = 30, to = 180). So they fall linearly from the last node's
-   value to 0 at x = 1; at the last node this equals the Lagrange weights. */
+   10 % (n = 1.5, s = 3, ti = 30, to = 180). Near the pole the mode m of a smooth
+   function on the sphere goes as sin^m theta, so past the last node mode m is the last
+   node's value times r^m, r = sin theta / sin theta_last (*r; 1 before the last node,
+   where the Lagrange weights stand). At the last node this is the Lagrange weights. */
 static void pole_weights(const double *nodes, int n, double x, const double wt[4],
-                         double wp[4])
+                         double wp[4], double *r)
 {
     double last = nodes[n - 1];
+    *r = 1.0;
     if (!(x > last)) {
         for (int a = 0; a < 4; a++)
             wp[a] = wt[a];
         return;
     }
     /* x > last: the stencil is the last four nodes; Gauss nodes lie inside (0, 1), so
-       1 - last > 0 */
-    double t = (1.0 - x) / (1.0 - last);
+       1 - last^2 > 0; x <= 1 (a cosine), and the max keeps rounding above 1 harmless */
     wp[0] = wp[1] = wp[2] = 0.0;
-    wp[3] = t > 0.0 ? t : 0.0;
+    wp[3] = 1.0;
+    double q = (1.0 - x * x) / (1.0 - last * last);
+    *r = sqrt(q > 0.0 ? q : 0.0);
 }
 
 static int ok_side(btdf_pane_side s) { return s == BTDF_PANE_FRONT || s == BTDF_PANE_BACK; }
@@ -100,9 +104,11 @@ BTDF_API void btdf_pane_eval_phis(const btdf_pane *P, btdf_pane_side side, btdf_
     double wi0[4], wo0[4], wi1[4], wo1[4], bm[BTDF_PANE_MODES_MAX];
     lagrange(P->mu, n, mui, &ki, wi0);
     lagrange(P->mu, n, muo, &ko, wo0);
-    pole_weights(P->mu, n, mui, wi0, wi1);
-    pole_weights(P->mu, n, muo, wo0, wo1);
+    double ri, ro;
+    pole_weights(P->mu, n, mui, wi0, wi1, &ri);
+    pole_weights(P->mu, n, muo, wo0, wo1, &ro);
     size_t oo = (size_t)n * n;
+    double rm = 1.0, rr = ri * ro; /* (ri ro)^m, by one product per mode */
     for (int m = 0; m < P->m; m++) {
         const double *cc = c + (size_t)m * oo;
         const double *wi = m ? wi1 : wi0, *wo = m ? wo1 : wo0;
@@ -111,7 +117,8 @@ BTDF_API void btdf_pane_eval_phis(const btdf_pane *P, btdf_pane_side side, btdf_
             const double *row = cc + (size_t)(ki + a) * n + ko;
             v += wi[a] * (wo[0] * row[0] + wo[1] * row[1] + wo[2] * row[2] + wo[3] * row[3]);
         }
-        bm[m] = v;
+        bm[m] = m ? v * rm : v;
+        rm *= rr;
     }
     for (size_t k = 0; k < count; k++) {
         if (!isfinite(phi[k]))
