@@ -171,5 +171,68 @@ grep -q -- '^ *polar) opts=".*--back --thickness --light --absorption' "$W/comp"
     ok "help and completion of polar list --back, --thickness, --light, --absorption" || \
     no "polar's help or completion lacks the pane's options"
 
+# A pane's grid: .csv (every block named in its rows) and .exr (layers), docs/pane.md
+# "Tables". A small grid keeps it fast; the values are btdf_pane_eval's at the nodes.
+G="--ior 1.5 -s 2 --back 4 --thickness 2 --absorption 0.05 --grid 10,10,7"
+# shellcheck disable=SC2086
+"$B" tabulate -q $G -o "$W/c/pg.csv" 2>"$W/err" || { no "tabulate --back -o .csv"; cat "$W/err"; }
+# shellcheck disable=SC2086
+"$B" tabulate -q $G --threads 1 -o "$W/c/pg1.csv" 2>/dev/null
+rows=$(sed -n 's/^# rows: //p' "$W/c/pg.csv")
+data=$(grep -c -v -e '^#' -e '^light,' "$W/c/pg.csv")
+head -n 1 "$W/c/pg.csv" | grep -q '^light,part,theta_i_deg,theta_o_deg,phi_deg,f,ti_rad,to_rad,phi_rad$' &&
+    [ "$rows" = 2800 ] && [ "$data" = 2800 ] && grep -q "^# end: 2800 rows$" "$W/c/pg.csv" &&
+    grep -q '^# back: 4$' "$W/c/pg.csv" && grep -q '^# error: e_L1 max ' "$W/c/pg.csv" &&
+    [ "$(cut -d, -f1,2 "$W/c/pg.csv" | grep -v '^#' | sort -u | tr '\n' ' ')" = \
+      "back,reflection back,transmission front,reflection front,transmission light,part " ] &&
+    [ "$(grep -v '^# provenance' "$W/c/pg.csv" | cksum)" = \
+      "$(grep -v '^# provenance' "$W/c/pg1.csv" | cksum)" ] &&
+    ok "pane .csv: 4 x 10 x 10 x 7 rows, each block named, the error line; same bytes on 1 thread (but the command line)" ||
+    { no "pane .csv layout"; head -n 20 "$W/c/pg.csv"; }
+# rows against eval --back at their own angles, bit for bit (awk compares the doubles)
+good=1
+for spec in "front transmission" "back reflection" "front reflection" "back transmission"; do
+    set -- $spec
+    part=$2
+    line=$(grep "^$1,$2,60,.*,90," "$W/c/pg.csv" | sed -n 4p)
+    a=$(echo "$line" | cut -d, -f3); t=$(echo "$line" | cut -d, -f4); f=$(echo "$line" | cut -d, -f6)
+    # shellcheck disable=SC2086
+    v=$("$B" eval --ior 1.5 -s 2 --back 4 --thickness 2 --absorption 0.05 --light "$1" \
+        --part "$part" "$a" "$t" 90 2>/dev/null)
+    awk -v x="$f" -v y="$v" 'BEGIN { exit !(x == y && x > 0) }' || { good=0; echo "# $spec: $line vs $v"; }
+done
+[ "$good" -eq 1 ] && ok "pane .csv values are btdftab eval --back's at their nodes, bit for bit" ||
+    no "pane .csv values differ from eval --back"
+# shellcheck disable=SC2086
+"$B" tabulate -q --ior 1.5 -s 2 --back smooth --grid 10,10,7 -o "$W/c/pd.csv" 2>/dev/null
+[ "$(grep -c '^back,reflection-delta,' "$W/c/pd.csv")" -eq 10 ] &&
+    [ "$(grep -c 'delta' "$W/c/pg.csv")" -eq 1 ] &&
+    grep -q '^back,reflection-delta,0,0,180,0.04000000000000001,' "$W/c/pd.csv" &&
+    ok "a flat back's mirror: one reflection-delta row per theta_i, Fresnel's 0.04 at 0" ||
+    { no "pane .csv delta rows"; grep delta "$W/c/pd.csv" | head -3; }
+# shellcheck disable=SC2086
+if "$B" tabulate -q $G -o "$W/c/pg.exr" 2>"$W/err"; then
+    line=$(grep "^front,transmission,40,160,90," "$W/c/pg.csv")
+    f=$(echo "$line" | cut -d, -f6)
+    v=$("$B" eval --table "$W/c/pg.exr" 40 160 90 2>/dev/null)
+    awk -v x="$f" -v y="$v" 'BEGIN { d = x - y; if (d < 0) d = -d; exit !(x > 0 && d <= 6e-8 * x) }' &&
+        ok "pane .exr: its values read back by eval --table are the .csv's front transmission (float rounding)" ||
+        no "pane .exr value $v against the .csv's $f"
+elif grep -q 'without OpenEXR' "$W/err"; then
+    [ ! -e "$W/c/pg.exr" ] && ok "pane .exr refused in a build without OpenEXR, no file" || no "pane .exr left a file"
+else no "tabulate --back -o .exr"; cat "$W/err"; fi
+# refusals: exit 2, the value named, no file
+for args in "--tolerance 1e-3 -o $W/c/r1.csv:tolerance" "--grid 1,10,7 -o $W/c/r2.csv:1,10,7" \
+            "--basis klems-full -o $W/c/r3.csv:basis" "-o $W/c/r4.bsdf:.bsdf"; do
+    a=${args%:*}; want=${args##*:}
+    # shellcheck disable=SC2086
+    "$B" tabulate -q --ior 1.5 -s 2 --back 4 $a 2>"$W/err"
+    rc=$?
+    out=${a##* }
+    [ "$rc" -eq 2 ] && grep -q -- "$want" "$W/err" && [ ! -e "$out" ] &&
+        ok "tabulate --back $a: exit 2, names '$want', no file" ||
+        { no "tabulate --back $a: status $rc"; cat "$W/err"; }
+done
+
 echo "# $pass passed, $failn failed"
 [ "$failn" -eq 0 ]

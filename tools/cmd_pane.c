@@ -392,6 +392,23 @@ static int pane_xml_checks(const cli *c)
     return folder_writable(c->out) ? 0 : 1;
 }
 
+/* A pane's .csv or .exr: a grid; what applies to an interface's table does not. */
+static int pane_table_checks(const cli *c)
+{
+    static const opt_id no[] = {OPT_THETA_I, OPT_PREVIEW, OPT_THETA_O, OPT_PHI, OPT_METRIC,
+                                OPT_MAX_SAMPLES, OPT_MAX_MEMORY, OPT_SIZE, OPT_SIDE, OPT_PART,
+                                OPT_TOLERANCE, OPT_REPORT, OPT_BASIS};
+    for (size_t k = 0; k < sizeof no / sizeof no[0]; k++)
+        if (GIVEN(c, no[k]))
+            return fail(EXIT_USAGE, "%s: --%s does not apply to a pane's grid (every block, "
+                                    "light from either side; --grid sets its nodes)",
+                        c->out, opt_find(no[k])->name);
+    if (ends_with(c->out, ".exr") && !btdf_format_available("exr"))
+        return fail(EXIT_USAGE, "%s: this btdftab was built without OpenEXR: write .csv",
+                    c->out);
+    return folder_writable(c->out) ? 0 : 1;
+}
+
 static int write_system(const btdf_pane *P, const char *path, const btdf_params *p,
                         btdf_rad_basis basis, int threads, int quiet, const char *prov)
 {
@@ -462,10 +479,30 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
         if (c->npos)
             return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
                         c->pos[0]);
-        if (!c->out || !ends_with(c->out, ".xml"))
+        if (!c->out || !(ends_with(c->out, ".xml") || ends_with(c->out, ".csv") ||
+                         ends_with(c->out, ".exr")))
             return fail(EXIT_USAGE, "%s: --back: a pane's system is written to .xml (Klems or "
-                                    "tree3, --basis); other formats take the interface only",
+                                    "tree3, --basis), .csv or .exr (a grid, --grid); .bsdf "
+                                    "takes the interface only",
                         c->out ? c->out : "no -o");
+        if (!ends_with(c->out, ".xml")) {
+            int code = pane_table_checks(c);
+            if (code)
+                return code;
+            pane_spec ps = cli_spec(c);
+            btdf_pane *P = NULL;
+            code = make_pane(&c->p, &ps, c->threads, &P);
+            size_t nti = 46, nto = 46, nphi = 37; /* 2, 2 and 5 degrees */
+            if (GIVEN(c, OPT_GRID)) {
+                nti = c->o.grid_ti;
+                nto = c->o.grid_to;
+                nphi = c->o.grid_phi;
+            }
+            if (!code)
+                code = pane_write_table(c->out, P, nti, nto, nphi, c->quiet, prov);
+            btdf_pane_free(P);
+            return code;
+        }
     } else if (cmd == CMD_POLAR) {
         int code = pane_polar_checks(c);
         if (code)
