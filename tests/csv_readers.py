@@ -69,5 +69,35 @@ with tempfile.TemporaryDirectory() as w:
                   "%s: pandas.read_csv reads %d rows, exact values" % (name, len(rows)))
         except ImportError:
             pass
+    # A pane's grid (docs/pane.md, "Tables"): text columns light and part beside the
+    # numbers, read by the calls docs/pane.md gives, the values bit for bit
+    path = os.path.join(w, "pane.csv")
+    subprocess.run([tool, "tabulate", "-q", "--ior", "1.5", "-s", "2", "--back", "smooth",
+                    "--grid", "6,5,4", "-o", path], check=True)
+    rows = node_rows(path)
+    header = open(path).readline().strip().split(",")
+    want = [(r[0], r[1], float(r[5])) for r in rows]
+    try:
+        import numpy
+        a = numpy.genfromtxt(path, delimiter=",", names=True, dtype=None, encoding="utf-8")
+        got = [(str(x["light"]), str(x["part"]), float(x["f"])) for x in a]
+        check(list(a.dtype.names) == header and got == want,
+              "pane: numpy.genfromtxt(dtype=None) reads %d rows, sides named, exact values"
+              % len(rows))
+    except ImportError:
+        pass
+    try:
+        import pandas
+        kw = ({"float_precision": "round_trip"}
+              if int(pandas.__version__.split(".")[0]) < 3 else {})
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            d = pandas.read_csv(path, comment="#", **kw)
+        got = list(zip(d["light"], d["part"], d["f"]))
+        ft = d[(d.light == "front") & (d.part == "transmission")]
+        check(list(d.columns) == header and got == want and len(ft) == 6 * 5 * 4,
+              "pane: pandas.read_csv reads %d rows, sides named, exact values" % len(rows))
+    except ImportError:
+        pass
 print("%d passed, %d failed" % (passed, failed))
 sys.exit(1 if failed or passed == 0 else 0)
