@@ -115,6 +115,79 @@ def check(tool, args, work):
     return None
 
 
+# A pane's grid (docs/pane.md, "Tables"): every layer of the .exr against the rows of
+# the .csv of the same options, rounded to binary32. (front s, back, grid, more options)
+PANE_CASES = [
+    ["--ior", "1.5", "-s", "3", "--back", "smooth", "--thickness", "4"],  # default grid
+    ["--ior", "1.5", "-s", "2", "--back", "6", "--absorption", "0.03", "--grid", "31,23,19"],
+    ["--ior", "1.5,1.51,1.52", "-s", "4", "--back", "smooth", "--grid", "12,15,9"],
+]
+# layer name (the front's transmission has none) -> the CSV's (light, part)
+PANE_LAYERS = {"": ("front", "transmission"), "front_reflection.": ("front", "reflection"),
+               "back_transmission.": ("back", "transmission"),
+               "back_reflection.": ("back", "reflection")}
+
+
+def check_pane(tool, args, work):
+    """Part k is theta_i node k; its row i is theta_o = 90 + t_i (a reflection's tr =
+    90 - t_i), which is the CSV's node nto - 1 - i of t (from the face); column j is
+    phi node j. back_delta, for a flat back, holds the back's mirror weight of the slice
+    at every node."""
+    csv = os.path.join(work, "p.csv")
+    exr = os.path.join(work, "p.exr")
+    for out in (csv, exr):
+        r = subprocess.run([tool, "tabulate", *args, "-q", "-o", out], capture_output=True,
+                           text=True)
+        if r.returncode != 0:
+            return "tabulate %s failed: %s" % (out, r.stderr.strip())
+    with open(csv) as fh:
+        head = fh.readline().rstrip("\n").split(",")
+        rows = [l.rstrip("\n").split(",") for l in fh if not l.startswith("#")]
+    fcols = [i for i, h in enumerate(head) if h.startswith("f")]
+    nch = len(fcols)
+    blocks, delta = {}, {}
+    for r in rows:  # in file order: block by block, theta_i, t, phi
+        if r[1].endswith("-delta"):
+            delta.setdefault((r[0], r[1]), []).append([float(r[i]) for i in fcols])
+        else:
+            blocks.setdefault((r[0], r[1]), []).append([float(x) for x in r[2:5]] +
+                                                       [float(r[i]) for i in fcols])
+    f = OpenEXR.File(exr, separate_channels=True)
+    nti = len(f.parts)
+    first = f.parts[0]
+    nto, nphi = first.channels["Y" if nch == 1 else "R"].pixels.shape
+    names = ["Y"] if nch == 1 else ["R", "G", "B"]
+    checked = 0
+    for pre, key in PANE_LAYERS.items():
+        v = np.array(blocks[key]).reshape(nti, nto, nphi, 3 + nch)
+        for k, part in enumerate(f.parts):
+            ti = float(np.asarray(part.header["btdf.ti"]).ravel()[0])
+            if abs(ti * 180.0 / np.pi - v[k, 0, 0, 0]) > 1e-9:
+                return "part %d: btdf.ti %.17g, the CSV's theta_i %s" % (k, ti, v[k, 0, 0, 0])
+            for ch, name in enumerate(names):
+                px = part.channels[pre + name].pixels
+                want = v[k, ::-1, :, 3 + ch].astype(np.float32)
+                bad = np.argwhere(px != want)
+                if px.shape != (nto, nphi) or bad.size:
+                    i, j = bad[0] if bad.size else (0, 0)
+                    return ("part %d layer %r %s node (%d, %d): file %.9g, csv %.9g; %d differ"
+                            % (k, pre, name, i, j, px[i, j], want[i, j], len(bad)))
+                checked += px.size
+    for k, part in enumerate(f.parts):
+        has = any(c.startswith("back_delta.") for c in part.channels)
+        if has != (("back", "reflection-delta") in delta):
+            return "part %d: back_delta layer %s, the CSV's delta rows %s" % (
+                k, has, ("back", "reflection-delta") in delta)
+        for ch, name in enumerate(names if has else []):
+            px = part.channels["back_delta." + name].pixels
+            if np.any(px != np.float32(delta[("back", "reflection-delta")][k][ch])):
+                return "part %d: back_delta %s is not the CSV's weight" % (k, name)
+    if checked != nch * sum(len(b) for b in blocks.values()):
+        return "%d values checked, the CSV has %d" % (checked,
+                                                      nch * sum(len(b) for b in blocks.values()))
+    return None
+
+
 def main():
     tool = sys.argv[1]
     work = sys.argv[2] if len(sys.argv) > 2 else tempfile.mkdtemp(prefix="btdf-foreign-")
@@ -122,6 +195,15 @@ def main():
     for args in CASES:
         why = check(tool, args, work)
         label = " ".join(args)
+        if why is None:
+            passed += 1
+            print("ok   %s" % label)
+        else:
+            failed += 1
+            print("FAIL %s: %s" % (label, why))
+    for args in PANE_CASES:
+        why = check_pane(tool, args, work)
+        label = "pane " + " ".join(args)
         if why is None:
             passed += 1
             print("ok   %s" % label)

@@ -377,33 +377,31 @@ static double src_specular(void *user, int k, double ti)
                               k >= 2 ? BTDF_PART_REFLECTION : BTDF_PART_TRANSMISSION, 0, ti);
 }
 
-static int pane_xml_checks(const cli *c)
-{
-    static const opt_id no[] = {OPT_THETA_I, OPT_GRID, OPT_PREVIEW, OPT_THETA_O, OPT_PHI,
-                                OPT_METRIC, OPT_MAX_SAMPLES, OPT_MAX_MEMORY, OPT_SIZE,
-                                OPT_SIDE, OPT_PART, OPT_TOLERANCE, OPT_REPORT};
-    for (size_t k = 0; k < sizeof no / sizeof no[0]; k++)
-        if (GIVEN(c, no[k]))
-            return fail(EXIT_USAGE, "%s: --%s does not apply to a pane's .xml (it holds the "
-                                    "system, both parts, light from either side)",
-                        c->out, opt_find(no[k])->name);
-    if (c->p.channels != 1)
-        return fail(EXIT_USAGE, "--back: a pane's .xml has one channel: give one --ior");
-    return folder_writable(c->out) ? 0 : 1;
-}
-
-/* A pane's .csv or .exr: a grid; what applies to an interface's table does not. */
-static int pane_table_checks(const cli *c)
+/* What applies to an interface's table does not apply to a pane's .xml (the system,
+   both parts, light from either side) nor to its grid (.csv, .exr), where --grid sets
+   the nodes in place of --basis. */
+static int pane_out_checks(const cli *c, int grid)
 {
     static const opt_id no[] = {OPT_THETA_I, OPT_PREVIEW, OPT_THETA_O, OPT_PHI, OPT_METRIC,
                                 OPT_MAX_SAMPLES, OPT_MAX_MEMORY, OPT_SIZE, OPT_SIDE, OPT_PART,
-                                OPT_TOLERANCE, OPT_REPORT, OPT_BASIS};
-    for (size_t k = 0; k < sizeof no / sizeof no[0]; k++)
+                                OPT_TOLERANCE, OPT_REPORT, OPT_GRID};
+    size_t count = sizeof no / sizeof no[0] - (grid ? 1 : 0); /* a grid takes --grid */
+    for (size_t k = 0; k < count; k++)
         if (GIVEN(c, no[k]))
-            return fail(EXIT_USAGE, "%s: --%s does not apply to a pane's grid (every block, "
-                                    "light from either side; --grid sets its nodes)",
+            return fail(EXIT_USAGE, grid ? "%s: --%s does not apply to a pane's grid (every "
+                                           "block, light from either side; --grid sets its "
+                                           "nodes)"
+                                         : "%s: --%s does not apply to a pane's .xml (it "
+                                           "holds the system, both parts, light from either "
+                                           "side)",
                         c->out, opt_find(no[k])->name);
-    if (ends_with(c->out, ".exr") && !btdf_format_available("exr"))
+    if (grid && GIVEN(c, OPT_BASIS))
+        return fail(EXIT_USAGE, "%s: --basis does not apply to a pane's grid (--grid sets "
+                                "its nodes)",
+                    c->out);
+    if (!grid && c->p.channels != 1)
+        return fail(EXIT_USAGE, "--back: a pane's .xml has one channel: give one --ior");
+    if (grid && ends_with(c->out, ".exr") && !btdf_format_available("exr"))
         return fail(EXIT_USAGE, "%s: this btdftab was built without OpenEXR: write .csv",
                     c->out);
     return folder_writable(c->out) ? 0 : 1;
@@ -486,7 +484,7 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
                                     "takes the interface only",
                         c->out ? c->out : "no -o");
         if (!ends_with(c->out, ".xml")) {
-            int code = pane_table_checks(c);
+            int code = pane_out_checks(c, 1);
             if (code)
                 return code;
             pane_spec ps = cli_spec(c);
@@ -515,7 +513,7 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
     }
     pane_spec ps = cli_spec(c);
     if (cmd == CMD_TABULATE) {
-        int code = pane_xml_checks(c);
+        int code = pane_out_checks(c, 0);
         return code ? code : pane_write_xml(c->out, &c->p, &ps, c->basis, c->threads, c->quiet,
                                             prov);
     }

@@ -25,6 +25,7 @@
 #include "run.h"
 #include "simchart.h"
 #include "simulate_out.h"
+#include "textout.h"
 
 static const char *prog_name = "btdftab";
 double deg_given[MAX_ANGLES]; /* the angles as given, for the report */
@@ -116,13 +117,6 @@ static void progress(void *ctx, uint64_t done, uint64_t total, double t_se)
     run_progress_cb(ctx, stage, (size_t)done, (size_t)(total - done));
 }
 
-static void jnum(FILE *f, double x)
-{
-    char b[40];
-    btdf_format_double(isfinite(x) ? x : 0.0, b, sizeof b); /* never NaN in a file */
-    fputs(b, f);
-}
-
 /* "key": value for one case, or [values] for several. */
 static void jfield(FILE *f, const char *key, const btdf_sim_result *r, size_t off, int se)
 {
@@ -131,7 +125,7 @@ static void jfield(FILE *f, const char *key, const btdf_sim_result *r, size_t of
         const btdf_sim_est *e = (const btdf_sim_est *)((const char *)&r->tally[k] + off);
         if (k)
             fputs(", ", f);
-        jnum(f, se ? e->se : e->mean);
+        text_num(f, se ? e->se : e->mean);
     }
     fprintf(f, "%s,\n", r->count > 1 ? "]" : "");
 }
@@ -143,7 +137,7 @@ static void jorders(FILE *f, const btdf_sim_tally *t, int T, int se)
     for (int o = 0; o < BTDF_SIM_ORDERS; o++) {
         if (o)
             fputs(", ", f);
-        jnum(f, se ? e[o].se : e[o].mean);
+        text_num(f, se ? e[o].se : e[o].mean);
     }
     fputc(']', f);
 }
@@ -193,7 +187,7 @@ static void write_raw(FILE *f, const btdf_sim_opts *o, const btdf_sim_result *r)
     for (size_t i = 0; i < nb * 3; i++) {
         if (i)
             fputc(',', f);
-        jnum(f, r->raw_stats[i]);
+        text_num(f, r->raw_stats[i]);
     }
     fputs("]},\n", f);
 }
@@ -218,21 +212,21 @@ static const struct {
 static void jcmp(FILE *f, const btdf_sim_cmp *c)
 {
     fputs("{\"model\": ", f);
-    jnum(f, c->model_total);
+    text_num(f, c->model_total);
     fputs(", \"model_in_bins\": ", f);
-    jnum(f, c->model_in_bins);
+    text_num(f, c->model_in_bins);
     fputs(", \"e_T\": ", f);
-    jnum(f, c->e_T);
+    text_num(f, c->e_T);
     fputs(", \"e_T_floor\": ", f);
-    jnum(f, c->e_T_floor);
+    text_num(f, c->e_T_floor);
     fputs(", \"e_L1\": ", f);
-    jnum(f, c->e_L1);
+    text_num(f, c->e_L1);
     fputs(", \"e_L1_floor\": ", f);
-    jnum(f, c->e_L1_floor);
+    text_num(f, c->e_L1_floor);
     fputs(", \"e_L1_floor_sd\": ", f);
-    jnum(f, c->e_L1_floor_sd);
+    text_num(f, c->e_L1_floor_sd);
     fputs(", \"chi2\": ", f);
-    jnum(f, c->chi2);
+    text_num(f, c->chi2);
     fprintf(f, ", \"dof\": %d}", c->dof);
 }
 
@@ -247,13 +241,13 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
         return fail(1, "%s: out of memory for the report", path);
     run_json_open(f, prov);
     fprintf(f, "  \"smoothness\": ");
-    jnum(f, o->smoothness);
+    text_num(f, o->smoothness);
     fprintf(f, ",\n  \"cases\": [");
     for (size_t k = 0; k < r->count; k++) {
         fprintf(f, "%s{\"theta_i\": ", k ? ", " : "");
-        jnum(f, deg_given[k % o->n_theta]);
+        text_num(f, deg_given[k % o->n_theta]);
         fprintf(f, ", \"channel\": %d, \"ior\": ", r->tally[k].channel);
-        jnum(f, r->tally[k].ior);
+        text_num(f, r->tally[k].ior);
         fputc('}', f);
     }
     fprintf(f, "],\n");
@@ -278,13 +272,13 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
     for (size_t k = 0; k < r->count; k++) {
         if (k)
             fputs(", ", f);
-        jnum(f, eqT[k]);
+        text_num(f, eqT[k]);
     }
     fprintf(f, "%s, \"R\": %s", r->count > 1 ? "]" : "", r->count > 1 ? "[" : "");
     for (size_t k = 0; k < r->count; k++) {
         if (k)
             fputs(", ", f);
-        jnum(f, eqR[k]);
+        text_num(f, eqR[k]);
     }
     fprintf(f, "%s},\n", r->count > 1 ? "]" : "");
     if (o->profile || o->pane) {
@@ -306,24 +300,24 @@ static int write_report(const char *path, const char *prov, const btdf_sim_opts 
 surface:;
     const btdf_sim_surface *s = &r->surface;
     fprintf(f, "  \"surface\": {\"points_per_side\": %d, \"spacing\": ", s->n);
-    jnum(f, s->dx);
+    text_num(f, s->dx);
     fprintf(f, ", \"tile\": ");
-    jnum(f, s->tile);
+    text_num(f, s->tile);
     fprintf(f, ", \"realisations_measured\": %d, \"rms_height\": ", s->realisations);
-    jnum(f, s->rms_height);
+    text_num(f, s->rms_height);
     fprintf(f, ", \"rms_slope\": ");
-    jnum(f, s->rms_slope);
+    text_num(f, s->rms_slope);
     fprintf(f, ", \"rms_slope_target\": ");
-    jnum(f, (o->profile ? 1.4142135623730951 : 2.0) / o->smoothness);
+    text_num(f, (o->profile ? 1.4142135623730951 : 2.0) / o->smoothness);
     fprintf(f, ", \"corr_length\": ");
-    jnum(f, s->corr_length);
+    text_num(f, s->corr_length);
     fprintf(f, ", \"tile_bytes\": %zu},\n", s->tile_bytes);
     fprintf(f, "  \"rays\": %llu,\n  \"batches\": %llu,\n  \"lost\": %llu,\n  \"seed\": %llu,\n",
             (unsigned long long)o->rays, (unsigned long long)r->tally[0].batches,
             (unsigned long long)r->tally[0].lost, (unsigned long long)o->seed);
     write_raw(f, o, r);
     fprintf(f, "  \"seconds\": ");
-    jnum(f, r->seconds);
+    text_num(f, r->seconds);
     fprintf(f, "\n}\n");
     if (fclose(f) != 0) {
         free(buf);

@@ -13,6 +13,7 @@
 #include "btdf_pane.h"
 #include "cli.h"
 #include "pane_write.h"
+#include "textout.h"
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -156,13 +157,6 @@ static void grid_error(const btdf_pane *P, const pgrid *g, perr *e)
         e->l1_mean /= (double)count;
 }
 
-static void cnum(FILE *f, double x)
-{
-    char b[40];
-    btdf_format_double(isfinite(x) ? x : 0.0, b, sizeof b); /* never NaN in a file */
-    fputs(b, f);
-}
-
 static void describe(FILE *f, const btdf_pane_opts *o, const char *prov, const perr *e,
                      const pgrid *g)
 {
@@ -170,21 +164,21 @@ static void describe(FILE *f, const btdf_pane_opts *o, const char *prov, const p
             btdf_version_string(), o->front.channels);
     for (int c = 0; c < o->front.channels; c++) {
         fputc(c ? ',' : ' ', f);
-        cnum(f, o->front.ior[c]);
+        text_num(f, o->front.ior[c]);
     }
     fputs("\n# smoothness: ", f);
-    cnum(f, o->front.smoothness);
+    text_num(f, o->front.smoothness);
     fprintf(f, "\n# model: %s\n# k0: ", btdf_model_name(o->front.model));
-    cnum(f, o->front.k0);
+    text_num(f, o->front.k0);
     fputs("\n# back: ", f);
     if (o->back_smooth)
         fputs("smooth", f);
     else
-        cnum(f, o->back_smoothness);
+        text_num(f, o->back_smoothness);
     fputs("\n# thickness_mm: ", f);
-    cnum(f, o->thickness_mm);
+    text_num(f, o->thickness_mm);
     fputs("\n# absorption_per_mm: ", f);
-    cnum(f, o->absorption_per_mm);
+    text_num(f, o->absorption_per_mm);
     fputs("\n# units: f in 1/sr, no cosine factor, air to air (btdf_pane.h): light on the "
           "face `light` names, angles in degrees in that face's frame, theta_o in [90, 180] "
           "for transmission and [0, 90] for reflection, phi 180 forward; a row of part "
@@ -194,16 +188,7 @@ static void describe(FILE *f, const btdf_pane_opts *o, const char *prov, const p
                "[0, 90] from the face (to = 180 - t for transmission), [0, 180] degrees; "
                "trilinear in degrees between them\n",
             g->nti, g->nto, g->nphi);
-    if (prov) {
-        fputs("# provenance: ", f);
-        for (const unsigned char *c = (const unsigned char *)prov; *c; c++) {
-            if (*c < 0x20 || *c == 0x7f)
-                fprintf(f, "\\x%02x", *c); /* control bytes as C escapes */
-            else
-                fputc(*c, f);
-        }
-        fputc('\n', f);
-    }
+    text_provenance(f, prov);
     fprintf(f, "# error: e_L1 max %.4g mean %.4g (worst: light %s, %s, theta_i %.4g deg), "
                "max %.4g up to theta_i 80 deg; e_T max %.4g: the grid read trilinearly "
                "against the system, MODEL.md section 6 on channel 0, at the midpoints "
@@ -241,21 +226,21 @@ static int write_csv(const char *path, const btdf_pane_opts *o, const pgrid *g,
                 for (size_t m = 0; m < g->nphi; m++) {
                     double a = ti_deg(g, i), t = out_deg(b & 1, t_deg(g, j)), p = phi_deg(g, m);
                     fprintf(f, "%s,%s,", light_name[b >> 1], part_name[b & 1]);
-                    cnum(f, a);
+                    text_num(f, a);
                     fputc(',', f);
-                    cnum(f, t);
+                    text_num(f, t);
                     fputc(',', f);
-                    cnum(f, p);
+                    text_num(f, p);
                     for (size_t c = 0; c < g->nch; c++) {
                         fputc(',', f);
-                        cnum(f, g->v[at(g, b, c, i, j, m)]);
+                        text_num(f, g->v[at(g, b, c, i, j, m)]);
                     }
                     fputc(',', f);
-                    cnum(f, a * DEG);
+                    text_num(f, a * DEG);
                     fputc(',', f);
-                    cnum(f, t * DEG);
+                    text_num(f, t * DEG);
                     fputc(',', f);
-                    cnum(f, p * DEG);
+                    text_num(f, p * DEG);
                     fputc('\n', f);
                 }
         for (size_t i = 0; i < g->nti; i++) {
@@ -267,20 +252,20 @@ static int write_csv(const char *path, const btdf_pane_opts *o, const pgrid *g,
                 continue;
             double a = ti_deg(g, i), t = b & 1 ? a : 180.0 - a;
             fprintf(f, "%s,%s-delta,", light_name[b >> 1], part_name[b & 1]);
-            cnum(f, a);
+            text_num(f, a);
             fputc(',', f);
-            cnum(f, t);
+            text_num(f, t);
             fputs(",180", f);
             for (size_t c = 0; c < g->nch; c++) {
                 fputc(',', f);
-                cnum(f, sp[c * g->nti]);
+                text_num(f, sp[c * g->nti]);
             }
             fputc(',', f);
-            cnum(f, a * DEG);
+            text_num(f, a * DEG);
             fputc(',', f);
-            cnum(f, t * DEG);
+            text_num(f, t * DEG);
             fputc(',', f);
-            cnum(f, M_PI);
+            text_num(f, M_PI);
             fputc('\n', f);
         }
     }

@@ -16,6 +16,7 @@
 
 #include "cmd_simulate_pane.h"
 #include "simchart.h"
+#include "textout.h"
 
 static int fail(int code, const char *fmt, ...)
 {
@@ -35,13 +36,6 @@ static double cos_sr(int nt, int np, int it)
     if (profile_1d) /* integral of |cos to| d to over the bin, one side of the normal */
         return b - a;
     return 0.5 * (b * b - a * a) * 2.0 * (3.141592653589793 / np);
-}
-
-static void cnum(FILE *f, double x)
-{
-    char b[40];
-    btdf_format_double(isfinite(x) ? x : 0.0, b, sizeof b); /* never NaN in a file */
-    fputs(b, f);
 }
 
 /* The outgoing distribution as CSV (docs/simulation.md): the header row, the comment
@@ -65,10 +59,10 @@ int write_dist(const char *path, const char *prov, const btdf_sim_opts *o,
             btdf_version_string(), o->channels);
     for (int c = 0; c < o->channels; c++) {
         fputc(c ? ',' : ' ', f);
-        cnum(f, o->ior[c]);
+        text_num(f, o->ior[c]);
     }
     fputs("\n# smoothness: ", f);
-    cnum(f, o->smoothness);
+    text_num(f, o->smoothness);
     simpane_csv(f, o);
     if (profile_1d)
         fputs("\n# units: a 1D profile (rays in the plane of incidence): rho in 1/rad, no cosine "
@@ -88,16 +82,7 @@ int write_dist(const char *path, const char *prov, const btdf_sim_opts *o,
                "realisation each)\n",
             (unsigned long long)o->rays, (unsigned long long)o->seed,
             (unsigned long long)r->tally[0].batches);
-    if (prov) {
-        fputs("# provenance: ", f);
-        for (const unsigned char *c = (const unsigned char *)prov; *c; c++) {
-            if (*c < 0x20 || *c == 0x7f)
-                fprintf(f, "\\x%02x", *c); /* control bytes as C escapes */
-            else
-                fputc(*c, f);
-        }
-        fputc('\n', f);
-    }
+    text_provenance(f, prov);
     fprintf(f, "# rows: %llu\n", rows);
     double wt = 90.0 / nt, wp = 180.0 / np;
     for (size_t k = 0; k < r->count; k++) {
@@ -112,27 +97,27 @@ int write_dist(const char *path, const char *prov, const btdf_sim_opts *o,
                 for (int ip = 0; ip < np; ip++) {
                     size_t i = (size_t)it * (size_t)np + (size_t)ip;
                     double pc = (ip + 0.5) * wp;
-                    cnum(f, deg_given[k % o->n_theta]); /* the shortest decimals, as tables */
+                    text_num(f, deg_given[k % o->n_theta]); /* the shortest decimals, as tables */
                     fputc(',', f);
-                    cnum(f, to);
+                    text_num(f, to);
                     fputc(',', f);
-                    cnum(f, pc);
+                    text_num(f, pc);
                     fprintf(f, ",%d,%s,", t->channel, part ? "reflection" : "transmission");
-                    cnum(f, all[i].mean * inv);
+                    text_num(f, all[i].mean * inv);
                     fputc(',', f);
-                    cnum(f, all[i].se * inv);
+                    text_num(f, all[i].se * inv);
                     fputc(',', f);
-                    cnum(f, one[i].mean * inv);
+                    text_num(f, one[i].mean * inv);
                     fputc(',', f);
-                    cnum(f, one[i].se * inv);
+                    text_num(f, one[i].se * inv);
                     fputc(',', f);
-                    cnum(f, t->theta_i);
+                    text_num(f, t->theta_i);
                     fputc(',', f);
-                    cnum(f, to * DEG);
+                    text_num(f, to * DEG);
                     fputc(',', f);
-                    cnum(f, pc * DEG);
+                    text_num(f, pc * DEG);
                     fputc(',', f);
-                    cnum(f, cs);
+                    text_num(f, cs);
                     fputc('\n', f);
                 }
             }

@@ -31,6 +31,7 @@ import mitsuba as mi
 import numpy as np
 
 from .model import _gather, _jit, _not
+from .plugin import _f64, _parse_ior  # plugin.py imports this module only in register()
 
 _classes = {}
 
@@ -40,17 +41,6 @@ _classes = {}
 NI, NMU, NPH = 32, 64, 64
 NCELL = NMU * NPH
 EPS_COS = 0.1  # the share of cosine-distributed draws within a part
-
-
-def _f64(x):
-    return mi.Float64(x) if _jit() else float(x)
-
-
-def _parse_ior(text):
-    vals = [float(x) for x in str(text).replace(",", " ").split()]
-    if len(vals) not in (1, 3):
-        raise ValueError("btdftab_pane: ior '%s': give one index or three (R, G, B)" % text)
-    return vals
 
 
 def _frame(src, dst):
@@ -132,35 +122,38 @@ class PaneSeries:
               dr.select(past, 0.0, w[2]), dr.select(past, 1.0, w[3])]
         return k, w, wp, r
 
-    def eval(self, ch, blk, mui, muo, cph, active):
-        """max(0, the cosine sum) of channel ch, block blk (UInt32 per lane:
-        2 * back + reflection) at (mui, muo, cos phi); 0 where not active."""
+    def eval(self, channels, blk, mui, muo, cph, active):
+        """[max(0, the cosine sum)] of each channel of `channels`, block blk (UInt32 per
+        lane: 2 * back + reflection) at (mui, muo, cos phi); 0 where not active. The
+        stencils and the cosines are the same for every channel: made once."""
         n = self.n
         ki, wi0, wi1, ri = self._stencil(mui, active)
         ko, wo0, wo1, ro = self._stencil(muo, active)
         rr = ri * ro
         rm = mi.Float64(1.0)  # (ri ro)^m
-        base = mi.UInt32(ki * n + ko) + (ch * 4 + blk) * self.block
+        at = mi.UInt32(ki * n + ko)
+        bases = [at + (ch * 4 + blk) * self.block for ch in channels]
         c1 = cph
         cm_1 = c1
         cm = mi.Float64(1.0)
-        total = mi.Float64(0.0)
+        totals = [mi.Float64(0.0) for _ in channels]
         nn = n * n
         for m in range(self.M):
-            v = mi.Float64(0.0)
             wi, wo = (wi1, wo1) if m else (wi0, wo0)
-            for a in range(4):
-                row = base + (m * nn + a * n)
-                g = [dr.gather(mi.Float64, self.coef, row + b, active) for b in range(4)]
-                v = v + wi[a] * (wo[0] * g[0] + wo[1] * g[1] + wo[2] * g[2] + wo[3] * g[3])
-            if m:
-                v = v * rm
+            for c, base in enumerate(bases):
+                v = mi.Float64(0.0)
+                for a in range(4):
+                    row = base + (m * nn + a * n)
+                    g = [dr.gather(mi.Float64, self.coef, row + b, active) for b in range(4)]
+                    v = v + wi[a] * (wo[0] * g[0] + wo[1] * g[1] + wo[2] * g[2] + wo[3] * g[3])
+                if m:
+                    v = v * rm
+                totals[c] = totals[c] + v * cm
             rm = rm * rr
-            total = total + v * cm
             nx = c1 if m == 0 else 2.0 * c1 * cm - cm_1
             cm_1 = cm
             cm = nx
-        return dr.select(active & (total > 0.0), total, 0.0)
+        return [dr.select(active & (t > 0.0), t, 0.0) for t in totals]
 
 
 class PaneSampler:
@@ -256,7 +249,7 @@ def _make_class():
                 raise ValueError("btdftab_pane: part '%s': must be 'both', 'transmission' "
                                  "or 'reflection'" % part)
             self.part = part
-            self.ior = _parse_ior(props.get("ior", "1.5"))
+            self.ior = _parse_ior(props.get("ior", "1.5"), "btdftab_pane")
             self.s = float(props.get("smoothness", 3.0))
             back = props.get("back", "smooth")
             if isinstance(back, str) and back.strip() == "smooth":
@@ -323,8 +316,7 @@ def _make_class():
             if _jit():
                 blk = dr.select(front, 0, 2) + dr.select(through, 0, 1)
                 blk = mi.UInt32(blk)
-                return [self.series.eval(c, blk, mui, muo, cph, ok)
-                        for c in range(self.channels)]
+                return self.series.eval(range(self.channels), blk, mui, muo, cph, ok)
             if not ok:
                 return [0.0] * self.channels
             lib = btdftab.pane._lib()

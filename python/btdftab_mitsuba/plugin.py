@@ -82,10 +82,10 @@ def _flip(v):
     return mi.Vector3f(v.x, v.y, -v.z)
 
 
-def _parse_ior(text):
+def _parse_ior(text, who="btdftab"):
     vals = [float(x) for x in str(text).replace(",", " ").split()]
     if len(vals) not in (1, 3):
-        raise ValueError("btdftab: ior '%s': give one index or three (R, G, B)" % text)
+        raise ValueError("%s: ior '%s': give one index or three (R, G, B)" % (who, text))
     return vals
 
 
@@ -502,6 +502,6 @@ def register():
         _classes[v] = _make_class()
     cls = _classes[v]
     mi.register_bsdf("btdftab", lambda props: cls(props))
-    from . import pane  # the thin sheet, btdftab_pane (pane.py imports model.py alone)
+    from . import pane  # the thin sheet, btdftab_pane (imported here: it imports this module)
     pane.register()
     return cls
