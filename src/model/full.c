@@ -472,6 +472,57 @@ double full_ms(const btdf_full *f, int h, double ti_deg, double mu, double cphi)
     return v > 0.0 ? v : 0.0;
 }
 
+/* full_rho_row_deg's modes: a[m] = sin^m t sum_k q_km(mu) c_km(ti), so that the
+   multiply scattered part at azimuth phi is max(0, sum_m a[m] cos(m phi)). */
+static void full_ms_modes(const btdf_full *f, int h, double ti_deg, double mu, double *a)
+{
+    double w;
+    int k0 = full_locate(f, ti_deg, &w);
+    double st = sqrt(fmax(0.0, 1.0 - mu * mu)), sm = 1.0; /* as full_basis */
+    for (int m = 0; m < FULL_M; m++) {
+        double v = 0.0;
+        for (int k = 0; k < FULL_K; k++) {
+            double q = 0.0;
+            for (int j = FULL_K - 1; j >= 0; j--)
+                q = q * mu + f->poly[m][k][j];
+            v += q * ((1.0 - w) * f->coef[k0][h][k][m] + w * f->coef[k0 + 1][h][k][m]);
+        }
+        a[m] = v * sm;
+        sm *= st;
+    }
+}
+
+void full_rho_row_deg(const btdf_full *f, int h, double ti, double to, int np, double *out)
+{
+    double so, co;
+    model_sincos_deg(to, &so, &co);
+    (void)so;
+    int ok = h ? (ti >= 0.0 && ti < 90.0 && to >= 0.0 && to <= 90.0 && co != 0.0)
+               : (ti >= 0.0 && ti < 90.0 && to >= 90.0 && to <= 180.0 && co != 0.0);
+    double a[FULL_M];
+    if (ok)
+        full_ms_modes(f, h, ti, h ? co : -co, a);
+    for (int p = 0; p < np; p++) {
+        if (!ok) { /* grazing in or out: no flux crosses (MODEL.md 3.5) */
+            out[p] = 0.0;
+            continue;
+        }
+        double phd = np > 1 ? 180.0 * p / (np - 1) : 0.0, sp, cp, cm[FULL_M];
+        model_sincos_deg(phd, &sp, &cp);
+        (void)sp;
+        cm[0] = 1.0;
+        cm[1] = cp;
+        for (int m = 2; m < FULL_M; m++)
+            cm[m] = 2.0 * cp * cm[m - 1] - cm[m - 2]; /* Chebyshev: cos(m phi) */
+        double v = 0.0;
+        for (int m = 0; m < FULL_M; m++)
+            v += a[m] * cm[m];
+        double one = h ? btdf_rho_r_smith_deg(f->n, f->s, ti, to, ti == 0.0 ? 0.0 : phd)
+                       : btdf_rho_smith_deg(f->n, f->s, ti, to, ti == 0.0 ? 0.0 : phd);
+        out[p] = one + (v > 0.0 ? v : 0.0); /* a dip of the series below 0, as full_ms */
+    }
+}
+
 static int full_ok_t(double ti, double to, double phi)
 {
     return ti >= 0.0 && ti <= 90.0 && to >= 90.0 && to <= 180.0 && isfinite(phi);

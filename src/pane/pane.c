@@ -6,6 +6,7 @@
 
 #include "btdf.h"
 #include "core/core.h"
+#include "model/full.h"
 #include "pane/pane_impl.h"
 
 #define PI 3.14159265358979323846
@@ -117,14 +118,19 @@ static void sample_row(void *arg, size_t orow)
     if (!rho)
         return; /* the caller checks a canary */
     double *acc = rho + J->np;
+    const btdf_full *fu = btdf_model_ctx_params(c)->model == BTDF_MODEL_FULL
+                              ? btdf_model_ctx_full(c, J->ch) : NULL;
     const int M = J->m;
     for (int j = 0; j < J->ni; j++) {
         double tid = acos(J->mi[j]) * 180.0 / PI;
-        for (int p = 0; p < J->np; p++) {
-            double phd = 180.0 * p / (J->np - 1);
-            rho[p] = J->reflect ? btdf_model_ctx_rho_r_deg(c, J->ch, tid, tod, phd)
-                                : btdf_model_ctx_rho_deg(c, J->ch, tid, 180.0 - tod, phd);
-        }
+        if (fu) /* full: its multiply scattered modes once per pair */
+            full_rho_row_deg(fu, J->reflect, tid, J->reflect ? tod : 180.0 - tod, J->np, rho);
+        else
+            for (int p = 0; p < J->np; p++) {
+                double phd = 180.0 * p / (J->np - 1);
+                rho[p] = J->reflect ? btdf_model_ctx_rho_r_deg(c, J->ch, tid, tod, phd)
+                                    : btdf_model_ctx_rho_deg(c, J->ch, tid, 180.0 - tod, phd);
+            }
         double dphi = PI / (J->np - 1);
         /* the lit span [lo, hi] of the samples: the terms outside it are zeros, whose
            sums change no bit of the ones inside (at s = 10 a lobe spans some 6 % of the
