@@ -79,11 +79,59 @@ build_fails "$W/m/b4.ini" 2 "absorption: 'nan'" "absorption nan"
 printf '[p]\nior = 1.5\nsmoothness = 1\nthickness = 2\nxml = x.xml\n' > "$W/m/b5.ini"
 build_fails "$W/m/b5.ini" 2 "b5.ini:4: .*give back = smooth|S as well" "thickness without back"
 printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\nenter = x.csv\n' > "$W/m/b6.ini"
-build_fails "$W/m/b6.ini" 2 "written to xml only" "a pane with a table output"
+build_fails "$W/m/b6.ini" 2 "written to xml and grid only" "a pane with a table output"
 printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\ntolerance = 1e-3\nxml = x.xml\n' > "$W/m/b7.ini"
 build_fails "$W/m/b7.ini" 2 "do not apply to a pane" "a pane with a tolerance"
 printf '[p]\nior = 1.5,1.6,1.7\nsmoothness = 1\nback = smooth\nxml = x.xml\n' > "$W/m/b8.ini"
 build_fails "$W/m/b8.ini" 2 "one channel" "a pane with three channels"
+# a pane's grid from the manifest: the bytes of tabulate --back -o F.csv --grid (but the
+# provenance line), once per material, a stamp that knows the grid's size; three
+# channels are a grid's as they are tabulate's; the grid keys' refusals
+mkdir -p "$W/g"
+cat > "$W/g/grid.ini" <<'INI'
+[p]
+ior = 1.5
+smoothness = 1
+back = 2
+thickness = 2
+absorption = 0.1
+grid = out/p.csv out/p.exr
+grid_size = 10,10,7
+[c]
+ior = 1.5,1.52,1.54
+smoothness = 1
+back = smooth
+grid = out/c.csv
+INI
+"$B" build -q "$W/g/grid.ini" 2>"$W/err" || { no "build of a pane's grid"; cat "$W/err"; }
+"$B" tabulate -q --ior 1.5 -s 1 --back 2 --thickness 2 --absorption 0.1 --grid 10,10,7 \
+    -o "$W/c/p.csv" 2>/dev/null
+"$B" tabulate -q --ior 1.5,1.52,1.54 -s 1 --back smooth -o "$W/c/c.csv" 2>/dev/null
+gsame=1
+for f in p c; do
+    grep -v '^# .*btdftab' "$W/g/out/$f.csv" > "$W/m.txt"; grep -v '^# .*btdftab' "$W/c/$f.csv" > "$W/c.txt"
+    [ -s "$W/m.txt" ] && cmp -s "$W/m.txt" "$W/c.txt" || { gsame=0; diff "$W/m.txt" "$W/c.txt" | head -4; }
+done
+[ "$gsame" -eq 1 ] && [ -s "$W/g/out/p.exr" ] && grep -q 'material \[p\]' "$W/g/out/p.csv" && \
+    ok "manifest grid, grid_size: the bytes of tabulate --back --grid, one and three channels" || \
+    no "manifest grid differs from tabulate's"
+"$B" build "$W/g/grid.ini" 2>&1 | grep -c 'up to date' | grep -qx 3 && \
+    ok "a pane's grids up to date" || no "a pane's grids rebuilt without a change"
+sed -i 's/^grid_size = 10,10,7/grid_size = 10,10,9/' "$W/g/grid.ini"
+"$B" build --dry-run "$W/g/grid.ini" 2>&1 | grep 'p.csv' | grep -q 'up to date' && \
+    no "a changed grid_size left the grid up to date" || ok "a changed grid_size makes it stale"
+printf '[p]\nior = 1.5\nsmoothness = 1\ngrid = x.csv\n' > "$W/m/g1.ini"
+build_fails "$W/m/g1.ini" 2 "g1.ini:4: .*grid: the grid of a pane's system: give back" "grid without back"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\ngrid_size = 4,4,4\nxml = x.xml\n' > "$W/m/g2.ini"
+build_fails "$W/m/g2.ini" 2 "g2.ini:5: .*grid_size: sets the nodes of the grid outputs" "grid_size without grid"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\ngrid = x.png\n' > "$W/m/g3.ini"
+build_fails "$W/m/g3.ini" 2 "a pane's grid is .csv or .exr" "a pane's grid as .png"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\ngrid = x.csv\ngrid_size = 4,0,4\n' > "$W/m/g4.ini"
+build_fails "$W/m/g4.ini" 2 "grid_size '4,0,4'" "grid_size with a zero"
+printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\ngrid = x.csv\ngrid_size = 1000,1000,100\n' > "$W/m/g5.ini"
+build_fails "$W/m/g5.ini" 2 "g5.ini:6: .*400000000 values, more than 2" "grid_size too large"
+[ ! -e "$W/m/x.csv" ] && ok "refused grids leave no file" || no "a refused grid left a file"
+
 # the command line's messages are the same checks
 "$B" tabulate --ior 1.5 -s 1 --back 1e9 -o "$W/c/x.xml" 2>"$W/err"
 [ $? -eq 2 ] && grep -q -- "--back: 1e+09: give smooth" "$W/err" && [ ! -e "$W/c/x.xml" ] && \
@@ -159,7 +207,7 @@ done
 
 # the manual and the completion know the keys and options
 "$B" --man > "$W/man.1"
-for k in back thickness absorption; do
+for k in back thickness absorption grid grid_size; do
     grep -q "^\.B $k\$" "$W/man.1" || no "man page lacks manifest key $k"
 done
 grep -q '^\.B absorption$' "$W/man.1" && ok "the manual lists back, thickness, absorption"

@@ -79,11 +79,11 @@ const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
                            "as well"
                          : NULL;
     if (interface_outputs > 0)
-        return "back: a pane's system is written to xml only (enter, leave and bsdf take the "
-               "interface)";
+        return "back: a pane's system is written to xml and grid only (enter, leave and bsdf "
+               "take the interface)";
     if (table_keys)
         return "back: tolerance, theta_i, metric, part and sides do not apply to a pane's xml "
-               "(it holds the system, both parts, light from either side)";
+               "or grid (they hold the system, both parts, light from either side)";
     return channels != 1 ? "back: a pane's xml has one channel: give one ior" : NULL;
 }
 
@@ -122,6 +122,11 @@ static int make_pane(const btdf_params *p, const pane_spec *ps, int threads, btd
     if (st != BTDF_OK)
         return fail(1, "%s", msg[0] ? msg : btdf_strerror(st));
     return 0;
+}
+
+int pane_make(const btdf_params *p, const pane_spec *ps, int threads, btdf_pane **out)
+{
+    return make_pane(p, ps, threads, out);
 }
 
 /* The options of c as a pane_spec (--thickness defaults to 4 mm). */

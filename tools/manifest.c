@@ -13,6 +13,7 @@
 #include "numparse.h"
 
 #include <btdf/btdf.h>
+#include <btdf/btdf_pane.h>
 
 #include "manifest.h"
 #include "pane_write.h"
@@ -45,8 +46,11 @@
  *   xml = glazing.xml          ; a Radiance BSDF XML (both parts, light from either side)
  *   basis = tree3              ; its basis, as --basis: tree3 (the default), klems-full,
  *                              ; klems-half or klems-quarter
- *   back = smooth              ; a pane (xml only): its back face, smooth or S, as --back;
- *   thickness = 4              ; with thickness (mm) and absorption (per mm) as the options
+ *   back = smooth              ; a pane (xml and grid only): its back face, smooth or S,
+ *   thickness = 4              ; as --back; with thickness (mm) and absorption (per mm) as
+ *                              ; the options
+ *   grid = door.csv door.exr   ; a pane's system on a grid (tabulate --back -o F.csv|.exr)
+ *   grid_size = 46,46,37       ; optional, its nodes NI,NO,NPHI, as --grid
  *
  * Only the tables an output needs are built, once per material and side, and shared
  * by its outputs. An output is skipped when it exists and its stamp (a hidden file
@@ -61,7 +65,7 @@
 
 #define MAX_MATERIALS 64
 #define MAX_OUTPUTS 8
-#define NKEYS 17
+#define NKEYS 19
 
 typedef struct material {
     char name[64];
@@ -72,7 +76,9 @@ typedef struct material {
     btdf_part part; /* of the enter and leave tables */
     int has_ior, has_s;
     char *enter[MAX_OUTPUTS], *leave[MAX_OUTPUTS], *bsdf[MAX_OUTPUTS], *xml[MAX_OUTPUTS];
-    int nenter, nleave, nbsdf, nxml;
+    char *grid[MAX_OUTPUTS]; /* a pane's grids */
+    int nenter, nleave, nbsdf, nxml, ngrid;
+    size_t grid_n[3];     /* key grid_size: NI, NO, NPHI */
     btdf_rad_basis basis; /* of the .xml outputs */
     pane_spec pane;       /* keys back, thickness, absorption (key_line[K_BACK]: a pane) */
     int line;          /* of the [name] header */
@@ -83,11 +89,17 @@ typedef struct material {
 static const char *const KEYS[NKEYS] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
                                         "metric",  "sides",      "enter", "leave",   "bsdf",
                                         "part",    "model",      "xml",   "basis", "back",
-                                        "thickness", "absorption"};
+                                        "thickness", "absorption", "grid", "grid_size"};
 enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF, K_PART,
-       K_MODEL, K_XML, K_BASIS, K_BACK, K_THICK, K_ABS };
+       K_MODEL, K_XML, K_BASIS, K_BACK, K_THICK, K_ABS, K_GRID, K_GRID_SIZE };
 
-/* Output k of m in manifest order (enter, leave, bsdf, xml) and its key. */
+/* The number of outputs of m. */
+static int n_outputs(const material *m)
+{
+    return m->nenter + m->nleave + m->nbsdf + m->nxml + m->ngrid;
+}
+
+/* Output k of m in manifest order (enter, leave, bsdf, xml, grid) and its key. */
 static const char *output_at(const material *m, int k, int *key)
 {
     if (k < m->nenter)
@@ -98,7 +110,10 @@ static const char *output_at(const material *m, int k, int *key)
     k -= m->nleave;
     if (k < m->nbsdf)
         return *key = K_BSDF, m->bsdf[k];
-    return *key = K_XML, m->xml[k - m->nbsdf];
+    k -= m->nbsdf;
+    if (k < m->nxml)
+        return *key = K_XML, m->xml[k];
+    return *key = K_GRID, m->grid[k - m->nxml];
 }
 
 typedef struct manifest {
@@ -208,6 +223,9 @@ static int on_entry(void *user, const char *section, const char *key, const char
         m->part = BTDF_PART_TRANSMISSION;
         m->basis = BTDF_RAD_TREE3;
         pane_spec_default(&m->pane);
+        m->grid_n[0] = 46; /* 2, 2 and 5 degrees: tabulate --back's default grid */
+        m->grid_n[1] = 46;
+        m->grid_n[2] = 37;
         m->line = line;
         return 1;
     }
@@ -292,6 +310,18 @@ static int on_entry(void *user, const char *section, const char *key, const char
         for (int i = 0; i < m->nxml; i++)
             if (!ends_with(m->xml[i], ".xml"))
                 return set_why(mf, "output '%.200s': must end in .xml%s", m->xml[i], "");
+    } else if (ki == K_GRID) {
+        if (!split_outputs(mf, key, value, m->grid, &m->ngrid))
+            return 0;
+        for (int i = 0; i < m->ngrid; i++)
+            if (!ends_with(m->grid[i], ".csv") && !ends_with(m->grid[i], ".exr"))
+                return set_why(mf, "output '%.200s': a pane's grid is .csv or .exr%s",
+                               m->grid[i], "");
+    } else if (ki == K_GRID_SIZE) {
+        /* a grid needs two nodes on every axis (pane_write_table) */
+        const char *r = num_size_list(value, 2, 100000, m->grid_n, 3);
+        if (r)
+            return set_why(mf, "grid_size '%.100s': %.200s (NI,NO,NPHI, as --grid)", value, r);
     } else if (ki >= K_BACK) {
         return pane_spec_set(&m->pane, key, value, mf->why, sizeof mf->why);
     } else if (ki == K_BASIS) {
@@ -307,7 +337,8 @@ static void free_manifest(manifest *mf)
     for (int i = 0; i < mf->n; i++) {
         material *m = &mf->m[i]; /* the lists are NULL past their count (memset) */
         for (int k = 0; k < MAX_OUTPUTS; k++)
-            free(m->enter[k]), free(m->leave[k]), free(m->bsdf[k]), free(m->xml[k]);
+            free(m->enter[k]), free(m->leave[k]), free(m->bsdf[k]), free(m->xml[k]),
+                free(m->grid[k]);
     }
 }
 
@@ -553,6 +584,60 @@ static int manifest_xml(const manifest_opts *mo, const material *mat, int *done,
     return 0;
 }
 
+/* The grid outputs of a pane's section: the system is built once, when some grid is
+   stale, and written to each (tabulate --back -o F.csv|.exr --grid NI,NO,NPHI). */
+static int manifest_grid(const manifest_opts *mo, const material *mat, int *done, int total,
+                         int *job)
+{
+    material m; /* the stamp's: only what the file depends on */
+    memset(&m, 0, sizeof m);
+    char stamp[4096], what[96], prov[256];
+    snprintf(what, sizeof what, "grid %zu %zu %zu", mat->grid_n[0], mat->grid_n[1],
+             mat->grid_n[2]);
+    stamp_text(stamp, sizeof stamp, &m, &mat->p, what);
+    int used = (int)strlen(stamp);
+    snprintf(stamp + used, sizeof stamp - (size_t)used, "pane %d %.17g %.17g %.17g\n",
+             mat->pane.back_smooth, mat->pane.back_s, mat->pane.thickness,
+             mat->pane.absorption);
+    snprintf(prov, sizeof prov, "btdftab build, material [%s]", mat->name);
+    struct btdf_pane *P = NULL;
+    int code = 0;
+    for (int k = 0; k < mat->ngrid && code == 0; k++) {
+        const char *out = mat->grid[k];
+        (*done)++;
+        if (!mine(mo, (*job)++))
+            continue;
+        if (mo->dry_run) {
+            plan(mat->name, out, why_stale(out, stamp, mo->force));
+            continue;
+        }
+        if (!mo->force && up_to_date(out, stamp)) {
+            if (!mo->quiet)
+                fprintf(stderr, "%s: %s: up to date\n", mo->prog, out);
+            continue;
+        }
+        if (!make_parents(out)) {
+            fprintf(stderr, "%s: %s: cannot create its folder: %s\n", mo->prog, out,
+                    strerror(errno));
+            code = 1;
+            break;
+        }
+        if (!mo->quiet)
+            fprintf(stderr, "%s: [%d/%d] %s\n", mo->prog, *done, total, out);
+        if (!P && (code = pane_make(&mat->p, &mat->pane, mo->threads, &P)) != 0)
+            break;
+        code = pane_write_table(out, P, mat->grid_n[0], mat->grid_n[1], mat->grid_n[2],
+                                mo->quiet, prov);
+        char why[512] = "";
+        if (code == 0 && !write_stamp_for(out, stamp, why, sizeof why)) {
+            fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, out, why);
+            code = 1;
+        }
+    }
+    btdf_pane_free(P);
+    return code;
+}
+
 /* A .bsdf's blocks and tolerance from the keys as tabulate takes them from its options
    (run.h): part and tolerance apply when given; without part, the file holds both
    parts, as tabulate -o F.bsdf without --part. */
@@ -613,7 +698,7 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
                    : !strncmp(msg, "side", 4)    ? line_of(m, K_SIDES)
                                                  : m->line;
         }
-        for (int k = 0; k < m->nenter + m->nleave + m->nbsdf + m->nxml; k++) {
+        for (int k = 0; k < n_outputs(m); k++) {
             int key;
             const char *out = output_at(m, k, &key);
             /* a missing folder is created at build time: what is above it must allow it */
@@ -643,7 +728,7 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
             /* every earlier output, of this material and the ones before */
             for (int j = 0; j <= i; j++) {
                 const material *q = &mf->m[j];
-                int nq = j < i ? q->nenter + q->nleave + q->nbsdf + q->nxml : k;
+                int nq = j < i ? n_outputs(q) : k;
                 for (int r = 0; r < nq; r++) {
                     int qk;
                     const char *o2 = output_at(q, r, &qk);
@@ -716,8 +801,10 @@ int manifest_run(const manifest_opts *mo)
             free(mf);
             return 2;
         }
-        for (int k = 0; k < m->nenter + m->nleave; k++) {
-            const char *o = k < m->nenter ? m->enter[k] : m->leave[k - m->nenter];
+        for (int k = 0; k < m->nenter + m->nleave + m->ngrid; k++) {
+            const char *o = k < m->nenter             ? m->enter[k]
+                            : k < m->nenter + m->nleave ? m->leave[k - m->nenter]
+                                                        : m->grid[k - m->nenter - m->nleave];
             btdf_format_info fi;
             if (btdf_format_find(o, &fi) && !fi.available) {
                 fprintf(stderr, "%s: %s: material [%s]: %s: %s support was switched off at "
@@ -728,12 +815,41 @@ int manifest_run(const manifest_opts *mo)
                 return 1;
             }
         }
+        if ((m->ngrid || m->key_line[K_GRID_SIZE]) && !m->key_line[K_BACK]) {
+            int gl = m->ngrid ? m->key_line[K_GRID] : m->key_line[K_GRID_SIZE];
+            fprintf(stderr, "%s: %s:%d: material [%s]: %s: the grid of a pane's system: give "
+                            "back = smooth|S as well (enter and leave take the interface's "
+                            "tables)\n", mo->prog, mo->path, gl, m->name,
+                    m->ngrid ? "grid" : "grid_size");
+            free_manifest(mf);
+            free(mf);
+            return 2;
+        }
+        double nv = 4.0 * m->p.channels * (double)m->grid_n[0] * (double)m->grid_n[1] *
+                    (double)m->grid_n[2];
+        if (m->ngrid && nv > (double)((size_t)1 << 28)) { /* pane_write_table's limit */
+            fprintf(stderr, "%s: %s:%d: material [%s]: grid_size %zu,%zu,%zu: %.0f values, more "
+                            "than 2^28\n", mo->prog, mo->path, line_of(m, K_GRID_SIZE), m->name,
+                    m->grid_n[0], m->grid_n[1], m->grid_n[2], nv);
+            free_manifest(mf);
+            free(mf);
+            return 2;
+        }
+        if (m->key_line[K_GRID_SIZE] && !m->ngrid) {
+            fprintf(stderr, "%s: %s:%d: material [%s]: grid_size: sets the nodes of the grid "
+                            "outputs, and the section has none (give grid = F.csv|F.exr)\n",
+                    mo->prog, mo->path, m->key_line[K_GRID_SIZE], m->name);
+            free_manifest(mf);
+            free(mf);
+            return 2;
+        }
+        /* three channels: a pane's grid holds them, its .xml does not */
         const char *pw = pane_keys_refusal(
             m->key_line[K_BACK] != 0, m->key_line[K_THICK] || m->key_line[K_ABS],
             m->nenter + m->nleave + m->nbsdf,
             m->key_line[K_TOL] || m->key_line[K_THETA] || m->key_line[K_METRIC] ||
                 m->key_line[K_PART] || m->key_line[K_SIDES],
-            m->p.channels);
+            m->nxml ? m->p.channels : 1);
         if (pw) {
             fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path,
                     m->key_line[K_BACK] ? m->key_line[K_BACK]
@@ -753,7 +869,7 @@ int manifest_run(const manifest_opts *mo)
             free(mf);
             return 2;
         }
-        total += m->nenter + m->nleave + m->nbsdf + m->nxml;
+        total += n_outputs(m);
     }
     if (mf->n == 0) {
         fprintf(stderr, "%s: %s: no [material] sections\n", mo->prog, mo->path);
@@ -788,6 +904,8 @@ int manifest_run(const manifest_opts *mo)
                                  m->bsdf, m->nbsdf, &done, total, &job);
         if (code == 0 && m->nxml)
             code = manifest_xml(mo, m, &done, total, &job);
+        if (code == 0 && m->ngrid)
+            code = manifest_grid(mo, m, &done, total, &job);
     }
     free_manifest(mf);
     free(mf);

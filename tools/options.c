@@ -644,7 +644,7 @@ void opt_man(FILE *f, const char *version)
         {"tolerance", "optional, as \\fB\\-\\-tolerance\\fR"},
         {"metric", "optional, l1 or max"},
         {"part", "optional, transmission, reflection or both, as \\fB\\-\\-part\\fR"},
-        {"model", "optional, xu-sun (default) or smith, as \\fB\\-\\-model\\fR"},
+        {"model", "optional, xu-sun (default), smith or full, as \\fB\\-\\-model\\fR"},
         {"enter", "outputs for light entering (index n): .csv .exr .png"},
         {"leave", "outputs for light leaving (index 1/n)"},
         {"bsdf", "a .bsdf output, as \\fBtabulate \\-o F.bsdf\\fR"},
@@ -652,11 +652,15 @@ void opt_man(FILE *f, const char *version)
         {"xml", "a Radiance BSDF XML output, as \\fBtabulate \\-o F.xml\\fR"},
         {"basis", "the .xml's basis, as \\fB\\-\\-basis\\fR: tree3 (default), klems-full, "
                   "klems-half or klems-quarter"},
-        {"back", "a pane (its system, to the xml outputs only): the back face, smooth or a "
-                 "smoothness, as \\fB\\-\\-back\\fR"},
+        {"back", "a pane (its system, to the xml and grid outputs only): the back face, "
+                 "smooth or a smoothness, as \\fB\\-\\-back\\fR"},
         {"thickness", "the pane's thickness in mm (default 4), as \\fB\\-\\-thickness\\fR"},
         {"absorption", "the pane's absorption per mm (default 0), as "
-                       "\\fB\\-\\-absorption\\fR"}};
+                       "\\fB\\-\\-absorption\\fR"},
+        {"grid", "a pane's system on a grid, .csv or .exr, as \\fBtabulate \\-\\-back \\-o "
+                 "F.csv\\fR"},
+        {"grid_size", "optional, the grid's nodes NI,NO,NPHI (default 46,46,37), as "
+                      "\\fB\\-\\-grid\\fR"}};
     fprintf(f, ".SH MANIFEST\nA scene manifest (\\fBbtdftab build\\fR) is an INI file, one "
                "[section] per material, with the keys:\n");
     for (size_t k = 0; k < sizeof mkeys / sizeof mkeys[0]; k++)

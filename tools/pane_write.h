@@ -34,11 +34,15 @@ const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
 int pane_write_xml(const char *path, const btdf_params *p, const pane_spec *ps,
                    btdf_rad_basis basis, int threads, int quiet, const char *prov);
 
+/* The pane whose front face is p and the rest ps, on threads threads; 0, or the exit
+   code after a message on stderr. */
+struct btdf_pane;
+int pane_make(const btdf_params *p, const pane_spec *ps, int threads, struct btdf_pane **out);
+
 /* Writes the system of pane P on a regular grid of nti x nto x nphi nodes a block to
    path, .csv (every block, the sides and parts named in each row) or .exr (grid tables,
    the other blocks as layers), with the grid's error (tools/pane_table.c); 0, or the
    exit code after a message on stderr. */
-struct btdf_pane;
 int pane_write_table(const char *path, const struct btdf_pane *P, size_t nti, size_t nto,
                      size_t nphi, int quiet, const char *prov);
 
