@@ -59,8 +59,9 @@
  * Output paths that are not absolute are relative to the manifest's folder, so a
  * manifest gives the same files from any working directory; missing folders are
  * created. The work comes in jobs, in manifest order: per material, its enter
- * tables, its leave tables, then each .bsdf, then each .xml. --shard K/N does jobs K-1, K-1+N, ...:
- * every output belongs to exactly one job, so N shards write disjoint files.
+ * tables, its leave tables, then each .bsdf, each .xml, each grid. --shard K/N does
+ * jobs K-1, K-1+N, ...: every output belongs to exactly one job, so N shards write
+ * disjoint files.
  */
 
 #define MAX_MATERIALS 64
