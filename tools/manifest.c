@@ -64,284 +64,7 @@
  * disjoint files.
  */
 
-#define MAX_MATERIALS 64
-#define MAX_OUTPUTS 8
-#define NKEYS 19
-
-typedef struct material {
-    char name[64];
-    btdf_params p;
-    double ti0, ti1, tol;
-    btdf_metric metric;
-    int sides; /* btdf_side */
-    btdf_part part; /* of the enter and leave tables */
-    int has_ior, has_s;
-    char *enter[MAX_OUTPUTS], *leave[MAX_OUTPUTS], *bsdf[MAX_OUTPUTS], *xml[MAX_OUTPUTS];
-    char *grid[MAX_OUTPUTS]; /* a pane's grids */
-    int nenter, nleave, nbsdf, nxml, ngrid;
-    size_t grid_n[3];     /* key grid_size: NI, NO, NPHI */
-    btdf_rad_basis basis; /* of the .xml outputs */
-    pane_spec pane;       /* keys back, thickness, absorption (key_line[K_BACK]: a pane) */
-    int line;          /* of the [name] header */
-    int key_line[NKEYS];  /* of each key (KEYS order), 0 if not given */
-} material;
-
-/* The keys of a section, in the order of material.key_line. */
-static const char *const KEYS[NKEYS] = {"ior",     "smoothness", "k0",    "theta_i", "tolerance",
-                                        "metric",  "sides",      "enter", "leave",   "bsdf",
-                                        "part",    "model",      "xml",   "basis", "back",
-                                        "thickness", "absorption", "grid", "grid_size"};
-enum { K_IOR, K_S, K_K0, K_THETA, K_TOL, K_METRIC, K_SIDES, K_ENTER, K_LEAVE, K_BSDF, K_PART,
-       K_MODEL, K_XML, K_BASIS, K_BACK, K_THICK, K_ABS, K_GRID, K_GRID_SIZE };
-
-/* The number of outputs of m. */
-static int n_outputs(const material *m)
-{
-    return m->nenter + m->nleave + m->nbsdf + m->nxml + m->ngrid;
-}
-
-/* Output k of m in manifest order (enter, leave, bsdf, xml, grid) and its key. */
-static const char *output_at(const material *m, int k, int *key)
-{
-    if (k < m->nenter)
-        return *key = K_ENTER, m->enter[k];
-    k -= m->nenter;
-    if (k < m->nleave)
-        return *key = K_LEAVE, m->leave[k];
-    k -= m->nleave;
-    if (k < m->nbsdf)
-        return *key = K_BSDF, m->bsdf[k];
-    k -= m->nbsdf;
-    if (k < m->nxml)
-        return *key = K_XML, m->xml[k];
-    return *key = K_GRID, m->grid[k - m->nxml];
-}
-
-typedef struct manifest {
-    material m[MAX_MATERIALS];
-    int n;
-    char why[512]; /* reason for the first error */
-    int why_line;  /* its line when not the line being read */
-    char dir[4096]; /* the manifest's folder with a final '/', or "" for the current one */
-} manifest;
-
-static int set_why(manifest *mf, const char *fmt, const char *a, const char *b)
-{
-    if (!mf->why[0])
-        snprintf(mf->why, sizeof mf->why, fmt, a, b);
-    return 0; /* the reader: an error at this line */
-}
-
-/* A number by the tool's one rule (numparse.h), or an error naming key and value. */
-static int num(manifest *mf, const char *key, const char *s, double *out)
-{
-    const char *r = num_double(s, out);
-    if (!r)
-        return 1;
-    snprintf(mf->why, sizeof mf->why, "%s '%.200s' %s", key, s, r);
-    return 0;
-}
-
-static int split_outputs(manifest *mf, const char *key, const char *value, char **list, int *n)
-{
-    char *buf = malloc(strlen(value) + 1);
-    if (!buf)
-        return set_why(mf, "out of memory%s%s", "", "");
-    strcpy(buf, value);
-    int ok = 1;
-    for (char *tok = strtok(buf, " \t,"); tok && ok; tok = strtok(NULL, " \t,")) {
-        if (*n == MAX_OUTPUTS) {
-            ok = set_why(mf, "'%s': at most 8 outputs%s", key, "");
-            break;
-        }
-        const char *dir = tok[0] == '/' ? "" : mf->dir; /* relative to the manifest */
-        list[*n] = malloc(strlen(dir) + strlen(tok) + 1);
-        if (!list[*n]) {
-            ok = set_why(mf, "out of memory%s%s", "", "");
-            break;
-        }
-        strcpy(list[*n], dir);
-        strcat(list[(*n)++], tok);
-    }
-    free(buf);
-    if (ok && *n == 0)
-        return set_why(mf, "'%s' names no file%s", key, "");
-    return ok;
-}
-
-static int ends_with(const char *s, const char *x)
-{
-    size_t ls = strlen(s), lx = strlen(x);
-    if (ls < lx)
-        return 0;
-    for (size_t i = 0; i < lx; i++) /* extensions in any case, as the formats' registry */
-        if (tolower((unsigned char)s[ls - lx + i]) != tolower((unsigned char)x[i]))
-            return 0;
-    return 1;
-}
-
-/* A section that sets nothing is a mistake (a misspelt name, a lost block). */
-static int check_not_empty(manifest *mf)
-{
-    if (mf->n == 0)
-        return 1;
-    material *m = &mf->m[mf->n - 1];
-    for (int k = 0; k < NKEYS; k++)
-        if (m->key_line[k])
-            return 1;
-    snprintf(mf->why, sizeof mf->why, "material [%s] is empty (no keys)", m->name);
-    mf->why_line = m->line;
-    return 0;
-}
-
-static int on_entry(void *user, const char *section, const char *key, const char *value,
-                    int line)
-{
-    manifest *mf = user;
-    if (!key) { /* a section header */
-        if (!check_not_empty(mf))
-            return 0;
-        for (int i = 0; i < mf->n; i++)
-            if (!strcmp(mf->m[i].name, section)) {
-                snprintf(mf->why, sizeof mf->why, "material [%.100s] appears twice (first at "
-                         "line %d)", section, mf->m[i].line);
-                return 0;
-            }
-        if (mf->n == MAX_MATERIALS)
-            return set_why(mf, "more than 64 materials%s%s", "", "");
-        material *m = &mf->m[mf->n];
-        if (strlen(section) >= sizeof m->name)
-            return set_why(mf, "material name '%.100s' is longer than 63 bytes%s", section, "");
-        mf->n++;
-        memset(m, 0, sizeof *m);
-        snprintf(m->name, sizeof m->name, "%s", section);
-        btdf_params_default(&m->p);
-        m->ti0 = 0.0;
-        m->ti1 = 90.0;
-        m->tol = 1e-3;
-        m->metric = BTDF_METRIC_L1;
-        m->sides = BTDF_SIDE_BOTH;
-        m->part = BTDF_PART_TRANSMISSION;
-        m->basis = BTDF_RAD_TREE3;
-        pane_spec_default(&m->pane);
-        m->grid_n[0] = 46; /* 2, 2 and 5 degrees: tabulate --back's default grid */
-        m->grid_n[1] = 46;
-        m->grid_n[2] = 37;
-        m->line = line;
-        return 1;
-    }
-    if (!section[0] || mf->n == 0)
-        return set_why(mf, "'%.100s' before any [material] section%s", key, "");
-    material *m = &mf->m[mf->n - 1];
-    int ki = -1;
-    for (int k = 0; k < NKEYS; k++)
-        if (!strcmp(key, KEYS[k]))
-            ki = k;
-    if (ki < 0)
-        return set_why(mf, "unknown key '%.100s' (known: ior, smoothness, k0, model, theta_i, "
-                           "tolerance, metric, part, sides, enter, leave, bsdf, xml, basis, back, "
-                           "thickness, absorption)%s", key, "");
-    if (m->key_line[ki]) {
-        snprintf(mf->why, sizeof mf->why, "'%s' given twice in [%s] (first at line %d)", key,
-                 m->name, m->key_line[ki]);
-        return 0;
-    }
-    m->key_line[ki] = line;
-    if (ki == K_IOR) {
-        int k = 0;
-        const char *r = num_double_list_blanks(value, m->p.ior, 1, 3, &k);
-        if (r || k == 2) {
-            snprintf(mf->why, sizeof mf->why, "ior '%.200s': %s", value,
-                     r ? r : "expected one number or three (R,G,B)");
-            return 0;
-        }
-        m->p.channels = k;
-        m->has_ior = 1;
-    } else if (ki == K_S) {
-        if (!num(mf, key, value, &m->p.smoothness))
-            return 0;
-        m->has_s = 1;
-    } else if (ki == K_K0) {
-        if (!num(mf, key, value, &m->p.k0))
-            return 0;
-    } else if (ki == K_MODEL) {
-        if (!btdf_model_parse(value, &m->p.model))
-            return set_why(mf, "model '%.100s': must be xu-sun, smith or full%s", value, "");
-    } else if (ki == K_TOL) {
-        if (!num(mf, key, value, &m->tol))
-            return 0;
-    } else if (ki == K_METRIC) {
-        if (!run_parse_metric(value, &m->metric))
-            return set_why(mf, "metric '%.100s': must be l1 or max%s", value, "");
-    } else if (ki == K_THETA) {
-        const char *colon = strchr(value, ':');
-        if (!colon || colon - value >= 64)
-            return set_why(mf, "theta_i '%.100s': expected A:B in degrees%s", value, "");
-        char a[64];
-        snprintf(a, sizeof a, "%.*s", (int)(colon - value), value);
-        if (!num(mf, "theta_i", a, &m->ti0) || !num(mf, "theta_i", colon + 1, &m->ti1))
-            return 0;
-        if (!(m->ti0 >= 0 && m->ti0 <= m->ti1 && m->ti1 <= 90))
-            return set_why(mf, "theta_i '%.100s': need 0 <= A <= B <= 90 degrees%s", value, "");
-    } else if (ki == K_PART) {
-        if (!btdf_part_parse(value, &m->part))
-            return set_why(mf, "part '%.100s': must be transmission, reflection or both%s", value,
-                           "");
-    } else if (ki == K_SIDES) {
-        if (!(m->sides = run_parse_side(value)))
-            return set_why(mf, "sides '%.100s': must be enter, leave or both%s", value, "");
-    } else if (ki == K_ENTER || ki == K_LEAVE) {
-        char **list = ki == K_ENTER ? m->enter : m->leave;
-        int *n = ki == K_ENTER ? &m->nenter : &m->nleave;
-        if (!split_outputs(mf, key, value, list, n))
-            return 0;
-        for (int i = 0; i < *n; i++)
-            if (!ends_with(list[i], ".csv") && !ends_with(list[i], ".exr") &&
-                !ends_with(list[i], ".png"))
-                return set_why(mf, "output '%.200s': tables are .csv, .exr or .png%s", list[i], "");
-    } else if (ki == K_BSDF) {
-        if (!split_outputs(mf, key, value, m->bsdf, &m->nbsdf))
-            return 0;
-        for (int i = 0; i < m->nbsdf; i++)
-            if (!ends_with(m->bsdf[i], ".bsdf"))
-                return set_why(mf, "output '%.200s': must end in .bsdf%s", m->bsdf[i], "");
-    } else if (ki == K_XML) {
-        if (!split_outputs(mf, key, value, m->xml, &m->nxml))
-            return 0;
-        for (int i = 0; i < m->nxml; i++)
-            if (!ends_with(m->xml[i], ".xml"))
-                return set_why(mf, "output '%.200s': must end in .xml%s", m->xml[i], "");
-    } else if (ki == K_GRID) {
-        if (!split_outputs(mf, key, value, m->grid, &m->ngrid))
-            return 0;
-        for (int i = 0; i < m->ngrid; i++)
-            if (!ends_with(m->grid[i], ".csv") && !ends_with(m->grid[i], ".exr"))
-                return set_why(mf, "output '%.200s': a pane's grid is .csv or .exr%s",
-                               m->grid[i], "");
-    } else if (ki == K_GRID_SIZE) {
-        /* a grid needs two nodes on every axis (pane_write_table) */
-        const char *r = num_size_list(value, 2, 100000, m->grid_n, 3);
-        if (r)
-            return set_why(mf, "grid_size '%.100s': %.200s (NI,NO,NPHI, as --grid)", value, r);
-    } else if (ki >= K_BACK) {
-        return pane_spec_set(&m->pane, key, value, mf->why, sizeof mf->why);
-    } else if (ki == K_BASIS) {
-        if (!btdf_rad_basis_parse(value, &m->basis))
-            return set_why(mf, "basis '%.100s': must be tree3, klems-full, klems-half or "
-                               "klems-quarter%s", value, "");
-    }
-    return 1;
-}
-
-static void free_manifest(manifest *mf)
-{
-    for (int i = 0; i < mf->n; i++) {
-        material *m = &mf->m[i]; /* the lists are NULL past their count (memset) */
-        for (int k = 0; k < MAX_OUTPUTS; k++)
-            free(m->enter[k]), free(m->leave[k]), free(m->bsdf[k]), free(m->xml[k]),
-                free(m->grid[k]);
-    }
-}
+#include "manifest_impl.h"
 
 /* The stamp of an output: what it was made from. Same text = up to date. */
 static void stamp_text(char *buf, size_t len, const material *m, const btdf_params *p,
@@ -745,6 +468,49 @@ static int validate(const manifest_opts *mo, const manifest *mf, char *why, size
     return 0;
 }
 
+/* The keys of a pane's section as tabulate --back refuses the options (pane_keys_refusal)
+   and the grid keys' own checks: 0, or 2 after a message naming the key and its line. */
+static int pane_section_refusal(const manifest_opts *mo, const material *m)
+{
+    if ((m->ngrid || m->key_line[K_GRID_SIZE]) && !m->key_line[K_BACK]) {
+        int gl = m->ngrid ? m->key_line[K_GRID] : m->key_line[K_GRID_SIZE];
+        fprintf(stderr, "%s: %s:%d: material [%s]: %s: the grid of a pane's system: give "
+                        "back = smooth|S as well (enter and leave take the interface's "
+                        "tables)\n", mo->prog, mo->path, gl, m->name,
+                m->ngrid ? "grid" : "grid_size");
+        return 2;
+    }
+    double nv = 4.0 * m->p.channels * (double)m->grid_n[0] * (double)m->grid_n[1] *
+                (double)m->grid_n[2];
+    if (m->ngrid && nv > (double)((size_t)1 << 28)) { /* pane_write_table's limit */
+        fprintf(stderr, "%s: %s:%d: material [%s]: grid_size %zu,%zu,%zu: %.0f values, more "
+                        "than 2^28\n", mo->prog, mo->path, line_of(m, K_GRID_SIZE), m->name,
+                m->grid_n[0], m->grid_n[1], m->grid_n[2], nv);
+        return 2;
+    }
+    if (m->key_line[K_GRID_SIZE] && !m->ngrid) {
+        fprintf(stderr, "%s: %s:%d: material [%s]: grid_size: sets the nodes of the grid "
+                        "outputs, and the section has none (give grid = F.csv|F.exr)\n",
+                mo->prog, mo->path, m->key_line[K_GRID_SIZE], m->name);
+        return 2;
+    }
+    /* three channels: a pane's grid holds them, its .xml does not */
+    const char *pw = pane_keys_refusal(
+        m->key_line[K_BACK] != 0, m->key_line[K_THICK] || m->key_line[K_ABS],
+        m->nenter + m->nleave + m->nbsdf,
+        m->key_line[K_TOL] || m->key_line[K_THETA] || m->key_line[K_METRIC] ||
+            m->key_line[K_PART] || m->key_line[K_SIDES],
+        m->nxml ? m->p.channels : 1);
+    if (pw) {
+        fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path,
+                m->key_line[K_BACK] ? m->key_line[K_BACK]
+                : m->key_line[K_THICK] ? m->key_line[K_THICK] : m->key_line[K_ABS],
+                m->name, pw);
+        return 2;
+    }
+    return 0;
+}
+
 int manifest_run(const manifest_opts *mo)
 {
     manifest *mf = calloc(1, sizeof *mf);
@@ -754,11 +520,11 @@ int manifest_run(const manifest_opts *mo)
     const char *slash = strrchr(mo->path, '/');
     if (slash) /* outputs are relative to the manifest's folder */
         snprintf(mf->dir, sizeof mf->dir, "%.*s/", (int)(slash - mo->path), mo->path);
-    int line = ini_read(mo->path, on_entry, mf, rwhy, sizeof rwhy);
-    if (line == 0 && !check_not_empty(mf))
+    int line = ini_read(mo->path, manifest_on_entry, mf, rwhy, sizeof rwhy);
+    if (line == 0 && !manifest_check_not_empty(mf))
         line = mf->why_line;
     if (line < 0) {
-        free_manifest(mf);
+        manifest_free(mf);
         free(mf);
         fprintf(stderr, "%s: %s: %s\n", mo->prog, mo->path, rwhy);
         return 1;
@@ -766,7 +532,7 @@ int manifest_run(const manifest_opts *mo)
     if (line > 0) {
         fprintf(stderr, "%s: %s:%d: %s\n", mo->prog, mo->path, mf->why_line ? mf->why_line : line,
                 mf->why[0] ? mf->why : rwhy);
-        free_manifest(mf);
+        manifest_free(mf);
         free(mf);
         return 2;
     }
@@ -779,7 +545,7 @@ int manifest_run(const manifest_opts *mo)
         if (miss) {
             fprintf(stderr, "%s: %s:%d: material [%s]: missing '%s'\n", mo->prog, mo->path,
                     m->line, m->name, miss);
-            free_manifest(mf);
+            manifest_free(mf);
             free(mf);
             return 2;
         }
@@ -789,7 +555,7 @@ int manifest_run(const manifest_opts *mo)
         if (btdf_params_check(&single, why, sizeof why) != BTDF_OK) {
             fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path, m->line,
                     m->name, why);
-            free_manifest(mf);
+            manifest_free(mf);
             free(mf);
             return 2;
         }
@@ -798,7 +564,7 @@ int manifest_run(const manifest_opts *mo)
                             "yet (enter and leave tables take it)\n",
                     mo->prog, mo->path, m->key_line[K_BSDF], m->name, m->bsdf[0],
                     btdf_model_name(m->p.model));
-            free_manifest(mf);
+            manifest_free(mf);
             free(mf);
             return 2;
         }
@@ -811,52 +577,13 @@ int manifest_run(const manifest_opts *mo)
                 fprintf(stderr, "%s: %s: material [%s]: %s: %s support was switched off at "
                                 "build time\n",
                         mo->prog, mo->path, m->name, o, fi.name);
-                free_manifest(mf);
+                manifest_free(mf);
                 free(mf);
                 return 1;
             }
         }
-        if ((m->ngrid || m->key_line[K_GRID_SIZE]) && !m->key_line[K_BACK]) {
-            int gl = m->ngrid ? m->key_line[K_GRID] : m->key_line[K_GRID_SIZE];
-            fprintf(stderr, "%s: %s:%d: material [%s]: %s: the grid of a pane's system: give "
-                            "back = smooth|S as well (enter and leave take the interface's "
-                            "tables)\n", mo->prog, mo->path, gl, m->name,
-                    m->ngrid ? "grid" : "grid_size");
-            free_manifest(mf);
-            free(mf);
-            return 2;
-        }
-        double nv = 4.0 * m->p.channels * (double)m->grid_n[0] * (double)m->grid_n[1] *
-                    (double)m->grid_n[2];
-        if (m->ngrid && nv > (double)((size_t)1 << 28)) { /* pane_write_table's limit */
-            fprintf(stderr, "%s: %s:%d: material [%s]: grid_size %zu,%zu,%zu: %.0f values, more "
-                            "than 2^28\n", mo->prog, mo->path, line_of(m, K_GRID_SIZE), m->name,
-                    m->grid_n[0], m->grid_n[1], m->grid_n[2], nv);
-            free_manifest(mf);
-            free(mf);
-            return 2;
-        }
-        if (m->key_line[K_GRID_SIZE] && !m->ngrid) {
-            fprintf(stderr, "%s: %s:%d: material [%s]: grid_size: sets the nodes of the grid "
-                            "outputs, and the section has none (give grid = F.csv|F.exr)\n",
-                    mo->prog, mo->path, m->key_line[K_GRID_SIZE], m->name);
-            free_manifest(mf);
-            free(mf);
-            return 2;
-        }
-        /* three channels: a pane's grid holds them, its .xml does not */
-        const char *pw = pane_keys_refusal(
-            m->key_line[K_BACK] != 0, m->key_line[K_THICK] || m->key_line[K_ABS],
-            m->nenter + m->nleave + m->nbsdf,
-            m->key_line[K_TOL] || m->key_line[K_THETA] || m->key_line[K_METRIC] ||
-                m->key_line[K_PART] || m->key_line[K_SIDES],
-            m->nxml ? m->p.channels : 1);
-        if (pw) {
-            fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path,
-                    m->key_line[K_BACK] ? m->key_line[K_BACK]
-                    : m->key_line[K_THICK] ? m->key_line[K_THICK] : m->key_line[K_ABS],
-                    m->name, pw);
-            free_manifest(mf);
+        if (pane_section_refusal(mo, m)) {
+            manifest_free(mf);
             free(mf);
             return 2;
         }
@@ -866,7 +593,7 @@ int manifest_run(const manifest_opts *mo)
             fprintf(stderr, "%s: %s:%d: material [%s]: tolerance: a Klems matrix holds exact "
                             "patch averages; its error is set by the basis, not by a "
                             "tolerance\n", mo->prog, mo->path, m->key_line[K_TOL], m->name);
-            free_manifest(mf);
+            manifest_free(mf);
             free(mf);
             return 2;
         }
@@ -881,7 +608,7 @@ int manifest_run(const manifest_opts *mo)
     int vline = validate(mo, mf, vwhy, sizeof vwhy);
     if (vline) {
         fprintf(stderr, "%s: %s:%d: %s\n", mo->prog, mo->path, vline, vwhy);
-        free_manifest(mf);
+        manifest_free(mf);
         free(mf);
         return 2;
     }
@@ -908,7 +635,7 @@ int manifest_run(const manifest_opts *mo)
         if (code == 0 && m->ngrid)
             code = manifest_grid(mo, m, &done, total, &job);
     }
-    free_manifest(mf);
+    manifest_free(mf);
     free(mf);
     return code;
 }
