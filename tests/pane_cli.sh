@@ -88,14 +88,18 @@ build_fails "$W/m/b8.ini" 2 "one channel" "a pane with three channels"
 # provenance line), once per material, a stamp that knows the grid's size; three
 # channels are a grid's as they are tabulate's; the grid keys' refusals
 mkdir -p "$W/g"
-cat > "$W/g/grid.ini" <<'INI'
+# the .exr beside the .csv where this build has OpenEXR (a build without it refuses .exr)
+GX=""; NUP=2
+"$B" tabulate -q --ior 1.5 -s 1 --back smooth --grid 2,2,2 -o "$W/g/probe.exr" 2>/dev/null &&
+    { GX=" out/p.exr"; NUP=3; rm -f "$W/g/probe.exr"; }
+cat > "$W/g/grid.ini" <<INI
 [p]
 ior = 1.5
 smoothness = 1
 back = 2
 thickness = 2
 absorption = 0.1
-grid = out/p.csv out/p.exr
+grid = out/p.csv$GX
 grid_size = 10,10,7
 [c]
 ior = 1.5,1.52,1.54
@@ -112,10 +116,10 @@ for f in p c; do
     grep -v '^# .*btdftab' "$W/g/out/$f.csv" > "$W/m.txt"; grep -v '^# .*btdftab' "$W/c/$f.csv" > "$W/c.txt"
     [ -s "$W/m.txt" ] && cmp -s "$W/m.txt" "$W/c.txt" || { gsame=0; diff "$W/m.txt" "$W/c.txt" | head -4; }
 done
-[ "$gsame" -eq 1 ] && [ -s "$W/g/out/p.exr" ] && grep -q 'material \[p\]' "$W/g/out/p.csv" && \
+[ "$gsame" -eq 1 ] && { [ -z "$GX" ] || [ -s "$W/g/out/p.exr" ]; } && grep -q 'material \[p\]' "$W/g/out/p.csv" && \
     ok "manifest grid, grid_size: the bytes of tabulate --back --grid, one and three channels" || \
     no "manifest grid differs from tabulate's"
-"$B" build "$W/g/grid.ini" 2>&1 | grep -c 'up to date' | grep -qx 3 && \
+"$B" build "$W/g/grid.ini" 2>&1 | grep -c 'up to date' | grep -qx "$NUP" && \
     ok "a pane's grids up to date" || no "a pane's grids rebuilt without a change"
 sed -i 's/^grid_size = 10,10,7/grid_size = 10,10,9/' "$W/g/grid.ini"
 "$B" build --dry-run "$W/g/grid.ini" 2>&1 | grep 'p.csv' | grep -q 'up to date' && \
