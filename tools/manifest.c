@@ -249,6 +249,29 @@ static int manifest_bsdf(const manifest_opts *mo, const char *name, const btdf_p
     return 0;
 }
 
+/* What an output's job does before it builds: plans it (--dry-run) or reports it up to
+   date, 1 (skip it); creates its folder, 0 (build it); -1 after a message when the folder
+   cannot be made. */
+static int output_prelude(const manifest_opts *mo, const char *name, const char *out,
+                          const char *stamp)
+{
+    if (mo->dry_run) {
+        plan(name, out, why_stale(out, stamp, mo->force));
+        return 1;
+    }
+    if (!mo->force && up_to_date(out, stamp)) {
+        if (!mo->quiet)
+            fprintf(stderr, "%s: %s: up to date\n", mo->prog, out);
+        return 1;
+    }
+    if (!make_parents(out)) {
+        fprintf(stderr, "%s: %s: cannot create its folder: %s\n", mo->prog, out,
+                strerror(errno));
+        return -1;
+    }
+    return 0;
+}
+
 /* Writes the stale .xml outputs of one material: every block in its basis, with the
    tolerance tabulate -o F.xml takes (a tree's: the key's, or 0.2; a Klems matrix has
    none). theta_i, metric, part and sides do not apply: the file holds both parts and
@@ -274,20 +297,11 @@ static int manifest_xml(const manifest_opts *mo, const material *mat, int *done,
         (*done)++;
         if (!mine(mo, (*job)++))
             continue;
-        if (mo->dry_run) {
-            plan(mat->name, out, why_stale(out, stamp, mo->force));
-            continue;
-        }
-        if (!mo->force && up_to_date(out, stamp)) {
-            if (!mo->quiet)
-                fprintf(stderr, "%s: %s: up to date\n", mo->prog, out);
-            continue;
-        }
-        if (!make_parents(out)) {
-            fprintf(stderr, "%s: %s: cannot create its folder: %s\n", mo->prog, out,
-                    strerror(errno));
+        int pre = output_prelude(mo, mat->name, out, stamp);
+        if (pre < 0)
             return 1;
-        }
+        if (pre > 0)
+            continue;
         char label[128];
         snprintf(label, sizeof label, "[%d/%d] %s", *done, total, out);
         run_progress pr;
@@ -331,21 +345,13 @@ static int manifest_grid(const manifest_opts *mo, const material *mat, int *done
         (*done)++;
         if (!mine(mo, (*job)++))
             continue;
-        if (mo->dry_run) {
-            plan(mat->name, out, why_stale(out, stamp, mo->force));
-            continue;
-        }
-        if (!mo->force && up_to_date(out, stamp)) {
-            if (!mo->quiet)
-                fprintf(stderr, "%s: %s: up to date\n", mo->prog, out);
-            continue;
-        }
-        if (!make_parents(out)) {
-            fprintf(stderr, "%s: %s: cannot create its folder: %s\n", mo->prog, out,
-                    strerror(errno));
+        int pre = output_prelude(mo, mat->name, out, stamp);
+        if (pre < 0) {
             code = 1;
             break;
         }
+        if (pre > 0)
+            continue;
         if (!mo->quiet)
             fprintf(stderr, "%s: [%d/%d] %s\n", mo->prog, *done, total, out);
         if (!P && (code = pane_make(&mat->p, &mat->pane, mo->threads, &P)) != 0)
