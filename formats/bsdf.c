@@ -402,6 +402,23 @@ static int cmp_u32(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* The model a file holds: its builder's, or the metadata's "model" (btdftab writes the
+   name of any model but xu-sun, whose files say "Xu & Sun 2008 Eq. 25" or nothing). */
+static const char *file_model(const btdf_scatfun *f)
+{
+    if (f->built)
+        return btdf_model_name(f->params.model);
+    const char *m = f->metalen ? strstr(f->meta, "\"model\": \"") : NULL;
+    if (m) {
+        m += strlen("\"model\": \"");
+        if (!strncmp(m, "smith\"", 6))
+            return "smith";
+        if (!strncmp(m, "full\"", 5))
+            return "full";
+    }
+    return "xu-sun";
+}
+
 BTDF_API btdf_status btdf_scatfun_info(const btdf_scatfun *f, FILE *out)
 {
     if (!f || !out)
@@ -428,6 +445,7 @@ BTDF_API btdf_status btdf_scatfun_info(const btdf_scatfun *f, FILE *out)
     ok &= fprintf(out, "reflection        %s%s%s\n", f->sides & BTDF_SCATFUN_R_TOP ? "top " : "",
                   f->sides & BTDF_SCATFUN_R_BOTTOM ? "bottom" : "",
                   f->sides & BTDF_SCATFUN_REFLECTION ? "" : "none") > 0;
+    ok &= fprintf(out, "model             %s\n", file_model(f)) > 0;
     ok &= fprintf(out, "coefficients      %u floats\n", f->ncoeffs) > 0;
     ok &= fprintf(out, "mMax              %u\n", f->mmax) > 0;
     ok &= fprintf(out, "pairs             %zu, %zu with a series, %zu empty\n", nn, nz, nn - nz) > 0;

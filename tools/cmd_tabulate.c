@@ -203,15 +203,12 @@ int cmd_tabulate(cli *c, const char *prov)
         int same = distinct_outputs(out, c);
         if (same)
             return same;
-        /* A smith .bsdf does not converge yet: rho_smith stays finite up to grazing
-           incidence (G2 ~ cos ti) and drops to 0 at ti = 90 deg, a step the series
-           builder cannot follow (measured: e_L1 0.999 at the coefficient budget at
-           n = 1.5, s = 3); the samplers and metadata carry the model already. */
-        if (c->p.model != BTDF_MODEL_XU_SUN && fi.needs == BTDF_NEEDS_SERIES)
-            return fail(EXIT_USAGE, "%s: --model %s: not available for this format yet "
-                        "(%s take it; xu-sun is the model of every format)",
-                        out, btdf_model_name(c->p.model),
-                        ".csv, .exr and .xml");
+        /* full's multiply scattered light is a tally the series builder does not
+           sample (btdf_params_check refuses it there); xu-sun and smith are series */
+        if (c->p.model == BTDF_MODEL_FULL && fi.needs == BTDF_NEEDS_SERIES)
+            return fail(EXIT_USAGE, "%s: --model full: not available for .bsdf yet (.csv, "
+                        ".exr and .xml take it; xu-sun and smith are the models of a .bsdf)",
+                        out);
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)

@@ -22,9 +22,10 @@ const opt_def opt_table[] = {
     {OPT_MODEL, "model", 0, "M", 0, MAT,
      "the facets' shadowing-masking: xu-sun (default: Eq. 25, V(ti) V(to) with k0) or\n"
      "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused;\n"
-     "tabulate writes it to .csv and .exr, the files record it) or full (smith plus the\n"
-     "light scattered two or more times, tallied once per material by a random walk:\n"
-     "R + T = 1; eval, albedo, polar and tabulate to .csv and .exr, which keep the tally)"},
+     "tabulate writes it to .csv, .exr, .xml and .bsdf, the files record it) or full\n"
+     "(smith plus the light scattered two or more times, tallied once per material by a\n"
+     "random walk: R + T = 1; eval, albedo, polar and tabulate to .csv, .exr and .xml,\n"
+     "which keep the tally)"},
     {OPT_BACK, "back", 0, "smooth|S", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL | CMD_POLAR,
      "a pane, not an interface: its back face is flat (smooth) or rough with\n"
      "smoothness S; the front face is --ior, --smoothness, --model; tabulate writes the\n"

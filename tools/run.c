@@ -416,10 +416,15 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
             fprintf(stderr,
                     "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients and "
                     "build %.3f s of the whole file; this block's estimate %.3f s (%zu angles, "
-                    "%zu points); e_L1 max %.3g "
+                    "%zu points)%s%s%s; e_L1 max %.3g "
                     "mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
                     prog, path, name, btdf_scatfun_node_count(f), btdf_scatfun_coeff_count(f),
-                    t1 - t0, e1 - e0, r.test_angles, r.test_points, r.e_l1_max, r.e_l1_mean,
+                    t1 - t0, e1 - e0, r.test_angles, r.test_points,
+                    /* xu-sun's line keeps its words; another model is named */
+                    p->model == BTDF_MODEL_XU_SUN ? "" : "; error against ",
+                    p->model == BTDF_MODEL_XU_SUN ? "" : btdf_model_name(p->model),
+                    p->model == BTDF_MODEL_XU_SUN ? "" : " (up to 89.9994 deg)",
+                    r.e_l1_max, r.e_l1_mean,
                     r.e_max_max, r.e_t_max, ok ? "; tolerance met" : "; TOLERANCE NOT MET");
         if (k > 0 && (size_t)k < sizeof meta)
             k += snprintf(meta + k, sizeof meta - (size_t)k,

@@ -578,6 +578,13 @@ static int plan_splits(const build_ctx *c, const double *P, size_t K,
         return -1;
     }
     *nsplit = spread_fronts(*split, fresh, ahead, K);
+    /* no interval below the grazing floor is split (scatfun.h, SF_TI_TOP): nodes
+       ascend, so those are the first ones */
+    for (size_t j = 0; j < K && P[j] <= SF_MU_FLOOR; j++)
+        if ((*split)[j]) {
+            (*split)[j] = 0;
+            --*nsplit;
+        }
     return 0;
 }
 

@@ -112,11 +112,15 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
     for (uint32_t i = f->n; i-- > 0;)
         if (f->xd[i] > 0.0 && f->xd[i] < 1.0)
             knots[nk++] = acos(f->xd[i]); /* ascending in ti as mu descends */
-    knots[nk++] = M_PI / 2;
+    /* the top test angle (scatfun.h, SF_TI_TOP): xu-sun's rho vanishes towards
+       grazing with V(ti), so its files are tested at 90 deg, where truth and file are
+       0, and keep the reports they always had */
+    double top = p->model == BTDF_MODEL_XU_SUN ? M_PI / 2 : SF_TI_TOP;
+    knots[nk++] = top;
     /* a reflection block is measured against rho_r over its side's upper hemisphere,
        relative to max(R(ti), 0.01), by the estimator's own sample sets (MODEL.md
        sections 6 and 8); mis_eval reads tr's cosine where a transmission's is to's */
-    btdf_status st = est_knots_prep_part(&q, refl, 0.0, M_PI / 2, angles, ppa, seed, threads,
+    btdf_status st = est_knots_prep_part(&q, refl, 0.0, top, angles, ppa, seed, threads,
                                          knots, nk, mis_eval, mis_prep, mis_done, &m, &opt,
                                          memo, r);
     free(knots);
