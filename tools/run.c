@@ -412,6 +412,11 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
             worst = r.e_l1_max;
             worst_name = name;
         }
+        char upto[48];
+        double top = 0.0;
+        for (size_t a = 0; a < r.test_angles; a++)
+            top = fmax(top, r.per_ti[a].ti);
+        snprintf(upto, sizeof upto, " (up to %.6g deg)", top * 180.0 / M_PI);
         if (!quiet)
             fprintf(stderr,
                     "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients and "
@@ -420,10 +425,11 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
                     "mean %.3g; e_max max %.3g; e_T max %.3g%s\n",
                     prog, path, name, btdf_scatfun_node_count(f), btdf_scatfun_coeff_count(f),
                     t1 - t0, e1 - e0, r.test_angles, r.test_points,
-                    /* xu-sun's line keeps its words; another model is named */
+                    /* xu-sun's line keeps its words; another model is named, with the
+                       report's top test angle */
                     p->model == BTDF_MODEL_XU_SUN ? "" : "; error against ",
                     p->model == BTDF_MODEL_XU_SUN ? "" : btdf_model_name(p->model),
-                    p->model == BTDF_MODEL_XU_SUN ? "" : " (up to 89.9994 deg)",
+                    p->model == BTDF_MODEL_XU_SUN ? "" : upto,
                     r.e_l1_max, r.e_l1_mean,
                     r.e_max_max, r.e_t_max, ok ? "; tolerance met" : "; TOLERANCE NOT MET");
         if (k > 0 && (size_t)k < sizeof meta)

@@ -34,16 +34,17 @@
    nodes) and a view with cos = +-1 lies outside the nodes, where the renderer returns
    no sample (pdf 0) instead of NaN. docs/scatfun.md, "Views on the normal". */
 #define POLE_NODE 0.999999940395355224609375
-/* The highest incident angle a report of smith's file tests: 1e-5 rad (5.7e-4 deg)
-   short of grazing (xu-sun's, whose rho vanishes there, 90 deg itself), and the builder splits no elevation interval that lies below |mu| = 1e-6,
-   a tenth of that angle's cosine. At 90 deg exactly the light lies in the surface: a
-   reader returns 0 where that cosine is the fast index (f = stored / |mu_f|, pbrt-v3
+/* The highest incident angle a report of smith's file tests, 1e-5 rad (5.7e-4 deg)
+   short of grazing (xu-sun's, whose rho vanishes there, test 90 deg itself), and the
+   floor below which the builder splits no elevation interval, |mu| = 1e-6, a tenth of
+   that angle's cosine. At 90 deg exactly the light lies in the surface: a reader
+   returns 0 where that cosine is the fast index (f = stored / |mu_f|, pbrt-v3
    included), and double's cos(pi/2) is 6.1e-17, not 0, so "90 deg" tested a direction
    6e-17 rad above the horizon, where smith's T, which falls like 1/ln(1/mu), is still
    0.0876 (n = 1.5, s = 3) and its R 0.162. Following that took the builder's nodes to
-   |mu| = 1.4e-12 with 16385 harmonics per grazing pair: 80 % of a 515 MB file. The
-   band left out holds light at cos ti < 1e-5; docs/scatfun.md, "The grazing band",
-   gives the file's values there. */
+   |mu| = 1.4e-12 with 16385 harmonics per grazing pair, a 515 MB file. The band left
+   out holds light at cos ti < 1e-5; docs/scatfun.md, "Files of smith: the grazing
+   band", gives the file's values there. */
 #define SF_TI_TOP (M_PI / 2 - 1e-5)
 #define SF_MU_FLOOR 1e-6
 
