@@ -125,34 +125,43 @@ class PaneSeries:
     def eval(self, channels, blk, mui, muo, cph, active):
         """[max(0, the cosine sum)] of each channel of `channels`, block blk (UInt32 per
         lane: 2 * back + reflection) at (mui, muo, cos phi); 0 where not active. The
-        stencils and the cosines are the same for every channel: made once."""
+        stencils and the cosines are the same for every channel: made once. The modes
+        m >= 1 run in a device loop (dr.while_loop), not unrolled: unrolled, the 48 to
+        96 modes of a pane made kernels LLVM took minutes to compile; the operations and
+        their order are the same either way."""
         n = self.n
+        nn = n * n
         ki, wi0, wi1, ri = self._stencil(mui, active)
         ko, wo0, wo1, ro = self._stencil(muo, active)
         rr = ri * ro
-        rm = mi.Float64(1.0)  # (ri ro)^m
         at = mi.UInt32(ki * n + ko)
         bases = [at + (ch * 4 + blk) * self.block for ch in channels]
+        coef = self.coef
+
+        def mode(m, wi, wo, base):  # the 4 x 4 stencil of mode m (UInt32) in one block
+            v = mi.Float64(0.0)
+            for a in range(4):
+                row = base + (m * nn + a * n)
+                g = [dr.gather(mi.Float64, coef, row + b, active) for b in range(4)]
+                v = v + wi[a] * (wo[0] * g[0] + wo[1] * g[1] + wo[2] * g[2] + wo[3] * g[3])
+            return v
+
+        m0 = mi.UInt32(0)
+        one = mi.Float64(1.0)
+        totals = tuple(mi.Float64(0.0) + mode(m0, wi0, wo0, base) * one for base in bases)
+        rm = one * rr  # (ri ro)^m
         c1 = cph
-        cm_1 = c1
-        cm = mi.Float64(1.0)
-        totals = [mi.Float64(0.0) for _ in channels]
-        nn = n * n
-        for m in range(self.M):
-            wi, wo = (wi1, wo1) if m else (wi0, wo0)
-            for c, base in enumerate(bases):
-                v = mi.Float64(0.0)
-                for a in range(4):
-                    row = base + (m * nn + a * n)
-                    g = [dr.gather(mi.Float64, self.coef, row + b, active) for b in range(4)]
-                    v = v + wi[a] * (wo[0] * g[0] + wo[1] * g[1] + wo[2] * g[2] + wo[3] * g[3])
-                if m:
-                    v = v * rm
-                totals[c] = totals[c] + v * cm
-            rm = rm * rr
-            nx = c1 if m == 0 else 2.0 * c1 * cm - cm_1
-            cm_1 = cm
-            cm = nx
+
+        def body(m, rm, cm, cm_1, totals):
+            out = tuple(t + (mode(m, wi1, wo1, base) * rm) * cm
+                        for t, base in zip(totals, bases))
+            return m + 1, rm * rr, 2.0 * c1 * cm - cm_1, cm, out
+
+        if self.M > 1:
+            _, _, _, _, totals = dr.while_loop(
+                state=(mi.UInt32(1), rm, c1, one, totals),
+                cond=lambda m, rm, cm, cm_1, totals: m < self.M,
+                body=body, labels=("m", "rm", "cm", "cm_1", "totals"))
         return [dr.select(active & (t > 0.0), t, 0.0) for t in totals]
 
 
