@@ -871,8 +871,8 @@ awk -v v="$v" 'BEGIN { exit !(v > 0 && v < 100) }' && ok "eval --model full" || 
 rt=$("$B" albedo -s 1 --model full 60 | awk -F, 'NR == 2 { print $5 }')
 awk -v a="$rt" 'BEGIN { exit !(a > 0.99 && a < 1.01) }' && ok "albedo --model full: R + T = 1" || \
     no "albedo --model full: R + T = $rt"
-expect 2 "--model full: not available for .bsdf yet (.csv, .exr and .xml take it" \
-    "tabulate refuses a full .bsdf, naming the formats that take it" -- "$B" tabulate --model full -o "$W/t.bsdf"
+expect 2 "with three indices: model full: a .bsdf of one index only" \
+    "tabulate refuses a three-index full .bsdf, with the reason" -- "$B" tabulate --model full --ior 1.4,1.5,1.6 -o "$W/t.bsdf"
 expect 2 "--model: 'walter': must be xu-sun, smith or full" "an unknown --model is named" -- "$B" albedo --model walter
 # tables of smith, and the formats that refuse it: tests/models.sh
 

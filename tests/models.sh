@@ -167,8 +167,18 @@ if [ $exr = 1 ]; then
         [ "$a" = "$b" ] && ok "a full EXR keeps its tally (the same value where only it counts)" ||
         no "full EXR: $a against $b"
 fi
-expect 2 "--model full: not available for .bsdf yet" "a full .bsdf is refused" \
-    -- "$B" tabulate --model full -o "$W/f.bsdf"
+# a full .bsdf (the light entering, transmission, 5e-2): its model in the file, its report
+# against full with the tally's noise floor, and where smith's single scattering is 2e-181
+# (45, 120, 180 deg) the tally's part, read back within 5 % of eval --model full
+"$B" tabulate --model full -s 3 --side enter --part transmission --tolerance 5e-2 \
+    -o "$W/f.bsdf" 2>"$W/fb.err" && "$B" inspect "$W/f.bsdf" | grep -q '^model  *full$' &&
+    grep -q "error against full (up to 89.9994 deg; its tally's noise floor" "$W/fb.err" &&
+    grep -q "tolerance met" "$W/fb.err" &&
+    v=$("$B" eval --table "$W/f.bsdf" 45 120 180) && m=$("$B" eval --model full -s 3 45 120 180) &&
+    awk -v v="$v" -v m="$m" 'BEGIN { exit !(m > 0.05 && v - m < 5e-2 * m && m - v < 5e-2 * m) }' &&
+    ok "a full .bsdf holds the tally's part ($v against $m)" || no "full .bsdf: $v against $m: $(cat "$W/fb.err")"
+expect 2 "model full: a .bsdf of one index only" "a three-index full .bsdf is refused" \
+    -- "$B" tabulate --model full --ior 1.49,1.5,1.51 -o "$W/f3.bsdf"
 # a full .xml names its model in the comment and the Comments, and its report measures
 # each block against full with the tally's noise floor (the Klems energy: radiance_full)
 "$B" tabulate --model full -s 3 --tolerance 0.5 --threads 2 -o "$W/f.xml" 2>"$W/f.err" &&

@@ -438,7 +438,8 @@ for call, word in ((lambda: btdftab.rho(1.5, 3, 2.0, 2.5, 0), "2.0"),
                    (lambda: btdftab.rho(1.5, 3, 0, 3, 0, model="walter"), "walter"),
                    (lambda: btdftab.T(1.5, 3, 0, model="smth"), "smth"),
                    (lambda: btdftab.rho_deg(1.5, 3, 30, 60, 0, model="full"), "60"),
-                   (lambda: btdftab.build(1.5, 3, model="full", format="bsdf"), "full")):
+                   (lambda: btdftab.build((1.49, 1.5, 1.51), 3, model="full", format="bsdf"),
+                    "three indices")):
     try:
         call()
         check(False, "bad input raises ValueError (%s)" % word)

@@ -100,8 +100,15 @@ static int tabulate_series(const cli *c, const char *prov)
         return bad;
     if (c->report && !folder_writable(c->report))
         return 1;
-    if (!check_params(&c->p))
+    btdf_params single = c->p; /* full has smith's parameters (the builder makes its tally) */
+    if (single.model == BTDF_MODEL_FULL)
+        single.model = BTDF_MODEL_SMITH;
+    if (!check_params(&single))
         return EXIT_USAGE;
+    char why[256];
+    if (c->p.model == BTDF_MODEL_FULL && /* one index only: the library's reason */
+        btdf_scatfun_check(&c->p, 0.05, (btdf_side)BTDF_SCATFUN_ALL, why, sizeof why) == BTDF_ENOTSUP)
+        return fail(EXIT_USAGE, "%s: --ior %s: %s", c->out, "with three indices", why);
     if (!folder_writable(c->out))
         return 1;
     run_progress pr;
@@ -203,12 +210,6 @@ int cmd_tabulate(cli *c, const char *prov)
         int same = distinct_outputs(out, c);
         if (same)
             return same;
-        /* full's multiply scattered light is a tally the series builder does not
-           sample (btdf_params_check refuses it there); xu-sun and smith are series */
-        if (c->p.model == BTDF_MODEL_FULL && fi.needs == BTDF_NEEDS_SERIES)
-            return fail(EXIT_USAGE, "%s: --model full: not available for .bsdf yet (.csv, "
-                        ".exr and .xml take it; xu-sun and smith are the models of a .bsdf)",
-                        out);
         if (fi.needs == BTDF_NEEDS_SERIES)
             return tabulate_series(c, prov);
         if (fi.needs == BTDF_NEEDS_RADIANCE)

@@ -565,16 +565,6 @@ int manifest_run(const manifest_opts *mo)
             free(mf);
             return 2;
         }
-        if (m->p.model == BTDF_MODEL_FULL && m->nbsdf > 0) { /* as tabulate refuses it */
-            fprintf(stderr, "%s: %s:%d: material [%s]: %s: model %s: not available for .bsdf "
-                            "yet (enter and leave tables take it; xu-sun and smith are the "
-                            "models of a .bsdf)\n",
-                    mo->prog, mo->path, m->key_line[K_BSDF], m->name, m->bsdf[0],
-                    btdf_model_name(m->p.model));
-            manifest_free(mf);
-            free(mf);
-            return 2;
-        }
         for (int k = 0; k < m->nenter + m->nleave + m->ngrid; k++) {
             const char *o = k < m->nenter             ? m->enter[k]
                             : k < m->nenter + m->nleave ? m->leave[k - m->nenter]

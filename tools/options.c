@@ -24,8 +24,8 @@ const opt_def opt_table[] = {
      "smith (the height-correlated Smith term of the same Gaussian surface; k0 unused;\n"
      "tabulate writes it to .csv, .exr, .xml and .bsdf, the files record it) or full\n"
      "(smith plus the light scattered two or more times, tallied once per material by a\n"
-     "random walk: R + T = 1; eval, albedo, polar and tabulate to .csv, .exr and .xml,\n"
-     "which keep the tally)"},
+     "random walk: R + T = 1; eval, albedo, polar and tabulate to .csv, .exr, .xml and\n"
+     ".bsdf (one index), which keep the tally or its sum)"},
     {OPT_BACK, "back", 0, "smooth|S", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL | CMD_POLAR,
      "a pane, not an interface: its back face is flat (smooth) or rough with\n"
      "smoothness S; the front face is --ior, --smoothness, --model; tabulate writes the\n"

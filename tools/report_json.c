@@ -164,13 +164,17 @@ const char *const report_block_name[4] = {"enter", "leave", "reflection_top",
                                           "reflection_bottom"};
 
 /* One side's report as JSON (the fields of a table's report, docs/tables.md). */
-static void json_side(FILE *f, const char *name, const btdf_report *r, double tol, int last)
+static void json_side(FILE *f, const char *name, btdf_model model, const btdf_report *r,
+                      double tol, int last)
 {
-    fprintf(f, "    \"%s\": {\"met\": %s, \"e_l1\": {\"max\": %.6g, \"mean\": %.6g}, "
+    fprintf(f, "    \"%s\": {", name);
+    if (model == BTDF_MODEL_FULL) /* the noise floor of the tally it is measured against */
+        fprintf(f, "\"ms_noise\": %s, ", num(r->ms_noise));
+    fprintf(f, "\"met\": %s, \"e_l1\": {\"max\": %.6g, \"mean\": %.6g}, "
                "\"e_max\": {\"max\": %.6g, \"mean\": %.6g}, \"e_t\": {\"max\": %.6g, "
                "\"mean\": %.6g}, \"seconds_estimate\": %.6f, \"test_angles\": %zu, "
                "\"test_points\": %zu,\n      \"per_theta_i\": [\n",
-            name, r->e_l1_max <= tol ? "true" : "false", r->e_l1_max, r->e_l1_mean,
+            r->e_l1_max <= tol ? "true" : "false", r->e_l1_max, r->e_l1_mean,
             r->e_max_max, r->e_max_mean, r->e_t_max, r->e_t_mean, r->seconds_estimate,
             r->test_angles, r->test_points);
     for (size_t k = 0; k < r->test_angles; k++) {
@@ -215,7 +219,7 @@ int report_json_series(const char *prog, const char *report, const btdf_params *
             last = b;
     for (int b = 0; b < 4; b++)
         if (reps[b].test_angles)
-            json_side(m, report_block_name[b], &reps[b], tol, b == last);
+            json_side(m, report_block_name[b], p->model, &reps[b], tol, b == last);
     fprintf(m, "  }\n}\n");
     int bad = fclose(m) != 0;
     char msg[512] = "";

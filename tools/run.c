@@ -412,11 +412,13 @@ int run_series_ex(const char *prog, const char *path, const btdf_params *p, doub
             worst = r.e_l1_max;
             worst_name = name;
         }
-        char upto[48];
+        char upto[96];
         double top = 0.0;
         for (size_t a = 0; a < r.test_angles; a++)
             top = fmax(top, r.per_ti[a].ti);
-        snprintf(upto, sizeof upto, " (up to %.6g deg)", top * 180.0 / M_PI);
+        int n = snprintf(upto, sizeof upto, " (up to %.6g deg", top * 180.0 / M_PI);
+        snprintf(upto + n, sizeof upto - (size_t)n, p->model == BTDF_MODEL_FULL ? "; its "
+                 "tally's noise floor %.2g)" : ")", r.ms_noise); /* full: and its noise */
         if (!quiet)
             fprintf(stderr,
                     "%s: %s (%s, as a renderer reads it): %zu nodes, %zu coefficients and "

@@ -21,7 +21,7 @@ model: "xu-sun" (Eq. 25, the default), "smith" (the height-correlated Smith term
 the same facets) or "full" (smith plus the light scattered two or more times, from a
 tally made once per material: paths and seed as btdf_full_opts, the defaults those
 of `btdftab eval --model full`; see Full). Tables (.csv, .exr) hold any of the three
-(a table of full keeps its tally, which the reader rebuilds); a .bsdf xu-sun or smith.
+(a table of full keeps its tally, which the reader rebuilds); a .bsdf any of them (full with one index).
 
 Bad parameters or angles raise ValueError naming the value and what is allowed; a
 failed library call raises BtdfError with the library's message.
@@ -781,14 +781,15 @@ def build(ior, smoothness, k0=0.7, tolerance=1e-3, part="transmission", threads=
     or, with format="bsdf", a .bsdf file's contents (btdf_scatfun_build, all four
     blocks). ior: one index or three; ti_range: (min, max) radians; model xu-sun,
     smith or full for a table (as `btdftab tabulate --model`; full's tally is made with
-    the defaults of `btdftab tabulate --model full` and kept in the table); xu-sun or
-    smith for a .bsdf. Returns a Table or a Bsdf; a budget that stops refinement first raises
+    the defaults of `btdftab tabulate --model full` and kept in the table); any of the
+    three for a .bsdf (full with one index). Returns a Table or a Bsdf; a budget that stops refinement first raises
     BtdfError."""
     lib = _library()
-    if format == "bsdf" and model == "full":
-        raise ValueError("model 'full': btdf_scatfun_build takes xu-sun or smith (btdftab "
-                         "tabulate -o F.bsdf xu-sun only); tables (format='table') take full")
     p = _ior_params(ior, smoothness, k0, _model_id(model))
+    if format == "bsdf" and model == "full" and p.channels == 3:
+        raise ValueError("model 'full' with three indices %r: a .bsdf of full holds one index "
+                         "(three channels' transmission is read along the reverse path, whose "
+                         "tally is another)" % (ior,))
     msg = ctypes.create_string_buffer(1024)
     h = ctypes.c_void_p()
     if format == "bsdf":

@@ -472,9 +472,8 @@ double full_ms(const btdf_full *f, int h, double ti_deg, double mu, double cphi)
     return v > 0.0 ? v : 0.0;
 }
 
-/* full_rho_row_deg's modes: a[m] = sin^m t sum_k q_km(mu) c_km(ti), so that the
-   multiply scattered part at azimuth phi is max(0, sum_m a[m] cos(m phi)). */
-static void full_ms_modes(const btdf_full *f, int h, double ti_deg, double mu, double *a)
+/* Declared in full.h. */
+void full_ms_modes(const btdf_full *f, int h, double ti_deg, double mu, double *a)
 {
     double w;
     int k0 = full_locate(f, ti_deg, &w);

@@ -41,6 +41,11 @@ int full_locate(const btdf_full *f, double ti_deg, double *w);
 /* The multiply scattered rho alone, side h (0 transmission, 1 reflection), at incidence
    ti_deg (degrees), mu = |cos| of the outgoing direction, cphi = cos phi; >= 0. */
 double full_ms(const btdf_full *f, int h, double ti_deg, double mu, double cphi);
+/* The modes of the multiply scattered part of side h at incidence ti_deg and outgoing
+   |cos| mu: a[m] = sin^m t sum_k q_km(mu) c_km(ti), m < FULL_M, so that the part at
+   azimuth phi is max(0, sum_m a[m] cos(m phi)) (full_ms's value, summed in another
+   order). */
+void full_ms_modes(const btdf_full *f, int h, double ti_deg, double mu, double *a);
 /* rho of full on side h (0: transmission, to in [90, 180]; 1: reflection, to = tr in
    [0, 90]) at the np azimuths 180 p / (np - 1) degrees, p = 0..np-1: smith's value at
    each plus the multiply scattered part, its modes formed once for the pair (a row of

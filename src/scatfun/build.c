@@ -106,12 +106,19 @@ BTDF_API btdf_status btdf_scatfun_build(const btdf_params *p, double tolerance,
 BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
                                         btdf_side side, char *msg, size_t msglen)
 {
-    btdf_status st = btdf_params_check(p, msg, msglen);
+    btdf_status st = sf_check_params(p, msg, msglen);
     if (st != BTDF_OK)
         return st;
     if (!(tolerance >= 1e-6 && tolerance <= 0.5))
         return core_say(BTDF_EINVAL, msg, msglen, "tolerance %s: must lie in [1e-6, 0.5]",
                         core_num(tolerance, (char[32]){0}));
+    if (p->model == BTDF_MODEL_FULL && p->channels == 3)
+        /* a three-channel transmission block is right on the ADJOINT path only (its
+           pbrt-v3 fold), which reads the reverse path's tally (report.c) */
+        return core_say(BTDF_ENOTSUP, msg, msglen,
+                        "model full: a .bsdf of one index only (three channels' "
+                        "transmission is read along the reverse path, whose tally is "
+                        "another); xu-sun and smith take three");
     if ((int)side < 1 || (int)side > BTDF_SCATFUN_ALL)
         return core_say(BTDF_EINVAL, msg, msglen,
                            "blocks %d: must be a mask of 1 (transmission entering), 2 "
@@ -541,6 +548,7 @@ static void keep_finest(build_ctx *c, int threads, uint64_t seed, albedo_memo *m
 static void free_work(build_ctx *c, double *P, unsigned char *fresh, unsigned char *ahead)
 {
     sf_free_state(c);
+    sf_free_tallies(c->own); /* the files hold their own copies (sf_assemble) */
     free(c->P);
     free(c->full);
     free(P);
@@ -613,9 +621,10 @@ static btdf_status hand_over(btdf_scatfun *best, albedo_memo *memo, double toler
    first nodes, then the refinement loop: one pass of series and checks (pass_series),
    split marks and fronts (plan_splits), the file's own measurement that accepts,
    splits locally or tightens (measure_state), the budgets (growth_limit), splits
-   inserted (insert_splits); then the best file kept (keep_finest, hand_over). The
-   loop's decisions stay here: they share the counters tighten, local, stall and
-   last_err and one cleanup path. */
+   inserted (insert_splits); then the best file kept (keep_finest, hand_over). Long:
+   the loop's decisions stay here, as they share the counters tighten, local, stall
+   and last_err and one cleanup path (model full's tallies, sf_make_tallies, are
+   freed on it too). */
 static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side side,
                               int threads, size_t max_coeffs, size_t max_bytes,
                               btdf_progress_fn progress, void *user, btdf_scatfun **out,
@@ -632,6 +641,11 @@ static btdf_status build_impl(const btdf_params *p, double tolerance, btdf_side 
     if (pthread_mutex_init(&c.lock, NULL) != 0)
         return core_say(BTDF_ENOMEM, msg, msglen, "cannot create a mutex");
     build_ctx_setup(&c, p, side, tolerance);
+    st = sf_make_tallies(&c, threads, progress, user, msg, msglen);
+    if (st != BTDF_OK) {
+        pthread_mutex_destroy(&c.lock);
+        return st;
+    }
 
     btdf_scatfun *best = NULL;
     double best_err = HUGE_VAL;

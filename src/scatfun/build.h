@@ -12,6 +12,7 @@
 #include "btdf.h"
 #include "btdf_scatfun.h"
 #include "model/kernel.h"
+#include "model/full.h"
 #include "estimate/estimate.h"
 #include "scatfun/scatfun.h"
 #include "scatfun/dct.h"
@@ -54,6 +55,11 @@ typedef struct build_ctx {
                              values so pbrt-v3's single-eta radiance path is right for
                              every channel (1 for one channel and for reflection) */
     size_t nmin, nmax; /* phi sample counts (powers of two) */
+    /* model full: each block's and channel's tally (index n for T_ENTER and R_TOP, 1/n
+       for T_LEAVE and R_BOTTOM), whose multiply scattered part every sample adds to
+       smith's (build_sample.c); NULL for the other models */
+    const btdf_full *ms[NBLK][3];
+    btdf_full *own[2][3]; /* the tallies ms points at, per index (n, 1/n) and channel */
     double budget; /* current target for e_L1 */
     /* half nodes P[0..K-1] ascending, P[K-1] = 1, and the full node list */
     size_t K;
@@ -214,6 +220,14 @@ int sf_carry_over(build_ctx *c, const double *Q, size_t KQ, const unsigned char 
                   int threads);
 int sf_set_nodes(build_ctx *c, const double *P, size_t K);
 btdf_status sf_assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t msglen);
+
+/* build_full.c: model full's tallies for the blocks c asks (c->own[index][channel],
+   index 0 n, 1 1/n; c->ms pointed at them), made on the build's threads, after a
+   progress call; BTDF_OK with nothing made for the other models; on failure nothing
+   is kept. sf_free_tallies frees them (NULL entries: nothing) and clears the array. */
+btdf_status sf_make_tallies(build_ctx *c, int threads, btdf_progress_fn progress, void *user,
+                            char *msg, size_t msglen);
+void sf_free_tallies(btdf_full *own[2][3]);
 
 /* build_predict.c: the relative L1 error of a unit Gaussian through a uniform
    Catmull-Rom spline with nodes r standard deviations apart (mean over node phases). */

@@ -254,12 +254,16 @@ oom:
 static void norms_at(const build_ctx *c, int side, double mu, double *out)
 {
     btdf_params q = *c->p;
+    if (q.model == BTDF_MODEL_FULL) /* its single scattering; the tally's energy below */
+        q.model = BTDF_MODEL_SMITH;
     for (int k = 0; k < c->nc; k++)
         q.ior[k] = c->ior[side][k];
     double T[3] = {0, 0, 0};
     /* acos of a value in [0, 1] is in [0, pi/2], the accepted range */
     double ti = acos(fmin(1.0, fmax(0.0, mu)));
     bt_albedo_panels(&q, blk_refl[side], ti, NORM_U_PANELS, NORM_PSI_PANELS, T);
+    for (int k = 0; c->ms[side][0] && k < c->nc; k++) /* full: orders 2+ as tallied */
+        T[k] += full_ms_energy(c->ms[side][k], blk_refl[side], ti, NULL);
     if (c->nst == 1) {
         out[0] = fmax(T[0], T_FLOOR);
     } else {
@@ -276,6 +280,8 @@ static void norms_at(const build_ctx *c, int side, double mu, double *out)
         for (int k = 0; k < c->nc; k++)
             q.ior[k] = c->ior[other][k];
         bt_albedo_panels(&q, 0, ti, NORM_U_PANELS, NORM_PSI_PANELS, T);
+        for (int k = 0; c->ms[other][0] && k < c->nc; k++)
+            T[k] += full_ms_energy(c->ms[other][k], 0, ti, NULL);
         e2 = side == BLK_T_ENTER ? 1.0 / (eta * eta) : eta * eta; /* eta > 0 (checked) */
     }
     /* mu >= the first node or midpoint > 0; the floor keeps the norm positive should

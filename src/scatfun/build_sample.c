@@ -56,7 +56,8 @@ BT_CLONES static void sample_grid_t1(const build_ctx *c, const build_ws *w, int 
     bt_io io;
     bt_io_set(&io, ss, mu_s, sf, mu_f, sp, cp, sm);
     double n = c->ior[b][0], d = n - 1.0, s = c->p->smoothness;
-    if (c->p->model == BTDF_MODEL_SMITH) /* the model's shadowing-masking (kernel.h) */
+    if (c->p->model != BTDF_MODEL_XU_SUN) /* smith's shadowing-masking (kernel.h); full's
+                                             single scattering is smith's */
         bt_io_pref_smith(&io, s);
     else
         bt_io_pref(&io, s, c->p->k0);
@@ -84,7 +85,7 @@ BT_CLONES static void sample_grid_r1(const build_ctx *c, const build_ws *w, int 
     memset(&ir, 0, sizeof ir);
     /* ti = acos mu_s, tr = acos mu_f, both in [0, pi/2] */
     bt_ir_rad_m(&ir, atan2(ss, mu_s), atan2(sf, mu_f), c->p->smoothness, c->p->k0,
-                c->p->model == BTDF_MODEL_SMITH);
+                c->p->model != BTDF_MODEL_XU_SUN);
     double n = c->ior[b][0], d = n - 1.0, s = c->p->smoothness;
     size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
     long cnt = phase <= N ? (long)((N - phase) / step) + 1 : 0, sg = (long)(step * g);
@@ -194,17 +195,80 @@ size_t sf_first_grid(const build_ctx *c, int b, double mu_s, double mu_f)
            below */
         want = fmax(want, width > 0.0 ? 2.0 * M_PI / width : HUGE_VAL);
     }
+    if (want == 0.0 && c->ms[b][0])
+        return pow2_at_least(FIRST_MIN_PHI); /* full: light scattered more than once
+                                                 reaches every pair; five modes */
     if (want == 0.0)
         return 0; /* no channel reaches any azimuth */
     return want >= (double)c->nmin ? c->nmin : pow2_at_least(want);
 }
 
+/* Model full: the multiply scattered part of each model channel, times mu_f (and the
+   block's fold), added to the samples sf_sample_grid made of smith's single scattering.
+   Its five modes are formed once for the pair (full_ms_modes), then summed at each
+   azimuth with the cosines by Chebyshev's recurrence and clipped at 0, as full_ms
+   clips its series. Light or view in the surface (mu 0) carries no flux (MODEL.md
+   3.5): nothing is added there, as btdf_full_rho adds nothing. */
+static void add_ms(const build_ctx *c, const build_ws *w, int b, double mu_s, double mu_f,
+                   size_t N, size_t stride, size_t step, size_t phase, double *x)
+{
+    if (!(mu_s > 0.0 && mu_f > 0.0))
+        return;
+    /* |mu| <= 1 for every node and midpoint; fmax guards rounding; ti in [0, 90) deg */
+    double ti_deg = atan2(sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), mu_s) * (180.0 / M_PI);
+    double a[3][FULL_M];
+    for (int k = 0; k < c->nc; k++)
+        full_ms_modes(c->ms[b][k], blk_refl[b], ti_deg, mu_f, a[k]);
+    size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
+    for (size_t j = phase; j <= N; j += step) {
+        /* phi_d = j pi / N; phi = pi - phi_d, so cos phi = -cos phi_d (sf_sample_grid) */
+        double cp = -w->cosg[j * g], cm[FULL_M], v[3];
+        cm[0] = 1.0;
+        cm[1] = cp;
+        for (int m = 2; m < FULL_M; m++)
+            cm[m] = 2.0 * cp * cm[m - 1] - cm[m - 2]; /* Chebyshev: cos(m phi) */
+        for (int k = 0; k < c->nc; k++) {
+            double t = 0.0;
+            for (int m = 0; m < FULL_M; m++)
+                t += a[k][m] * cm[m];
+            v[k] = (t > 0.0 ? t : 0.0) * mu_f;
+        }
+        if (c->nst == 1) {
+            x[j] += v[0];
+            continue;
+        }
+        for (int k = 0; k < 3; k++)
+            v[k] *= c->fold[b][k];
+        x[j] += LUM_R * v[0] + LUM_G * v[1] + LUM_B * v[2];
+        x[stride + j] += v[0];
+        x[2 * stride + j] += v[2];
+    }
+}
+
+static void sample_single(const build_ctx *c, const build_ws *w, int b, double mu_s,
+                          double mu_f, size_t N, size_t stride, size_t step, size_t phase,
+                          double *x);
+
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
    j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones).
-   mu_s, mu_f are the block's cosines as magnitudes, in [0, 1]. */
+   mu_s, mu_f are the block's cosines as magnitudes, in [0, 1]: the model's single
+   scattering, and for full the multiply scattered part on top. */
 void sf_sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_s,
-                        double mu_f, size_t N, size_t stride, size_t step, size_t phase,
-                        double *x)
+                    double mu_f, size_t N, size_t stride, size_t step, size_t phase,
+                    double *x)
+{
+    sample_single(c, w, b, mu_s, mu_f, N, stride, step, phase, x);
+    if (c->ms[b][0])
+        add_ms(c, w, b, mu_s, mu_f, N, stride, step, phase, x);
+}
+
+/* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
+   j pi / N, only at indices j with j % step == phase (step 1: all, 2: odd ones).
+   mu_s, mu_f are the block's cosines as magnitudes, in [0, 1]; the single scattering
+   of the model (smith's for full). */
+static void sample_single(const build_ctx *c, const build_ws *w, int b, double mu_s,
+                          double mu_f, size_t N, size_t stride, size_t step, size_t phase,
+                          double *x)
 {
     if (!blk_refl[b] && c->nc == 1) {
         sample_grid_t1(c, w, b, mu_s, mu_f, N, step, phase, x);
@@ -226,7 +290,7 @@ void sf_sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_s,
     if (blk_refl[b]) {
         /* ti = acos mu_s, tr = acos mu_f, both in [0, pi/2] */
         double ti = atan2(ss, mu_s), tr = atan2(sf, mu_f);
-        bt_ir_rad_m(&ir, ti, tr, c->p->smoothness, c->p->k0, c->p->model == BTDF_MODEL_SMITH);
+        bt_ir_rad_m(&ir, ti, tr, c->p->smoothness, c->p->k0, c->p->model != BTDF_MODEL_XU_SUN);
     } else {
         rho_in_init_m(&ri, ss, mu_s, c->p->smoothness, c->p->k0, c->p->model);
         rho_out_init_m(&ro, sf, -mu_f, c->p->smoothness, c->p->k0, &ri);

@@ -137,5 +137,8 @@ BTDF_API void btdf_scatfun_free(btdf_scatfun *f)
     free(f->coeffs);
     free(f->meta);
     albedo_memo_free(f->memo);
+    for (int i = 0; i < 2; i++)
+        for (int k = 0; k < 3; k++)
+            btdf_full_free(f->ms[i][k]);
     free(f);
 }

@@ -11,6 +11,7 @@
 #include "core/core.h"
 #include "model/kernel.h"
 #include "model/facet.h"
+#include "model/full.h"
 #include "estimate/estimate.h"
 #include "scatfun/scatfun.h"
 
@@ -101,6 +102,13 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
     if (below)
         for (int k = 0; k < q.channels; k++)
             q.ior[k] = 1.0 / p->ior[k];
+    /* full: the truth is smith plus the tally of the light's index (est_opts.full) */
+    if (p->model == BTDF_MODEL_FULL) {
+        for (int k = 0; k < q.channels; k++)
+            if (!f->ms[below][k])
+                return BTDF_ENOTSUP; /* a file read back keeps no tally */
+        opt.full = (btdf_full *const *)f->ms[below];
+    }
     /* Knots: the incident angles of the elevation nodes (both indices share them), so
        every interval between nodes gets its midpoint tested (a band between two nodes
        can hold the largest error: docs/scatfun.md, "Error report"). */
@@ -124,6 +132,10 @@ static btdf_status report_reading(const btdf_scatfun *f, const btdf_params *p, i
                                          knots, nk, mis_eval, mis_prep, mis_done, &m, &opt,
                                          memo, r);
     free(knots);
+    /* full: the tally's noise floor over the range tested (table/full.c's rule) */
+    r->ms_noise = 0.0;
+    for (int k = 0; st == BTDF_OK && opt.full && k < q.channels; k++)
+        r->ms_noise = fmax(r->ms_noise, full_ms_noise(opt.full[k], refl, 0.0, top));
     return st;
 }
 
@@ -153,6 +165,13 @@ btdf_status sf_report_mis(const btdf_scatfun *f, const btdf_params *p, btdf_side
     /* the other transmission block, which ADJOINT reads for this side's light */
     int tb = b == BTDF_SCATFUN_T_ENTER ? BTDF_SCATFUN_T_LEAVE : BTDF_SCATFUN_T_ENTER;
     int has_adj = refl || (f->sides & tb) != 0;
+    /* Model full is not reciprocal to the bit: each index has its own tally, whose
+       orders 2+ are a fit. The file keeps each block's own (its DIRECT reading); an
+       ADJOINT reading returns the reverse path's tally, apart from this block's by the
+       model's own reciprocity gap, which no file of separate blocks can close (measured
+       in docs/scatfun.md, "Files of full"). So full's files are measured DIRECT. */
+    if (p->model == BTDF_MODEL_FULL)
+        has_adj = 0;
     if (f->channels == 3 && !refl)
         /* a file of this one block: its ADJOINT reading is the other side's light */
         return report_reading(f, p, has_adj ? b : tb, BTDF_SCATFUN_ADJOINT, 0, angles, ppa,
@@ -171,8 +190,11 @@ BTDF_API btdf_status btdf_scatfun_report(const btdf_scatfun *f, const btdf_param
         ((int)side != BTDF_SCATFUN_T_ENTER && (int)side != BTDF_SCATFUN_T_LEAVE &&
          (int)side != BTDF_SCATFUN_R_TOP && (int)side != BTDF_SCATFUN_R_BOTTOM))
         return BTDF_EINVAL;
-    if (btdf_params_check(p, NULL, 0) != BTDF_OK)
+    if (sf_check_params(p, NULL, 0) != BTDF_OK)
         return BTDF_EINVAL;
+    if (p->model == BTDF_MODEL_FULL && !f->ms[0][p->channels == 3 ? 1 : 0] &&
+        !f->ms[1][p->channels == 3 ? 1 : 0])
+        return BTDF_ENOTSUP; /* full's truth needs the tally: a built file's */
     if ((p->channels == 3) != (f->channels == 3))
         return BTDF_EINVAL; /* the truth must have the file's channels */
     if (test_angles == 0)

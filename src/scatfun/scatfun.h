@@ -68,7 +68,16 @@ struct btdf_scatfun {
     double tolerance, seconds_build;
     int sides;         /* btdf_side mask of the blocks present */
     albedo_memo *memo; /* T and R of the reports' test angles (NULL: computed each time) */
+    /* model full, a built file: the tallies its multiply scattered part came from, per
+       index ([0] n, the blocks lit from above; [1] 1/n) and channel, owned; its reports
+       are measured against smith plus these. NULL otherwise (a file read back does not
+       keep them: formats/bsdf.c). */
+    btdf_full *ms[2][3];
 };
+
+/* build.c: btdf_params_check for a file's parameters: model full is checked as its
+   single scattering, smith (its tally is the builder's). */
+btdf_status sf_check_params(const btdf_params *p, char *msg, size_t msglen);
 
 /* lookup.c: btdf_scatfun_eval_side from cosines: ci = cos ti and co = |cos to| in
    [0, 1], cpd = cos phi_d = -cos phi in [-1, 1]; side and mode checked by the caller. */
