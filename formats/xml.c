@@ -201,7 +201,12 @@ static btdf_status xml_write(const fmt_output_ctx *c, FILE *f, char *msg, size_t
         : r->p.model == BTDF_MODEL_FULL ? "Xu and Sun 2008 facets with the Smith term and "
                                           "multiple scattering (model full)"
                                         : "Xu and Sun 2008 Eq. 25";
-    if (sys)
+    if (sys && r->channels == 3)
+        fprintf(f, "\t\t<Comments>%s: n = %.9g (R), %.9g (G), %.9g (B) in Radiance's RGB, "
+                   "written as CIE X, Y, Z; s = %.9g, k0 = %.9g; basis %s", r->system,
+                r->p.ior[0], r->p.ior[1], r->p.ior[2], r->p.smoothness, r->p.k0,
+                rad_basis_name(r->basis));
+    else if (sys)
         fprintf(f, "\t\t<Comments>%s: n = %.9g, s = %.9g, k0 = %.9g; basis %s", r->system,
                 r->p.ior[0], r->p.smoothness, r->p.k0, rad_basis_name(r->basis));
     else if (r->channels == 3)

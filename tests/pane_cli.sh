@@ -82,8 +82,23 @@ printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\nenter = x.csv\n' > "$W/m/
 build_fails "$W/m/b6.ini" 2 "written to xml and grid only" "a pane with a table output"
 printf '[p]\nior = 1.5\nsmoothness = 1\nback = smooth\ntolerance = 1e-3\nxml = x.xml\n' > "$W/m/b7.ini"
 build_fails "$W/m/b7.ini" 2 "do not apply to a pane" "a pane with a tolerance"
-printf '[p]\nior = 1.5,1.6,1.7\nsmoothness = 1\nback = smooth\nxml = x.xml\n' > "$W/m/b8.ini"
-build_fails "$W/m/b8.ini" 2 "one channel" "a pane with three channels"
+printf '[p]\nior = 1.5,1.6,1.7\nsmoothness = 1\nback = smooth\nbasis = tree3\nxml = x.xml\n' > "$W/m/b8.ini"
+build_fails "$W/m/b8.ini" 2 "a colour pane .xml takes the Klems bases" "a colour pane's tree3"
+# a colour pane's Klems file from a manifest: the same bytes as tabulate's (but the
+# provenance), CIE X, Y, Z blocks (Radiance reads it: tests/radiance.sh)
+mkdir -p "$W/c3"
+printf '[p]\nior = 1.49,1.5,1.52\nsmoothness = 3\nback = smooth\nbasis = klems-quarter\nxml = c.xml\n' \
+    > "$W/c3/c3.ini"
+c3ok=0
+(cd "$W/c3" && "$B" build c3.ini -q) && (cd "$W/c3" && "$B" tabulate --back smooth -s 3 \
+    --ior 1.49,1.5,1.52 --basis klems-quarter -q -o t3.xml) &&
+    [ "$(grep -c '<Wavelength unit="Integral">CIE-[XZ]</Wavelength>' "$W/c3/c.xml")" = 8 ] &&
+    c3ok=1
+diff "$W/c3/c.xml" "$W/c3/t3.xml" 2>&1 | grep '^[<>]' | grep -v -e 'command:' -e '^[<>] *<Name>' \
+    >"$W/c3/c3.diff"
+[ "$c3ok" = 1 ] && [ ! -s "$W/c3/c3.diff" ] &&
+    ok "manifest: a colour pane's Klems .xml, the blocks of tabulate's" ||
+    no "manifest colour pane: $(head -c 600 "$W/c3/c3.diff" 2>/dev/null)"
 # a pane's grid from the manifest: the bytes of tabulate --back -o F.csv --grid (but the
 # provenance line), once per material, a stamp that knows the grid's size; three
 # channels are a grid's as they are tabulate's; the grid keys' refusals

@@ -70,6 +70,28 @@ PYR=$("$PY" -c 'import os, pyradiance; print(os.path.dirname(pyradiance.__file__
     ok "pane: checkBSDF's T within 1 % of ours, reciprocity below 5 %" ||
     no "pane: checkBSDF against btdftab albedo --back"
 
+# A colour pane (three indices, Klems): Radiance reads it as a colour BSDF (checkBSDF's
+# "Color: 1"), and its largest hemispherical transmission from outside (CIE Y, %) is
+# within 1 % of the Y of our three channels' T at normal incidence (Klems full: its first
+# patch spans 0-5 deg). Y = 0.2651 R + 0.6701 G + 0.0648 B: the Y row of RGB -> XYZ for
+# Radiance's default primaries (0.640, 0.330), (0.290, 0.600), (0.150, 0.060) and
+# equal-energy white, by which the file's X, Y, Z were made (src/radiance/radiance.c).
+"$B" tabulate --back smooth --thickness 4 -s 3 --ior 1.49,1.5,1.52 --basis klems-full -q \
+    -o "$W/pcol.xml" &&
+    RAYPATH=".:$PYR/lib" "$PYR/bin/checkBSDF" "$W/pcol.xml" >"$W/ck3" 2>&1 &&
+    grep -q '^Color: 1' "$W/ck3" &&
+    "$B" albedo --back smooth --thickness 4 -s 3 --ior 1.49,1.5,1.52 0 >"$W/alb3" &&
+    awk -F'\t' -v alb="$(tail -n 1 "$W/alb3")" '
+        BEGIN { split(alb, a, ","); ty = 100 * (0.2651 * a[2] + 0.6701 * a[8] + 0.0648 * a[14]) }
+        /^Ext->Int Trans/ { ef = $4 + 0 }
+        END { printf "# colour pane: checkBSDF Y %g %%, ours %g %%\n", ef, ty
+              exit (ef - ty) ^ 2 > (ty / 100) ^ 2 }' "$W/ck3" &&
+    ok "colour pane: Radiance reads a colour BSDF, its Y within 1 % of ours" ||
+    no "colour pane: $(cat "$W/ck3" 2>/dev/null | head -n 12)"
+"$B" tabulate --back smooth -s 3 --ior 1.49,1.5,1.52 --basis tree3 -o "$W/pct.xml" 2>"$W/err"
+[ $? -eq 2 ] && grep -q "takes the Klems bases" "$W/err" && [ ! -e "$W/pct.xml" ] &&
+    ok "a colour pane tree3: usage error naming the bases that take it" || no "colour pane tree3: $(cat "$W/err")"
+
 # bad input: usage status 2, the value named, nothing written
 "$B" tabulate --basis klems-eighth -o "$W/t.xml" 2>"$W/err"
 [ $? -eq 2 ] && grep -q "klems-eighth" "$W/err" && [ ! -e "$W/t.xml" ] &&

@@ -84,7 +84,9 @@ const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
     if (table_keys)
         return "back: tolerance, theta_i, metric, part and sides do not apply to a pane's xml "
                "or grid (they hold the system, both parts, light from either side)";
-    return channels != 1 ? "back: a pane's xml has one channel: give one ior" : NULL;
+    return channels != 1 ? "back: a colour pane .xml takes the Klems bases (basis = "
+                           "klems-full, klems-half or klems-quarter); its tree3 has one channel"
+                         : NULL;
 }
 
 int apply_pane(cli *c, int id, const char *v)
@@ -357,29 +359,38 @@ static int pane_polar(const cli *c, const btdf_pane *P)
    through the front, 2 reflected on -Z (front), 3 on +Z (back). */
 static btdf_pane_side block_side(int k) { return k == 1 || k == 2 ? BTDF_PANE_FRONT : BTDF_PANE_BACK; }
 
+/* The user of the source's calls: the pane and the channel asked. */
+typedef struct pane_ch {
+    const btdf_pane *P;
+    int ch;
+} pane_ch;
+
 static double src_eval(void *user, int k, double ti, double to, double phi)
 {
-    const btdf_pane *P = user;
+    const pane_ch *u = user;
     if (k >= 2)
-        return btdf_pane_eval(P, block_side(k), BTDF_PART_REFLECTION, 0, ti, to, phi);
-    return btdf_pane_eval(P, block_side(k), BTDF_PART_TRANSMISSION, 0, ti, M_PI - to, phi);
+        return btdf_pane_eval(u->P, block_side(k), BTDF_PART_REFLECTION, u->ch, ti, to, phi);
+    return btdf_pane_eval(u->P, block_side(k), BTDF_PART_TRANSMISSION, u->ch, ti, M_PI - to,
+                          phi);
 }
 
 static void src_eval_phis(void *user, int k, double ti, double to, size_t count,
                           const double *phi, double *out)
 {
-    const btdf_pane *P = user;
+    const pane_ch *u = user;
     if (k >= 2)
-        btdf_pane_eval_phis(P, block_side(k), BTDF_PART_REFLECTION, 0, ti, to, count, phi, out);
-    else
-        btdf_pane_eval_phis(P, block_side(k), BTDF_PART_TRANSMISSION, 0, ti, M_PI - to, count,
+        btdf_pane_eval_phis(u->P, block_side(k), BTDF_PART_REFLECTION, u->ch, ti, to, count,
                             phi, out);
+    else
+        btdf_pane_eval_phis(u->P, block_side(k), BTDF_PART_TRANSMISSION, u->ch, ti, M_PI - to,
+                            count, phi, out);
 }
 
 static double src_specular(void *user, int k, double ti)
 {
-    return btdf_pane_specular(user, block_side(k),
-                              k >= 2 ? BTDF_PART_REFLECTION : BTDF_PART_TRANSMISSION, 0, ti);
+    const pane_ch *u = user;
+    return btdf_pane_specular(u->P, block_side(k),
+                              k >= 2 ? BTDF_PART_REFLECTION : BTDF_PART_TRANSMISSION, u->ch, ti);
 }
 
 /* What applies to an interface's table does not apply to a pane's .xml (the system,
@@ -404,8 +415,10 @@ static int pane_out_checks(const cli *c, int grid)
         return fail(EXIT_USAGE, "%s: --basis does not apply to a pane's grid (--grid sets "
                                 "its nodes)",
                     c->out);
-    if (!grid && c->p.channels != 1)
-        return fail(EXIT_USAGE, "--back: a pane's .xml has one channel: give one --ior");
+    if (!grid && c->p.channels != 1 && c->basis == BTDF_RAD_TREE3)
+        return fail(EXIT_USAGE, "%s: --ior %s: a colour pane .xml takes the Klems bases "
+                                "(--basis klems-full|klems-half|klems-quarter); its tree3 "
+                                "has one channel", c->out, "with three indices");
     if (grid && ends_with(c->out, ".exr") && !btdf_format_available("exr"))
         return fail(EXIT_USAGE, "%s: this btdftab was built without OpenEXR: write .csv",
                     c->out);
@@ -422,12 +435,22 @@ static int write_system(const btdf_pane *P, const char *path, const btdf_params 
         snprintf(back, sizeof back, "flat");
     else
         snprintf(back, sizeof back, "rough, s = %.9g", o->back_smoothness);
+    char ns[96];
+    if (p->channels == 3)
+        snprintf(ns, sizeof ns, "n = %.9g (R), %.9g (G), %.9g (B)", o->front.ior[0],
+                 o->front.ior[1], o->front.ior[2]);
+    else
+        snprintf(ns, sizeof ns, "n = %.9g", o->front.ior[0]);
     snprintf(desc, sizeof desc,
-             "a pane in air (front face: model %s, n = %.9g, s = %.9g; back face %s; "
+             "a pane in air (front face: model %s, %s, s = %.9g; back face %s; "
              "thickness %.9g mm, absorption %.9g per mm)",
-             btdf_model_name(o->front.model), o->front.ior[0], o->front.smoothness, back,
+             btdf_model_name(o->front.model), ns, o->front.smoothness, back,
              o->thickness_mm, o->absorption_per_mm);
-    btdf_rad_source src = {(void *)P, src_eval, src_specular, src_eval_phis, desc};
+    pane_ch u[3] = {{P, 0}, {P, 1}, {P, 2}};
+    btdf_rad_source src = {&u[0], src_eval, src_specular, src_eval_phis, desc,
+                           {&u[0], &u[1], &u[2]}};
+    if (p->channels != 3)
+        src.user_ch[0] = src.user_ch[1] = src.user_ch[2] = NULL;
     btdf_rad *x = NULL;
     char msg[512] = "";
     btdf_status st = btdf_rad_build_source(&src, p, basis, PANE_TREE_DEPTH, threads,
@@ -461,8 +484,10 @@ static int write_system(const btdf_pane *P, const char *path, const btdf_params 
 int pane_write_xml(const char *path, const btdf_params *p, const pane_spec *ps,
                    btdf_rad_basis basis, int threads, int quiet, const char *prov)
 {
-    if (p->channels != 1)
-        return fail(EXIT_USAGE, "%s: a pane's .xml has one channel: give one ior", path);
+    if (p->channels != 1 && basis == BTDF_RAD_TREE3)
+        return fail(EXIT_USAGE, "%s: a colour pane .xml takes the Klems bases (basis "
+                                "klems-full, klems-half or klems-quarter); its tree3 has one "
+                                "channel", path);
     btdf_pane *P = NULL;
     int code = make_pane(p, ps, threads, &P);
     if (!code)

@@ -500,13 +500,13 @@ static int pane_section_refusal(const manifest_opts *mo, const material *m)
                 mo->prog, mo->path, m->key_line[K_GRID_SIZE], m->name);
         return 2;
     }
-    /* three channels: a pane's grid holds them, its .xml does not */
+    /* three channels: a pane's grid and Klems .xml hold them, its tree3 does not */
     const char *pw = pane_keys_refusal(
         m->key_line[K_BACK] != 0, m->key_line[K_THICK] || m->key_line[K_ABS],
         m->nenter + m->nleave + m->nbsdf,
         m->key_line[K_TOL] || m->key_line[K_THETA] || m->key_line[K_METRIC] ||
             m->key_line[K_PART] || m->key_line[K_SIDES],
-        m->nxml ? m->p.channels : 1);
+        m->nxml && m->basis == BTDF_RAD_TREE3 ? m->p.channels : 1);
     if (pw) {
         fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path,
                 m->key_line[K_BACK] ? m->key_line[K_BACK]

@@ -25,7 +25,8 @@ int pane_spec_set(pane_spec *ps, const char *key, const char *value, char *why, 
 
 /* Why a manifest section's pane keys are refused, as tabulate --back refuses the
    options, or NULL: back given, thickness or absorption given, the number of enter, leave
-   and bsdf outputs, whether a key for tables is given, the channels of ior. */
+   and bsdf outputs, whether a key for tables is given, the channels of ior a tree3 .xml
+   is asked with (1 when none is: a Klems .xml and a grid take three). */
 const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
                               int table_keys, int channels);
 

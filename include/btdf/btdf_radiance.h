@@ -142,7 +142,8 @@ BTDF_API void btdf_rad_set_errors(btdf_rad *r, int k, double e_l1, double e_t);
    weight in the mirror or straight-through direction, put on the diagonal (Klems) or in
    the leaf holding that direction (tree). Klems: 3 x 3 Gauss points over every patch
    pair; tree3: a full tree of `depth` levels, each leaf the value at its centre. p gives
-   n for the frame and the Comments (one channel). */
+   n for the frame and the Comments: one channel, or three for the Klems bases (user_ch;
+   BTDF_ENOTSUP for a colour tree). */
 typedef struct btdf_rad_source {
     void *user;
     double (*eval)(void *user, int k, double ti, double to, double phi);
@@ -151,6 +152,11 @@ typedef struct btdf_rad_source {
     void (*eval_phis)(void *user, int k, double ti, double to, size_t count,
                       const double *phi, double *out);
     const char *description; /* the file's account of itself, e.g. the pane; may be NULL */
+    /* Three channels (p->channels == 3, the Klems bases): each callback is called with
+       user_ch[c] for channel c (n = p->ior[c]), and the file holds CIE X, Y, Z made
+       from the three, as an interface's colour Klems file does. Unused (NULL) for one
+       channel. */
+    void *user_ch[3];
 } btdf_rad_source;
 #define BTDF_RAD_SOURCE_DEPTH_MAX 7
 BTDF_API btdf_status btdf_rad_build_source(const btdf_rad_source *s, const btdf_params *p,

@@ -142,34 +142,45 @@ static void src_klems_in(void *arg, size_t i)
         }
 }
 
+/* The Klems matrices of the four blocks. Three channels: each channel's exact patch
+   averages (the source called with user_ch[c]), combined into CIE X, Y, Z by Radiance's
+   RGB primaries and each then rounded, as rad_klems_colour combines an interface's. */
 static btdf_status src_klems(const btdf_rad_source *s, btdf_rad *r, int threads, char *msg,
                              size_t msglen)
 {
     const rad_klems_basis *kb = r->kb;
-    size_t np = (size_t)kb->npatch;
-    double *rect = malloc(sizeof(double) * 4 * np), *acc = malloc(sizeof(double) * np * np);
-    if (!rect || !acc) {
-        free(rect);
-        free(acc);
-        return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
-    }
-    for (size_t p = 0; p < np; p++)
+    size_t np = (size_t)kb->npatch, nn = np * np;
+    int nc = r->channels == 3 ? 3 : 1;
+    double *rect = malloc(sizeof(double) * 4 * np), *acc[3] = {NULL, NULL, NULL}, m[3][3];
+    int bad = !rect;
+    for (int c = 0; c < nc; c++)
+        bad |= !(acc[c] = malloc(sizeof(double) * nn));
+    for (size_t p = 0; p < np && !bad; p++)
         patch_rect4(kb, (int)p, rect + 4 * p);
-    for (int k = 0; k < 4; k++) {
-        src_job J = {s, kb, k, acc, rect, 0};
-        core_parallel_for(threads, np, src_klems_in, &J);
-        r->b[k].klems = malloc(sizeof(float) * np * np);
-        if (!r->b[k].klems) {
-            free(rect);
-            free(acc);
-            return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
+    rad_rgb_to_xyz(m);
+    for (int k = 0; k < 4 && !bad; k++) {
+        for (int c = 0; c < nc; c++) {
+            btdf_rad_source sc = *s;
+            if (nc == 3)
+                sc.user = s->user_ch[c];
+            src_job J = {&sc, kb, k, acc[c], rect, 0};
+            core_parallel_for(threads, np, src_klems_in, &J);
         }
-        for (size_t e = 0; e < np * np; e++)
-            r->b[k].klems[e] = rad_klems_value(acc[e]);
+        rad_block *b = &r->b[k];
+        float **dst[3] = {&b->klems_x, &b->klems, &b->klems_z};
+        for (int i = 0; i < nc && !bad; i++) {
+            float *out = *dst[nc == 3 ? i : 1] = malloc(sizeof(float) * nn);
+            bad |= !out;
+            for (size_t e = 0; out && e < nn; e++)
+                out[e] = rad_klems_value(nc == 3 ? m[i][0] * acc[0][e] + m[i][1] * acc[1][e] +
+                                                       m[i][2] * acc[2][e]
+                                                 : acc[0][e]);
+        }
     }
     free(rect);
-    free(acc);
-    return BTDF_OK;
+    for (int c = 0; c < 3; c++)
+        free(acc[c]);
+    return bad ? core_say(BTDF_ENOMEM, msg, msglen, "out of memory") : BTDF_OK;
 }
 
 /* A full tree of `depth` levels: leaf (u0, a, b) holds the source at its centre, and the
@@ -274,9 +285,16 @@ BTDF_API btdf_status btdf_rad_build_source(const btdf_rad_source *s, const btdf_
 {
     if (!s || !s->eval || !p || !out)
         return core_say(BTDF_EINVAL, msg, msglen, "btdf_rad_build_source: NULL argument");
-    if (p->channels != 1)
+    if (p->channels == 3 && basis == BTDF_RAD_TREE3)
+        return core_say(BTDF_ENOTSUP, msg, msglen,
+                        "btdf_rad_build_source: three channels: the Klems bases only (a "
+                        "colour tree3 of a caller's BSDF is not available)");
+    if (p->channels == 3 && !(s->user_ch[0] && s->user_ch[1] && s->user_ch[2]))
         return core_say(BTDF_EINVAL, msg, msglen,
-                        "btdf_rad_build_source: %d channels: one channel only", p->channels);
+                        "btdf_rad_build_source: three channels need user_ch[0..2]");
+    if (p->channels != 1 && p->channels != 3)
+        return core_say(BTDF_EINVAL, msg, msglen,
+                        "btdf_rad_build_source: %d channels: one or three", p->channels);
     if (basis == BTDF_RAD_TREE3 && !(depth >= 1 && depth <= BTDF_RAD_SOURCE_DEPTH_MAX))
         return core_say(BTDF_EINVAL, msg, msglen, "tree depth %d: use 1..%d", depth,
                         BTDF_RAD_SOURCE_DEPTH_MAX);
@@ -286,7 +304,7 @@ BTDF_API btdf_status btdf_rad_build_source(const btdf_rad_source *s, const btdf_
         return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
     r->basis = basis;
     r->p = *p;
-    r->channels = 1;
+    r->channels = p->channels;
     r->nblocks = 4;
     r->kb = basis == BTDF_RAD_TREE3 ? NULL : rad_klems(basis);
     for (int k = 0; k < 4; k++)
