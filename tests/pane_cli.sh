@@ -92,13 +92,16 @@ printf '[p]\nior = 1.49,1.5,1.52\nsmoothness = 3\nback = smooth\nbasis = klems-q
 c3ok=0
 (cd "$W/c3" && "$B" build c3.ini -q) && (cd "$W/c3" && "$B" tabulate --back smooth -s 3 \
     --ior 1.49,1.5,1.52 --basis klems-quarter -q -o t3.xml) &&
-    [ "$(grep -c '<Wavelength unit="Integral">CIE-[XZ]</Wavelength>' "$W/c3/c.xml")" = 8 ] &&
+    [ "$(grep -c '<Wavelength unit="Integral">CIE-[XZ]</Wavelength>' "$W/c3/c.xml")" = 2 ] &&
+    [ "$(grep -c '<WavelengthDataDirection>' "$W/c3/c.xml")" = 12 ] &&
     c3ok=1
+# (the Y, X and Z spectra each hold the four blocks: one CIE-X and one CIE-Z section,
+# twelve block directions in all)
 diff "$W/c3/c.xml" "$W/c3/t3.xml" 2>&1 | grep '^[<>]' | grep -v -e 'command:' -e '^[<>][[:space:]]*<Name>' \
     >"$W/c3/c3.diff"
 [ "$c3ok" = 1 ] && [ ! -s "$W/c3/c3.diff" ] &&
     ok "manifest: a colour pane's Klems .xml, the blocks of tabulate's" ||
-    no "manifest colour pane: $(head -c 600 "$W/c3/c3.diff" 2>/dev/null)"
+    no "manifest colour pane: built and laid out as X, Y, Z: $c3ok; diff: $(head -c 600 "$W/c3/c3.diff" 2>/dev/null)"
 # a pane's grid from the manifest: the bytes of tabulate --back -o F.csv --grid (but the
 # provenance line), once per material, a stamp that knows the grid's size; three
 # channels are a grid's as they are tabulate's; the grid keys' refusals
