@@ -506,19 +506,12 @@ void full_rho_row_deg(const btdf_full *f, int h, double ti, double to, int np, d
             out[p] = 0.0;
             continue;
         }
-        double phd = np > 1 ? 180.0 * p / (np - 1) : 0.0, sp, cp, cm[FULL_M];
+        double phd = np > 1 ? 180.0 * p / (np - 1) : 0.0, sp, cp;
         model_sincos_deg(phd, &sp, &cp);
         (void)sp;
-        cm[0] = 1.0;
-        cm[1] = cp;
-        for (int m = 2; m < FULL_M; m++)
-            cm[m] = 2.0 * cp * cm[m - 1] - cm[m - 2]; /* Chebyshev: cos(m phi) */
-        double v = 0.0;
-        for (int m = 0; m < FULL_M; m++)
-            v += a[m] * cm[m];
         double one = h ? btdf_rho_r_smith_deg(f->n, f->s, ti, to, ti == 0.0 ? 0.0 : phd)
                        : btdf_rho_smith_deg(f->n, f->s, ti, to, ti == 0.0 ? 0.0 : phd);
-        out[p] = one + (v > 0.0 ? v : 0.0); /* a dip of the series below 0, as full_ms */
+        out[p] = one + full_ms_at(a, cp);
     }
 }
 

@@ -46,6 +46,21 @@ double full_ms(const btdf_full *f, int h, double ti_deg, double mu, double cphi)
    azimuth phi is max(0, sum_m a[m] cos(m phi)) (full_ms's value, summed in another
    order). */
 void full_ms_modes(const btdf_full *f, int h, double ti_deg, double mu, double *a);
+/* The multiply scattered part at azimuth phi from the modes a of full_ms_modes, given
+   cos phi: max(0, sum_m a[m] cos(m phi)), the cosines by Chebyshev's recurrence (a dip
+   of the truncated series below 0 is clipped, as full_ms). */
+static inline double full_ms_at(const double *a, double cp)
+{
+    double cm[FULL_M];
+    cm[0] = 1.0;
+    cm[1] = cp;
+    for (int m = 2; m < FULL_M; m++)
+        cm[m] = 2.0 * cp * cm[m - 1] - cm[m - 2]; /* Chebyshev: cos(m phi) */
+    double v = 0.0;
+    for (int m = 0; m < FULL_M; m++)
+        v += a[m] * cm[m];
+    return v > 0.0 ? v : 0.0;
+}
 /* rho of full on side h (0: transmission, to in [90, 180]; 1: reflection, to = tr in
    [0, 90]) at the np azimuths 180 p / (np - 1) degrees, p = 0..np-1: smith's value at
    each plus the multiply scattered part, its modes formed once for the pair (a row of

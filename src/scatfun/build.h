@@ -35,6 +35,9 @@ static const int blk_slow_neg[NBLK] = {0, 1, 0, 1}; /* mu_s < 0 */
 static const int blk_fast_neg[NBLK] = {0, 1, 1, 0}; /* mu_f < 0 */
 static const int blk_mask[NBLK] = {BTDF_SCATFUN_T_ENTER, BTDF_SCATFUN_T_LEAVE,
                                    BTDF_SCATFUN_R_TOP, BTDF_SCATFUN_R_BOTTOM};
+/* The blocks lit from the side of each index: [0] light in the upper medium (index n),
+   [1] light in the lower one (1/n); each pair is one tally of full. */
+static const int blk_of_index[2][2] = {{BLK_T_ENTER, BLK_R_TOP}, {BLK_T_LEAVE, BLK_R_BOTTOM}};
 
 typedef struct pair {
     double *a;     /* nst * m coefficients, channel-major (Y, R, B) */

@@ -46,7 +46,6 @@ static btdf_status make(build_ctx *c, int threads, btdf_full *own[2][3], char *m
     btdf_full_opts fo;
     btdf_full_opts_default(&fo);
     fo.threads = threads;
-    static const int blk_of_index[2][2] = {{BLK_T_ENTER, BLK_R_TOP}, {BLK_T_LEAVE, BLK_R_BOTTOM}};
     for (int i = 0; i < 2; i++) {
         if (!c->want[blk_of_index[i][0]] && !c->want[blk_of_index[i][1]])
             continue;

@@ -346,7 +346,6 @@ btdf_status sf_assemble(build_ctx *c, btdf_scatfun **out, char *msg, size_t msgl
     for (int s = 0; s < NBLK; s++)
         f->sides |= c->want[s] ? blk_mask[s] : 0;
     /* full: copies of the tallies of the blocks' two indices, for the file's reports */
-    static const int blk_of_index[2][2] = {{BLK_T_ENTER, BLK_R_TOP}, {BLK_T_LEAVE, BLK_R_BOTTOM}};
     for (int i = 0; i < 2; i++)
         for (int k = 0; k < c->nc; k++) {
             const btdf_full *src = c->ms[blk_of_index[i][0]][k] ? c->ms[blk_of_index[i][0]][k]

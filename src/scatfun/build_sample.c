@@ -203,46 +203,25 @@ size_t sf_first_grid(const build_ctx *c, int b, double mu_s, double mu_f)
     return want >= (double)c->nmin ? c->nmin : pow2_at_least(want);
 }
 
-/* Model full: the multiply scattered part of each model channel, times mu_f (and the
-   block's fold), added to the samples sf_sample_grid made of smith's single scattering.
+/* Model full (one channel): the multiply scattered part, times mu_f, added to the
+   samples sf_sample_grid made of smith's single scattering.
    Its five modes are formed once for the pair (full_ms_modes), then summed at each
    azimuth with the cosines by Chebyshev's recurrence and clipped at 0, as full_ms
    clips its series. Light or view in the surface (mu 0) carries no flux (MODEL.md
    3.5): nothing is added there, as btdf_full_rho adds nothing. */
 static void add_ms(const build_ctx *c, const build_ws *w, int b, double mu_s, double mu_f,
-                   size_t N, size_t stride, size_t step, size_t phase, double *x)
+                   size_t N, size_t step, size_t phase, double *x)
 {
     if (!(mu_s > 0.0 && mu_f > 0.0))
         return;
     /* |mu| <= 1 for every node and midpoint; fmax guards rounding; ti in [0, 90) deg */
     double ti_deg = atan2(sqrt(fmax(0.0, 1.0 - mu_s * mu_s)), mu_s) * (180.0 / M_PI);
-    double a[3][FULL_M];
-    for (int k = 0; k < c->nc; k++)
-        full_ms_modes(c->ms[b][k], blk_refl[b], ti_deg, mu_f, a[k]);
+    double a[FULL_M];
+    full_ms_modes(c->ms[b][0], blk_refl[b], ti_deg, mu_f, a);
     size_t g = c->nmax / N; /* N divides nmax: both are powers of two */
-    for (size_t j = phase; j <= N; j += step) {
+    for (size_t j = phase; j <= N; j += step)
         /* phi_d = j pi / N; phi = pi - phi_d, so cos phi = -cos phi_d (sf_sample_grid) */
-        double cp = -w->cosg[j * g], cm[FULL_M], v[3];
-        cm[0] = 1.0;
-        cm[1] = cp;
-        for (int m = 2; m < FULL_M; m++)
-            cm[m] = 2.0 * cp * cm[m - 1] - cm[m - 2]; /* Chebyshev: cos(m phi) */
-        for (int k = 0; k < c->nc; k++) {
-            double t = 0.0;
-            for (int m = 0; m < FULL_M; m++)
-                t += a[k][m] * cm[m];
-            v[k] = (t > 0.0 ? t : 0.0) * mu_f;
-        }
-        if (c->nst == 1) {
-            x[j] += v[0];
-            continue;
-        }
-        for (int k = 0; k < 3; k++)
-            v[k] *= c->fold[b][k];
-        x[j] += LUM_R * v[0] + LUM_G * v[1] + LUM_B * v[2];
-        x[stride + j] += v[0];
-        x[2 * stride + j] += v[2];
-    }
+        x[j] += full_ms_at(a, -w->cosg[j * g]) * mu_f;
 }
 
 static void sample_single(const build_ctx *c, const build_ws *w, int b, double mu_s,
@@ -258,8 +237,9 @@ void sf_sample_grid(const build_ctx *c, const build_ws *w, int b, double mu_s,
                     double *x)
 {
     sample_single(c, w, b, mu_s, mu_f, N, stride, step, phase, x);
+    /* full is one index only (btdf_scatfun_check): one stored channel */
     if (c->ms[b][0])
-        add_ms(c, w, b, mu_s, mu_f, N, stride, step, phase, x);
+        add_ms(c, w, b, mu_s, mu_f, N, step, phase, x);
 }
 
 /* Fills samples x (stride N2 + 1 per stored channel, N2 = the grid wanted) for the grid
