@@ -233,6 +233,11 @@ static btdf_status csv_write(const fmt_output_ctx *c, FILE *f, char *msg, size_t
                    "cos(theta_i)) in place of V(theta_i)/cos(theta_i), and facet slices divide "
                    "each node by (1 + Lambda(theta_i)) G2 beside K, G2 the Smith term of its "
                    "directions at the slice's theta_i (docs/tables.md)\n");
+    if (tr && p->model != BTDF_MODEL_XU_SUN)
+        fprintf(f, "# model-rule reflection: smith: reflection slices divide each node by "
+                   "(1 + Lambda(theta_i)) G2 / cos(theta_r) beside Fr; a node whose facet "
+                   "mirrors e_i below the horizon holds the value at the mirror image of its "
+                   "direction (|cos theta_r|), which no direction reads (docs/tables.md)\n");
     /* Read by machines: files without these lines are read with the plain rule. */
     if (t->kind != BTDF_TABLE_GRID)
         fprintf(f, "# slice-rule: %s\n", btdf_table_rule_name(t->rule));

@@ -88,14 +88,6 @@ static btdf_status check_opts(const btdf_table_opts *o, char *msg, size_t msglen
     if (o->kind == BTDF_TABLE_GRID && o->part != 0 && o->part != BTDF_PART_TRANSMISSION)
         return core_say(BTDF_EINVAL, msg, msglen, "part %lld: grid tables hold the transmission only; the "
                                     "reflection needs a facet table", (long long)o->part);
-    /* Smith's reflection keeps a finite value up to the horizon (G2 ~ cos tr there) where
-       the builder's nodes stop: measured at n = 1.5, s = 3, a 5e-2 table misses 8 % of
-       R with e_max 1, so it is refused rather than written short */
-    if (o->params.model != BTDF_MODEL_XU_SUN && o->part != 0 &&
-        o->part != BTDF_PART_TRANSMISSION)
-        return core_say(BTDF_ENOTSUP, msg, msglen, "part %s with model %s: reflection tables "
-                        "of this model are not available in this build (the transmission is)",
-                        btdf_part_name(o->part), btdf_model_name(o->params.model));
     /* full's tally is added to facet slices at the query (table/full.c); a grid of
        full would need the tally in its nodes and its own estimate */
     if (o->params.model == BTDF_MODEL_FULL && o->kind == BTDF_TABLE_GRID)
@@ -225,7 +217,9 @@ static btdf_status build_part(const btdf_table_opts *o, const btdf_full *const *
             o->progress(o->progress_user, "tighter pass", (size_t)pass, (size_t)(6 - pass));
         table_clear(t);
         table_strip_full(t);
-        t->kind = BTDF_TABLE_FACET;
+        /* the pass's own kind: its slices' model factors (slice_prepare) are the
+           reflection's for a reflection, and the refraction's in n for the others */
+        t->kind = refl ? BTDF_TABLE_FACET_REFLECTION : BTDF_TABLE_FACET;
         t->p = ob.params;
         budget_hit = 0;
         st = tb_facet_pass(&ob, fs, ft, t, &budget_hit, &evals);

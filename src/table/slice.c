@@ -45,10 +45,18 @@ static double facet_rho_r(double n, double s, double k0, const rho_in *a, double
 {
     *w = 0.0;
     double ca, rx, ry, rz;
-    if (!facet_mirror(a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz))
+    int up = facet_mirror(a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz);
+    if (!up && !(a->model != BTDF_MODEL_XU_SUN && ca > 0.0))
         return 0.0; /* no reflected direction in the upper medium */
-    double vo = rho_out_shadow_r(a, sqrt(rx * rx + ry * ry), rz, s, k0); /* rz > 0 checked */
-    *w = rz * 4.0 * ca * stn;
+    if (!up) {
+        /* smith: its rho_r stays finite at the horizon (G2 ~ cos tr), so a node whose
+           facet mirrors below it holds the value at the mirror image (|rz|, floored at
+           1e-9 as model_dir_factor floors it): continued, not cut to 0, so that the
+           interpolant sees the smooth Beckmann factor. Weight 0: no direction there. */
+        rz = fabs(rz) > 1e-9 ? fabs(rz) : 1e-9;
+    }
+    double vo = rho_out_shadow_r(a, sqrt(rx * rx + ry * ry), rz, s, k0); /* rz > 0 */
+    *w = up ? rz * 4.0 * ca * stn : 0.0;
     double r = a->pref * beck * bt_fresnel_r(n, n - 1.0, ca) * vo / (4.0 * rz);
     return r >= DBL_MIN ? r : 0.0; /* MODEL.md 3.6 */
 }

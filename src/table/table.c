@@ -39,13 +39,19 @@ double model_dir_factor(const btdf_params *p, int refl, double sti, double cti, 
     switch (p->model) {
     case BTDF_MODEL_SMITH:
     case BTDF_MODEL_FULL: { /* its slices hold the single scattering, smith's */
+        if (refl && !(cto > 0.0))
+            return 0.0; /* a grazing reflection carries no flux (MODEL.md 3.5) */
+        /* reflection: G2 ~ cos tr and G2 / cos tr tends to a finite limit at the
+           horizon; below cos tr = 1e-9 that limit is reached to 1e-9 relative, and the
+           floor keeps Lambda(tr) and the division finite */
+        double ct = refl ? (cto > 1e-9 ? cto : 1e-9) : cto;
         double s = p->smoothness, li = bt_lambda(sti, cti > 0.0 ? cti : 0.0, s);
-        double lo = bt_lambda(sto, cto > 0.0 ? cto : 0.0, s);
+        double lo = bt_lambda(sto, ct > 0.0 ? ct : 0.0, s);
         /* (1 + li) G2 = e^(ln(1 + li) - (-ln G2)): the exponent is <= 0 since
            G2 <= G1(ti) = 1/(1 + li) */
         double x = bt_log1p(li) - (refl ? bt_smith_r_exponent(li, lo)
                                         : bt_smith_t_exponent(li, lo));
-        return bt_exp_mul(x < 0.0 ? x : 0.0, 1.0);
+        return bt_exp_mul(x < 0.0 ? x : 0.0, 1.0) / (refl ? ct : 1.0); /* ct >= 1e-9 */
     }
     default:
         return 1.0; /* xu-sun: V(ti) V(to), and V(to) stays in the nodes */
@@ -62,9 +68,13 @@ double model_node_factor(const btdf_params *p, int refl, double n, double sti, d
         rho_in a;
         rho_in_init(&a, sti, cti, 1.0, 0.0); /* geometry only */
         double ca, rx, ry, rz;
-        if (!facet_mirror(&a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz))
-            return 0.0; /* no reflected direction: the node's rho_r is 0 */
-        return model_dir_factor(p, 1, sti, cti, sqrt(rx * rx + ry * ry), rz);
+        if (!facet_mirror(&a, stn, ctn, cpsi, spsi, &ca, &rx, &ry, &rz) && !(ca > 0.0))
+            return 0.0; /* the facet faces away from the light: the node's rho_r is 0 */
+        /* a facet that mirrors below the horizon takes the factor of the mirror image
+           of its direction (|cos tr|), as its node's continued rho_r does (facet_rho_r
+           in slice.c): the reduced value rho_r / K is the Beckmann factor on both
+           sides of the horizon, and no query reads a direction below it */
+        return model_dir_factor(p, 1, sti, cti, sqrt(rx * rx + ry * ry), fabs(rz) > 1e-9 ? fabs(rz) : 1e-9);
     }
     facet_ray r;
     if (!facet_refract(n, sti, cti, stn, ctn, cpsi, spsi, &r))
