@@ -914,7 +914,7 @@ def furnace_checks(res, spp):
 
 def series_energy(full, deg, side, nmu=256, nphi=512):
     """The hemispherical integral of full's multiply scattered part as libbtdf evaluates
-    it, max(0, series) (btdf/btdf.h, btdf_full_get_series), at ti = deg: a midpoint rule
+    it, c max(0, series) (btdf/btdf.h, btdf_full_get_series), at ti = deg: a midpoint rule
     on nmu x nphi cells in (mu, phi), with the weight mu of the cosine. At ti = 0 the
     incident direction has no azimuth and the plugin, as the checks' reference, takes
     phi = 0 for every outgoing direction (plugin.py, _angles): so does this integral
@@ -936,7 +936,10 @@ def series_energy(full, deg, side, nmu=256, nphi=512):
             cf = (1 - w) * coef[k, side, j, m] + w * coef[k + 1, side, j, m]
             cph = np.ones_like(ph) if deg == 0.0 else np.cos(m * ph)
             v += (cf * np.polyval(poly[m, j][::-1], mu) * st ** m)[:, None] * cph[None, :]
-    v = np.maximum(v, 0.0)
+    x = w * btdftab.SERIES_SUB  # the clip's energy factor (btdf/btdf.h)
+    q = min(int(x), btdftab.SERIES_SUB - 1)
+    fac = (1 - (x - q)) * sr["clip"][k, q, side] + (x - q) * sr["clip"][k, q + 1, side]
+    v = fac * np.maximum(v, 0.0)
     return float((v * mu[:, None]).sum() * (1.0 / nmu) * (2.0 * math.pi / nphi))
 
 

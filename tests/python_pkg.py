@@ -181,7 +181,16 @@ def series_at(sr, a, b, c, side=0):
             bas = st ** m * math.cos(m * math.radians(c))
             total += cf * bas * np.polyval(poly[m, j][::-1], mu)
             mag += abs(cf * bas) * np.polyval(np.abs(poly[m, j][::-1]), mu)
-    return max(0.0, total), mag
+    fac = clip_factor(sr, k, w, side)
+    return fac * max(0.0, total), fac * mag
+
+
+def clip_factor(sr, k, w, side):
+    """The clip's energy factor of btdf/btdf.h at interval k, weight w, side h."""
+    x = w * btdftab.SERIES_SUB
+    q = min(int(x), btdftab.SERIES_SUB - 1)
+    u = x - q
+    return (1 - u) * sr["clip"][k, q, side] + u * sr["clip"][k, q + 1, side]
 
 
 # The models smith and full (model=...), against btdftab eval|albedo --model, bit for

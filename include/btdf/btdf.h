@@ -296,17 +296,22 @@ BTDF_API void btdf_full_info(const btdf_full *f, btdf_full_stats *st);
    that bracket it (the first a with ti <= node_deg[a + 1], a + 1 < nodes; w clamped to
    [0, 1], so the end nodes hold beyond them), side h = 0 for transmission, 1 for
    reflection:
-     rho_ms = max(0, sum_{j<K, m<M} ((1 - w) coef[a][h][j][m] + w coef[a + 1][h][j][m])
-                     sin^m t cos(m phi) sum_{i<K} poly[m][j][i] mu^i),
-   and btdf_full_rho_deg = btdf_rho_smith_deg + rho_ms (0 at grazing ti or to). */
+     rho_ms = c max(0, sum_{j<K, m<M} ((1 - w) coef[a][h][j][m] + w coef[a + 1][h][j][m])
+                       sin^m t cos(m phi) sum_{i<K} poly[m][j][i] mu^i),
+   c = (1 - u) clip[a][q][h] + u clip[a][q + 1][h], with x = w SUB, q = min(floor(x),
+   SUB - 1), u = x - q: the factor (<= 1) that gives the clipped series the tallied
+   energy of the series itself (the clip adds the energy of its negative dips), and
+   btdf_full_rho_deg = btdf_rho_smith_deg + rho_ms (0 at grazing ti or to). */
 #define BTDF_FULL_SERIES_K 8      /* polynomials in mu of degree 0..7 */
 #define BTDF_FULL_SERIES_M 5      /* cos(m phi), m = 0..4 */
 #define BTDF_FULL_SERIES_NODES 33 /* at most this many incidence angles */
+#define BTDF_FULL_SERIES_SUB 8    /* the clip factor's points per node interval, less 1 */
 typedef struct btdf_full_series {
     int nodes;
     double node_deg[BTDF_FULL_SERIES_NODES]; /* increasing */
     double poly[BTDF_FULL_SERIES_M][BTDF_FULL_SERIES_K][BTDF_FULL_SERIES_K];
     double coef[BTDF_FULL_SERIES_NODES][2][BTDF_FULL_SERIES_K][BTDF_FULL_SERIES_M];
+    double clip[BTDF_FULL_SERIES_NODES][BTDF_FULL_SERIES_SUB + 1][2];
 } btdf_full_series;
 /* BTDF_EINVAL for a NULL argument. */
 BTDF_API btdf_status btdf_full_get_series(const btdf_full *f, btdf_full_series *out);

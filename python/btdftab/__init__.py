@@ -43,7 +43,7 @@ _RULES = {0: "plain", 1: "chi", 2: "fresnel"}
 MODELS = ("xu-sun", "smith", "full")  # btdf_model: 0, 1, 2
 _MODEL_IDS = {name: k for k, name in enumerate(MODELS)}
 FULL_PATHS_DEFAULT = 200000  # BTDF_FULL_PATHS_DEFAULT
-SERIES_K, SERIES_M, SERIES_NODES = 8, 5, 33  # btdf_full_series of btdf/btdf.h
+SERIES_K, SERIES_M, SERIES_NODES, SERIES_SUB = 8, 5, 33, 8  # btdf_full_series of btdf/btdf.h
 _STATUS_EDOMAIN = None  # set from the library (btdf_strerror) on load
 
 
@@ -90,7 +90,8 @@ class _FullSeries(ctypes.Structure):
     _fields_ = [("nodes", ctypes.c_int),
                 ("node_deg", ctypes.c_double * SERIES_NODES),
                 ("poly", ctypes.c_double * (SERIES_M * SERIES_K * SERIES_K)),
-                ("coef", ctypes.c_double * (SERIES_NODES * 2 * SERIES_K * SERIES_M))]
+                ("coef", ctypes.c_double * (SERIES_NODES * 2 * SERIES_K * SERIES_M)),
+                ("clip", ctypes.c_double * (SERIES_NODES * (SERIES_SUB + 1) * 2))]
 
 
 class _TableOpts(ctypes.Structure):
@@ -549,8 +550,9 @@ class Full:
         return {k: getattr(st, k) for k, _ in _FullStats._fields_}
 
     def series(self):
-        """btdf_full_get_series: dict of node_deg (nodes,), poly (M, K, K) and coef
-        (nodes, 2, K, M), the multiply scattered part as btdf/btdf.h spells it."""
+        """btdf_full_get_series: dict of node_deg (nodes,), poly (M, K, K), coef
+        (nodes, 2, K, M) and clip (nodes, SUB + 1, 2), the multiply scattered part as
+        btdf/btdf.h spells it."""
         lib = _library()
         if not hasattr(lib, "btdf_full_get_series"):
             raise BtdfError("this libbtdf (%s) has no btdf_full_get_series" % version())
@@ -559,7 +561,9 @@ class Full:
         k, m, nn = SERIES_K, SERIES_M, sr.nodes
         return {"node_deg": np.array(sr.node_deg[:nn]),
                 "poly": np.array(sr.poly[:]).reshape(m, k, k),
-                "coef": np.array(sr.coef[:]).reshape(SERIES_NODES, 2, k, m)[:nn].copy()}
+                "coef": np.array(sr.coef[:]).reshape(SERIES_NODES, 2, k, m)[:nn].copy(),
+                "clip": np.array(sr.clip[:]).reshape(SERIES_NODES, SERIES_SUB + 1,
+                                                     2)[:nn].copy()}
 
     @classmethod
     def _borrow(cls, handle, owner, ior, smoothness):

@@ -316,6 +316,9 @@ class FullSeries:
         f64 = mi.Float64 if _jit() else (lambda a: a)
         self.coef = f64(array.array("d", coef.ravel().tolist()))
         self.stride = 2 * self.K * self.M
+        clip = sr["clip"]  # (nodes, SUB + 1, 2): the clip's energy factor
+        self.sub = clip.shape[1] - 1
+        self.clip = f64(array.array("d", clip.ravel().tolist()))
         # energy of each side per node: only the constant term integrates to non-zero
         # against mu dmu dphi (orthonormal basis): E = 2 pi a_00 q_00 / 2, q_00 = sqrt 2
         self.energy = [[math.pi * self.poly[0][0][0] * coef[k, h, 0, 0] for h in (0, 1)]
@@ -359,7 +362,8 @@ class FullSeries:
 
     def eval(self, h, ti_deg, mu, cphi, active=True):
         """rho_ms of side h (0 transmission, 1 reflection), mu = |cos t| of the outgoing
-        direction; max(0, the series), as libbtdf clips it."""
+        direction; max(0, the series) times the clip's energy factor, as libbtdf
+        sums it."""
         k, w = self.locate(ti_deg)
         st = dr.sqrt(dr.maximum(1.0 - mu * mu, 0.0))  # rounding can push mu above 1
         cm = [1.0, cphi]
@@ -381,7 +385,14 @@ class FullSeries:
                 c0 = _gather(self.coef, base0 + off, active)
                 c1 = _gather(self.coef, base1 + off, active)
                 v = v + b * ((1.0 - w) * c0 + w * c1)
-        return dr.maximum(v, 0.0)
+        # the clip's energy factor between its points in w (btdf/btdf.h)
+        x = w * self.sub
+        q = dr.minimum(dr.floor(x), self.sub - 1)
+        u = x - q
+        qi = (mi.UInt32(q) if _jit() else int(q))
+        at = (k * (self.sub + 1) + qi) * 2 + h
+        fac = (1.0 - u) * _gather(self.clip, at, active) + u * _gather(self.clip, at + 2, active)
+        return fac * dr.maximum(v, 0.0)
 
 
 def _node_factors(table, slices):

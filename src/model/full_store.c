@@ -128,6 +128,10 @@ btdf_status full_from_text(double n, double s, uint64_t paths, uint64_t seed,
         f->ems_se[k][1] = head[6];
         f->lost[k] = head[7];
     }
+    if (!full_set_clip_scale(f)) {
+        free(f);
+        return core_say(BTDF_ENOMEM, msg, msglen, "out of memory");
+    }
     *out = f;
     return BTDF_OK;
 }
