@@ -257,10 +257,9 @@ static btdf_status face_rough(const quad *q, int modes, const btdf_model_ctx *cn
     free(cosm);
     /* Energy: each incidence node's reflected and transmitted columns are scaled so
        their discrete hemispherical sums equal the model's own T and R at that node
-       (btdf_model_ctx_albedo). Point samples of a lobe integrate to within 1e-4 of them
-       for xu-sun and smith, but full's series of its multiple scattering does not
-       integrate to its tally (up to 2 % at grazing incidence inside the glass), and the
-       light trapped by total internal reflection multiplies a per-bounce excess. */
+       (btdf_model_ctx_albedo): point samples of a sharp lobe miss its integral by up
+       to 1 % (s = 1, docs/pane.md), and the light trapped by total internal reflection
+       would multiply a per-bounce excess. */
     for (int g = 0; g < 2; g++) {
         int ni = g ? q->ng : q->no, nR = g ? q->ng : q->no, nT = g ? q->no : q->ng;
         const double *mi = g ? q->mg : q->mu, *wi = g ? q->wg : q->w;
