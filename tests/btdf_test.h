@@ -61,6 +61,21 @@ static inline double rad(double d) { return d * M_PI / 180.0; }
 
 /* A table of one channel (n, s) over ti0..ti1 degrees at tolerance tol holding part,
    built with threads workers (0 = all); asserts the status want and a table. */
+/* Builds the table of o, asserts the status want (printing the builder's message when it
+   is not that) and a table, and returns it. */
+static inline btdf_table *btdf_test_build(const btdf_table_opts *o, btdf_status want)
+{
+    btdf_table *t = NULL;
+    char msg[512] = "";
+    btdf_status st = btdf_table_build(o, &t, msg, sizeof msg);
+    if (st != want)
+        print_message("build: %s\n", msg);
+    assert_status(want, st);
+    assert_non_null(t);
+    assert_int_equal(btdf_table_get_params(t)->model, o->params.model);
+    return t;
+}
+
 static inline btdf_table *btdf_test_table(double n, double s, double ti0, double ti1, double tol,
                                           int threads, btdf_part part, btdf_status want)
 {
@@ -73,14 +88,7 @@ static inline btdf_table *btdf_test_table(double n, double s, double ti0, double
     o.tolerance = tol;
     o.threads = threads;
     o.part = part;
-    btdf_table *t = NULL;
-    char msg[512] = "";
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    if (st != want)
-        print_message("build: %s\n", msg);
-    assert_status(want, st);
-    assert_non_null(t);
-    return t;
+    return btdf_test_build(&o, want);
 }
 
 #endif

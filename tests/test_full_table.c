@@ -32,14 +32,7 @@ static btdf_table *full_table(int threads, btdf_report *rep)
     o.tolerance = TOL_TEST;
     o.estimate = BTDF_ESTIMATE_FAST;
     o.threads = threads;
-    btdf_table *t = NULL;
-    char msg[512] = "";
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    if (st != BTDF_OK)
-        print_message("build: %s\n", msg);
-    assert_status(BTDF_OK, st);
-    assert_non_null(t);
-    assert_int_equal(btdf_table_get_params(t)->model, BTDF_MODEL_FULL);
+    btdf_table *t = btdf_test_build(&o, BTDF_OK);
     if (rep)
         assert_status(BTDF_OK, btdf_table_estimate(t, 0.0, M_PI / 2, 16, 2048, 20081231u,
                                                    threads, rep));
@@ -225,12 +218,7 @@ static void both_parts(void **state)
     o.params.model = BTDF_MODEL_FULL;
     o.tolerance = TOL_TEST;
     o.part = BTDF_PART_BOTH;
-    btdf_table *t = NULL;
-    char msg[512] = "";
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    if (st != BTDF_OK)
-        print_message("build: %s\n", msg);
-    assert_status(BTDF_OK, st);
+    btdf_table *t = btdf_test_build(&o, BTDF_OK);
     const btdf_table *tt = btdf_table_part(t, BTDF_PART_TRANSMISSION);
     const btdf_table *tr = btdf_table_part(t, BTDF_PART_REFLECTION);
     assert_non_null(tt);
@@ -281,8 +269,8 @@ static void both_parts(void **state)
         assert_true(2.0 * fabs(sum[0] + sum[1] - (al.T + al.R)) <
                     fabs(sum[0] + sum[1] - (smith_t + smith_r)));
     }
-    char dir[] = "/tmp/btdf_full_refl_XXXXXX", path[512];
-    assert_non_null(mkdtemp(dir));
+    char dir[400], path[512], msg[512] = "";
+    assert_int_equal(btdf_test_mkdtemp(dir, sizeof dir, "full-refl"), 0);
     snprintf(path, sizeof path, "%s/f.csv", dir);
     assert_status(BTDF_OK, btdf_table_write(t, path, NULL, msg, sizeof msg));
     btdf_table *u = NULL;

@@ -511,14 +511,7 @@ static btdf_table *smith_table(double n, double s, double ti1, double tol, btdf_
     o.ti_max = rad(ti1);
     o.tolerance = tol;
     o.part = part;
-    btdf_table *t = NULL;
-    char msg[512] = "";
-    btdf_status st = btdf_table_build(&o, &t, msg, sizeof msg);
-    if (st != BTDF_OK)
-        print_message("build: %s\n", msg);
-    assert_status(BTDF_OK, st);
-    assert_int_equal(btdf_table_get_params(t)->model, BTDF_MODEL_SMITH);
-    return t;
+    return btdf_test_build(&o, BTDF_OK);
 }
 
 /* A smith table's nodes hold btdf_rho_smith (btdf_rho_r_smith) at the directions their
