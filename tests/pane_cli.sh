@@ -137,6 +137,22 @@ done
 [ "$gsame" -eq 1 ] && { [ -z "$GX" ] || [ -s "$W/g/out/p.exr" ]; } && grep -q 'material \[p\]' "$W/g/out/p.csv" && \
     ok "manifest grid, grid_size: the bytes of tabulate --back --grid, one and three channels" || \
     no "manifest grid differs from tabulate's"
+# the manifest's .exr holds tabulate's own .exr values (its bytes differ only in the
+# provenance attribute): eval --table on both (the front's transmission) at five points
+if [ -n "$GX" ]; then
+    "$B" tabulate -q --ior 1.5 -s 1 --back 2 --thickness 2 --absorption 0.1 --grid 10,10,7 \
+        -o "$W/c/p.exr" 2>/dev/null
+    esame=1
+    for q in "10 150 0" "40 160 90" "70 120 180" "30 100 60" "85 170 120"; do
+        # shellcheck disable=SC2086
+        a=$("$B" eval --table "$W/g/out/p.exr" $q 2>&1); b=$("$B" eval --table "$W/c/p.exr" $q 2>&1)
+        case $a in [0-9]*) ;; *) esame=0 ;; esac # a number, not a refusal
+        [ "$a" = "$b" ] || esame=0
+        [ "$esame" -eq 1 ] || echo "at $q: manifest $a, tabulate $b"
+    done
+    [ "$esame" -eq 1 ] && ok "manifest grid .exr: eval --table gives tabulate's .exr values at 5 points" ||
+        no "manifest grid .exr values differ from tabulate's"
+fi
 "$B" build "$W/g/grid.ini" 2>&1 | grep -c 'up to date' | grep -qx "$NUP" && \
     ok "a pane's grids up to date" || no "a pane's grids rebuilt without a change"
 sed -i 's/^grid_size = 10,10,7/grid_size = 10,10,9/' "$W/g/grid.ini"
