@@ -37,6 +37,12 @@ CASES = [
      "--tolerance", "1e-2"],
     ["--ior", "1.5,1.51,1.52", "-s", "6", "--part", "both", "--tolerance", "1e-2",
      "--theta-i", "0:40"],
+    # the other models' reflection nodes hold the Beckmann factor and are continued
+    # past the horizon (docs/tables.md): the file must still hold rho_r itself
+    ["--model", "smith", "--ior", "1.5", "-s", "3", "--part", "reflection",
+     "--tolerance", "1e-2"],
+    ["--model", "full", "--ior", "0.6666667", "-s", "3", "--part", "both",
+     "--tolerance", "2e-2", "--theta-i", "40:80"],
 ]
 
 
