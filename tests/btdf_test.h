@@ -59,10 +59,8 @@ static inline int btdf_test_rmtree(const char *dir)
 
 static inline double rad(double d) { return d * M_PI / 180.0; }
 
-/* A table of one channel (n, s) over ti0..ti1 degrees at tolerance tol holding part,
-   built with threads workers (0 = all); asserts the status want and a table. */
 /* Builds the table of o, asserts the status want (printing the builder's message when it
-   is not that) and a table, and returns it. */
+   is not that) and a table of o's model, and returns it. */
 static inline btdf_table *btdf_test_build(const btdf_table_opts *o, btdf_status want)
 {
     btdf_table *t = NULL;
@@ -76,6 +74,8 @@ static inline btdf_table *btdf_test_build(const btdf_table_opts *o, btdf_status 
     return t;
 }
 
+/* A table of one channel (n, s) over ti0..ti1 degrees at tolerance tol holding part,
+   built with threads workers (0 = all); asserts the status want and a table. */
 static inline btdf_table *btdf_test_table(double n, double s, double ti0, double ti1, double tol,
                                           int threads, btdf_part part, btdf_status want)
 {
