@@ -170,12 +170,16 @@ BT_INLINE double bt_lambda(double sn, double cs, double s)
                  (3.8981032682771344e-07 + z * 2.3894428621003025e-08) * z2) * z4) * z8 +
                ((-1.5779711270640086e-08 + z * -1.5679996926558987e-09) +
                 (5.7079271508319384e-10 + z * 6.0577447299708143e-11) * z2) * z16;
-    double pp = q / (1.0 + 1.7724538509055160 * ap + 2.0 * ap * ap); /* divisor >= 1 */
-    double ia2 = 1.0 / (a * a); /* a >= 1e-150: a^2 >= 1e-300, no 1/0 */
-    double pt = 0.5 * ia2 * (1.0 - ia2 * (1.5 - ia2 * (3.75 - 13.125 * ia2)));
-    double P = a < 6.0 ? pp : pt;
+    int series = a < 6.0;
+    double dd = 1.0 + 1.7724538509055160 * ap + 2.0 * ap * ap; /* >= 1 */
+    /* one division for both forms: rr = 1/(a dd) below 6, 1/a^3 above; a in
+       [1e-150, 1e100] keeps a dd >= 1e-150 and a^3 <= 1e300, so no 1/0 and no inf */
+    double rr = 1.0 / (series ? a * dd : a * a * a);
+    double ia2 = a * rr; /* 1/a^2 where the asymptotic form uses it (a >= 6) */
+    double pa = series ? q * rr /* P / a */
+                       : 0.5 * rr * (1.0 - ia2 * (1.5 - ia2 * (3.75 - 13.125 * ia2)));
     /* P / (2 sqrt(pi) a) <= 2.9e149 < 2^600, as bt_exp_mul requires */
-    return bt_exp_mul(-(a * a), P * (0.28209479177387814 / a));
+    return bt_exp_mul(-(a * a), 0.28209479177387814 * pa);
 }
 
 /* Stirling's correction lnGamma(w) - ((w - 1/2) ln w - w + ln(2 pi)/2) for w >= 10,
@@ -189,6 +193,53 @@ BT_INLINE double bt_stirling_tail(double r) /* r = 1/w */
     return r * p;
 }
 
+/* c[0] + c[1] t + ... + c[16] t^16 in Estrin's scheme (short dependency chains). */
+BT_INLINE double bt_poly16(const double c[17], double t)
+{
+    double t2 = t * t, t4 = t2 * t2, t8 = t4 * t4;
+    double r0 = (c[0] + c[1] * t) + (c[2] + c[3] * t) * t2;
+    double r1 = (c[4] + c[5] * t) + (c[6] + c[7] * t) * t2;
+    double r2 = (c[8] + c[9] * t) + (c[10] + c[11] * t) * t2;
+    double r3 = (c[12] + c[13] * t) + (c[14] + c[15] * t) * t2;
+    return ((r0 + r1 * t4) + (r2 + r3 * t4) * t8) + c[16] * (t8 * t8);
+}
+
+/* The two series of bt_smith_t_exponent_small, as monomials in t on [-1, 1]:
+   (lnGamma(1 + z) + gamma z) / z^2 for z in [0, 1/2], t = 4z - 1, and
+   (lnGamma(2 + z) - (1 - gamma) z) / z^2 for z in [0, 1], t = 2z - 1: Chebyshev
+   interpolants of degree 16 of the 50-digit functions (analytic on the intervals, the
+   nearest singularity at z = -1 and -2: a convergence ratio of 9.9 per degree),
+   relative error 6e-17 with the coefficients rounded to double. */
+static const double BT_LGAMMA1_Q[17] = {0.7365132768571209, -0.07397802761317189,
+    0.010107355622778322, -0.001559181029757405, 0.0002561731273294925,
+    -4.3710620452788424e-05, 7.646592774714669e-06, -1.3614713641646265e-06,
+    2.4562192159869764e-07, -4.476874896037351e-08, 8.227500659030772e-09,
+    -1.52291050182321e-09, 2.8341508370250317e-10, -5.241841462912307e-11,
+    9.843683082010727e-12, -2.1900695231749067e-12, 4.146114768698709e-13};
+static const double BT_LGAMMA2_Q[17] = {0.29316281169474234, -0.02558101229593262,
+    0.0031780909472403193, -0.00045884056869221237, 7.19427819900362e-05,
+    -1.1874161437430832e-05, 2.0285598639184464e-06, -3.5511919485849294e-07,
+    6.329599641886561e-08, -1.1437370518771048e-08, 2.088972105657327e-09,
+    -3.8496151478735105e-10, 7.14157407660682e-11, -1.317938987138669e-11,
+    2.4709445286441827e-12, -5.489799466456034e-13, 1.0385044577889636e-13};
+
+/* -ln B(1 + x, 1 + y) for 0 <= y <= x <= 1/2 (both Lambdas at most 1/2: s = 3 up to
+   78.4 degrees, s = 1 up to 58.3): with lnGamma(1 + z) = -gamma z + z^2 q1(z) and
+   lnGamma(2 + z) = (1 - gamma) z + z^2 q2(z) the linear terms sum to x + y, so
+     -ln B = (x + y) + (x + y)^2 q2(x + y) - x^2 q1(x) - y^2 q1(y),
+   no division and no logarithm. With q2 <= 0.33, q1 <= 0.83 and x, y <= 1/2 the square
+   terms are at most 0.33 (x + y) and 0.42 (x + y), so no cancellation: against 40-digit
+   lnGamma on 20,000 pairs (uniform, log-uniform down to 1e-18, near x = 1/2) absolute
+   error 2.6e-16 and relative 3.6e-16, where the Stirling form gives 8.5e-15. 0 at 0. */
+BT_INLINE double bt_smith_t_exponent_small(double x, double y)
+{
+    double z = x + y;
+    double q2 = bt_poly16(BT_LGAMMA2_Q, 2.0 * z - 1.0);
+    double qx = bt_poly16(BT_LGAMMA1_Q, 4.0 * x - 1.0);
+    double qy = bt_poly16(BT_LGAMMA1_Q, 4.0 * y - 1.0);
+    return z + ((z * z) * q2 - ((x * x) * qx + (y * y) * qy));
+}
+
 /* -ln B(1 + x, 1 + y) for x, y >= 0: the exponent of the height-correlated Smith term of
    transmission, G2 = B(1 + Lambda_i, 1 + Lambda_o) = Gamma(1+x) Gamma(1+y) / Gamma(2+x+y)
    (Heitz 2014, eq. 99). Branch-free and stable for large arguments: with x the larger,
@@ -198,7 +249,7 @@ BT_INLINE double bt_stirling_tail(double r) /* r = 1/w */
    1e16 at grazing angles). Arguments below 10 are first shifted up by 9
    (lnGamma(z) = lnGamma(z + 9) - ln(z (z+1) ... (z+8))); the three products of the shift
    stay below 1e13 and go into one logarithm. Exactly 0 at x = y = 0 (B(1, 1) = 1). */
-BT_INLINE double bt_smith_t_exponent(double li, double lo)
+BT_INLINE double bt_smith_t_exponent_stirling(double li, double lo)
 {
     double x = li > lo ? li : lo, y = li > lo ? lo : li;
     int mx = x < 9.0, my = y < 9.0;
@@ -217,6 +268,14 @@ BT_INLINE double bt_smith_t_exponent(double li, double lo)
     double sh = dxy - gy + bt_log(px * py / pxy); /* pxy >= 1 */
     sh = sh > 0.0 ? sh : 0.0; /* -ln B >= 0 for x, y >= 0: a rounding below it is 0 */
     return x > 0.0 ? sh : 0.0; /* no shadowing at all: B(1, 1) = 1 exactly */
+}
+
+/* -ln B(1 + x, 1 + y) for x, y >= 0: the series where both are at most 1/2 (most
+   directions; no logarithm or division there), the shifted Stirling form elsewhere. */
+BT_INLINE double bt_smith_t_exponent(double li, double lo)
+{
+    double x = li > lo ? li : lo, y = li > lo ? lo : li;
+    return x <= 0.5 ? bt_smith_t_exponent_small(x, y) : bt_smith_t_exponent_stirling(x, y);
 }
 
 /* ln(1 + Lambda_i + Lambda_r): the exponent of the height-correlated Smith term of

@@ -426,29 +426,34 @@ BT_CLONES static void batch_block(const btdf_params *p, size_t count, const doub
     const int nc = p->channels;
     for (size_t i = 0; i < count; i++)
         c[i] = bt_fold_rad(phi[i]);
-    if (p->model == BTDF_MODEL_SMITH && nc == 1) {
-        /* the loops below with the Smith prefactor (bt_io_pref_smith) */
-        const double n = p->ior[0], d = n - 1.0;
-        for (size_t i = 0; i < count; i++) {
-            bt_io io;
-            bt_az az;
-            bt_io_geom_rad(&io, ti[i], to[i]);
-            bt_io_pref_smith(&io, s);
-            bt_az_rad(&az, c[i]);
-            out[i] = bt_rho(n, d, s, &io, az.h2, az.sphi);
-        }
-        return;
-    }
     if (p->model == BTDF_MODEL_SMITH) {
+        /* the Smith prefactor (bt_io_pref_smith) in passes, so that the log-Beta's two
+           forms (bt_smith_t_exponent) do not keep the loops from vectorising: the
+           geometry and both Lambdas; the series form for every point (its arguments
+           clamped to its range, which changes nothing where it is the form used); the
+           Stirling form, scalar, for the points beyond; then the value */
+        bt_io io[BT_BLOCK];
+        double li[BT_BLOCK], lo[BT_BLOCK], sh[BT_BLOCK];
         for (size_t i = 0; i < count; i++) {
-            bt_io io;
+            bt_io_geom_rad(&io[i], ti[i], to[i]);
+            li[i] = bt_lambda(io[i].sti, io[i].cti, s);
+            lo[i] = bt_lambda(io[i].sto, io[i].cto, s);
+        }
+        for (size_t i = 0; i < count; i++) {
+            double x = li[i] > lo[i] ? li[i] : lo[i], y = li[i] > lo[i] ? lo[i] : li[i];
+            sh[i] = bt_smith_t_exponent_small(x < 0.5 ? x : 0.5, y < 0.5 ? y : 0.5);
+        }
+        for (size_t i = 0; i < count; i++)
+            if (li[i] > 0.5 || lo[i] > 0.5)
+                sh[i] = bt_smith_t_exponent_stirling(li[i], lo[i]);
+        for (size_t i = 0; i < count; i++)
+            bt_io_pref_smith_sh(&io[i], s, sh[i]);
+        for (size_t i = 0; i < count; i++) {
             bt_az az;
-            bt_io_geom_rad(&io, ti[i], to[i]);
-            bt_io_pref_smith(&io, s);
             bt_az_rad(&az, c[i]);
             for (int k = 0; k < nc; k++)
                 out[i * (size_t)nc + (size_t)k] =
-                    bt_rho(p->ior[k], p->ior[k] - 1.0, s, &io, az.h2, az.sphi);
+                    bt_rho(p->ior[k], p->ior[k] - 1.0, s, &io[i], az.h2, az.sphi);
         }
         return;
     }

@@ -48,10 +48,15 @@ BT_INLINE void bt_io_pref(bt_io *io, double s, double k0)
    V(ti) V(to) = e^-sh becomes G2 = B(1 + Lambda(ti), 1 + Lambda(to)) = e^-sh, Lambda of
    the lower direction from |tan to| (sto, cto >= 0), so that swapping the two sides
    swaps the two Lambdas and the symmetric B keeps the reciprocity of MODEL.md 4. */
-BT_INLINE void bt_io_pref_smith(bt_io *io, double s)
+BT_INLINE void bt_io_pref_smith_sh(bt_io *io, double s, double sh)
 {
     io->pref = s * s / (4.0 * M_PI) * bt_inv_cos(io->cti) * bt_inv_cos(io->cto);
-    io->sh = bt_smith_t_exponent(bt_lambda(io->sti, io->cti, s), bt_lambda(io->sto, io->cto, s));
+    io->sh = sh;
+}
+BT_INLINE void bt_io_pref_smith(bt_io *io, double s)
+{
+    bt_io_pref_smith_sh(io, s, bt_smith_t_exponent(bt_lambda(io->sti, io->cti, s),
+                                                   bt_lambda(io->sto, io->cto, s)));
 }
 
 /* sin and cos of four reduced arguments at once (the lanes of one vector where the
