@@ -955,7 +955,7 @@ expect 2 "give --back" "--thickness without --back" -- "$B" albedo --thickness 4
 expect 2 "thickness: -1 mm" "--thickness -1" -- "$B" albedo --back smooth --thickness -1
 expect 2 "absorption: -2 per mm" "--absorption -2" -- "$B" albedo --back 3 --absorption -2
 expect 2 "give smooth, or a smoothness" "--back 0" -- "$B" albedo --back 0
-expect 2 ".bsdf takes the interface only" "--back with a .bsdf" -- "$B" tabulate --back smooth -o "$W/t.bsdf"
+expect 2 "a flat back reflects" "--back smooth with a .bsdf" -- "$B" tabulate --back smooth -o "$W/t.bsdf"
 expect 2 "a pane in air needs an index above 1" "--back with n < 1" -- \
     "$B" tabulate --back smooth --ior 0.8 -o "$W/t.xml"
 

@@ -72,18 +72,26 @@ int pane_spec_set(pane_spec *ps, const char *key, const char *value, char *why, 
 }
 
 const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
-                              int table_keys, int channels)
+                              int table_keys, int channels, int bsdf_outputs, int back_smooth)
 {
     if (!back)
         return thick_abs ? "thickness and absorption describe a pane: give back = smooth|S "
                            "as well"
                          : NULL;
     if (interface_outputs > 0)
-        return "back: a pane's system is written to xml and grid only (enter, leave and bsdf "
-               "take the interface)";
+        return "back: a pane's system is written to xml, grid and bsdf (enter and leave take "
+               "the interface)";
     if (table_keys)
-        return "back: tolerance, theta_i, metric, part and sides do not apply to a pane's xml "
-               "or grid (they hold the system, both parts, light from either side)";
+        return "back: theta_i, metric, part and sides do not apply to a pane's xml, grid or "
+               "bsdf (they hold the system, both parts, light from either side), nor "
+               "tolerance without a bsdf output (it sets the .bsdf's error)";
+    if (bsdf_outputs > 0 && back_smooth)
+        return "back = smooth with a bsdf output: a flat back reflects light falling on it as "
+               "a mirror, a delta that a .bsdf's series in azimuth cannot hold; give the back "
+               "a smoothness (back = S) or write xml, which holds the delta";
+    if (bsdf_outputs > 0 && channels != 1)
+        return "back: a pane's bsdf has one channel (give one index; a colour pane goes to a "
+               "Klems xml)";
     return channels != 1 ? "back: a colour pane .xml takes the Klems bases (basis = "
                            "klems-full, klems-half or klems-quarter); its tree3 has one channel"
                          : NULL;
@@ -496,6 +504,43 @@ int pane_write_xml(const char *path, const btdf_params *p, const pane_spec *ps,
     return code;
 }
 
+/* tabulate --back ... -o F.bsdf: the checks, then the file (tools/pane_bsdf.c). */
+static int pane_bsdf(const cli *c, const char *prov)
+{
+    static const opt_id no[] = {OPT_THETA_I, OPT_PREVIEW, OPT_THETA_O, OPT_PHI, OPT_METRIC,
+                                OPT_MAX_SAMPLES, OPT_MAX_MEMORY, OPT_SIZE, OPT_SIDE, OPT_PART,
+                                OPT_REPORT, OPT_GRID, OPT_BASIS};
+    for (size_t k = 0; k < sizeof no / sizeof no[0]; k++)
+        if (GIVEN(c, no[k]))
+            return fail(EXIT_USAGE, "%s: --%s does not apply to a pane's .bsdf (it holds the "
+                                    "system, both parts, light from either side; --tolerance "
+                                    "sets its error)",
+                        c->out, opt_find(no[k])->name);
+    if (c->p.channels != 1)
+        return fail(EXIT_USAGE, "%s: --ior %s: a pane's .bsdf has one channel (give one "
+                                "index; a colour pane goes to a Klems .xml)",
+                    c->out, "with three indices");
+    pane_spec ps = cli_spec(c);
+    if (ps.back_smooth)
+        return fail(EXIT_USAGE, "%s: --back smooth: a flat back reflects light falling on it "
+                                "as a mirror, a delta that a .bsdf's series in azimuth "
+                                "cannot hold (the file would render without it); give the "
+                                "back a smoothness (--back S) or write .xml, which holds the "
+                                "delta", c->out);
+    if (!folder_writable(c->out))
+        return 1;
+    double tol = GIVEN(c, OPT_TOLERANCE) ? c->o.tolerance : 1e-2;
+    if (!(tol >= 1e-6 && tol <= 0.5)) /* btdf_scatfun_build_source's range, before any work */
+        return fail(EXIT_USAGE, "%s: --tolerance %g: a pane's .bsdf takes 1e-6 to 0.5", c->out,
+                    tol);
+    btdf_pane *P = NULL;
+    int code = make_pane(&c->p, &ps, c->threads, &P);
+    if (!code)
+        code = pane_write_bsdf(c->out, P, tol, c->threads, c->quiet, prov);
+    btdf_pane_free(P);
+    return code;
+}
+
 int cmd_pane(const cli *c, unsigned cmd, const char *prov)
 {
     if (!GIVEN(c, OPT_BACK))
@@ -508,11 +553,12 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
             return fail(EXIT_USAGE, "tabulate: unexpected argument '%s' (the output is -o FILE)",
                         c->pos[0]);
         if (!c->out || !(ends_with(c->out, ".xml") || ends_with(c->out, ".csv") ||
-                         ends_with(c->out, ".exr")))
+                         ends_with(c->out, ".exr") || ends_with(c->out, ".bsdf")))
             return fail(EXIT_USAGE, "%s: --back: a pane's system is written to .xml (Klems or "
-                                    "tree3, --basis), .csv or .exr (a grid, --grid); .bsdf "
-                                    "takes the interface only",
+                                    "tree3, --basis), .csv or .exr (a grid, --grid) or .bsdf",
                         c->out ? c->out : "no -o");
+        if (ends_with(c->out, ".bsdf"))
+            return pane_bsdf(c, prov);
         if (!ends_with(c->out, ".xml")) {
             int code = pane_out_checks(c, 1);
             if (code)

@@ -46,7 +46,7 @@
  *   xml = glazing.xml          ; a Radiance BSDF XML (both parts, light from either side)
  *   basis = tree3              ; its basis, as --basis: tree3 (the default), klems-full,
  *                              ; klems-half or klems-quarter
- *   back = smooth              ; a pane (xml and grid only): its back face, smooth or S,
+ *   back = smooth              ; a pane (xml, grid, bsdf): its back face, smooth or S,
  *   thickness = 4              ; as --back; with thickness (mm) and absorption (per mm) as
  *                              ; the options
  *   grid = door.csv door.exr   ; a pane's system on a grid (tabulate --back -o F.csv|.exr)
@@ -322,16 +322,23 @@ static int manifest_xml(const manifest_opts *mo, const material *mat, int *done,
     return 0;
 }
 
-/* The grid outputs of a pane's section: the system is built once, when some grid is
-   stale, and written to each (tabulate --back -o F.csv|.exr --grid NI,NO,NPHI). */
-static int manifest_grid(const manifest_opts *mo, const material *mat, int *done, int total,
-                         int *job)
+/* The grid outputs of a pane's section (bsdf = 0), or its .bsdf outputs (bsdf = 1): the
+   system is built once, when some output is stale, and written to each (tabulate --back
+   -o F.csv|.exr --grid NI,NO,NPHI, or -o F.bsdf --tolerance E). */
+static int manifest_pane_out(const manifest_opts *mo, const material *mat, int bsdf, int *done,
+                             int total, int *job)
 {
     material m; /* the stamp's: only what the file depends on */
     memset(&m, 0, sizeof m);
     char stamp[4096], what[96], prov[256];
-    snprintf(what, sizeof what, "grid %zu %zu %zu", mat->grid_n[0], mat->grid_n[1],
-             mat->grid_n[2]);
+    double tol = mat->key_line[K_TOL] ? mat->tol : 1e-2; /* tabulate's default */
+    if (bsdf) {
+        m.tol = tol;
+        snprintf(what, sizeof what, "pane bsdf");
+    } else {
+        snprintf(what, sizeof what, "grid %zu %zu %zu", mat->grid_n[0], mat->grid_n[1],
+                 mat->grid_n[2]);
+    }
     stamp_text(stamp, sizeof stamp, &m, &mat->p, what);
     int used = (int)strlen(stamp);
     snprintf(stamp + used, sizeof stamp - (size_t)used, "pane %d %.17g %.17g %.17g\n",
@@ -340,8 +347,9 @@ static int manifest_grid(const manifest_opts *mo, const material *mat, int *done
     snprintf(prov, sizeof prov, "btdftab build, material [%s]", mat->name);
     struct btdf_pane *P = NULL;
     int code = 0;
-    for (int k = 0; k < mat->ngrid && code == 0; k++) {
-        const char *out = mat->grid[k];
+    int nout = bsdf ? mat->nbsdf : mat->ngrid;
+    for (int k = 0; k < nout && code == 0; k++) {
+        const char *out = bsdf ? mat->bsdf[k] : mat->grid[k];
         (*done)++;
         if (!mine(mo, (*job)++))
             continue;
@@ -356,8 +364,9 @@ static int manifest_grid(const manifest_opts *mo, const material *mat, int *done
             fprintf(stderr, "%s: [%d/%d] %s\n", mo->prog, *done, total, out);
         if (!P && (code = pane_make(&mat->p, &mat->pane, mo->threads, &P)) != 0)
             break;
-        code = pane_write_table(out, P, mat->grid_n[0], mat->grid_n[1], mat->grid_n[2],
-                                mo->quiet, prov);
+        code = bsdf ? pane_write_bsdf(out, P, tol, mo->threads, mo->quiet, prov)
+                    : pane_write_table(out, P, mat->grid_n[0], mat->grid_n[1], mat->grid_n[2],
+                                       mo->quiet, prov);
         char why[512] = "";
         if (code == 0 && !write_stamp_for(out, stamp, why, sizeof why)) {
             fprintf(stderr, "%s: %s: cannot write its stamp: %s\n", mo->prog, out, why);
@@ -503,10 +512,11 @@ static int pane_section_refusal(const manifest_opts *mo, const material *m)
     /* three channels: a pane's grid and Klems .xml hold them, its tree3 does not */
     const char *pw = pane_keys_refusal(
         m->key_line[K_BACK] != 0, m->key_line[K_THICK] || m->key_line[K_ABS],
-        m->nenter + m->nleave + m->nbsdf,
-        m->key_line[K_TOL] || m->key_line[K_THETA] || m->key_line[K_METRIC] ||
+        m->nenter + m->nleave,
+        (m->key_line[K_TOL] && !m->nbsdf) || m->key_line[K_THETA] || m->key_line[K_METRIC] ||
             m->key_line[K_PART] || m->key_line[K_SIDES],
-        m->nxml && m->basis == BTDF_RAD_TREE3 ? m->p.channels : 1);
+        (m->nxml && m->basis == BTDF_RAD_TREE3) || m->nbsdf ? m->p.channels : 1, m->nbsdf,
+        m->pane.back_smooth);
     if (pw) {
         fprintf(stderr, "%s: %s:%d: material [%s]: %s\n", mo->prog, mo->path,
                 m->key_line[K_BACK] ? m->key_line[K_BACK]
@@ -625,12 +635,14 @@ int manifest_run(const manifest_opts *mo)
                 done += m->nleave;
         }
         if (code == 0 && m->nbsdf)
-            code = manifest_bsdf(mo, m->name, &m->p, bsdf_tol(m), m->sides, bsdf_blocks(m),
-                                 m->bsdf, m->nbsdf, &done, total, &job);
+            code = m->key_line[K_BACK]
+                       ? manifest_pane_out(mo, m, 1, &done, total, &job)
+                       : manifest_bsdf(mo, m->name, &m->p, bsdf_tol(m), m->sides,
+                                       bsdf_blocks(m), m->bsdf, m->nbsdf, &done, total, &job);
         if (code == 0 && m->nxml)
             code = manifest_xml(mo, m, &done, total, &job);
         if (code == 0 && m->ngrid)
-            code = manifest_grid(mo, m, &done, total, &job);
+            code = manifest_pane_out(mo, m, 0, &done, total, &job);
     }
     manifest_free(mf);
     free(mf);

@@ -29,7 +29,8 @@ const opt_def opt_table[] = {
     {OPT_BACK, "back", 0, "smooth|S", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL | CMD_POLAR,
      "a pane, not an interface: its back face is flat (smooth) or rough with\n"
      "smoothness S; the front face is --ior, --smoothness, --model; tabulate writes the\n"
-     "system (air to air, light from either side) to .xml, albedo prints its T and R,\n"
+     "system (air to air, light from either side) to .xml, .csv, .exr or, with a rough\n"
+     "back, .bsdf (front face up); albedo prints its T and R,\n"
      "eval its BSDF and polar its lobes, light on the face --light names (docs/pane.md)"},
     {OPT_THICKNESS, "thickness", 0, "MM", 0, CMD_TABULATE | CMD_ALBEDO | CMD_EVAL | CMD_POLAR,
      "with --back: the pane's thickness in mm (default 4)"},
@@ -653,7 +654,7 @@ void opt_man(FILE *f, const char *version)
         {"xml", "a Radiance BSDF XML output, as \\fBtabulate \\-o F.xml\\fR"},
         {"basis", "the .xml's basis, as \\fB\\-\\-basis\\fR: tree3 (default), klems-full, "
                   "klems-half or klems-quarter"},
-        {"back", "a pane (its system, to the xml and grid outputs only): the back face, "
+        {"back", "a pane (its system, to the xml, grid and bsdf outputs; bsdf with a rough back): the back face, "
                  "smooth or a smoothness, as \\fB\\-\\-back\\fR"},
         {"thickness", "the pane's thickness in mm (default 4), as \\fB\\-\\-thickness\\fR"},
         {"absorption", "the pane's absorption per mm (default 0), as "

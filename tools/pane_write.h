@@ -24,11 +24,12 @@ void pane_spec_default(pane_spec *ps);
 int pane_spec_set(pane_spec *ps, const char *key, const char *value, char *why, size_t len);
 
 /* Why a manifest section's pane keys are refused, as tabulate --back refuses the
-   options, or NULL: back given, thickness or absorption given, the number of enter, leave
-   and bsdf outputs, whether a key for tables is given, the channels of ior a tree3 .xml
-   is asked with (1 when none is: a Klems .xml and a grid take three). */
+   options, or NULL: back given, thickness or absorption given, the number of enter and
+   leave outputs, whether a key for tables is given (tolerance counts only without a bsdf
+   output), the channels a tree3 .xml or a .bsdf is asked with (1 when none is: a Klems
+   .xml and a grid take three), the number of bsdf outputs, and whether the back is flat. */
 const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
-                              int table_keys, int channels);
+                              int table_keys, int channels, int bsdf_outputs, int back_smooth);
 
 /* Writes the system of the pane whose front face is p to path in the basis; 0, or the
    exit code after a message on stderr. */
@@ -46,5 +47,11 @@ int pane_make(const btdf_params *p, const pane_spec *ps, int threads, struct btd
    exit code after a message on stderr. */
 int pane_write_table(const char *path, const struct btdf_pane *P, size_t nti, size_t nto,
                      size_t nphi, int quiet, const char *prov);
+
+/* Writes the system of pane P to a SCATFUN .bsdf at tolerance tol (e_L1 of the file
+   against the system, tools/pane_bsdf.c); 0, 3 when the tolerance was not met (no
+   file), or the exit code after a message on stderr. */
+int pane_write_bsdf(const char *path, const struct btdf_pane *P, double tol, int threads,
+                    int quiet, const char *prov);
 
 #endif

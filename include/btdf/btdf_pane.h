@@ -107,6 +107,12 @@ BTDF_API void btdf_pane_eval_phis(const btdf_pane *p, btdf_pane_side side, btdf_
 BTDF_API btdf_status btdf_pane_get_series(const btdf_pane *p, btdf_pane_side side,
                                           btdf_part part, int ch, const double **mu,
                                           const double **coef, int *nodes, int *modes);
+/* The modes of that series at cosines mu_i, mu_o (the interpolation just described):
+   c[m] for m < modes (c holds at least modes doubles, BTDF_PANE_MODES_MAX suffices),
+   all 0 where mu_i or mu_o is not in (0, 1]. Returns modes, or 0 (c untouched) for a
+   NULL pointer, a side, part or channel out of range. */
+BTDF_API int btdf_pane_modes(const btdf_pane *p, btdf_pane_side side, btdf_part part, int ch,
+                             double mu_i, double mu_o, double *c);
 /* The weight of the delta part at ti (0 when there is none). */
 BTDF_API double btdf_pane_specular(const btdf_pane *p, btdf_pane_side side, btdf_part part,
                                    int ch, double ti);

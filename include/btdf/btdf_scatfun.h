@@ -136,6 +136,53 @@ BTDF_API btdf_status btdf_scatfun_predict(const btdf_params *p, double tolerance
 BTDF_API btdf_status btdf_scatfun_check(const btdf_params *p, double tolerance,
                                         btdf_side side, char *msg, size_t msglen);
 
+/* A caller's BSDF given by its azimuthal modes, for btdf_scatfun_build_source: a
+   pane's system (btdf_pane.h, docs/pane.md), which tools/ passes in. Each block is
+   read in its own frame, as an interface's are (above): the light's cosine mu_l =
+   cos ti, the view's mu_v = |cos to| (or cos tr); the slow index is the light's. */
+typedef struct btdf_scatfun_source {
+    void *user;
+    int blocks; /* the blocks it has: a btdf_scatfun_block mask, 1..15 */
+    int modes;  /* its series length, 1..BTDF_SCATFUN_MAX_PHI */
+    /* c[0 .. modes) with rho(mu_l, mu_v, phi) = max(0, sum_m c[m] cos(m phi)), 1/sr
+       without a cosine, phi = pi forward (straight through or the mirror), for block
+       `block` (one btdf_scatfun_block) at mu_l, mu_v in (0, 1] */
+    void (*modes_at)(void *user, int block, double mu_l, double mu_v, double *c);
+    const double *nodes; /* the source's own cosine nodes, ascending in (0, 1) */
+    size_t nnodes;       /* 2 .. BTDF_SCATFUN_MAX_HALF_NODES */
+    double eta;          /* the header's eta: 1 with the same medium on both sides */
+    double alpha;        /* the header's roughness alpha (pbrt-v3 ignores it), >= 0 */
+} btdf_scatfun_source;
+
+/* The error of a file built from a source, against the source: MODEL.md section 6's
+   e_L1 (relative to max(T or R, 0.01)) and e_T, the worst over every block and light
+   angle tested (btdf_scatfun_build_source), read as pbrt-v3 reads the file (DIRECT). */
+typedef struct btdf_scatfun_source_error {
+    double e_l1, e_t;
+    double e_l1_ti; /* where e_l1 is worst (radians) */
+    int block;      /* its block (one btdf_scatfun_block) */
+    size_t angles;  /* light angles tested per block */
+    size_t half_nodes; /* the file's half nodes */
+    double seconds; /* the build's wall time, checks included */
+} btdf_scatfun_source_error;
+
+/* Builds a file from a source: the half nodes are the source's (float-rounded) and the
+   pole node (1 - 2^-24, as every file here), both signs and two at 0; pair (slow,
+   fast) holds (-1)^m c[m] |mu_f| (phi_d = pi - phi), cut after the first m whose tail
+   sum_{k >= m} |a_k| is within tolerance / 4 of the light row's max(T, 0.01) / (2 pi),
+   so the cut adds at most tolerance / 4 to e_L1. The error is then measured against
+   the source (48 light angles per block: 24 stratified on [0, pi/2), 24 at midpoints
+   between the file's nodes; 128 x 128 midpoint cells in (mu_v, phi)), and while e_L1
+   or e_T is above tolerance every node interval is split at its middle angle, up to
+   BTDF_SCATFUN_MAX_HALF_NODES. BTDF_OK with *err when the tolerance was met;
+   BTDF_EBUDGET with the best file in *out and its *err when the node budget stopped
+   refinement first; BTDF_EINVAL (source, tolerance outside [1e-6, 0.5]), BTDF_ENOMEM,
+   BTDF_EOVERFLOW. threads: 0 = all cores; the bytes do not depend on it. */
+BTDF_API btdf_status btdf_scatfun_build_source(const btdf_scatfun_source *s, double tolerance,
+                                               int threads, btdf_scatfun **out,
+                                               btdf_scatfun_source_error *err, char *msg,
+                                               size_t msglen);
+
 /* Writes f to path (exact SCATFUN v1 layout, float32 little-endian) with the given
    metadata text appended (NULL: a short JSON of the build parameters). The file is
    written under a temporary name in the same folder and renamed at the end; on

@@ -76,6 +76,47 @@ static double interp1(const btdf_pane *P, const double *v, double mu)
     return s;
 }
 
+/* The modes b[0 .. P->m) of block (side, part), channel ch, at cosines mui, muo in (0, 1]
+   (checked by the callers): the interpolation btdf_pane_get_series describes. */
+static void modes_at(const btdf_pane *P, btdf_pane_side side, btdf_part part, int ch,
+                     double mui, double muo, double *bm)
+{
+    const double *c = P->ch[ch].coef[pane_block(side, part)];
+    int ki, ko, n = P->n;
+    double wi0[4], wo0[4], wi1[4], wo1[4];
+    lagrange(P->mu, n, mui, &ki, wi0);
+    lagrange(P->mu, n, muo, &ko, wo0);
+    double ri, ro;
+    pole_weights(P->mu, n, mui, wi0, wi1, &ri);
+    pole_weights(P->mu, n, muo, wo0, wo1, &ro);
+    size_t oo = (size_t)n * n;
+    double rm = 1.0, rr = ri * ro; /* (ri ro)^m, by one product per mode */
+    for (int m = 0; m < P->m; m++) {
+        const double *cc = c + (size_t)m * oo;
+        const double *wi = m ? wi1 : wi0, *wo = m ? wo1 : wo0;
+        double v = 0.0;
+        for (int a = 0; a < 4; a++) {
+            const double *row = cc + (size_t)(ki + a) * n + ko;
+            v += wi[a] * (wo[0] * row[0] + wo[1] * row[1] + wo[2] * row[2] + wo[3] * row[3]);
+        }
+        bm[m] = m ? v * rm : v;
+        rm *= rr;
+    }
+}
+
+BTDF_API int btdf_pane_modes(const btdf_pane *P, btdf_pane_side side, btdf_part part, int ch,
+                             double mu_i, double mu_o, double *c)
+{
+    if (!P || !ok_side(side) || !ok_part(part) || ch < 0 || ch >= P->o.front.channels || !c)
+        return 0;
+    for (int m = 0; m < P->m; m++)
+        c[m] = 0.0;
+    if (!(mu_i > 0.0 && mu_i <= 1.0) || !(mu_o > 0.0 && mu_o <= 1.0))
+        return P->m; /* grazing or out of range: the BSDF is 0 there */
+    modes_at(P, side, part, ch, mu_i, mu_o, c);
+    return P->m;
+}
+
 BTDF_API void btdf_pane_eval_phis(const btdf_pane *P, btdf_pane_side side, btdf_part part,
                                   int ch, double ti, double to, size_t count, const double *phi,
                                   double *out)
@@ -99,27 +140,8 @@ BTDF_API void btdf_pane_eval_phis(const btdf_pane *P, btdf_pane_side side, btdf_
     double mui = cos(ti);
     if (!(mui > 0.0) || !(muo > 0.0))
         return; /* grazing: the BSDF is 0 there, as in btdf.h */
-    const double *c = P->ch[ch].coef[pane_block(side, part)];
-    int ki, ko, n = P->n;
-    double wi0[4], wo0[4], wi1[4], wo1[4], bm[BTDF_PANE_MODES_MAX];
-    lagrange(P->mu, n, mui, &ki, wi0);
-    lagrange(P->mu, n, muo, &ko, wo0);
-    double ri, ro;
-    pole_weights(P->mu, n, mui, wi0, wi1, &ri);
-    pole_weights(P->mu, n, muo, wo0, wo1, &ro);
-    size_t oo = (size_t)n * n;
-    double rm = 1.0, rr = ri * ro; /* (ri ro)^m, by one product per mode */
-    for (int m = 0; m < P->m; m++) {
-        const double *cc = c + (size_t)m * oo;
-        const double *wi = m ? wi1 : wi0, *wo = m ? wo1 : wo0;
-        double v = 0.0;
-        for (int a = 0; a < 4; a++) {
-            const double *row = cc + (size_t)(ki + a) * n + ko;
-            v += wi[a] * (wo[0] * row[0] + wo[1] * row[1] + wo[2] * row[2] + wo[3] * row[3]);
-        }
-        bm[m] = m ? v * rm : v;
-        rm *= rr;
-    }
+    double bm[BTDF_PANE_MODES_MAX];
+    modes_at(P, side, part, ch, mui, muo, bm);
     for (size_t k = 0; k < count; k++) {
         if (!isfinite(phi[k]))
             continue;
