@@ -349,6 +349,23 @@ for args in "--tolerance 1e-3 -o $W/c/r1.csv:tolerance" "--grid 1,10,7 -o $W/c/r
         { no "tabulate --back $a: status $rc"; cat "$W/err"; }
 done
 
+# A pane's tree3 with --tolerance: leaves merged (btdf_rad_source.merge), a smaller file;
+# a Klems file takes no tolerance.
+if "$B" tabulate -q -s 1 --back smooth --tolerance 0.2 -o "$W/c/tm.xml" 2>"$W/err" &&
+    "$B" tabulate -q -s 1 --back smooth -o "$W/c/tf.xml" 2>>"$W/err"; then
+    [ "$(wc -c < "$W/c/tm.xml")" -lt "$(wc -c < "$W/c/tf.xml")" ] &&
+        ok "a pane's tree3 at --tolerance 0.2 is smaller than the full tree" ||
+        no "a pane's merged tree3 is not smaller"
+else no "tabulate --back --tolerance -o .xml"; cat "$W/err"; fi
+"$B" tabulate -q -s 1 --back smooth --basis klems-quarter --tolerance 0.2 -o "$W/c/tk.xml" 2>"$W/err"
+rc=$?
+[ "$rc" -eq 2 ] && [ ! -e "$W/c/tk.xml" ] && grep -q -- "--tolerance" "$W/err" &&
+    ok "a pane's Klems .xml refuses --tolerance" || { no "pane Klems --tolerance: status $rc"; cat "$W/err"; }
+"$B" tabulate -q -s 1 --back smooth --tolerance 0.7 -o "$W/c/t7.xml" 2>"$W/err"
+rc=$?
+[ "$rc" -eq 2 ] && [ ! -e "$W/c/t7.xml" ] && grep -q "tolerance 0.7" "$W/err" &&
+    ok "a pane's tree3 refuses --tolerance 0.7" || { no "pane tree3 --tolerance 0.7: status $rc"; cat "$W/err"; }
+
 # A pane's .bsdf (docs/pane.md, "A .bsdf of a pane"): four blocks, eta 1, metadata that
 # says it is a pane, and eval --table reads the system back (1 % pointwise: the file's
 # e_L1 bound is 1e-2; measured 2e-4 here; eval reads a .bsdf's transmission only, the

@@ -59,7 +59,7 @@ void bench_pane(FILE *f, int reps)
         if (btdf_pane_new(&o, &P, NULL, 0) != BTDF_OK)
             return;
         ts[r] = btdf_pane_seconds_build(P);
-        btdf_rad_source s = {P, ev, spec, ev_phis, "bench pane", {NULL, NULL, NULL}};
+        btdf_rad_source s = {P, ev, spec, ev_phis, "bench pane", {NULL, NULL, NULL}, 0.0};
         btdf_rad *x = NULL;
         tk[r] = tt[r] = 0.0;
         if (btdf_rad_build_source(&s, &o.front, BTDF_RAD_KLEMS_FULL, 0, 2, &x, NULL, 0) == BTDF_OK)

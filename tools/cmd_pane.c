@@ -410,15 +410,25 @@ static int pane_out_checks(const cli *c, int grid)
                                 OPT_MAX_SAMPLES, OPT_MAX_MEMORY, OPT_SIZE, OPT_SIDE, OPT_PART,
                                 OPT_TOLERANCE, OPT_REPORT, OPT_GRID};
     size_t count = sizeof no / sizeof no[0] - (grid ? 1 : 0); /* a grid takes --grid */
-    for (size_t k = 0; k < count; k++)
-        if (GIVEN(c, no[k]))
-            return fail(EXIT_USAGE, grid ? "%s: --%s does not apply to a pane's grid (every "
-                                           "block, light from either side; --grid sets its "
-                                           "nodes)"
-                                         : "%s: --%s does not apply to a pane's .xml (it "
-                                           "holds the system, both parts, light from either "
-                                           "side)",
-                        c->out, opt_find(no[k])->name);
+    for (size_t k = 0; k < count; k++) {
+        if (!GIVEN(c, no[k]) || (no[k] == OPT_TOLERANCE && !grid && c->basis == BTDF_RAD_TREE3))
+            continue;
+        if (no[k] == OPT_TOLERANCE && !grid)
+            return fail(EXIT_USAGE, "%s: --tolerance: a pane's Klems .xml holds exact patch "
+                                    "averages; --tolerance merges the leaves of a tree3",
+                        c->out);
+        return fail(EXIT_USAGE, grid ? "%s: --%s does not apply to a pane's grid (every "
+                                       "block, light from either side; --grid sets its "
+                                       "nodes)"
+                                     : "%s: --%s does not apply to a pane's .xml (it "
+                                       "holds the system, both parts, light from either "
+                                       "side)",
+                    c->out, opt_find(no[k])->name);
+    }
+    /* a tree3 takes --tolerance: its leaves merge within it (btdf_rad_source.merge) */
+    if (!grid && GIVEN(c, OPT_TOLERANCE) && !(c->o.tolerance > 0.0 && c->o.tolerance <= 0.5))
+        return fail(EXIT_USAGE, "%s: --tolerance %g: a pane's tree3 merges its leaves within "
+                                "a tolerance in (0, 0.5]", c->out, c->o.tolerance);
     if (grid && GIVEN(c, OPT_BASIS))
         return fail(EXIT_USAGE, "%s: --basis does not apply to a pane's grid (--grid sets "
                                 "its nodes)",
@@ -434,7 +444,8 @@ static int pane_out_checks(const cli *c, int grid)
 }
 
 static int write_system(const btdf_pane *P, const char *path, const btdf_params *p,
-                        btdf_rad_basis basis, int threads, int quiet, const char *prov)
+                        btdf_rad_basis basis, double merge, int threads, int quiet,
+                        const char *prov)
 {
     char desc[400];
     const btdf_pane_opts *o = btdf_pane_get_opts(P);
@@ -456,9 +467,10 @@ static int write_system(const btdf_pane *P, const char *path, const btdf_params 
              o->thickness_mm, o->absorption_per_mm);
     pane_ch u[3] = {{P, 0}, {P, 1}, {P, 2}};
     btdf_rad_source src = {&u[0], src_eval, src_specular, src_eval_phis, desc,
-                           {&u[0], &u[1], &u[2]}};
+                           {&u[0], &u[1], &u[2]}, 0.0};
     if (p->channels != 3)
         src.user_ch[0] = src.user_ch[1] = src.user_ch[2] = NULL;
+    src.merge = basis == BTDF_RAD_TREE3 ? merge : 0.0;
     btdf_rad *x = NULL;
     char msg[512] = "";
     btdf_status st = btdf_rad_build_source(&src, p, basis, PANE_TREE_DEPTH, threads,
@@ -476,21 +488,27 @@ static int write_system(const btdf_pane *P, const char *path, const btdf_params 
     btdf_output what = {NULL, NULL, NULL, &w, NULL, x};
     st = btdf_write(&what, path, msg, sizeof msg);
     double secs = btdf_rad_seconds_build(x);
+    btdf_rad_block_info bi;
+    size_t leaves_left = btdf_rad_block(x, 1, &bi) == BTDF_OK ? bi.values : 0;
     btdf_rad_free(x);
     if (st != BTDF_OK)
         return fail(1, "%s: %s", path, msg[0] ? msg : btdf_strerror(st));
     if (!quiet) {
         int n, m;
         btdf_pane_size(P, &n, &m);
-        fprintf(stderr, "btdftab: %s: %s; system %d nodes x %d modes in %.3f s, %s in %.3f s\n",
+        fprintf(stderr, "btdftab: %s: %s; system %d nodes x %d modes in %.3f s, %s in %.3f s",
                 path, desc, n, m, btdf_pane_seconds_build(P), btdf_rad_basis_name(basis),
                 secs);
+        if (src.merge > 0.0)
+            fprintf(stderr, ", leaves merged within %g: %zu of %zu left (transmission from "
+                            "the front)", src.merge, leaves_left, (size_t)1 << (3 * PANE_TREE_DEPTH));
+        fputc('\n', stderr);
     }
     return 0;
 }
 
 int pane_write_xml(const char *path, const btdf_params *p, const pane_spec *ps,
-                   btdf_rad_basis basis, int threads, int quiet, const char *prov)
+                   btdf_rad_basis basis, double merge, int threads, int quiet, const char *prov)
 {
     if (p->channels != 1 && basis == BTDF_RAD_TREE3)
         return fail(EXIT_USAGE, "%s: a colour pane .xml takes the Klems bases (basis "
@@ -499,7 +517,7 @@ int pane_write_xml(const char *path, const btdf_params *p, const pane_spec *ps,
     btdf_pane *P = NULL;
     int code = make_pane(p, ps, threads, &P);
     if (!code)
-        code = write_system(P, path, p, basis, threads, quiet, prov);
+        code = write_system(P, path, p, basis, merge, threads, quiet, prov);
     btdf_pane_free(P);
     return code;
 }
@@ -590,8 +608,10 @@ int cmd_pane(const cli *c, unsigned cmd, const char *prov)
     pane_spec ps = cli_spec(c);
     if (cmd == CMD_TABULATE) {
         int code = pane_out_checks(c, 0);
-        return code ? code : pane_write_xml(c->out, &c->p, &ps, c->basis, c->threads, c->quiet,
-                                            prov);
+        return code ? code
+                    : pane_write_xml(c->out, &c->p, &ps, c->basis,
+                                     GIVEN(c, OPT_TOLERANCE) ? c->o.tolerance : 0.0, c->threads,
+                                     c->quiet, prov);
     }
     btdf_pane *P = NULL;
     int code = make_pane(&c->p, &ps, c->threads, &P);

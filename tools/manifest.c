@@ -306,8 +306,8 @@ static int manifest_xml(const manifest_opts *mo, const material *mat, int *done,
         snprintf(label, sizeof label, "[%d/%d] %s", *done, total, out);
         run_progress pr;
         run_progress_start(&pr, mo->progress, label);
-        int code = pane ? pane_write_xml(out, &mat->p, &mat->pane, mat->basis, mo->threads,
-                                         mo->quiet, prov)
+        int code = pane ? pane_write_xml(out, &mat->p, &mat->pane, mat->basis, 0.0,
+                                         mo->threads, mo->quiet, prov)
                         : run_radiance(mo->prog, out, NULL, &mat->p, mat->basis,
                                        tol > 0.0 ? tol : 0.2, mo->threads, mo->quiet,
                                        mo->best_effort, prov, &pr);

@@ -31,10 +31,12 @@ int pane_spec_set(pane_spec *ps, const char *key, const char *value, char *why, 
 const char *pane_keys_refusal(int back, int thick_abs, int interface_outputs,
                               int table_keys, int channels, int bsdf_outputs, int back_smooth);
 
-/* Writes the system of the pane whose front face is p to path in the basis; 0, or the
-   exit code after a message on stderr. */
+/* Writes the system of the pane whose front face is p to path in the basis (a tree3
+   adaptive with merge > 0: btdf_rad_source.merge); 0, or the exit code after a message
+   on stderr. */
 int pane_write_xml(const char *path, const btdf_params *p, const pane_spec *ps,
-                   btdf_rad_basis basis, int threads, int quiet, const char *prov);
+                   btdf_rad_basis basis, double merge, int threads, int quiet,
+                   const char *prov);
 
 /* The pane whose front face is p and the rest ps, on threads threads; 0, or the exit
    code after a message on stderr. */

@@ -157,6 +157,12 @@ typedef struct btdf_rad_source {
        from the three, as an interface's colour Klems file does. Unused (NULL) for one
        channel. */
     void *user_ch[3];
+    /* tree3: 0 keeps the full tree; merge (up to 0.5) > 0 makes it adaptive, bottom up:
+       8 sibling leaves whose full-tree leaves are all within merge * max(|mean|,
+       0.01 / pi) of their mean become one leaf of that mean (0.01 / pi: MODEL.md 6's
+       floor of T, as a diffuse value), so no value moves by more than that bound from
+       the full tree's and the tree keeps its integral */
+    double merge;
 } btdf_rad_source;
 #define BTDF_RAD_SOURCE_DEPTH_MAX 7
 BTDF_API btdf_status btdf_rad_build_source(const btdf_rad_source *s, const btdf_params *p,

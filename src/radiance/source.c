@@ -251,6 +251,56 @@ static size_t tree_fill(rad_node *nodes, size_t *next, const float *leaf, size_t
     return k;
 }
 
+/* btdf_rad_source.merge: 1 when node k is a leaf once its subtree is merged; *lo and *hi
+   the range of the full tree's leaves under it (a merged leaf stands for all of them, so
+   a merge two levels up is checked against those, not against the means below it). */
+static int tree_merge(rad_node *nodes, size_t k, double eps, double *lo, double *hi)
+{
+    if (nodes[k].child < 0) {
+        *lo = *hi = (double)nodes[k].v;
+        return 1;
+    }
+    size_t c = (size_t)nodes[k].child;
+    int leaves = 1;
+    *lo = HUGE_VAL;
+    *hi = -HUGE_VAL;
+    for (size_t i = 0; i < 8; i++) {
+        double l, h;
+        leaves &= tree_merge(nodes, c + i, eps, &l, &h);
+        *lo = fmin(*lo, l);
+        *hi = fmax(*hi, h);
+    }
+    if (!leaves)
+        return 0;
+    double mean = 0.0; /* children of one node have equal size: the mean keeps the integral */
+    for (size_t i = 0; i < 8; i++)
+        mean += (double)nodes[c + i].v;
+    mean /= 8.0;
+    double lim = eps * fmax(fabs(mean), 0.01 / M_PI);
+    if (*hi - mean > lim || mean - *lo > lim)
+        return 0;
+    nodes[k].child = -1;
+    nodes[k].v = (float)mean;
+    return 1;
+}
+
+/* The nodes reachable from src[k] into dst[d], children contiguous after their parent
+   as tree_fill lays them; counts the leaves. */
+static void tree_copy(const rad_node *src, size_t k, rad_node *dst, size_t d, size_t *next,
+                      size_t *leaves)
+{
+    dst[d] = src[k];
+    if (src[k].child < 0) {
+        (*leaves)++;
+        return;
+    }
+    size_t c = *next;
+    *next += 8;
+    dst[d].child = (int32_t)c;
+    for (size_t i = 0; i < 8; i++)
+        tree_copy(src, (size_t)src[k].child + i, dst, c + i, next, leaves);
+}
+
 static btdf_status src_tree(const btdf_rad_source *s, int depth, btdf_rad *r, int threads,
                             char *msg, size_t msglen)
 {
@@ -274,6 +324,25 @@ static btdf_status src_tree(const btdf_rad_source *s, int depth, btdf_rad *r, in
         b->nnodes = total;
         b->leaves = leaves;
         b->depth = depth;
+        double lo, hi;
+        if (s->merge > 0.0 && tree_merge(b->nodes, 0, s->merge, &lo, &hi) == 0) {
+            rad_node *c = malloc(sizeof(rad_node) * total);
+            if (!c) {
+                free(leaf);
+                return core_say(BTDF_ENOMEM, msg, msglen, "out of memory (tree depth %d)",
+                                depth);
+            }
+            size_t nx = 1, nl = 0;
+            tree_copy(b->nodes, 0, c, 0, &nx, &nl);
+            free(b->nodes);
+            b->nodes = c;
+            b->nnodes = nx;
+            b->leaves = nl;
+        } else if (s->merge > 0.0) { /* every leaf merged into the root */
+            b->nodes[0].child = -1;
+            b->nnodes = 1;
+            b->leaves = 1;
+        }
     }
     free(leaf);
     return BTDF_OK;
@@ -295,6 +364,9 @@ BTDF_API btdf_status btdf_rad_build_source(const btdf_rad_source *s, const btdf_
     if (p->channels != 1 && p->channels != 3)
         return core_say(BTDF_EINVAL, msg, msglen,
                         "btdf_rad_build_source: %d channels: one or three", p->channels);
+    if (!(s->merge >= 0.0 && s->merge <= 0.5))
+        return core_say(BTDF_EINVAL, msg, msglen, "merge %g: use 0 (the full tree) to 0.5",
+                        s->merge);
     if (basis == BTDF_RAD_TREE3 && !(depth >= 1 && depth <= BTDF_RAD_SOURCE_DEPTH_MAX))
         return core_say(BTDF_EINVAL, msg, msglen, "tree depth %d: use 1..%d", depth,
                         BTDF_RAD_SOURCE_DEPTH_MAX);
