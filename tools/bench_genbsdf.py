@@ -285,7 +285,15 @@ def main():
     from pyradiance.genbsdf import SamplingBox
 
     out = os.path.abspath(args.outdir)
+    # The script writes files of fixed names (tile.obj, pane.rad, the XML files) into
+    # OUTDIR: it takes a new or empty folder, or one it made before (its marker file), so
+    # that it never writes over someone's files.
+    marker = os.path.join(out, ".bench_genbsdf")
+    if os.path.isdir(out) and os.listdir(out) and not os.path.exists(marker):
+        sys.exit("bench_genbsdf.py: %s: give a new or empty folder (it holds files this "
+                 "script did not make)" % out)
     os.makedirs(out, exist_ok=True)
+    open(marker, "a").close()
     btdftab = os.path.abspath(args.btdftab)
     times = []
 
